@@ -1,0 +1,37 @@
+// cli: the `cablecal` command on top of every stage. Each subcommand is a function that
+// takes its parsed options and returns an exit code; main.cc parses flags (CLI11) and
+// maps errors to exit codes (README, "Exit codes").
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "model/robot.h"
+
+namespace cablecal::cli {
+
+struct Context {
+  std::string command_line;  // for provenance in outputs
+};
+
+// The robot of --robot FILE, or the built-in one when the path is empty.
+Robot LoadRobotOption(const std::string& robot_path);
+
+struct WorkspaceOptions {
+  std::string robot_path, out_path, plot_path;
+  double step_m = 0.05;
+};
+int RunWorkspace(const Context& ctx, const WorkspaceOptions& options);
+
+struct SampleOptions {
+  std::string robot_path, out_path;
+  int poses = 0;
+  unsigned long long seed = 1;
+};
+int RunSample(const Context& ctx, const SampleOptions& options);
+
+// Runs a plotting script of scripts/ with the python that has matplotlib. Throws
+// SolverFailure (exit 3) if the script fails.
+void RunPlotScript(const std::string& script, const std::vector<std::string>& args);
+
+}  // namespace cablecal::cli

@@ -1,0 +1,98 @@
+#include "common/csv.h"
+
+#include <fstream>
+
+#include "common/error.h"
+#include "common/format.h"
+
+namespace cablecal {
+namespace {
+
+std::string Trim(const std::string& s) {
+  const char* ws = " \t\r";
+  const std::size_t a = s.find_first_not_of(ws);
+  if (a == std::string::npos) return "";
+  return s.substr(a, s.find_last_not_of(ws) - a + 1);
+}
+
+std::vector<std::string> Split(const std::string& line) {
+  std::vector<std::string> cells;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = line.find(',', start);
+    cells.push_back(Trim(line.substr(start, comma == std::string::npos ? std::string::npos : comma - start)));
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return cells;
+}
+
+}  // namespace
+
+std::string JoinCsv(const std::vector<std::string>& cells) {
+  std::string s;
+  for (std::size_t i = 0; i < cells.size(); ++i) s += (i ? "," : "") + cells[i];
+  return s;
+}
+
+std::string CsvRow::Where() const { return *path + ":" + std::to_string(line); }
+
+double CsvRow::Number(int col) const {
+  double v = 0.0;
+  if (!ParseFiniteDouble(cells[col], &v)) {
+    throw InputError(Where(), "column '" + (*header)[col] + "'",
+                     "must be a finite number (got '" + cells[col] + "')");
+  }
+  return v;
+}
+
+int CsvRow::PositiveInt(int col) const {
+  const std::string& s = cells[col];
+  const bool digits = !s.empty() && s.size() <= 9 && s.find_first_not_of("0123456789") == std::string::npos;
+  if (!digits || std::stoi(s) < 1) {
+    throw InputError(Where(), "column '" + (*header)[col] + "'", "must be a positive integer (got '" + s + "')");
+  }
+  return std::stoi(s);
+}
+
+void ForEachCsvRow(const std::string& path, const std::vector<std::string>& expected_header,
+                   const std::function<void(const CsvRow&)>& on_row) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "", "cannot open the file");
+  std::string line;
+  int line_no = 0;
+  bool have_header = false;
+  int rows = 0;
+  CsvRow row;
+  row.path = &path;
+  row.header = &expected_header;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (line_no == 1 && line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);  // UTF-8 BOM
+    const std::string trimmed = Trim(line);
+    if (trimmed.empty() || trimmed[0] == '#') continue;
+    std::vector<std::string> cells = Split(trimmed);
+    if (!have_header) {
+      if (cells != expected_header) {
+        throw InputError(path + ":" + std::to_string(line_no), "header",
+                         "expected '" + JoinCsv(expected_header) + "', got '" + trimmed + "'");
+      }
+      have_header = true;
+      continue;
+    }
+    if (cells.size() != expected_header.size()) {
+      throw InputError(path + ":" + std::to_string(line_no), "",
+                       "expected " + std::to_string(expected_header.size()) + " columns, got " +
+                           std::to_string(cells.size()));
+    }
+    row.line = line_no;
+    row.cells = std::move(cells);
+    on_row(row);
+    ++rows;
+  }
+  if (in.bad()) throw InputError(path, "", "read error");
+  if (!have_header) throw InputError(path, "", "is empty: no header line '" + JoinCsv(expected_header) + "'");
+  if (rows == 0) throw InputError(path, "", "has a header but no data rows");
+}
+
+}  // namespace cablecal

@@ -1,0 +1,35 @@
+// Reading the project's CSV files (pose plans, measurements) row by row, so a large file
+// is streamed in bounded memory. Tolerates what hand-edited and exported files contain:
+// a UTF-8 byte-order mark, CRLF line endings, '#' comment lines, blank lines and spaces
+// around cells. Everything else wrong is an InputError naming file, line and column.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace cablecal {
+
+struct CsvRow {
+  const std::string* path = nullptr;
+  int line = 0;  // 1-based line number in the file
+  const std::vector<std::string>* header = nullptr;
+  std::vector<std::string> cells;
+
+  // The cell of column `col` as a finite double; InputError "file:line: column 'x': ..." otherwise.
+  double Number(int col) const;
+  // The cell as a positive integer id.
+  int PositiveInt(int col) const;
+  std::string Where() const;
+};
+
+// Reads `path`; the first non-comment line must equal `expected_header` (cells compared
+// after trimming). Calls `on_row` for every data row, which has exactly as many cells as
+// the header. Throws InputError for a missing file, a wrong header, a wrong cell count or
+// a file with no data rows.
+void ForEachCsvRow(const std::string& path, const std::vector<std::string>& expected_header,
+                   const std::function<void(const CsvRow&)>& on_row);
+
+std::string JoinCsv(const std::vector<std::string>& cells);
+
+}  // namespace cablecal

@@ -1,0 +1,59 @@
+// Error tiers (see ../shared/STYLE.md, habit 5):
+//   InputError     bad user input: a file, a flag, a value. Exit code 2.
+//   SolverFailure  a solver that did not converge or returned a result that failed
+//                  verification. Exit code 3.
+//   CABLECAL_CHECK a broken internal invariant: always on, aborts with a message.
+#pragma once
+
+#include <cstdio>
+#include <cstdlib>
+#include <stdexcept>
+#include <string>
+
+namespace cablecal {
+
+enum ExitCode : int {
+  kExitOk = 0,
+  kExitInternal = 1,   // a bug: an unexpected exception or a failed invariant
+  kExitBadInput = 2,   // bad file, flag or value
+  kExitSolverFailed = 3,
+  kExitInterrupted = 130,
+};
+
+// Bad user input. `where` names the source ("robots/x.yaml:12" or "--step"),
+// `key` the field ("platform.mass"); what() is the full one-line message.
+class InputError : public std::runtime_error {
+ public:
+  InputError(const std::string& where, const std::string& key, const std::string& problem)
+      : std::runtime_error(Compose(where, key, problem)), where_(where), key_(key) {}
+  const std::string& where() const { return where_; }
+  const std::string& key() const { return key_; }
+
+ private:
+  static std::string Compose(const std::string& where, const std::string& key,
+                             const std::string& problem) {
+    std::string s = where;
+    if (!key.empty()) s += (s.empty() ? "" : ": ") + key;
+    return s + (s.empty() ? "" : ": ") + problem;
+  }
+  std::string where_, key_;
+};
+
+class SolverFailure : public std::runtime_error {
+ public:
+  explicit SolverFailure(const std::string& message) : std::runtime_error(message) {}
+};
+
+[[noreturn]] inline void CheckFailed(const char* expr, const char* file, int line,
+                                     const std::string& message) {
+  std::fprintf(stderr, "cablecal: internal error: %s:%d: check '%s' failed: %s\n", file, line,
+               expr, message.c_str());
+  std::abort();
+}
+
+}  // namespace cablecal
+
+#define CABLECAL_CHECK(expr, message)                                    \
+  do {                                                                   \
+    if (!(expr)) ::cablecal::CheckFailed(#expr, __FILE__, __LINE__, (message)); \
+  } while (0)

@@ -1,0 +1,33 @@
+#include "common/version.h"
+
+#include "common/version_info.h"  // generated at build time: kVersion, kGitCommit
+
+namespace cablecal {
+
+const char* Version() { return kVersion; }
+const char* GitCommit() { return kGitCommit; }
+
+std::string CommandLine(const std::vector<std::string>& argv) {
+  std::string line;
+  for (const std::string& arg : argv) {
+    if (!line.empty()) line += ' ';
+    const bool plain = !arg.empty() && arg.find_first_not_of(
+        "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-+=.,/:@%") ==
+        std::string::npos;
+    if (plain) {
+      line += arg;
+    } else {
+      line += '\'';
+      for (char c : arg) line += (c == '\'') ? std::string("'\\''") : std::string(1, c);
+      line += '\'';
+    }
+  }
+  return line;
+}
+
+std::string ProvenanceComment(const std::string& command_line) {
+  return std::string("# cablecal ") + Version() + " (commit " + GitCommit() + ")\n# command: " +
+         command_line + "\n";
+}
+
+}  // namespace cablecal

@@ -1,0 +1,19 @@
+// Version and provenance written into every output: the version, the git commit the
+// binary was built from, and the command line that made the output.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace cablecal {
+
+const char* Version();    // e.g. "0.1.0"
+const char* GitCommit();  // e.g. "3f2a1c9" or "3f2a1c9-dirty"; "unknown" outside git
+
+// The command line as typed, shell-quoted where needed.
+std::string CommandLine(const std::vector<std::string>& argv);
+
+// Lines "# cablecal <version> (commit <c>)" and "# command: <line>" for CSV heads.
+std::string ProvenanceComment(const std::string& command_line);
+
+}  // namespace cablecal

@@ -1,0 +1,149 @@
+// Cable geometry with the pulley wrap, written once on the scalar type T so that
+// doubles, ceres::Jet (identification, design derivatives) and nested Jets (stiffness)
+// all share the same formula.
+//
+// Construction (DESIGN.md): cable i runs up the post and touches pulley i on its outer
+// side at the exit point A_i (the pulley's outermost point at the height of its centre
+// C_i = A_i + s_i (r, 0), s_i = +1 left, -1 right), wraps over the top and leaves
+// tangentially at T_i toward the anchor B_i. Its length from A_i to B_i is
+//   l_i = r * phi_i + sqrt(|m_i|^2 - r^2),  m_i = B_i - C_i           (paper, Eq. 1-2)
+// Wrap angle convention: in the pulley frame mirrored so that the cable arrives on the
+// -x side (x' = s_i (x - C_x), z' = z - C_z), A_i sits at angle pi and the cable wraps
+// clockwise to T_i at angle alpha = psi + delta, with psi = atan2(m_z, s_i m_x) the angle
+// of m_i and delta = atan2(sqrt(|m|^2 - r^2), r) = acos(r / |m|) the angle between CT and
+// CB. Hence phi_i = pi - psi - delta.
+// The paper writes phi = pi - beta - gamma with beta = delta and sin(gamma) = (a_z - b_z)/|m|,
+// i.e. gamma = -psi for an anchor below the pulley; that is pi - delta + psi, which is
+// wrong by 2 psi (an anchor straight below the pulley must give phi = pi, Eq. 2 gives 0).
+// tests/model/cable_test.cc checks the closed form against a numerical tangency construction.
+//
+// Valid while |m_i| > r (the anchor is outside the pulley) and phi_i >= 0 (the cable
+// touches the pulley); CableGeometryValid says whether a configuration is.
+#pragma once
+
+#include <Eigen/Core>
+#include <cmath>
+
+#include "model/robot.h"
+
+namespace cablecal {
+
+template <typename T>
+using Vec2 = Eigen::Matrix<T, 2, 1>;
+template <typename T>
+using Vec3 = Eigen::Matrix<T, 3, 1>;
+
+// Platform pose q = (x_m, z_m, theta_rad) in F; theta counter-clockwise (x toward z).
+template <typename T>
+using Pose = Vec3<T>;
+
+template <typename T>
+Eigen::Matrix<T, 2, 2> Rotation(const T& theta_rad) {
+  using std::cos;
+  using std::sin;
+  Eigen::Matrix<T, 2, 2> R;
+  R << cos(theta_rad), -sin(theta_rad), sin(theta_rad), cos(theta_rad);
+  return R;
+}
+
+// Planar cross product a x b: the moment of force b at lever a, positive counter-clockwise.
+template <typename T>
+T Cross2(const Vec2<T>& a, const Vec2<T>& b) {
+  return a.x() * b.y() - a.y() * b.x();
+}
+
+// B = p + R(theta) b: a platform point in F.
+template <typename T>
+Vec2<T> PlatformPointInF(const Pose<T>& q, const Vec2<T>& p_P_point) {
+  return Vec2<T>(q(0), q(1)) + Rotation(q(2)) * p_P_point;
+}
+
+template <typename T>
+struct CableState {
+  T length_m;             // A_i -> B_i: arc + straight segment
+  T wrap_angle_rad;       // phi_i
+  T segment_length_m;     // straight part T_i -> B_i
+  T centre_distance_m;    // |m_i|
+  Vec2<T> p_F_tangent_m;  // T_i, where the cable leaves the pulley
+  Vec2<T> u_F_cable;      // unit vector from B_i toward T_i: direction of the cable's pull
+};
+
+template <typename T>
+CableState<T> CableGeometry(const Vec2<T>& p_F_exit_m, const T& pulley_radius_m,
+                            double side_sign, const Vec2<T>& p_F_anchor_m) {
+  using std::atan2;
+  using std::cos;
+  using std::sin;
+  using std::sqrt;
+  const T& r = pulley_radius_m;
+  const Vec2<T> p_F_centre(p_F_exit_m.x() + side_sign * r, p_F_exit_m.y());
+  const Vec2<T> m = p_F_anchor_m - p_F_centre;
+  CableState<T> s;
+  s.centre_distance_m = sqrt(m.squaredNorm());
+  s.segment_length_m = sqrt(m.squaredNorm() - r * r);
+  const T psi = atan2(m.y(), side_sign * m.x());
+  const T delta = atan2(s.segment_length_m, r);
+  const T alpha = psi + delta;
+  s.wrap_angle_rad = T(M_PI) - alpha;
+  s.length_m = r * s.wrap_angle_rad + s.segment_length_m;
+  s.p_F_tangent_m = Vec2<T>(p_F_centre.x() + side_sign * r * cos(alpha),
+                            p_F_centre.y() + r * sin(alpha));
+  s.u_F_cable = (s.p_F_tangent_m - p_F_anchor_m) / s.segment_length_m;
+  return s;
+}
+
+// The cable's state at platform pose q, for the robot's nominal exit point.
+template <typename T>
+CableState<T> CableAtPose(const Cable& cable, const Pose<T>& q) {
+  return CableGeometry<T>(cable.p_F_exit_m.cast<T>(), T(cable.pulley_radius_m),
+                          SideSign(cable.side),
+                          PlatformPointInF<T>(q, cable.p_P_anchor_m.cast<T>()));
+}
+
+inline bool CableGeometryValid(const CableState<double>& s, double pulley_radius_m) {
+  return std::isfinite(s.length_m) && s.centre_distance_m > pulley_radius_m &&
+         s.wrap_angle_rad >= 0.0;
+}
+
+// Wrench matrix W (3 x m): column i = [u_i; (R b_i) x u_i], the force and the moment
+// about p of a unit tension in cable i. W = -(dl/dq)^T (virtual work), which
+// tests/model/statics_test.cc checks with Jets.
+template <typename T>
+Eigen::Matrix<T, 3, Eigen::Dynamic> WrenchMatrix(const Robot& robot, const Pose<T>& q) {
+  Eigen::Matrix<T, 3, Eigen::Dynamic> W(3, robot.num_cables());
+  const Eigen::Matrix<T, 2, 2> R = Rotation(q(2));
+  for (int i = 0; i < robot.num_cables(); ++i) {
+    const Cable& c = robot.cables[i];
+    const CableState<T> s = CableAtPose<T>(c, q);
+    const Vec2<T> r_F_anchor = R * c.p_P_anchor_m.cast<T>();
+    W(0, i) = s.u_F_cable.x();
+    W(1, i) = s.u_F_cable.y();
+    W(2, i) = Cross2<T>(r_F_anchor, s.u_F_cable);
+  }
+  return W;
+}
+
+// Gravity wrench at p: [0; -m g; (R c) x (0, -m g)] = -grad V.
+template <typename T>
+Vec3<T> GravityWrench(const Robot& robot, const Pose<T>& q) {
+  const T weight_N = T(robot.platform_mass_kg * robot.gravity_mps2);
+  const Vec2<T> r_F_com = Rotation(q(2)) * robot.p_P_com_m.cast<T>();
+  return Vec3<T>(T(0.0), -weight_N, -weight_N * r_F_com.x());
+}
+
+// Gravitational potential energy m g z_com (J); its minimum along the motion the cables
+// allow is where the platform settles.
+template <typename T>
+T PotentialEnergy(const Robot& robot, const Pose<T>& q) {
+  return T(robot.platform_mass_kg * robot.gravity_mps2) *
+         PlatformPointInF<T>(q, robot.p_P_com_m.cast<T>()).y();
+}
+
+// Wrench balance residual W t + w_g (N, N, N m); zero at static equilibrium.
+template <typename T>
+Vec3<T> EquilibriumResidual(const Robot& robot, const Pose<T>& q,
+                            const Eigen::Matrix<T, Eigen::Dynamic, 1>& tensions_N) {
+  return WrenchMatrix<T>(robot, q) * tensions_N + GravityWrench<T>(robot, q);
+}
+
+}  // namespace cablecal

@@ -1,0 +1,74 @@
+// The robot description: constant data, loaded and validated once (Pinocchio's "Model").
+// Frames: F is the workspace frame (x right, z up, z = 0 the floor); P is the platform
+// frame (origin at the platform reference point p, x along the bar). SI units throughout;
+// angles in rad inside the program (the file's *_deg keys are converted on loading).
+#pragma once
+
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace cablecal {
+
+// The side of its pulley a cable arrives on. kLeft: the cable runs up the post on the
+// pulley's -x side, so the pulley centre is at exit + (r, 0); kRight mirrors it.
+enum class PulleySide { kLeft, kRight };
+
+// +1 for kLeft, -1 for kRight: the pulley centre is at exit + SideSign * (r, 0).
+inline double SideSign(PulleySide side) { return side == PulleySide::kLeft ? 1.0 : -1.0; }
+
+struct Cable {
+  Eigen::Vector2d p_F_exit_m;        // exit point A_i: the pulley's outermost point at centre height
+  double pulley_radius_m = 0.0;
+  PulleySide side = PulleySide::kLeft;
+  Eigen::Vector2d p_P_anchor_m;      // anchor b_i on the platform, platform frame
+  std::optional<double> initial_length_m;  // overrides the length at the home pose
+};
+
+struct SensorNoise {
+  // Each +- range of the paper is three standard deviations of a zero-mean Gaussian.
+  double laser_accuracy_m = 0.0;
+  double laser_repeatability_m = 0.0;
+  double inclinometer_accuracy_rad = 0.0;
+  double inclinometer_repeatability_rad = 0.0;
+  double encoder_sigma_m = 0.0;  // one standard deviation (not a range)
+};
+
+struct Robot {
+  std::string name;
+  std::string source;  // where it was loaded from, for messages ("<built-in>" or a path)
+  double gravity_mps2 = 9.81;
+  double frame_width_m = 0.0;
+  double frame_height_m = 0.0;
+  double platform_mass_kg = 0.0;
+  Eigen::Vector2d p_P_com_m = Eigen::Vector2d::Zero();
+  std::vector<Cable> cables;
+  double tension_min_N = 0.0;
+  double tension_max_N = 0.0;
+  double theta_max_rad = 0.0;  // inclinometer range
+  double laser_range_m = 0.0;  // largest measurable platform height z
+  double margin_m = 0.0;       // platform points keep this distance from the frame
+  Eigen::Vector2d p_F_home_m = Eigen::Vector2d::Zero();  // home (x, z); theta from equilibrium
+  SensorNoise sensors;
+
+  int num_cables() const { return static_cast<int>(cables.size()); }
+};
+
+// Parses and validates a robot file. Throws InputError naming file, line and key on any
+// problem: missing or unknown key, wrong type, non-finite or out-of-range value,
+// coincident anchors, tension min >= max, or a home pose outside the feasible workspace.
+Robot LoadRobotFile(const std::string& path);
+
+// The same from YAML text; `source` names it in messages.
+Robot LoadRobotFromString(const std::string& yaml_text, const std::string& source);
+
+// The built-in robot: robots/wang2022.yaml, compiled into the binary.
+const Robot& BuiltinRobot();
+const std::string& BuiltinRobotYaml();
+
+// Serialises a robot back to YAML in the file format (used for calibrated robots and
+// truth files); LoadRobotFromString(RobotToYaml(r)) reproduces r.
+std::string RobotToYaml(const Robot& robot);
+
+}  // namespace cablecal

@@ -1,0 +1,280 @@
+// Robot file parsing and validation (format: README, "Robot file").
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "common/error.h"
+#include "common/format.h"
+#include "model/robot.h"
+#include "model/statics.h"
+
+namespace cablecal {
+namespace {
+
+constexpr double kDegToRad = M_PI / 180.0;
+
+// Walks the YAML tree and turns every problem into one InputError "file:line: key: problem".
+class Reader {
+ public:
+  explicit Reader(std::string source) : source_(std::move(source)) {}
+
+  [[noreturn]] void Fail(const YAML::Node& node, const std::string& key,
+                         const std::string& problem) const {
+    std::string where = source_;
+    if (node && node.Mark().line >= 0) where += ":" + std::to_string(node.Mark().line + 1);
+    throw InputError(where, key, problem);
+  }
+
+  // A mapping with exactly the allowed keys (those in `required` must be present).
+  void ExpectMap(const YAML::Node& node, const std::string& key,
+                 const std::set<std::string>& required, const std::set<std::string>& optional) const {
+    if (!node.IsMap()) Fail(node, key, "must be a mapping");
+    for (const auto& kv : node) {
+      const std::string name = kv.first.as<std::string>();
+      if (!required.count(name) && !optional.count(name)) {
+        Fail(kv.first, Join(key, name), "unknown key (misspelt?)");
+      }
+    }
+    for (const std::string& name : required) {
+      if (!node[name]) Fail(node, Join(key, name), "missing");
+    }
+  }
+
+  double Number(const YAML::Node& parent, const std::string& parent_key, const std::string& name) const {
+    return NumberNode(parent[name], Join(parent_key, name));
+  }
+
+  double NumberNode(const YAML::Node& node, const std::string& key) const {
+    if (!node.IsScalar()) Fail(node, key, "must be a number");
+    double value = 0.0;
+    const std::string text = node.Scalar();
+    if (!ParseFiniteDouble(text, &value)) {
+      Fail(node, key, "must be a finite number (got '" + text + "')");
+    }
+    return value;
+  }
+
+  Eigen::Vector2d Vector2(const YAML::Node& node, const std::string& key) const {
+    if (!node.IsSequence() || node.size() != 2) Fail(node, key, "must be a list of two numbers [x, z]");
+    return Eigen::Vector2d(NumberNode(node[0], key + "[0]"), NumberNode(node[1], key + "[1]"));
+  }
+
+  std::string String(const YAML::Node& node, const std::string& key) const {
+    if (!node.IsScalar()) Fail(node, key, "must be a string");
+    return node.Scalar();
+  }
+
+  void Positive(const YAML::Node& node, const std::string& key, double v) const {
+    if (!(v > 0.0)) Fail(node, key, "must be > 0 (got " + FormatDouble(v) + ")");
+  }
+  void NonNegative(const YAML::Node& node, const std::string& key, double v) const {
+    if (!(v >= 0.0)) Fail(node, key, "must be >= 0 (got " + FormatDouble(v) + ")");
+  }
+
+  static std::string Join(const std::string& a, const std::string& b) {
+    return a.empty() ? b : a + "." + b;
+  }
+
+  const std::string& source() const { return source_; }
+
+ private:
+  std::string source_;
+};
+
+Robot Parse(const YAML::Node& root, const Reader& rd) {
+  Robot robot;
+  robot.source = rd.source();
+  rd.ExpectMap(root, "", {"name", "gravity", "frame", "platform", "cables", "tension", "limits", "home", "sensors"}, {});
+
+  robot.name = rd.String(root["name"], "name");
+  if (robot.name.empty()) rd.Fail(root["name"], "name", "must not be empty");
+  robot.gravity_mps2 = rd.Number(root, "", "gravity");
+  rd.Positive(root["gravity"], "gravity", robot.gravity_mps2);
+
+  const YAML::Node frame = root["frame"];
+  rd.ExpectMap(frame, "frame", {"width", "height"}, {});
+  robot.frame_width_m = rd.Number(frame, "frame", "width");
+  rd.Positive(frame["width"], "frame.width", robot.frame_width_m);
+  robot.frame_height_m = rd.Number(frame, "frame", "height");
+  rd.Positive(frame["height"], "frame.height", robot.frame_height_m);
+
+  const YAML::Node platform = root["platform"];
+  rd.ExpectMap(platform, "platform", {"mass", "com", "anchors"}, {});
+  robot.platform_mass_kg = rd.Number(platform, "platform", "mass");
+  rd.Positive(platform["mass"], "platform.mass", robot.platform_mass_kg);
+  robot.p_P_com_m = rd.Vector2(platform["com"], "platform.com");
+  const YAML::Node anchors = platform["anchors"];
+  if (!anchors.IsSequence()) rd.Fail(anchors, "platform.anchors", "must be a list of [x, z] points");
+
+  const YAML::Node cables = root["cables"];
+  if (!cables.IsSequence()) rd.Fail(cables, "cables", "must be a list of cables");
+  if (cables.size() != 2) {
+    rd.Fail(cables, "cables", "cablecal supports exactly 2 cables for now (got " +
+                                  std::to_string(cables.size()) + ")");
+  }
+  if (anchors.size() != cables.size()) {
+    rd.Fail(anchors, "platform.anchors", "needs one anchor per cable (" + std::to_string(cables.size()) +
+                                             "), got " + std::to_string(anchors.size()));
+  }
+  for (std::size_t i = 0; i < cables.size(); ++i) {
+    const std::string key = "cables[" + std::to_string(i) + "]";
+    const YAML::Node c = cables[i];
+    rd.ExpectMap(c, key, {"exit", "pulley_radius", "side"}, {"initial_length"});
+    Cable cable;
+    cable.p_F_exit_m = rd.Vector2(c["exit"], key + ".exit");
+    cable.pulley_radius_m = rd.Number(c, key, "pulley_radius");
+    rd.Positive(c["pulley_radius"], key + ".pulley_radius", cable.pulley_radius_m);
+    const std::string side = rd.String(c["side"], key + ".side");
+    if (side == "left") {
+      cable.side = PulleySide::kLeft;
+    } else if (side == "right") {
+      cable.side = PulleySide::kRight;
+    } else {
+      rd.Fail(c["side"], key + ".side", "must be 'left' or 'right' (got '" + side + "')");
+    }
+    if (c["initial_length"]) {
+      cable.initial_length_m = rd.Number(c, key, "initial_length");
+      rd.Positive(c["initial_length"], key + ".initial_length", *cable.initial_length_m);
+    }
+    cable.p_P_anchor_m = rd.Vector2(anchors[i], "platform.anchors[" + std::to_string(i) + "]");
+    robot.cables.push_back(cable);
+  }
+  for (std::size_t i = 0; i < robot.cables.size(); ++i) {
+    for (std::size_t j = i + 1; j < robot.cables.size(); ++j) {
+      if ((robot.cables[i].p_P_anchor_m - robot.cables[j].p_P_anchor_m).norm() < 1e-6) {
+        rd.Fail(anchors[j], "platform.anchors[" + std::to_string(j) + "]",
+                "coincides with anchor " + std::to_string(i) +
+                    ": the platform's orientation would be undetermined");
+      }
+      if ((robot.cables[i].p_F_exit_m - robot.cables[j].p_F_exit_m).norm() < 1e-6) {
+        rd.Fail(cables[j]["exit"], "cables[" + std::to_string(j) + "].exit",
+                "coincides with the exit point of cable " + std::to_string(i));
+      }
+    }
+  }
+
+  const YAML::Node tension = root["tension"];
+  rd.ExpectMap(tension, "tension", {"min", "max"}, {});
+  robot.tension_min_N = rd.Number(tension, "tension", "min");
+  rd.NonNegative(tension["min"], "tension.min", robot.tension_min_N);
+  robot.tension_max_N = rd.Number(tension, "tension", "max");
+  if (!(robot.tension_min_N < robot.tension_max_N)) {
+    rd.Fail(tension, "tension", "min must be < max (got min " + FormatDouble(robot.tension_min_N) +
+                                    " N, max " + FormatDouble(robot.tension_max_N) + " N)");
+  }
+
+  const YAML::Node limits = root["limits"];
+  rd.ExpectMap(limits, "limits", {"theta_max_deg", "laser_range", "margin"}, {});
+  const double theta_max_deg = rd.Number(limits, "limits", "theta_max_deg");
+  if (!(theta_max_deg > 0.0 && theta_max_deg < 89.0)) {
+    rd.Fail(limits["theta_max_deg"], "limits.theta_max_deg",
+            "must be in (0, 89) degrees (got " + FormatDouble(theta_max_deg) + ")");
+  }
+  robot.theta_max_rad = theta_max_deg * kDegToRad;
+  robot.laser_range_m = rd.Number(limits, "limits", "laser_range");
+  rd.Positive(limits["laser_range"], "limits.laser_range", robot.laser_range_m);
+  robot.margin_m = rd.Number(limits, "limits", "margin");
+  rd.NonNegative(limits["margin"], "limits.margin", robot.margin_m);
+
+  const YAML::Node sensors = root["sensors"];
+  rd.ExpectMap(sensors, "sensors", {"laser", "inclinometer", "encoder"}, {});
+  rd.ExpectMap(sensors["laser"], "sensors.laser", {"accuracy", "repeatability"}, {});
+  rd.ExpectMap(sensors["inclinometer"], "sensors.inclinometer", {"accuracy_deg", "repeatability_deg"}, {});
+  rd.ExpectMap(sensors["encoder"], "sensors.encoder", {"sigma"}, {});
+  SensorNoise& s = robot.sensors;
+  s.laser_accuracy_m = rd.Number(sensors["laser"], "sensors.laser", "accuracy");
+  s.laser_repeatability_m = rd.Number(sensors["laser"], "sensors.laser", "repeatability");
+  const double inc_acc_deg = rd.Number(sensors["inclinometer"], "sensors.inclinometer", "accuracy_deg");
+  const double inc_rep_deg = rd.Number(sensors["inclinometer"], "sensors.inclinometer", "repeatability_deg");
+  s.encoder_sigma_m = rd.Number(sensors["encoder"], "sensors.encoder", "sigma");
+  rd.NonNegative(sensors["laser"]["accuracy"], "sensors.laser.accuracy", s.laser_accuracy_m);
+  rd.NonNegative(sensors["laser"]["repeatability"], "sensors.laser.repeatability", s.laser_repeatability_m);
+  rd.NonNegative(sensors["inclinometer"]["accuracy_deg"], "sensors.inclinometer.accuracy_deg", inc_acc_deg);
+  rd.NonNegative(sensors["inclinometer"]["repeatability_deg"], "sensors.inclinometer.repeatability_deg", inc_rep_deg);
+  rd.NonNegative(sensors["encoder"]["sigma"], "sensors.encoder.sigma", s.encoder_sigma_m);
+  s.inclinometer_accuracy_rad = inc_acc_deg * kDegToRad;
+  s.inclinometer_repeatability_rad = inc_rep_deg * kDegToRad;
+
+  robot.p_F_home_m = rd.Vector2(root["home"], "home");
+  const PoseEvaluation home = EvaluatePose(robot, robot.p_F_home_m.x(), robot.p_F_home_m.y());
+  if (!home.feasible()) {
+    rd.Fail(root["home"], "home",
+            "(" + FormatDouble(robot.p_F_home_m.x()) + ", " + FormatDouble(robot.p_F_home_m.y()) +
+                ") m is not in the feasible workspace: " + ToString(home.feasibility));
+  }
+  return robot;
+}
+
+}  // namespace
+
+Robot LoadRobotFromString(const std::string& yaml_text, const std::string& source) {
+  const Reader rd(source);
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::ParserException& e) {
+    throw InputError(source + ":" + std::to_string(e.mark.line + 1), "", "not valid YAML: " + e.msg);
+  }
+  if (!root || root.IsNull()) throw InputError(source, "", "the robot file is empty");
+  try {
+    return Parse(root, rd);
+  } catch (const YAML::Exception& e) {
+    // Anything yaml-cpp itself rejects (e.g. a key that is not a scalar).
+    throw InputError(source + ":" + std::to_string(e.mark.line + 1), "", e.msg);
+  }
+}
+
+Robot LoadRobotFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "", "cannot open the robot file");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  if (in.bad()) throw InputError(path, "", "cannot read the robot file");
+  return LoadRobotFromString(buffer.str(), path);
+}
+
+const Robot& BuiltinRobot() {
+  static const Robot robot = LoadRobotFromString(BuiltinRobotYaml(), "<built-in wang2022>");
+  return robot;
+}
+
+std::string RobotToYaml(const Robot& robot) {
+  auto v2 = [](const Eigen::Vector2d& v) {
+    return "[" + FormatDouble(v.x()) + ", " + FormatDouble(v.y()) + "]";
+  };
+  std::ostringstream o;
+  o << "name: " << robot.name << "\n";
+  o << "gravity: " << FormatDouble(robot.gravity_mps2) << "\n";
+  o << "frame: {width: " << FormatDouble(robot.frame_width_m)
+    << ", height: " << FormatDouble(robot.frame_height_m) << "}\n";
+  o << "platform:\n  mass: " << FormatDouble(robot.platform_mass_kg) << "\n  com: " << v2(robot.p_P_com_m)
+    << "\n  anchors: [";
+  for (int i = 0; i < robot.num_cables(); ++i) {
+    o << (i ? ", " : "") << v2(robot.cables[i].p_P_anchor_m);
+  }
+  o << "]\ncables:\n";
+  for (const Cable& c : robot.cables) {
+    o << "  - {exit: " << v2(c.p_F_exit_m) << ", pulley_radius: " << FormatDouble(c.pulley_radius_m)
+      << ", side: " << (c.side == PulleySide::kLeft ? "left" : "right");
+    if (c.initial_length_m) o << ", initial_length: " << FormatDouble(*c.initial_length_m);
+    o << "}\n";
+  }
+  o << "tension: {min: " << FormatDouble(robot.tension_min_N) << ", max: " << FormatDouble(robot.tension_max_N)
+    << "}\n";
+  o << "limits: {theta_max_deg: " << FormatDouble(robot.theta_max_rad / kDegToRad)
+    << ", laser_range: " << FormatDouble(robot.laser_range_m) << ", margin: " << FormatDouble(robot.margin_m)
+    << "}\n";
+  o << "home: " << v2(robot.p_F_home_m) << "\n";
+  const SensorNoise& s = robot.sensors;
+  o << "sensors:\n  laser: {accuracy: " << FormatDouble(s.laser_accuracy_m)
+    << ", repeatability: " << FormatDouble(s.laser_repeatability_m) << "}\n"
+    << "  inclinometer: {accuracy_deg: " << FormatDouble(s.inclinometer_accuracy_rad / kDegToRad)
+    << ", repeatability_deg: " << FormatDouble(s.inclinometer_repeatability_rad / kDegToRad) << "}\n"
+    << "  encoder: {sigma: " << FormatDouble(s.encoder_sigma_m) << "}\n";
+  return o.str();
+}
+
+}  // namespace cablecal

@@ -1,0 +1,401 @@
+#include "model/statics.h"
+
+#include <ceres/jet.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "common/error.h"
+#include "model/cable.h"
+
+namespace cablecal {
+namespace {
+
+constexpr double kDegToRad = M_PI / 180.0;
+// The theta search covers the bar's orientations short of vertical, on a 1-degree grid;
+// roots closer than that are a fold at the workspace boundary and are left out.
+constexpr double kThetaSearchMax_rad = 89.0 * kDegToRad;
+constexpr int kThetaSearchSteps = 178;
+// A force matrix this close to singular means parallel cables: no equilibrium there.
+constexpr double kParallelCablesDet = 1e-12;
+// Bisection stops at this bracket width (rad): double rounding near theta = O(1).
+constexpr double kThetaTol_rad = 1e-15;
+
+// Moment balance with the forces solved exactly for this theta (Cramer's rule). Returns
+// det(F) * M(theta), which is continuous where det(F) changes sign, unlike M itself.
+struct MomentBalance {
+  bool valid = false;
+  double scaled_moment = 0.0;  // det(F) * M
+  double det = 0.0;
+  Eigen::Vector2d tensions_N = Eigen::Vector2d::Zero();
+};
+
+MomentBalance EvaluateMomentBalance(const Robot& robot, double x_m, double z_m, double theta_rad) {
+  MomentBalance b;
+  const Pose<double> q(x_m, z_m, theta_rad);
+  for (const Cable& c : robot.cables) {
+    if (!CableGeometryValid(CableAtPose<double>(c, q), c.pulley_radius_m)) return b;
+  }
+  const Eigen::Matrix<double, 3, Eigen::Dynamic> W = WrenchMatrix<double>(robot, q);
+  const Eigen::Vector3d w_g = GravityWrench<double>(robot, q);
+  const Eigen::Matrix2d F = W.topRows<2>();
+  b.det = F.determinant();
+  Eigen::Matrix2d adj;
+  adj << F(1, 1), -F(0, 1), -F(1, 0), F(0, 0);
+  const Eigen::Vector2d adj_t = adj * (-w_g.head<2>());  // det * t
+  b.scaled_moment = W.row(2).dot(adj_t) + b.det * w_g(2);
+  if (std::abs(b.det) > kParallelCablesDet) b.tensions_N = adj_t / b.det;
+  b.valid = std::isfinite(b.scaled_moment);
+  return b;
+}
+
+double ResidualNorm(const Robot& robot, const Eigen::Vector3d& q, const Eigen::VectorXd& t) {
+  return EquilibriumResidual<double>(robot, q, t).norm();
+}
+
+}  // namespace
+
+double ReducedStiffness(const Robot& robot, const Eigen::Vector3d& q,
+                        const Eigen::VectorXd& tensions_N) {
+  CABLECAL_CHECK(robot.num_cables() == 2, "the statics are implemented for 2 cables");
+  using Jet3 = ceres::Jet<double, 3>;
+  Pose<Jet3> q_jet;
+  for (int k = 0; k < 3; ++k) q_jet(k) = Jet3(q(k), k);
+  const Eigen::Matrix<Jet3, Eigen::Dynamic, 1> t_jet = tensions_N.cast<Jet3>();
+  const Vec3<Jet3> r = EquilibriumResidual<Jet3>(robot, q_jet, t_jet);
+  // K = d^2 L / dq^2 = -d(W t + w_g)/dq at fixed t (the Lagrangian's Hessian).
+  Eigen::Matrix3d K;
+  for (int i = 0; i < 3; ++i) K.row(i) = -r(i).v.transpose();
+  // The motion the cables allow keeps every length: it is normal to every column of W.
+  const Eigen::Matrix<double, 3, Eigen::Dynamic> W = WrenchMatrix<double>(robot, q);
+  Eigen::Vector3d n = W.col(0).cross(W.col(1));
+  n.normalize();
+  return n.dot(K * n);
+}
+
+EquilibriumResult SolveEquilibrium(const Robot& robot, double x_m, double z_m) {
+  CABLECAL_CHECK(robot.num_cables() == 2, "the statics are implemented for 2 cables");
+  EquilibriumResult result;
+  bool any_valid = false, any_taut = false, any_found = false;
+  double best_abs_theta = std::numeric_limits<double>::infinity();
+
+  auto consider_root = [&](double theta_rad) {
+    const MomentBalance b = EvaluateMomentBalance(robot, x_m, z_m, theta_rad);
+    if (!b.valid || std::abs(b.det) <= kParallelCablesDet) return;
+    Equilibrium eq;
+    eq.q = Eigen::Vector3d(x_m, z_m, theta_rad);
+    eq.tensions_N = b.tensions_N;
+    eq.residual_N = ResidualNorm(robot, eq.q, eq.tensions_N);
+    // A sign change of det*M through a pole of M is not a root: its residual is large.
+    const double weight_N = robot.platform_mass_kg * robot.gravity_mps2;
+    if (!(eq.residual_N < 1e-6 * weight_N)) return;
+    if (!(eq.tensions_N.minCoeff() > 0.0)) return;
+    any_taut = true;
+    eq.reduced_stiffness = ReducedStiffness(robot, eq.q, eq.tensions_N);
+    eq.stable = eq.reduced_stiffness > 0.0;
+    if (!eq.stable) return;
+    if (std::abs(theta_rad) < best_abs_theta) {
+      best_abs_theta = std::abs(theta_rad);
+      result.equilibrium = eq;
+      any_found = true;
+    }
+  };
+
+  const double step = 2.0 * kThetaSearchMax_rad / kThetaSearchSteps;
+  double theta_prev = -kThetaSearchMax_rad;
+  MomentBalance prev = EvaluateMomentBalance(robot, x_m, z_m, theta_prev);
+  any_valid = prev.valid;
+  for (int k = 1; k <= kThetaSearchSteps; ++k) {
+    const double theta = -kThetaSearchMax_rad + k * step;
+    const MomentBalance cur = EvaluateMomentBalance(robot, x_m, z_m, theta);
+    any_valid = any_valid || cur.valid;
+    if (prev.valid && cur.valid) {
+      if (cur.scaled_moment == 0.0) {
+        consider_root(theta);
+      } else if ((prev.scaled_moment < 0.0) != (cur.scaled_moment < 0.0) &&
+                 prev.scaled_moment != 0.0) {
+        double lo = theta_prev, hi = theta;
+        double g_lo = prev.scaled_moment;
+        while (hi - lo > kThetaTol_rad) {
+          const double mid = 0.5 * (lo + hi);
+          if (mid <= lo || mid >= hi) break;
+          const MomentBalance m = EvaluateMomentBalance(robot, x_m, z_m, mid);
+          if (!m.valid) break;
+          if ((m.scaled_moment < 0.0) == (g_lo < 0.0)) {
+            lo = mid;
+            g_lo = m.scaled_moment;
+          } else {
+            hi = mid;
+          }
+        }
+        // Keep the bracket end with the smaller residual.
+        const MomentBalance b_lo = EvaluateMomentBalance(robot, x_m, z_m, lo);
+        const MomentBalance b_hi = EvaluateMomentBalance(robot, x_m, z_m, hi);
+        consider_root(std::abs(b_lo.scaled_moment) <= std::abs(b_hi.scaled_moment) ? lo : hi);
+      }
+    }
+    prev = cur;
+    theta_prev = theta;
+  }
+
+  if (any_found) {
+    result.status = EquilibriumStatus::kFound;
+  } else if (any_taut) {
+    result.status = EquilibriumStatus::kUnstable;
+  } else if (!any_valid) {
+    result.status = EquilibriumStatus::kCableGeometry;
+  } else {
+    result.status = EquilibriumStatus::kNoEquilibrium;
+  }
+  return result;
+}
+
+Eigen::VectorXd CableLengths(const Robot& robot, const Eigen::Vector3d& q) {
+  Eigen::VectorXd l(robot.num_cables());
+  for (int i = 0; i < robot.num_cables(); ++i) {
+    l(i) = CableAtPose<double>(robot.cables[i], q).length_m;
+  }
+  return l;
+}
+
+const char* ToString(Feasibility f) {
+  switch (f) {
+    case Feasibility::kFeasible: return "feasible";
+    case Feasibility::kOutsideFrame: return "outside_frame";
+    case Feasibility::kLaserRange: return "laser_range";
+    case Feasibility::kCableGeometry: return "cable_geometry";
+    case Feasibility::kNoEquilibrium: return "no_equilibrium";
+    case Feasibility::kUnstable: return "unstable";
+    case Feasibility::kThetaLimit: return "theta_limit";
+    case Feasibility::kTensionLow: return "tension_low";
+    case Feasibility::kTensionHigh: return "tension_high";
+  }
+  return "unknown";
+}
+
+const char* ToString(ForwardStatus s) {
+  switch (s) {
+    case ForwardStatus::kConverged: return "converged";
+    case ForwardStatus::kNotConverged: return "not_converged";
+    case ForwardStatus::kSlack: return "slack_cable";
+    case ForwardStatus::kUnstable: return "unstable";
+  }
+  return "unknown";
+}
+
+namespace {
+
+bool InsideFrame(const Robot& robot, const Eigen::Vector2d& p_F_m) {
+  return p_F_m.x() >= robot.margin_m && p_F_m.x() <= robot.frame_width_m - robot.margin_m &&
+         p_F_m.y() >= robot.margin_m && p_F_m.y() <= robot.frame_height_m - robot.margin_m;
+}
+
+}  // namespace
+
+Feasibility CheckFeasibility(const Robot& robot, const Eigen::Vector3d& q,
+                             const Eigen::VectorXd& tensions_N) {
+  if (!InsideFrame(robot, q.head<2>())) return Feasibility::kOutsideFrame;
+  if (q(1) > robot.laser_range_m) return Feasibility::kLaserRange;
+  for (const Cable& c : robot.cables) {
+    if (!CableGeometryValid(CableAtPose<double>(c, q), c.pulley_radius_m)) {
+      return Feasibility::kCableGeometry;
+    }
+  }
+  if (std::abs(q(2)) > robot.theta_max_rad) return Feasibility::kThetaLimit;
+  if (!InsideFrame(robot, PlatformPointInF<double>(q, robot.p_P_com_m))) {
+    return Feasibility::kOutsideFrame;
+  }
+  for (const Cable& c : robot.cables) {
+    if (!InsideFrame(robot, PlatformPointInF<double>(q, c.p_P_anchor_m))) {
+      return Feasibility::kOutsideFrame;
+    }
+  }
+  if (tensions_N.minCoeff() < robot.tension_min_N) return Feasibility::kTensionLow;
+  if (tensions_N.maxCoeff() > robot.tension_max_N) return Feasibility::kTensionHigh;
+  return Feasibility::kFeasible;
+}
+
+PoseEvaluation EvaluatePose(const Robot& robot, double x_m, double z_m) {
+  PoseEvaluation e;
+  if (!InsideFrame(robot, Eigen::Vector2d(x_m, z_m))) {
+    e.feasibility = Feasibility::kOutsideFrame;
+    return e;
+  }
+  if (z_m > robot.laser_range_m) {
+    e.feasibility = Feasibility::kLaserRange;
+    return e;
+  }
+  const EquilibriumResult eq = SolveEquilibrium(robot, x_m, z_m);
+  switch (eq.status) {
+    case EquilibriumStatus::kFound: break;
+    case EquilibriumStatus::kNoEquilibrium: e.feasibility = Feasibility::kNoEquilibrium; return e;
+    case EquilibriumStatus::kUnstable: e.feasibility = Feasibility::kUnstable; return e;
+    case EquilibriumStatus::kCableGeometry: e.feasibility = Feasibility::kCableGeometry; return e;
+  }
+  e.has_equilibrium = true;
+  e.equilibrium = eq.equilibrium;
+  e.feasibility = CheckFeasibility(robot, e.equilibrium.q, e.equilibrium.tensions_N);
+  return e;
+}
+
+InversePose InverseModel(const Robot& robot, double x_m, double z_m) {
+  InversePose inv;
+  inv.evaluation = EvaluatePose(robot, x_m, z_m);
+  if (inv.evaluation.has_equilibrium) {
+    inv.lengths_m = CableLengths(robot, inv.evaluation.equilibrium.q);
+  }
+  return inv;
+}
+
+Eigen::VectorXd InitialLengths(const Robot& robot) {
+  Eigen::VectorXd l0(robot.num_cables());
+  bool all_given = true;
+  for (int i = 0; i < robot.num_cables(); ++i) {
+    all_given = all_given && robot.cables[i].initial_length_m.has_value();
+  }
+  Eigen::VectorXd home_lengths;
+  if (!all_given) {
+    const InversePose home = InverseModel(robot, robot.p_F_home_m.x(), robot.p_F_home_m.y());
+    if (!home.evaluation.feasible()) {
+      throw InputError(robot.source, "home",
+                       std::string("the home pose is not in the feasible workspace (") +
+                           ToString(home.evaluation.feasibility) + ")");
+    }
+    home_lengths = home.lengths_m;
+  }
+  for (int i = 0; i < robot.num_cables(); ++i) {
+    l0(i) = robot.cables[i].initial_length_m.value_or(all_given ? 0.0 : home_lengths(i));
+  }
+  return l0;
+}
+
+namespace {
+
+// Starting pose for the forward model at orientation theta, pulleys ignored: anchor i then
+// lies on the circle of radius L_i about A_i, so p lies on the circle about A_i - R b_i;
+// the lower intersection of the two circles. Returns false if the circles do not meet.
+bool CircleIntersectionGuess(const Robot& robot, const Eigen::VectorXd& lengths_m, double theta_rad,
+                             Eigen::Vector3d* guess) {
+  const Eigen::Matrix2d R = Rotation(theta_rad);
+  const Eigen::Vector2d c1 = robot.cables[0].p_F_exit_m - R * robot.cables[0].p_P_anchor_m;
+  const Eigen::Vector2d c2 = robot.cables[1].p_F_exit_m - R * robot.cables[1].p_P_anchor_m;
+  const double d = (c2 - c1).norm();
+  const double r1 = lengths_m(0), r2 = lengths_m(1);
+  if (d <= 0.0 || r1 + r2 < d || std::abs(r1 - r2) > d) return false;
+  const double a = (r1 * r1 - r2 * r2 + d * d) / (2.0 * d);
+  const double h = std::sqrt(std::max(0.0, r1 * r1 - a * a));
+  const Eigen::Vector2d e = (c2 - c1) / d;
+  const Eigen::Vector2d perp(-e.y(), e.x());
+  const Eigen::Vector2d p1 = c1 + a * e + h * perp, p2 = c1 + a * e - h * perp;
+  const Eigen::Vector2d p = p1.y() < p2.y() ? p1 : p2;
+  *guess = Eigen::Vector3d(p.x(), p.y(), theta_rad);
+  return true;
+}
+
+
+// Damped Newton from one starting pose.
+ForwardResult ForwardNewton(const Robot& robot, const Eigen::VectorXd& lengths_m, const Eigen::Vector3d& start) {
+  constexpr int kMaxIterations = 60;
+  constexpr double kLengthTol_m = 1e-11;   // a few hundred ulps of a 3 m length
+  constexpr double kWrenchTol_N = 1e-9;
+  using Jet5 = ceres::Jet<double, 5>;
+  using Vector5d = Eigen::Matrix<double, 5, 1>;
+  const double weight_N = robot.platform_mass_kg * robot.gravity_mps2;
+
+  // Unknowns y = (x, z, theta, t1, t2); wrench rows are divided by the weight so that the
+  // Newton merit function weighs metres and newtons alike.
+  auto residual = [&](const Vector5d& y, Eigen::Matrix<double, 5, 5>* jacobian) {
+    Eigen::Matrix<Jet5, 5, 1> yj;
+    for (int k = 0; k < 5; ++k) yj(k) = Jet5(y(k), k);
+    const Pose<Jet5> q = yj.head<3>();
+    const Eigen::Matrix<Jet5, Eigen::Dynamic, 1> t = yj.tail<2>();
+    Eigen::Matrix<Jet5, 5, 1> r;
+    for (int i = 0; i < 2; ++i) r(i) = CableAtPose<Jet5>(robot.cables[i], q).length_m - lengths_m(i);
+    r.tail<3>() = EquilibriumResidual<Jet5>(robot, q, t) / weight_N;
+    Vector5d value;
+    for (int k = 0; k < 5; ++k) {
+      value(k) = r(k).a;
+      if (jacobian) jacobian->row(k) = r(k).v.transpose();
+    }
+    return value;
+  };
+
+  Vector5d y;
+  y.head<3>() = start;
+  {
+    const Pose<double> q0 = y.head<3>();
+    const Eigen::Matrix<double, 3, Eigen::Dynamic> W = WrenchMatrix<double>(robot, q0);
+    y.tail<2>() = W.colPivHouseholderQr().solve(-GravityWrench<double>(robot, q0));
+  }
+
+  ForwardResult result;
+  Eigen::Matrix<double, 5, 5> J;
+  Vector5d r = residual(y, &J);
+  for (int it = 0; it < kMaxIterations; ++it) {
+    result.iterations = it;
+    if (!r.allFinite()) break;
+    if (r.head<2>().cwiseAbs().maxCoeff() < kLengthTol_m &&
+        r.tail<3>().norm() * weight_N < kWrenchTol_N) {
+      result.status = ForwardStatus::kConverged;
+      break;
+    }
+    const Vector5d step = J.fullPivLu().solve(-r);
+    if (!step.allFinite()) break;
+    // Backtracking on |r|^2 keeps Newton from jumping to another branch far away.
+    double lambda = 1.0;
+    Vector5d y_new, r_new;
+    Eigen::Matrix<double, 5, 5> J_new;
+    for (int ls = 0; ls < 30; ++ls) {
+      y_new = y + lambda * step;
+      r_new = residual(y_new, &J_new);
+      if (r_new.allFinite() && r_new.squaredNorm() < r.squaredNorm()) break;
+      lambda *= 0.5;
+    }
+    if (!r_new.allFinite() || !(r_new.squaredNorm() <= r.squaredNorm())) {
+      // No descent possible: accept only if already at rounding level.
+      break;
+    }
+    y = y_new;
+    r = r_new;
+    J = J_new;
+  }
+
+  Equilibrium& eq = result.equilibrium;
+  eq.q = y.head<3>();
+  eq.tensions_N = y.tail<2>();
+  eq.residual_N = r.tail<3>().norm() * weight_N;
+  result.length_residual_m = r.head<2>().cwiseAbs().maxCoeff();
+  if (result.status != ForwardStatus::kConverged) return result;
+  if (!(eq.tensions_N.minCoeff() > 0.0)) {
+    result.status = ForwardStatus::kSlack;
+    return result;
+  }
+  eq.reduced_stiffness = ReducedStiffness(robot, eq.q, eq.tensions_N);
+  eq.stable = eq.reduced_stiffness > 0.0;
+  if (!eq.stable) result.status = ForwardStatus::kUnstable;
+  return result;
+}
+
+}  // namespace
+
+ForwardResult SolveForwardGeometricoStatic(const Robot& robot, const Eigen::VectorXd& lengths_m,
+                                           const Eigen::Vector3d* guess) {
+  CABLECAL_CHECK(robot.num_cables() == 2, "the forward model is implemented for 2 cables");
+  CABLECAL_CHECK(lengths_m.size() == 2, "one length per cable");
+  if (guess) return ForwardNewton(robot, lengths_m, *guess);
+  // Cold start: Newton from the circle intersections at a few orientations, first taut and
+  // stable solution kept. Near the posts the platform tilts far from level, where a single
+  // level start can stall.
+  ForwardResult last;
+  for (const double theta_deg : {0.0, 25.0, -25.0, 50.0, -50.0, 75.0, -75.0}) {
+    Eigen::Vector3d start;
+    if (!CircleIntersectionGuess(robot, lengths_m, theta_deg * kDegToRad, &start)) continue;
+    last = ForwardNewton(robot, lengths_m, start);
+    if (last.status == ForwardStatus::kConverged) return last;
+  }
+  return last;
+}
+
+}  // namespace cablecal

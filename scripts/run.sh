@@ -1,0 +1,9 @@
+#!/usr/bin/env bash
+# Quick start, command 1: install what is missing, build, and run the main job on the built-in robot.
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+"$root/scripts/setup.sh"
+"$root/scripts/build.sh"
+build="${CABLECAL_BUILD_DIR:-$root/build}"
+mkdir -p "$root/results"
+"$build/cablecal" workspace --out "$root/results/workspace.csv" --plot "$root/results/workspace.png" "$@"

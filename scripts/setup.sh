@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# Installs the Debian packages cablecal needs, and only those that are missing.
+# Nothing else is downloaded: every dependency is a Debian package (see README, "Dependencies").
+set -euo pipefail
+
+PACKAGES=(
+  build-essential cmake pkg-config git
+  libeigen3-dev          # fixed-size 2-D/3-D geometry and small dense linear algebra
+  libceres-dev           # identification (Levenberg-Marquardt, autodiff Jets, covariance)
+  coinor-libipopt-dev    # experiment design NLP
+  libyaml-cpp-dev        # robot files
+  libcli11-dev           # command line
+  libgtest-dev           # unit tests
+  libbenchmark-dev       # bench/
+  python3-matplotlib     # figures (scripts/*.py, run with /usr/bin/python3)
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  exit 0
+fi
+
+echo "cablecal setup: installing missing Debian packages: ${missing[*]}" >&2
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then
+  if command -v sudo >/dev/null 2>&1; then SUDO="sudo"; else
+    echo "cablecal setup: need root (or sudo) to install: ${missing[*]}" >&2
+    exit 1
+  fi
+fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >&2

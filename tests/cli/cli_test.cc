@@ -1,0 +1,129 @@
+// End-to-end: the cablecal binary's outputs, exit codes and messages.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct RunResult {
+  int exit_code;
+  std::string output;  // stdout and stderr
+};
+
+RunResult RunCablecal(const std::string& args) {
+  const std::string command = std::string(CABLECAL_BINARY) + " " + args + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  std::string output;
+  std::array<char, 4096> buffer;
+  while (fgets(buffer.data(), buffer.size(), pipe)) output += buffer.data();
+  const int status = pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("cablecal_cli_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+  std::string Read(const std::string& name) const {
+    std::ifstream in(Path(name));
+    std::stringstream s;
+    s << in.rdbuf();
+    return s.str();
+  }
+  bool DirIsEmpty() const { return fs::is_empty(dir_); }
+  void WriteRobot(const std::string& name, const std::string& from, const std::string& to) const {
+    std::ifstream in(std::string(CABLECAL_SOURCE_DIR) + "/robots/wang2022.yaml");
+    std::stringstream s;
+    s << in.rdbuf();
+    std::string text = s.str();
+    text.replace(text.find(from), from.size(), to);
+    std::ofstream(Path(name)) << text;
+  }
+  fs::path dir_;
+};
+
+TEST_F(Cli, WorkspaceWritesCsvWithProvenanceAndPlot) {
+  const RunResult r = RunCablecal("workspace --step 0.2 --out " + Path("ws.csv") + " --plot " + Path("ws.png"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string csv = Read("ws.csv");
+  EXPECT_EQ(csv.rfind("# cablecal ", 0), 0u);
+  EXPECT_NE(csv.find("\n# command: "), std::string::npos);
+  EXPECT_NE(csv.find("\nx,z,theta,t1,t2,feasible,reason\n"), std::string::npos);
+  EXPECT_GT(fs::file_size(Path("ws.png")), 10000u);
+  EXPECT_NE(r.output.find("feasible"), std::string::npos);
+  for (const auto& entry : fs::directory_iterator(dir_)) {
+    EXPECT_EQ(entry.path().string().find(".tmp."), std::string::npos) << "left behind: " << entry.path();
+  }
+}
+
+TEST_F(Cli, SampleIsReproducible) {
+  ASSERT_EQ(RunCablecal("sample --poses 5 --seed 3 --out " + Path("a.csv")).exit_code, 0);
+  ASSERT_EQ(RunCablecal("sample --poses 5 --seed 3 --out " + Path("b.csv")).exit_code, 0);
+  const std::string a = Read("a.csv"), b = Read("b.csv");
+  // Identical apart from the provenance line naming the output file.
+  EXPECT_EQ(a.substr(a.find("\npose,")), b.substr(b.find("\npose,")));
+  EXPECT_NE(a.find("\npose,x,z,theta,t1,t2,l1,l2,dl1,dl2\n"), std::string::npos);
+}
+
+TEST_F(Cli, BadRobotFileExitsTwoWithKeyAndWritesNothing) {
+  WriteRobot("bad.yaml", "mass: 2.2", "mass: 0");
+  const RunResult r = RunCablecal("workspace --robot " + Path("bad.yaml") + " --out " + Path("ws.csv"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("bad.yaml:10: platform.mass: must be > 0 (got 0)"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(Path("ws.csv")));
+}
+
+TEST_F(Cli, HomeOutsideWorkspaceExitsTwo) {
+  WriteRobot("bad.yaml", "home: [2.6045, 1.4]", "home: [0.01, 1.4]");
+  const RunResult r = RunCablecal("sample --poses 3 --robot " + Path("bad.yaml") + " --out " + Path("p.csv"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("home: (0.01, 1.4) m is not in the feasible workspace: outside_frame"), std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(Path("p.csv")));
+}
+
+TEST_F(Cli, BadFlagsExitTwo) {
+  for (const std::string& args : std::vector<std::string>{"workspace --step -1 --out " + Path("ws.csv"), "workspace --step abc --out " + Path("ws.csv"),
+                                 "workspace", "sample --poses 0 --out " + Path("p.csv"),
+                                 "sample --poses 3 --robot /nonexistent.yaml --out " + Path("p.csv"),
+                                 "frobnicate", "workspace --out /nonexistent-dir/ws.csv"}) {
+    const RunResult r = RunCablecal(args);
+    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
+    EXPECT_NE(r.output.find("cablecal: error: "), std::string::npos) << args << "\n" << r.output;
+  }
+  EXPECT_TRUE(DirIsEmpty());
+}
+
+TEST_F(Cli, TensionBoundsThatEmptyTheWorkspaceAreRejectedAtLoading) {
+  // The home pose must be feasible, so bounds that empty the workspace fail when the robot
+  // is loaded (exit 2), before anything is sampled or written.
+  WriteRobot("tight.yaml", "{min: 1.0, max: 100.0}", "{min: 1.0, max: 5.0}");
+  const RunResult r = RunCablecal("sample --poses 3 --robot " + Path("tight.yaml") + " --out " + Path("p.csv"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("tension_high"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(Path("p.csv")));
+}
+
+TEST_F(Cli, VersionAndHelp) {
+  const RunResult v = RunCablecal("--version");
+  EXPECT_EQ(v.exit_code, 0);
+  EXPECT_NE(v.output.find("cablecal 0.1.0 (commit "), std::string::npos) << v.output;
+  EXPECT_EQ(RunCablecal("--help").exit_code, 0);
+}
+
+}  // namespace

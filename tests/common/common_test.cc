@@ -1,0 +1,133 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <set>
+
+#include "common/atomic_output.h"
+#include "common/csv.h"
+#include "common/error.h"
+#include "common/format.h"
+#include "common/random.h"
+
+namespace cablecal {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path TempDir() {
+  const fs::path dir = fs::temp_directory_path() / ("cablecal_common_test_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  return dir;
+}
+
+TEST(Format, ShortestRoundTrip) {
+  for (const double v : {0.1, 2.6045, 1.0 / 3.0, -5.209e-7, 1e300, 123456789.0}) {
+    double back = 0.0;
+    ASSERT_TRUE(ParseFiniteDouble(FormatDouble(v), &back)) << FormatDouble(v);
+    EXPECT_EQ(back, v);
+  }
+  EXPECT_EQ(FormatDouble(2.6045), "2.6045");
+  EXPECT_EQ(FormatDouble(-0.0), "0");
+}
+
+TEST(Format, ParseRejectsNonFinite) {
+  double v = 0.0;
+  for (const char* bad : {"", "nan", "NaN", "inf", "-inf", "1e400", "1.0x", " 1", "0x"}) {
+    EXPECT_FALSE(ParseFiniteDouble(bad, &v)) << bad;
+  }
+  EXPECT_TRUE(ParseFiniteDouble("1e-400", &v));  // underflow to zero is a number
+  EXPECT_TRUE(ParseFiniteDouble("-2.5e3", &v));
+  EXPECT_EQ(v, -2500.0);
+}
+
+TEST(Random, SameSeedSameStreamAndStreamsDiffer) {
+  Rng a(42), b(42), c(43);
+  for (int i = 0; i < 100; ++i) {
+    const double x = a.Normal();
+    EXPECT_EQ(x, b.Normal());
+    (void)c;
+  }
+  std::set<std::uint64_t> seeds;
+  for (std::uint64_t n = 0; n < 50; ++n) {
+    for (std::uint64_t t = 0; t < 50; ++t) seeds.insert(StreamSeed(1, {n, t}));
+  }
+  EXPECT_EQ(seeds.size(), 2500u);
+}
+
+TEST(Random, NormalHasUnitMoments) {
+  Rng rng(9);
+  const int n = 200000;
+  double sum = 0, sum2 = 0;
+  for (int i = 0; i < n; ++i) {
+    const double x = rng.Normal();
+    sum += x;
+    sum2 += x * x;
+  }
+  EXPECT_NEAR(sum / n, 0.0, 5.0 / std::sqrt(n));           // 5 standard errors
+  EXPECT_NEAR(sum2 / n, 1.0, 5.0 * std::sqrt(2.0 / n));
+}
+
+TEST(AtomicOutput, NothingAppearsWithoutCommit) {
+  const fs::path dir = TempDir();
+  const std::string final_path = (dir / "out.csv").string();
+  {
+    AtomicOutput out;
+    const std::string temp = out.WriteText(final_path, "a,b\n");
+    EXPECT_TRUE(fs::exists(temp));
+    EXPECT_FALSE(fs::exists(final_path));
+  }
+  EXPECT_FALSE(fs::exists(final_path));
+  EXPECT_TRUE(fs::is_empty(dir));
+  {
+    AtomicOutput out;
+    out.WriteText(final_path, "a,b\n");
+    out.Commit();
+  }
+  EXPECT_TRUE(fs::exists(final_path));
+  fs::remove_all(dir);
+}
+
+TEST(AtomicOutput, MissingFolderIsInputError) {
+  AtomicOutput out;
+  EXPECT_THROW(out.WriteText("/nonexistent-folder/x.csv", "x"), InputError);
+}
+
+TEST(Csv, ToleratesBomCrlfCommentsAndSpaces) {
+  const fs::path dir = TempDir();
+  const std::string path = (dir / "in.csv").string();
+  std::ofstream(path, std::ios::binary) << "\xEF\xBB\xBF# made by hand\r\npose, x\r\n\r\n 1 , 2.5 \r\n# note\r\n2,3\r\n";
+  std::vector<double> xs;
+  ForEachCsvRow(path, {"pose", "x"}, [&](const CsvRow& row) {
+    EXPECT_GT(row.PositiveInt(0), 0);
+    xs.push_back(row.Number(1));
+  });
+  EXPECT_EQ(xs, (std::vector<double>{2.5, 3.0}));
+  fs::remove_all(dir);
+}
+
+TEST(Csv, ErrorsNameFileLineAndColumn) {
+  const fs::path dir = TempDir();
+  const std::string path = (dir / "in.csv").string();
+  auto message = [&](const std::string& content) -> std::string {
+    std::ofstream(path, std::ios::binary | std::ios::trunc) << content;
+    try {
+      ForEachCsvRow(path, {"pose", "x"}, [](const CsvRow& row) { row.Number(1); row.PositiveInt(0); });
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_EQ(message("pose,x\n1,nan\n"), path + ":2: column 'x': must be a finite number (got 'nan')");
+  EXPECT_EQ(message("pose,x\n1,1e400\n"), path + ":2: column 'x': must be a finite number (got '1e400')");
+  EXPECT_EQ(message("pose,y\n1,2\n"), path + ":1: header: expected 'pose,x', got 'pose,y'");
+  EXPECT_EQ(message("pose,x\n1,2,3\n"), path + ":2: expected 2 columns, got 3");
+  EXPECT_EQ(message("pose,x\n0,2\n"), path + ":2: column 'pose': must be a positive integer (got '0')");
+  EXPECT_EQ(message(""), path + ": is empty: no header line 'pose,x'");
+  EXPECT_EQ(message("pose,x\n"), path + ": has a header but no data rows");
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace cablecal

@@ -1,0 +1,127 @@
+// Robot files: the built-in robot, and every rejection with its message.
+#include <gtest/gtest.h>
+
+#include <regex>
+#include <string>
+
+#include "common/error.h"
+#include "model/robot.h"
+
+namespace cablecal {
+namespace {
+
+std::string Replace(std::string text, const std::string& from, const std::string& to) {
+  const std::size_t at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << "test setup: '" << from << "' not in the robot file";
+  if (at != std::string::npos) text.replace(at, from.size(), to);
+  return text;
+}
+
+// Loads `yaml` and returns the InputError message ("" if it loaded).
+std::string LoadError(const std::string& yaml) {
+  try {
+    LoadRobotFromString(yaml, "bad.yaml");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(RobotFile, BuiltinRobotHasTheDocumentedValues) {
+  const Robot& r = BuiltinRobot();
+  EXPECT_EQ(r.name, "wang2022");
+  ASSERT_EQ(r.num_cables(), 2);
+  EXPECT_EQ(r.cables[0].p_F_exit_m, Eigen::Vector2d(0.0, 2.8));
+  EXPECT_EQ(r.cables[1].p_F_exit_m, Eigen::Vector2d(5.209, 2.8));
+  EXPECT_EQ(r.cables[0].side, PulleySide::kLeft);
+  EXPECT_EQ(r.cables[1].side, PulleySide::kRight);
+  EXPECT_EQ(r.cables[0].pulley_radius_m, 0.025);
+  EXPECT_EQ(r.platform_mass_kg, 2.2);
+  EXPECT_EQ(r.tension_min_N, 1.0);
+  EXPECT_EQ(r.tension_max_N, 100.0);
+  EXPECT_NEAR(r.theta_max_rad, M_PI / 3, 1e-15);
+  EXPECT_NEAR(r.sensors.inclinometer_accuracy_rad, 0.1 * M_PI / 180, 1e-18);
+  EXPECT_EQ(r.sensors.encoder_sigma_m, 5e-5);
+}
+
+TEST(RobotFile, FileOnDiskEqualsBuiltin) {
+  const Robot file = LoadRobotFile(std::string(CABLECAL_SOURCE_DIR) + "/robots/wang2022.yaml");
+  EXPECT_EQ(RobotToYaml(file), RobotToYaml(BuiltinRobot()));
+}
+
+TEST(RobotFile, YamlRoundTrip) {
+  Robot r = BuiltinRobot();
+  r.cables[0].initial_length_m = 2.9;
+  const Robot back = LoadRobotFromString(RobotToYaml(r), "roundtrip");
+  EXPECT_EQ(RobotToYaml(back), RobotToYaml(r));
+  EXPECT_EQ(*back.cables[0].initial_length_m, 2.9);
+}
+
+struct BadCase {
+  const char* name;
+  const char* from;
+  const char* to;
+  const char* expected;  // regex the message must match
+};
+
+class BadRobotFile : public ::testing::TestWithParam<BadCase> {};
+
+TEST_P(BadRobotFile, IsRejectedWithKeyAndLine) {
+  const BadCase& c = GetParam();
+  const std::string message = LoadError(Replace(BuiltinRobotYaml(), c.from, c.to));
+  EXPECT_TRUE(std::regex_search(message, std::regex(c.expected))) << "message: " << message;
+  EXPECT_TRUE(std::regex_search(message, std::regex("^bad\\.yaml:[0-9]+: "))) << "message: " << message;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Rejections, BadRobotFile,
+    ::testing::Values(
+        BadCase{"MissingKey", "  mass: 2.2 ", "  # no mass ", "platform\\.mass: missing"},
+        BadCase{"WrongType", "mass: 2.2", "mass: heavy", "platform\\.mass: must be a finite number \\(got 'heavy'\\)"},
+        BadCase{"NonPositiveMass", "mass: 2.2", "mass: -1", "platform\\.mass: must be > 0 \\(got -1\\)"},
+        BadCase{"ZeroRadius", "pulley_radius: 0.025, side: left", "pulley_radius: 0, side: left",
+                "cables\\[0\\]\\.pulley_radius: must be > 0"},
+        BadCase{"CoincidentAnchors", "[[-0.25, 0.0], [0.25, 0.0]]", "[[0.25, 0.0], [0.25, 0.0]]",
+                "platform\\.anchors\\[1\\]: coincides with anchor 0"},
+        BadCase{"TensionMinNotBelowMax", "{min: 1.0, max: 100.0}", "{min: 100.0, max: 100.0}",
+                "tension: min must be < max"},
+        BadCase{"HomeOutsideWorkspace", "home: [2.6045, 1.4]", "home: [2.6045, 2.9]",
+                "home: .* is not in the feasible workspace: outside_frame"},
+        BadCase{"HomeTensionTooHigh", "{min: 1.0, max: 100.0}", "{min: 1.0, max: 5.0}",
+                "home: .* is not in the feasible workspace: tension_high"},
+        BadCase{"UnknownKey", "gravity: 9.81", "gravity: 9.81\nfriction: 0.1", "friction: unknown key"},
+        BadCase{"NotANumber", "gravity: 9.81", "gravity: .nan", "gravity: must be a finite number"},
+        BadCase{"Overflow", "gravity: 9.81", "gravity: 1e400", "gravity: must be a finite number"},
+        BadCase{"BadSide", "side: right", "side: up", "cables\\[1\\]\\.side: must be 'left' or 'right'"},
+        BadCase{"ThreeCables", "  - {exit: [5.209, 2.8], pulley_radius: 0.025, side: right}",
+                "  - {exit: [5.209, 2.8], pulley_radius: 0.025, side: right}\n  - {exit: [2, 2.8], pulley_radius: 0.025, side: right}",
+                "cables: cablecal supports exactly 2 cables"},
+        BadCase{"ShortVector", "com: [0.0, 0.0]", "com: [0.0]", "platform\\.com: must be a list of two numbers"},
+        BadCase{"NegativeNoise", "encoder: {sigma: 0.00005}", "encoder: {sigma: -0.00005}",
+                "sensors\\.encoder\\.sigma: must be >= 0"},
+        BadCase{"InvalidYaml", "frame: {width: 5.209, height: 2.8}", "frame: {width: 5.209, height: [2.8}",
+                "not valid YAML"}),
+    [](const ::testing::TestParamInfo<BadCase>& info) { return std::string(info.param.name); });
+
+TEST(RobotFile, MissingAndEmptyFiles) {
+  try {
+    LoadRobotFile("/nonexistent/robot.yaml");
+    FAIL() << "loaded a missing file";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/robot.yaml: cannot open"), std::string::npos) << e.what();
+  }
+  EXPECT_NE(LoadError("").find("empty"), std::string::npos);
+  EXPECT_NE(LoadError("# only a comment\n").find("empty"), std::string::npos);
+}
+
+TEST(RobotFile, LineNumberPointsAtTheOffendingKey) {
+  const std::string yaml = Replace(BuiltinRobotYaml(), "mass: 2.2", "mass: -2.2");
+  const std::string message = LoadError(yaml);
+  // "mass" is on line 10 of robots/wang2022.yaml.
+  std::size_t line = 1;
+  for (std::size_t i = 0; i < yaml.find("mass: -2.2"); ++i) line += yaml[i] == '\n';
+  EXPECT_EQ(message.rfind("bad.yaml:" + std::to_string(line) + ": platform.mass", 0), 0u) << message;
+}
+
+}  // namespace
+}  // namespace cablecal

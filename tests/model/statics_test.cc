@@ -1,0 +1,192 @@
+// Equilibrium, stability, inverse and forward geometrico-static models.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+
+#include "common/random.h"
+#include "model/cable.h"
+#include "model/statics.h"
+
+namespace cablecal {
+namespace {
+
+constexpr double kEquilibriumTol_N = 1e-9;
+constexpr double kRoundTripTol = 1e-9;  // m and rad: forward(inverse(pose))
+
+TEST(Equilibrium, SymmetricRobotCentredPoseIsLevelWithEqualTensions) {
+  const Robot& robot = BuiltinRobot();
+  const double x_centre = robot.frame_width_m / 2;
+  for (const double z : {0.5, 1.4, 2.2}) {
+    const EquilibriumResult r = SolveEquilibrium(robot, x_centre, z);
+    ASSERT_EQ(r.status, EquilibriumStatus::kFound) << "z = " << z;
+    EXPECT_NEAR(r.equilibrium.q(2), 0.0, 1e-12);
+    EXPECT_NEAR(r.equilibrium.tensions_N(0), r.equilibrium.tensions_N(1), 1e-9);
+    EXPECT_TRUE(r.equilibrium.stable);
+    // Vertical balance: the two tensions' vertical parts carry the weight.
+    const Eigen::Matrix<double, 3, Eigen::Dynamic> W = WrenchMatrix<double>(robot, r.equilibrium.q);
+    EXPECT_NEAR(W.row(1).dot(r.equilibrium.tensions_N), robot.platform_mass_kg * robot.gravity_mps2, 1e-9);
+  }
+}
+
+TEST(Equilibrium, ResidualBelowToleranceOverFeasibleGrid) {
+  const Robot& robot = BuiltinRobot();
+  int feasible = 0;
+  for (double z = 0.0; z <= robot.frame_height_m; z += 0.1) {
+    for (double x = 0.0; x <= robot.frame_width_m; x += 0.1) {
+      const PoseEvaluation e = EvaluatePose(robot, x, z);
+      if (!e.feasible()) continue;
+      ++feasible;
+      EXPECT_LT(e.equilibrium.residual_N, kEquilibriumTol_N) << "at " << x << ", " << z;
+      EXPECT_LT(EquilibriumResidual<double>(robot, e.equilibrium.q, e.equilibrium.tensions_N).norm(),
+                kEquilibriumTol_N);
+      EXPECT_GT(e.equilibrium.reduced_stiffness, 0.0);
+    }
+  }
+  EXPECT_GT(feasible, 300);  // the seed robot's workspace is most of the frame's lower part
+}
+
+TEST(Equilibrium, OffCentreThetaTiltsTowardTheNearerPost) {
+  // Physically: nearer the left post, the left cable is steeper; the platform tilts so that
+  // both cable lines and the vertical through the centre of mass meet in one point.
+  const Robot& robot = BuiltinRobot();
+  const EquilibriumResult left = SolveEquilibrium(robot, 1.0, 1.4);
+  const EquilibriumResult right = SolveEquilibrium(robot, robot.frame_width_m - 1.0, 1.4);
+  ASSERT_EQ(left.status, EquilibriumStatus::kFound);
+  ASSERT_EQ(right.status, EquilibriumStatus::kFound);
+  EXPECT_NEAR(left.equilibrium.q(2), -right.equilibrium.q(2), 1e-10);  // mirror symmetry
+  EXPECT_NE(left.equilibrium.q(2), 0.0);
+  // Concurrency of the three forces: the cable lines meet on the vertical through the COM.
+  const Eigen::Vector3d q = left.equilibrium.q;
+  Eigen::Matrix2d lines;
+  Eigen::Vector2d rhs;
+  const CableState<double> c1 = CableAtPose<double>(robot.cables[0], q);
+  const CableState<double> c2 = CableAtPose<double>(robot.cables[1], q);
+  const Eigen::Vector2d B1 = PlatformPointInF<double>(q, robot.cables[0].p_P_anchor_m);
+  const Eigen::Vector2d B2 = PlatformPointInF<double>(q, robot.cables[1].p_P_anchor_m);
+  lines << c1.u_F_cable, -c2.u_F_cable;  // B1 + a u1 = B2 + b u2
+  rhs = B2 - B1;
+  const Eigen::Vector2d ab = lines.colPivHouseholderQr().solve(rhs);
+  const Eigen::Vector2d meet = B1 + ab(0) * c1.u_F_cable;
+  EXPECT_NEAR(meet.x(), PlatformPointInF<double>(q, robot.p_P_com_m).x(), 1e-9);
+}
+
+// Moves the platform along the one motion that keeps both cable lengths, parametrised by
+// theta, and returns the potential energy there (independent of the stiffness formula).
+double EnergyAlongFixedLengths(const Robot& robot, const Eigen::Vector3d& q0, const Eigen::VectorXd& L,
+                               double theta) {
+  Eigen::Vector2d p = q0.head<2>();
+  for (int it = 0; it < 50; ++it) {
+    const Eigen::Vector3d q(p.x(), p.y(), theta);
+    const Eigen::VectorXd r = CableLengths(robot, q) - L;
+    if (r.cwiseAbs().maxCoeff() < 1e-15) break;
+    const Eigen::Matrix<double, 3, Eigen::Dynamic> W = WrenchMatrix<double>(robot, q);
+    const Eigen::Matrix2d J = -W.topRows<2>().transpose();  // dl/d(x, z)
+    p -= J.lu().solve(r);
+  }
+  return PotentialEnergy<double>(robot, Eigen::Vector3d(p.x(), p.y(), theta));
+}
+
+TEST(Stability, ReducedStiffnessMatchesEnergyCurvatureAlongFreeMotion) {
+  const Robot& robot = BuiltinRobot();
+  for (const Eigen::Vector2d& xz : {Eigen::Vector2d(2.6045, 1.4), Eigen::Vector2d(1.2, 0.8), Eigen::Vector2d(4.0, 2.0)}) {
+    const EquilibriumResult r = SolveEquilibrium(robot, xz.x(), xz.y());
+    ASSERT_EQ(r.status, EquilibriumStatus::kFound);
+    const Eigen::Vector3d q = r.equilibrium.q;
+    const Eigen::VectorXd L = CableLengths(robot, q);
+    const double h = 1e-3;
+    const double d2V = (EnergyAlongFixedLengths(robot, q, L, q(2) + h) + EnergyAlongFixedLengths(robot, q, L, q(2) - h) -
+                        2 * EnergyAlongFixedLengths(robot, q, L, q(2))) / (h * h);
+    // Along the motion parametrised by theta, d2V/dtheta2 = n'Kn / n_theta^2 (|n| = 1).
+    const Eigen::Matrix<double, 3, Eigen::Dynamic> W = WrenchMatrix<double>(robot, q);
+    const Eigen::Vector3d n = W.col(0).cross(W.col(1)).normalized();
+    EXPECT_GT(d2V, 0.0);
+    EXPECT_NEAR(d2V, r.equilibrium.reduced_stiffness / (n(2) * n(2)), 1e-4 * std::abs(d2V)) << xz.transpose();
+  }
+}
+
+TEST(Stability, HighCentreOfMassMakesSomeEquilibriaUnstable) {
+  // A centre of mass far above the anchor line is an inverted pendulum hung from two cables:
+  // the level equilibrium at the centre becomes a potential-energy maximum.
+  Robot robot = BuiltinRobot();
+  robot.p_P_com_m = Eigen::Vector2d(0.0, 3.0);
+  const double x_centre = robot.frame_width_m / 2;
+  const Eigen::Vector3d q(x_centre, 0.5, 0.0);
+  Eigen::VectorXd t = WrenchMatrix<double>(robot, q).topRows<2>().lu().solve(-GravityWrench<double>(robot, q).head<2>());
+  ASSERT_LT(EquilibriumResidual<double>(robot, q, t).norm(), 1e-12);  // level pose balances by symmetry
+  EXPECT_LT(ReducedStiffness(robot, q, t), 0.0);
+  const EquilibriumResult r = SolveEquilibrium(robot, x_centre, 0.5);
+  if (r.status == EquilibriumStatus::kFound) {
+    EXPECT_GT(std::abs(r.equilibrium.q(2)), 1e-6);
+  }
+}
+
+TEST(ForwardModel, ForwardOfInverseReturnsThePose) {
+  const Robot& robot = BuiltinRobot();
+  Rng rng(5);
+  int checked = 0;
+  while (checked < 200) {
+    const double x = rng.Uniform(0.3, 4.9), z = rng.Uniform(0.1, 2.6);
+    const InversePose inv = InverseModel(robot, x, z);
+    if (!inv.evaluation.feasible()) continue;
+    ++checked;
+    // Cold start (length circles) and warm start (the pose itself, perturbed).
+    const ForwardResult cold = SolveForwardGeometricoStatic(robot, inv.lengths_m);
+    ASSERT_EQ(cold.status, ForwardStatus::kConverged) << x << ", " << z << ": " << ToString(cold.status);
+    EXPECT_LT((cold.equilibrium.q - inv.evaluation.equilibrium.q).cwiseAbs().maxCoeff(), kRoundTripTol)
+        << x << ", " << z;
+    EXPECT_LT((cold.equilibrium.tensions_N - inv.evaluation.equilibrium.tensions_N).cwiseAbs().maxCoeff(), 1e-7);
+    const Eigen::Vector3d guess = inv.evaluation.equilibrium.q + Eigen::Vector3d(0.01, -0.01, 0.02);
+    const ForwardResult warm = SolveForwardGeometricoStatic(robot, inv.lengths_m, &guess);
+    ASSERT_EQ(warm.status, ForwardStatus::kConverged);
+    EXPECT_LT((warm.equilibrium.q - inv.evaluation.equilibrium.q).cwiseAbs().maxCoeff(), kRoundTripTol);
+  }
+}
+
+TEST(ForwardModel, LengthsTooLongForTautCablesAreReportedNotReturned) {
+  const Robot& robot = BuiltinRobot();
+  // Both cables longer than the platform can hang with them taut (it would rest on the floor
+  // in reality; cablecal's model has no floor, so the answer must be a failure status, or a
+  // converged pose that really has these lengths).
+  Eigen::VectorXd L(2);
+  L << 2.0, 5.5;
+  const ForwardResult r = SolveForwardGeometricoStatic(robot, L);
+  if (r.status == ForwardStatus::kConverged) {
+    EXPECT_LT((CableLengths(robot, r.equilibrium.q) - L).cwiseAbs().maxCoeff(), 1e-10);
+    EXPECT_GT(r.equilibrium.tensions_N.minCoeff(), 0.0);
+    EXPECT_TRUE(r.equilibrium.stable);
+  }
+  // Lengths that cannot meet at all (sum shorter than the gap between the posts).
+  L << 1.0, 1.0;
+  EXPECT_NE(SolveForwardGeometricoStatic(robot, L).status, ForwardStatus::kConverged);
+}
+
+TEST(Feasibility, ReasonsAreReported) {
+  const Robot& robot = BuiltinRobot();
+  EXPECT_EQ(EvaluatePose(robot, -1.0, 1.0).feasibility, Feasibility::kOutsideFrame);
+  EXPECT_EQ(EvaluatePose(robot, 2.6, 2.79).feasibility, Feasibility::kOutsideFrame);
+  EXPECT_TRUE(EvaluatePose(robot, 2.6045, 1.4).feasible());
+  Robot tight = robot;
+  tight.tension_max_N = 5.0;  // below half the weight: nowhere feasible
+  EXPECT_EQ(EvaluatePose(tight, 2.6045, 1.4).feasibility, Feasibility::kTensionHigh);
+  Robot short_laser = robot;
+  short_laser.laser_range_m = 1.0;
+  EXPECT_EQ(EvaluatePose(short_laser, 2.6045, 1.4).feasibility, Feasibility::kLaserRange);
+  Robot narrow_inclinometer = robot;
+  narrow_inclinometer.theta_max_rad = 1e-3;
+  EXPECT_EQ(EvaluatePose(narrow_inclinometer, 1.0, 1.4).feasibility, Feasibility::kThetaLimit);
+}
+
+TEST(InitialLengths, HomeEquilibriumUnlessOverridden) {
+  Robot robot = BuiltinRobot();
+  const Eigen::VectorXd l0 = InitialLengths(robot);
+  const InversePose home = InverseModel(robot, robot.p_F_home_m.x(), robot.p_F_home_m.y());
+  EXPECT_NEAR(l0(0), home.lengths_m(0), 1e-15);
+  EXPECT_NEAR(l0(0), l0(1), 1e-12);  // symmetric robot
+  robot.cables[1].initial_length_m = 3.0;
+  EXPECT_EQ(InitialLengths(robot)(1), 3.0);
+  EXPECT_NEAR(InitialLengths(robot)(0), home.lengths_m(0), 1e-15);
+}
+
+}  // namespace
+}  // namespace cablecal

@@ -1,0 +1,115 @@
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "common/error.h"
+#include "model/cable.h"
+#include "workspace/workspace.h"
+
+namespace cablecal {
+namespace {
+
+namespace fs = std::filesystem;
+
+TEST(WorkspaceGrid, ResultDoesNotDependOnThreadCount) {
+  const Robot& robot = BuiltinRobot();
+  omp_set_num_threads(1);
+  const std::string one = WorkspaceCsv(robot, ComputeWorkspaceGrid(robot, 0.2), "");
+  omp_set_num_threads(2);
+  const std::string two = WorkspaceCsv(robot, ComputeWorkspaceGrid(robot, 0.2), "");
+  EXPECT_EQ(one, two);
+}
+
+TEST(WorkspaceGrid, AreaConvergesWithStep) {
+  const Robot& robot = BuiltinRobot();
+  const WorkspaceGrid coarse = ComputeWorkspaceGrid(robot, 0.1);
+  const WorkspaceGrid fine = ComputeWorkspaceGrid(robot, 0.05);
+  EXPECT_GT(fine.num_feasible, 0);
+  EXPECT_LT(fine.feasible_area_m2(), robot.frame_width_m * robot.frame_height_m);
+  EXPECT_NEAR(coarse.feasible_area_m2(), fine.feasible_area_m2(), 0.05 * fine.feasible_area_m2());
+  // Every infeasible point carries its reason; every feasible one an equilibrium.
+  for (const WorkspacePoint& p : fine.points) {
+    if (p.evaluation.feasible()) {
+      EXPECT_TRUE(p.evaluation.has_equilibrium);
+      EXPECT_LE(std::abs(p.evaluation.equilibrium.q(2)), robot.theta_max_rad);
+      EXPECT_GE(p.evaluation.equilibrium.tensions_N.minCoeff(), robot.tension_min_N);
+      EXPECT_LE(p.evaluation.equilibrium.tensions_N.maxCoeff(), robot.tension_max_N);
+    }
+  }
+}
+
+TEST(WorkspaceGrid, CsvHeaderAndRows) {
+  const Robot& robot = BuiltinRobot();
+  const WorkspaceGrid grid = ComputeWorkspaceGrid(robot, 0.5);
+  const std::string csv = WorkspaceCsv(robot, grid, "# provenance\n");
+  EXPECT_EQ(csv.rfind("# provenance\nx,z,theta,t1,t2,feasible,reason\n", 0), 0u);
+  EXPECT_NE(csv.find(",0,outside_frame\n"), std::string::npos);
+  EXPECT_NE(csv.find(",1,feasible\n"), std::string::npos);
+}
+
+TEST(WorkspaceGrid, BadStepIsInputError) {
+  EXPECT_THROW(ComputeWorkspaceGrid(BuiltinRobot(), 0.0), InputError);
+  EXPECT_THROW(ComputeWorkspaceGrid(BuiltinRobot(), -0.1), InputError);
+  EXPECT_THROW(ComputeWorkspaceGrid(BuiltinRobot(), 1e-6), InputError);
+}
+
+TEST(Sampler, SeededReproducibleAndFeasible) {
+  const Robot& robot = BuiltinRobot();
+  const auto a = SampleFeasiblePoses(robot, 30, 123);
+  const auto b = SampleFeasiblePoses(robot, 30, 123);
+  const auto c = SampleFeasiblePoses(robot, 30, 124);
+  EXPECT_EQ(PosePlanCsv(a, ""), PosePlanCsv(b, ""));
+  EXPECT_NE(PosePlanCsv(a, ""), PosePlanCsv(c, ""));
+  const Eigen::VectorXd l0 = InitialLengths(robot);
+  for (const PlanPose& p : a) {
+    EXPECT_EQ(CheckFeasibility(robot, p.q, p.tensions_N), Feasibility::kFeasible);
+    EXPECT_LT(EquilibriumResidual<double>(robot, p.q, p.tensions_N).norm(), 1e-9);
+    EXPECT_NEAR((p.lengths_m - l0 - p.length_change_m).norm(), 0.0, 1e-15);
+  }
+}
+
+TEST(Sampler, UniformOverTheFeasibleRegion) {
+  // The sample's mean x matches the feasible grid's centroid (a symmetric region: the frame
+  // centre) within 4 standard errors.
+  const Robot& robot = BuiltinRobot();
+  const auto poses = SampleFeasiblePoses(robot, 2000, 5);
+  double mean = 0, var = 0;
+  for (const PlanPose& p : poses) mean += p.q(0) / poses.size();
+  for (const PlanPose& p : poses) var += (p.q(0) - mean) * (p.q(0) - mean) / (poses.size() - 1);
+  EXPECT_NEAR(mean, robot.frame_width_m / 2, 4 * std::sqrt(var / poses.size()));
+}
+
+TEST(Sampler, EmptyWorkspaceFailsClearly) {
+  Robot robot = BuiltinRobot();
+  robot.tension_max_N = 5.0;
+  robot.cables[0].initial_length_m = 3.0;  // so that no home equilibrium is needed
+  robot.cables[1].initial_length_m = 3.0;
+  EXPECT_THROW(SampleFeasiblePoses(robot, 5, 1), SolverFailure);
+  EXPECT_THROW(SampleFeasiblePoses(BuiltinRobot(), 0, 1), InputError);
+}
+
+TEST(PosePlan, CsvRoundTrip) {
+  const Robot& robot = BuiltinRobot();
+  const auto plan = SampleFeasiblePoses(robot, 7, 99);
+  const fs::path path = fs::temp_directory_path() / ("cablecal_plan_" + std::to_string(::getpid()) + ".csv");
+  std::ofstream(path) << PosePlanCsv(plan, "# comment\n");
+  const auto back = ReadPosePlanCsv(path.string(), 2);
+  ASSERT_EQ(back.size(), plan.size());
+  for (std::size_t j = 0; j < plan.size(); ++j) {
+    EXPECT_EQ(back[j].q, plan[j].q);  // shortest round-trip formatting: exact
+    EXPECT_EQ(back[j].length_change_m, plan[j].length_change_m);
+  }
+  std::ofstream(path) << "pose,x,z,theta,t1,t2,l1,l2,dl1,dl2\n1,1,1,0,1,1,1,1,0,0\n1,1,1,0,1,1,1,1,0,0\n";
+  try {
+    ReadPosePlanCsv(path.string(), 2);
+    FAIL() << "duplicate accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), path.string() + ":3: column 'pose': duplicate pose id 1");
+  }
+  fs::remove(path);
+}
+
+}  // namespace
+}  // namespace cablecal

@@ -1,0 +1,143 @@
+#include "workspace/workspace.h"
+
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include "common/csv.h"
+#include "common/error.h"
+#include "common/format.h"
+#include "common/random.h"
+
+namespace cablecal {
+
+WorkspaceGrid ComputeWorkspaceGrid(const Robot& robot, double step_m) {
+  if (!(step_m > 0.0) || !std::isfinite(step_m)) {
+    throw InputError("--step", "", "must be a positive number of metres (got " + FormatDouble(step_m) + ")");
+  }
+  // Guard against a step so small the grid would not fit in memory.
+  const double nx_d = std::floor(robot.frame_width_m / step_m + 1e-9) + 1;
+  const double nz_d = std::floor(robot.frame_height_m / step_m + 1e-9) + 1;
+  if (nx_d * nz_d > 2e7) {
+    throw InputError("--step", "", FormatDouble(step_m) + " m makes a grid of more than 2e7 points");
+  }
+  const int nx = static_cast<int>(nx_d), nz = static_cast<int>(nz_d);
+  WorkspaceGrid grid;
+  grid.step_m = step_m;
+  grid.points.resize(static_cast<std::size_t>(nx) * nz);
+#pragma omp parallel for schedule(dynamic, 16)
+  for (int k = 0; k < nx * nz; ++k) {
+    WorkspacePoint& p = grid.points[k];
+    p.x_m = (k % nx) * step_m;
+    p.z_m = (k / nx) * step_m;
+    p.evaluation = EvaluatePose(robot, p.x_m, p.z_m);
+  }
+  for (const WorkspacePoint& p : grid.points) grid.num_feasible += p.evaluation.feasible();
+  return grid;
+}
+
+std::string WorkspaceCsv(const Robot& robot, const WorkspaceGrid& grid, const std::string& provenance) {
+  std::string out = provenance;
+  out += "x,z,theta";
+  for (int i = 1; i <= robot.num_cables(); ++i) out += ",t" + std::to_string(i);
+  out += ",feasible,reason\n";
+  for (const WorkspacePoint& p : grid.points) {
+    out += FormatDouble(p.x_m) + "," + FormatDouble(p.z_m) + ",";
+    if (p.evaluation.has_equilibrium) {
+      out += FormatDouble(p.evaluation.equilibrium.q(2));
+      for (int i = 0; i < robot.num_cables(); ++i) {
+        out += "," + FormatDouble(p.evaluation.equilibrium.tensions_N(i));
+      }
+    } else {
+      for (int i = 0; i < robot.num_cables(); ++i) out += ",";
+    }
+    out += std::string(",") + (p.evaluation.feasible() ? "1" : "0") + "," + ToString(p.evaluation.feasibility) + "\n";
+  }
+  return out;
+}
+
+PlanPose MakePlanPose(const Robot& robot, const Equilibrium& equilibrium,
+                      const Eigen::VectorXd& initial_lengths_m) {
+  PlanPose pose;
+  pose.q = equilibrium.q;
+  pose.tensions_N = equilibrium.tensions_N;
+  pose.lengths_m = CableLengths(robot, equilibrium.q);
+  pose.length_change_m = pose.lengths_m - initial_lengths_m;
+  return pose;
+}
+
+std::vector<PlanPose> SampleFeasiblePoses(const Robot& robot, int n, std::uint64_t seed) {
+  if (n < 1) throw InputError("--poses", "", "must be at least 1 (got " + std::to_string(n) + ")");
+  const Eigen::VectorXd l0 = InitialLengths(robot);
+  Rng rng(seed);
+  const double x_lo = robot.margin_m, x_hi = robot.frame_width_m - robot.margin_m;
+  const double z_lo = robot.margin_m,
+               z_hi = std::min(robot.frame_height_m - robot.margin_m, robot.laser_range_m);
+  const long max_draws = 10000L + 1000L * n;
+  std::vector<PlanPose> plan;
+  long draws = 0;
+  while (static_cast<int>(plan.size()) < n) {
+    if (++draws > max_draws) {
+      throw SolverFailure("found only " + std::to_string(plan.size()) + " feasible poses in " +
+                          std::to_string(max_draws) + " random draws: the feasible workspace is empty or tiny");
+    }
+    const double x = rng.Uniform(x_lo, x_hi);
+    const double z = rng.Uniform(z_lo, z_hi);
+    const PoseEvaluation e = EvaluatePose(robot, x, z);
+    if (e.feasible()) plan.push_back(MakePlanPose(robot, e.equilibrium, l0));
+  }
+  return plan;
+}
+
+std::string PosePlanCsv(const std::vector<PlanPose>& plan, const std::string& provenance) {
+  std::string out = provenance + "pose,x,z,theta";
+  const int m = plan.empty() ? 2 : static_cast<int>(plan.front().lengths_m.size());
+  for (const char* prefix : {"t", "l", "dl"}) {
+    for (int i = 1; i <= m; ++i) out += "," + std::string(prefix) + std::to_string(i);
+  }
+  out += "\n";
+  for (std::size_t j = 0; j < plan.size(); ++j) {
+    const PlanPose& p = plan[j];
+    out += std::to_string(j + 1);
+    for (int k = 0; k < 3; ++k) out += "," + FormatDouble(p.q(k));
+    for (int i = 0; i < m; ++i) out += "," + FormatDouble(p.tensions_N(i));
+    for (int i = 0; i < m; ++i) out += "," + FormatDouble(p.lengths_m(i));
+    for (int i = 0; i < m; ++i) out += "," + FormatDouble(p.length_change_m(i));
+    out += "\n";
+  }
+  return out;
+}
+
+}  // namespace cablecal
+
+namespace cablecal {
+
+std::vector<PlanPose> ReadPosePlanCsv(const std::string& path, int num_cables) {
+  std::vector<std::string> header = {"pose", "x", "z", "theta"};
+  for (const char* prefix : {"t", "l", "dl"}) {
+    for (int i = 1; i <= num_cables; ++i) header.push_back(prefix + std::to_string(i));
+  }
+  std::vector<PlanPose> plan;
+  std::set<int> ids;
+  ForEachCsvRow(path, header, [&](const CsvRow& row) {
+    const int id = row.PositiveInt(0);
+    if (!ids.insert(id).second) {
+      throw InputError(row.Where(), "column 'pose'", "duplicate pose id " + std::to_string(id));
+    }
+    PlanPose p;
+    for (int k = 0; k < 3; ++k) p.q(k) = row.Number(1 + k);
+    p.tensions_N.resize(num_cables);
+    p.lengths_m.resize(num_cables);
+    p.length_change_m.resize(num_cables);
+    for (int i = 0; i < num_cables; ++i) {
+      p.tensions_N(i) = row.Number(4 + i);
+      p.lengths_m(i) = row.Number(4 + num_cables + i);
+      p.length_change_m(i) = row.Number(4 + 2 * num_cables + i);
+    }
+    plan.push_back(p);
+  });
+  return plan;
+}
+
+}  // namespace cablecal

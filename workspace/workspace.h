@@ -1,0 +1,64 @@
+// workspace: the feasible cable-tension workspace of a robot (DESIGN.md) and the pose
+// plans built on it.
+//   ComputeWorkspaceGrid   every grid point's equilibrium and feasibility (with the reason)
+//   SampleFeasiblePoses    uniform random feasible poses, seeded; reused by design and
+//                          the Monte Carlo
+//   PosePlan               the pose plan CSV shared by sample, design and simulate
+// Depends on model/ and common/.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "model/robot.h"
+#include "model/statics.h"
+
+namespace cablecal {
+
+struct WorkspacePoint {
+  double x_m = 0.0, z_m = 0.0;
+  PoseEvaluation evaluation;
+};
+
+struct WorkspaceGrid {
+  double step_m = 0.0;
+  std::vector<WorkspacePoint> points;  // row-major: z outer, x inner
+  int num_feasible = 0;
+  // Area estimate: each feasible grid point stands for a step x step cell (m^2).
+  double feasible_area_m2() const { return num_feasible * step_m * step_m; }
+};
+
+// Grid over the frame [0, width] x [0, height] with spacing step_m (> 0). Points are
+// evaluated in parallel (OpenMP); the result does not depend on the thread count.
+WorkspaceGrid ComputeWorkspaceGrid(const Robot& robot, double step_m);
+
+// Workspace CSV: header x,z,theta,t1,t2,feasible,reason (m, rad, N); theta and tensions
+// empty where no equilibrium exists.
+std::string WorkspaceCsv(const Robot& robot, const WorkspaceGrid& grid, const std::string& provenance);
+
+// One measurement pose of a plan.
+struct PlanPose {
+  Eigen::Vector3d q = Eigen::Vector3d::Zero();  // (x_m, z_m, theta_rad), an equilibrium
+  Eigen::VectorXd tensions_N;
+  Eigen::VectorXd lengths_m;        // l_i, exit point -> anchor
+  Eigen::VectorXd length_change_m;  // dl_i = l_i - l_i0: the encoder command from home
+};
+
+// Fills tensions, lengths and length changes for equilibrium poses.
+PlanPose MakePlanPose(const Robot& robot, const Equilibrium& equilibrium,
+                      const Eigen::VectorXd& initial_lengths_m);
+
+// n poses drawn uniformly over the feasible (x, z) region by rejection from the frame
+// box; the stream is Rng(seed). Throws InputError if n < 1 and SolverFailure if no
+// feasible pose turns up in 10000 + 1000 n draws (an empty or tiny workspace).
+std::vector<PlanPose> SampleFeasiblePoses(const Robot& robot, int n, std::uint64_t seed);
+
+// Pose plan CSV: header pose,x,z,theta,t1,t2,l1,l2,dl1,dl2 (pose numbered from 1).
+std::string PosePlanCsv(const std::vector<PlanPose>& plan, const std::string& provenance);
+
+// Reads a pose plan CSV; '#' lines are comments. Throws InputError naming file, line and
+// column on a wrong header, a bad number, a duplicate or non-positive pose id.
+std::vector<PlanPose> ReadPosePlanCsv(const std::string& path, int num_cables);
+
+}  // namespace cablecal
