@@ -25,7 +25,10 @@ void AddRobotOption(CLI::App* app, std::string* path) {
 
 int main(int argc, char** argv) {
   Context ctx;
-  ctx.command_line = cablecal::CommandLine(std::vector<std::string>(argv, argv + argc));
+  // argv[0] is recorded as "cablecal" so that outputs do not depend on where it was built.
+  std::vector<std::string> args(argv, argv + argc);
+  args[0] = "cablecal";
+  ctx.command_line = cablecal::CommandLine(args);
 
   CLI::App app{"cablecal: plan, identify and predict the calibration of cable-driven parallel robots"};
   app.set_version_flag("--version", std::string("cablecal ") + cablecal::Version() + " (commit " +

@@ -5,5 +5,6 @@ root="$(cd "$(dirname "$0")/.." && pwd)"
 "$root/scripts/setup.sh"
 "$root/scripts/build.sh"
 build="${CABLECAL_BUILD_DIR:-$root/build}"
-mkdir -p "$root/results"
-"$build/cablecal" workspace --out "$root/results/workspace.csv" --plot "$root/results/workspace.png" "$@"
+cd "$root"
+mkdir -p results
+"$build/cablecal" workspace --out results/workspace.csv --plot results/workspace.png "$@"
