@@ -10,6 +10,8 @@
 #include "common/error.h"
 #include "common/format.h"
 #include "common/version.h"
+#include "identify/experiment.h"
+#include "identify/identify.h"
 #include "model/statics.h"
 #include "workspace/workspace.h"
 
@@ -69,6 +71,71 @@ int RunSample(const Context& ctx, const SampleOptions& options) {
   output.Commit();
   std::printf("wrote %zu random feasible poses of %s (seed %llu) to %s\n", plan.size(), robot.name.c_str(),
               options.seed, options.out_path.c_str());
+  return kExitOk;
+}
+
+int RunSimulate(const Context& ctx, const SimulateOptions& options) {
+  const Robot nominal = LoadRobotOption(options.robot_path);
+  const SimulationOptions sim{ParseNoisySensors(options.sensors), !options.no_encoder_noise};
+  if (!options.truth_path.empty() && options.geometry_sigma_m >= 0.0) {
+    throw InputError("--truth", "", "give either --truth or --geometry-sigma, not both");
+  }
+  const std::vector<PlanPose> plan = ReadPosePlanCsv(options.plan_path, nominal.num_cables());
+  // The geometry perturbation and the sensor noise use separate streams of the seed, so the
+  // same seed gives the same true robot whatever the sensors' settings.
+  Rng geometry_rng(StreamSeed(options.seed, {0}));
+  Rng noise_rng(StreamSeed(options.seed, {1}));
+  Robot truth = nominal;
+  if (!options.truth_path.empty()) {
+    truth = LoadRobotFile(options.truth_path);
+  } else if (options.geometry_sigma_m > 0.0) {
+    truth = PerturbGeometry(nominal, options.geometry_sigma_m, geometry_rng);
+  }
+  const SimulatedExperiment experiment = SimulateExperiment(nominal, truth, plan, sim, noise_rng);
+  AtomicOutput output;
+  output.WriteText(options.out_path, MeasurementsCsv(experiment.measurements, ProvenanceComment(ctx.command_line)));
+  if (!options.truth_out_path.empty()) {
+    std::string provenance = ProvenanceComment(ctx.command_line);
+    output.WriteText(options.truth_out_path,
+                     provenance + TruthYaml(WithGeometry(truth, GeometryOf(truth)), experiment.measurements,
+                                            experiment.true_poses));
+  }
+  output.Commit();
+  std::printf("simulated %zu poses (noisy sensors: %s, encoder noise %s) to %s\n", plan.size(),
+              ToString(sim.noisy), sim.encoder_noise ? "on" : "off", options.out_path.c_str());
+  return kExitOk;
+}
+
+int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
+  const Robot nominal = LoadRobotOption(options.robot_path);
+  IdentifyOptions id;
+  id.estimator = ParseEstimator(options.estimator);
+  id.gauge = ParseGauge(options.gauge);
+  id.source = options.measurements_path;
+  id.max_iterations = options.max_iterations;
+  const std::vector<Measurement> measurements = ReadMeasurementsCsv(options.measurements_path, nominal.num_cables());
+  const IdentifyResult result = Identify(nominal, measurements, id);
+  if (result.status == IdentifyStatus::kRankDeficient) {
+    throw InputError(options.measurements_path, "", result.message);
+  }
+  if (!result.converged()) throw SolverFailure(options.measurements_path + ": " + result.message);
+  AtomicOutput output;
+  output.WriteText(options.out_path, IdentifyResultYaml(result, ctx.command_line));
+  if (!options.calibrated_robot_path.empty()) {
+    const Robot calibrated = WithGeometry(nominal, result.geometry);
+    output.WriteText(options.calibrated_robot_path,
+                     ProvenanceComment(ctx.command_line) + "# calibrated: exit points and initial lengths identified (" +
+                         ToString(id.estimator) + ", gauge " + ToString(id.gauge) + ")\n" + RobotToYaml(calibrated));
+  }
+  output.Commit();
+  std::printf("identified %s from %zu poses (%s, gauge %s): %d iterations, residual rms encoder %s m, laser %s m\n",
+              nominal.name.c_str(), measurements.size(), ToString(id.estimator), ToString(id.gauge), result.iterations,
+              FormatDouble(result.rms_encoder_m).c_str(), FormatDouble(result.rms_laser_m).c_str());
+  for (int k = 0; k < 6; ++k) {
+    std::printf("  %s = %.6f m", kGeometryNames[k], result.geometry(k));
+    if (result.has_covariance) std::printf("  (std %.3g mm)", 1e3 * result.geometry_std(k));
+    std::printf("\n");
+  }
   return kExitOk;
 }
 

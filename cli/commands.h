@@ -30,6 +30,22 @@ struct SampleOptions {
 };
 int RunSample(const Context& ctx, const SampleOptions& options);
 
+struct SimulateOptions {
+  std::string robot_path, truth_path, plan_path, out_path, truth_out_path;
+  double geometry_sigma_m = -1.0;  // < 0: not given
+  unsigned long long seed = 1;
+  std::string sensors = "both";
+  bool no_encoder_noise = false;
+};
+int RunSimulate(const Context& ctx, const SimulateOptions& options);
+
+struct IdentifyCommandOptions {
+  std::string robot_path, measurements_path, out_path, calibrated_robot_path;
+  std::string estimator = "ml", gauge = "a1x";
+  int max_iterations = 100;
+};
+int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options);
+
 // Runs a plotting script of scripts/ with the python that has matplotlib. Throws
 // SolverFailure (exit 3) if the script fails.
 void RunPlotScript(const std::string& script, const std::vector<std::string>& args);

@@ -49,6 +49,38 @@ int main(int argc, char** argv) {
   sample_cmd->add_option("--seed", sample.seed, "random seed")->capture_default_str();
   sample_cmd->add_option("--out", sample.out_path, "pose plan CSV")->required();
 
+  cablecal::cli::SimulateOptions sim;
+  CLI::App* sim_cmd = app.add_subcommand("simulate", "simulate an experiment: true robot, forward motion, sensor noise");
+  AddRobotOption(sim_cmd, &sim.robot_path);
+  sim_cmd->add_option("--truth", sim.truth_path, "true robot file (default: the nominal robot)")->check(CLI::ExistingFile);
+  sim_cmd->add_option("--geometry-sigma", sim.geometry_sigma_m,
+                      "perturb nominal exit points and initial lengths by N(0, S^2), S in m")
+      ->check(CLI::NonNegativeNumber);
+  sim_cmd->add_option("--plan", sim.plan_path, "pose plan CSV")->required()->check(CLI::ExistingFile);
+  sim_cmd->add_option("--seed", sim.seed, "random seed")->capture_default_str();
+  sim_cmd->add_option("--sensors", sim.sensors, "noisy sensors: both|laser|inclinometer|none")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"both", "laser", "inclinometer", "none"}));
+  sim_cmd->add_flag("--no-encoder-noise", sim.no_encoder_noise, "encoders read the commanded changes exactly");
+  sim_cmd->add_option("--out", sim.out_path, "measurement CSV (pose,dl1,dl2,z,theta)")->required();
+  sim_cmd->add_option("--truth-out", sim.truth_out_path, "true robot and true poses (YAML)");
+
+  cablecal::cli::IdentifyCommandOptions ident;
+  CLI::App* id_cmd = app.add_subcommand("identify", "identify exit points, initial lengths and poses (Ceres)");
+  AddRobotOption(id_cmd, &ident.robot_path);
+  id_cmd->add_option("--measurements", ident.measurements_path, "measurement CSV")->required()->check(CLI::ExistingFile);
+  id_cmd->add_option("--estimator", ident.estimator, "ml (all sensors whitened) or paper (Eq. 6)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"ml", "paper"}));
+  id_cmd->add_option("--gauge", ident.gauge, "a1x (hold a1x), prior (tracker prior on exits) or none")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"a1x", "prior", "none"}));
+  id_cmd->add_option("--max-iterations", ident.max_iterations, "Levenberg-Marquardt iteration limit")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  id_cmd->add_option("--out", ident.out_path, "result YAML")->required();
+  id_cmd->add_option("--calibrated-robot", ident.calibrated_robot_path, "robot file with the identified geometry");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -65,6 +97,8 @@ int main(int argc, char** argv) {
   try {
     if (ws_cmd->parsed()) return cablecal::cli::RunWorkspace(ctx, ws);
     if (sample_cmd->parsed()) return cablecal::cli::RunSample(ctx, sample);
+    if (sim_cmd->parsed()) return cablecal::cli::RunSimulate(ctx, sim);
+    if (id_cmd->parsed()) return cablecal::cli::RunIdentify(ctx, ident);
   } catch (const cablecal::InputError& e) {
     std::fprintf(stderr, "cablecal: error: %s\n", e.what());
     return cablecal::kExitBadInput;

@@ -11,14 +11,15 @@
 // -x side (x' = s_i (x - C_x), z' = z - C_z), A_i sits at angle pi and the cable wraps
 // clockwise to T_i at angle alpha = psi + delta, with psi = atan2(m_z, s_i m_x) the angle
 // of m_i and delta = atan2(sqrt(|m|^2 - r^2), r) = acos(r / |m|) the angle between CT and
-// CB. Hence phi_i = pi - psi - delta.
+// CB. Hence phi_i = pi - psi - delta, with phi in [0, 3 pi / 2) for a valid configuration.
 // The paper writes phi = pi - beta - gamma with beta = delta and sin(gamma) = (a_z - b_z)/|m|,
 // i.e. gamma = -psi for an anchor below the pulley; that is pi - delta + psi, which is
 // wrong by 2 psi (an anchor straight below the pulley must give phi = pi, Eq. 2 gives 0).
 // tests/model/cable_test.cc checks the closed form against a numerical tangency construction.
 //
-// Valid while |m_i| > r (the anchor is outside the pulley) and phi_i >= 0 (the cable
-// touches the pulley); CableGeometryValid says whether a configuration is.
+// Valid while |m_i| > r (the anchor is outside the pulley) and 0 <= phi_i <= 3 pi / 2 (the
+// cable touches the pulley and leaves it before passing under it); CableGeometryValid says
+// whether a configuration is.
 #pragma once
 
 #include <Eigen/Core>
@@ -68,26 +69,56 @@ struct CableState {
   Vec2<T> u_F_cable;      // unit vector from B_i toward T_i: direction of the cable's pull
 };
 
+namespace internal {
+
+template <typename T>
+struct Wrap {
+  Vec2<T> p_F_centre;
+  Vec2<T> m;            // B - C
+  T segment_length_m;   // sqrt(|m|^2 - r^2)
+  T alpha_rad;          // tangent point's angle in the mirrored pulley frame, = psi + delta
+};
+
+template <typename T>
+Wrap<T> ComputeWrap(const Vec2<T>& p_F_exit_m, const T& r, double side_sign, const Vec2<T>& p_F_anchor_m) {
+  using std::atan2;
+  using std::sqrt;
+  Wrap<T> w;
+  w.p_F_centre = Vec2<T>(p_F_exit_m.x() + side_sign * r, p_F_exit_m.y());
+  w.m = p_F_anchor_m - w.p_F_centre;
+  w.segment_length_m = sqrt(w.m.squaredNorm() - r * r);
+  // psi + delta in one atan2 (angle of the product of (s m_x, m_z) and (r, segment)): a
+  // third fewer transcendental calls in the identification's inner loop. It wraps only
+  // where phi would leave [0, 3 pi / 2], which CableGeometryValid rejects.
+  const T mx = side_sign * w.m.x();
+  w.alpha_rad = atan2(w.m.y() * r + mx * w.segment_length_m, mx * r - w.m.y() * w.segment_length_m);
+  return w;
+}
+
+}  // namespace internal
+
+// Length from exit point to anchor only (what the identification needs).
+template <typename T>
+T CableLength(const Vec2<T>& p_F_exit_m, const T& pulley_radius_m, double side_sign, const Vec2<T>& p_F_anchor_m) {
+  const internal::Wrap<T> w = internal::ComputeWrap<T>(p_F_exit_m, pulley_radius_m, side_sign, p_F_anchor_m);
+  return pulley_radius_m * (T(M_PI) - w.alpha_rad) + w.segment_length_m;
+}
+
 template <typename T>
 CableState<T> CableGeometry(const Vec2<T>& p_F_exit_m, const T& pulley_radius_m,
                             double side_sign, const Vec2<T>& p_F_anchor_m) {
-  using std::atan2;
   using std::cos;
   using std::sin;
   using std::sqrt;
   const T& r = pulley_radius_m;
-  const Vec2<T> p_F_centre(p_F_exit_m.x() + side_sign * r, p_F_exit_m.y());
-  const Vec2<T> m = p_F_anchor_m - p_F_centre;
+  const internal::Wrap<T> w = internal::ComputeWrap<T>(p_F_exit_m, r, side_sign, p_F_anchor_m);
   CableState<T> s;
-  s.centre_distance_m = sqrt(m.squaredNorm());
-  s.segment_length_m = sqrt(m.squaredNorm() - r * r);
-  const T psi = atan2(m.y(), side_sign * m.x());
-  const T delta = atan2(s.segment_length_m, r);
-  const T alpha = psi + delta;
-  s.wrap_angle_rad = T(M_PI) - alpha;
+  s.centre_distance_m = sqrt(w.m.squaredNorm());
+  s.segment_length_m = w.segment_length_m;
+  s.wrap_angle_rad = T(M_PI) - w.alpha_rad;
   s.length_m = r * s.wrap_angle_rad + s.segment_length_m;
-  s.p_F_tangent_m = Vec2<T>(p_F_centre.x() + side_sign * r * cos(alpha),
-                            p_F_centre.y() + r * sin(alpha));
+  s.p_F_tangent_m = Vec2<T>(w.p_F_centre.x() + side_sign * r * cos(w.alpha_rad),
+                            w.p_F_centre.y() + r * sin(w.alpha_rad));
   s.u_F_cable = (s.p_F_tangent_m - p_F_anchor_m) / s.segment_length_m;
   return s;
 }
@@ -102,7 +133,7 @@ CableState<T> CableAtPose(const Cable& cable, const Pose<T>& q) {
 
 inline bool CableGeometryValid(const CableState<double>& s, double pulley_radius_m) {
   return std::isfinite(s.length_m) && s.centre_distance_m > pulley_radius_m &&
-         s.wrap_angle_rad >= 0.0;
+         s.wrap_angle_rad >= 0.0 && s.wrap_angle_rad <= 1.5 * M_PI;
 }
 
 // Wrench matrix W (3 x m): column i = [u_i; (R b_i) x u_i], the force and the moment

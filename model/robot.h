@@ -5,6 +5,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
 #include <optional>
 #include <string>
 #include <vector>
@@ -33,6 +34,16 @@ struct SensorNoise {
   double inclinometer_accuracy_rad = 0.0;
   double inclinometer_repeatability_rad = 0.0;
   double encoder_sigma_m = 0.0;  // one standard deviation (not a range)
+  // Laser-tracker measurement of the exit points, one standard deviation per coordinate;
+  // used by the identification's `prior` gauge. Optional in the file.
+  std::optional<double> tracker_sigma_m;
+
+  // Standard deviation of one reading: accuracy and repeatability are drawn separately
+  // (each range = 3 sigma) and added, so their variances add.
+  double laser_sigma_m() const { return std::hypot(laser_accuracy_m, laser_repeatability_m) / 3.0; }
+  double inclinometer_sigma_rad() const {
+    return std::hypot(inclinometer_accuracy_rad, inclinometer_repeatability_rad) / 3.0;
+  }
 };
 
 struct Robot {

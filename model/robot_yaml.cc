@@ -2,6 +2,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -87,7 +88,8 @@ class Reader {
 Robot Parse(const YAML::Node& root, const Reader& rd) {
   Robot robot;
   robot.source = rd.source();
-  rd.ExpectMap(root, "", {"name", "gravity", "frame", "platform", "cables", "tension", "limits", "home", "sensors"}, {});
+  rd.ExpectMap(root, "", {"name", "gravity", "frame", "platform", "cables", "tension", "limits", "home", "sensors"},
+               {"true_poses"});
 
   robot.name = rd.String(root["name"], "name");
   if (robot.name.empty()) rd.Fail(root["name"], "name", "must not be empty");
@@ -180,7 +182,7 @@ Robot Parse(const YAML::Node& root, const Reader& rd) {
   rd.NonNegative(limits["margin"], "limits.margin", robot.margin_m);
 
   const YAML::Node sensors = root["sensors"];
-  rd.ExpectMap(sensors, "sensors", {"laser", "inclinometer", "encoder"}, {});
+  rd.ExpectMap(sensors, "sensors", {"laser", "inclinometer", "encoder"}, {"tracker"});
   rd.ExpectMap(sensors["laser"], "sensors.laser", {"accuracy", "repeatability"}, {});
   rd.ExpectMap(sensors["inclinometer"], "sensors.inclinometer", {"accuracy_deg", "repeatability_deg"}, {});
   rd.ExpectMap(sensors["encoder"], "sensors.encoder", {"sigma"}, {});
@@ -195,6 +197,14 @@ Robot Parse(const YAML::Node& root, const Reader& rd) {
   rd.NonNegative(sensors["inclinometer"]["accuracy_deg"], "sensors.inclinometer.accuracy_deg", inc_acc_deg);
   rd.NonNegative(sensors["inclinometer"]["repeatability_deg"], "sensors.inclinometer.repeatability_deg", inc_rep_deg);
   rd.NonNegative(sensors["encoder"]["sigma"], "sensors.encoder.sigma", s.encoder_sigma_m);
+  if (sensors["tracker"]) {
+    rd.ExpectMap(sensors["tracker"], "sensors.tracker", {"sigma"}, {});
+    s.tracker_sigma_m = rd.Number(sensors["tracker"], "sensors.tracker", "sigma");
+    rd.Positive(sensors["tracker"]["sigma"], "sensors.tracker.sigma", *s.tracker_sigma_m);
+  }
+  if (root["true_poses"] && !root["true_poses"].IsSequence()) {
+    rd.Fail(root["true_poses"], "true_poses", "must be a list (it is written by cablecal simulate --truth-out)");
+  }
   s.inclinometer_accuracy_rad = inc_acc_deg * kDegToRad;
   s.inclinometer_repeatability_rad = inc_rep_deg * kDegToRad;
 
@@ -209,6 +219,14 @@ Robot Parse(const YAML::Node& root, const Reader& rd) {
 }
 
 }  // namespace
+
+// Degrees for the file: the radians divided back, to 12 significant digits so that a value
+// typed as 60 is written as 60 and not 59.99999999999999.
+static std::string Degrees(double rad) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof(buffer), "%.12g", rad / kDegToRad);
+  return buffer;
+}
 
 Robot LoadRobotFromString(const std::string& yaml_text, const std::string& source) {
   const Reader rd(source);
@@ -264,16 +282,17 @@ std::string RobotToYaml(const Robot& robot) {
   }
   o << "tension: {min: " << FormatDouble(robot.tension_min_N) << ", max: " << FormatDouble(robot.tension_max_N)
     << "}\n";
-  o << "limits: {theta_max_deg: " << FormatDouble(robot.theta_max_rad / kDegToRad)
+  o << "limits: {theta_max_deg: " << Degrees(robot.theta_max_rad)
     << ", laser_range: " << FormatDouble(robot.laser_range_m) << ", margin: " << FormatDouble(robot.margin_m)
     << "}\n";
   o << "home: " << v2(robot.p_F_home_m) << "\n";
   const SensorNoise& s = robot.sensors;
   o << "sensors:\n  laser: {accuracy: " << FormatDouble(s.laser_accuracy_m)
     << ", repeatability: " << FormatDouble(s.laser_repeatability_m) << "}\n"
-    << "  inclinometer: {accuracy_deg: " << FormatDouble(s.inclinometer_accuracy_rad / kDegToRad)
-    << ", repeatability_deg: " << FormatDouble(s.inclinometer_repeatability_rad / kDegToRad) << "}\n"
+    << "  inclinometer: {accuracy_deg: " << Degrees(s.inclinometer_accuracy_rad)
+    << ", repeatability_deg: " << Degrees(s.inclinometer_repeatability_rad) << "}\n"
     << "  encoder: {sigma: " << FormatDouble(s.encoder_sigma_m) << "}\n";
+  if (s.tracker_sigma_m) o << "  tracker: {sigma: " << FormatDouble(*s.tracker_sigma_m) << "}\n";
   return o.str();
 }
 

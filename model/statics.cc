@@ -384,11 +384,14 @@ ForwardResult SolveForwardGeometricoStatic(const Robot& robot, const Eigen::Vect
                                            const Eigen::Vector3d* guess) {
   CABLECAL_CHECK(robot.num_cables() == 2, "the forward model is implemented for 2 cables");
   CABLECAL_CHECK(lengths_m.size() == 2, "one length per cable");
-  if (guess) return ForwardNewton(robot, lengths_m, *guess);
-  // Cold start: Newton from the circle intersections at a few orientations, first taut and
-  // stable solution kept. Near the posts the platform tilts far from level, where a single
-  // level start can stall.
   ForwardResult last;
+  if (guess) {
+    last = ForwardNewton(robot, lengths_m, *guess);
+    if (last.status == ForwardStatus::kConverged) return last;
+  }
+  // Cold start (or a guess that failed): Newton from the circle intersections at a few
+  // orientations, first taut and stable solution kept. Near the posts the platform tilts
+  // far from level, where a single level start can stall.
   for (const double theta_deg : {0.0, 25.0, -25.0, 50.0, -50.0, 75.0, -75.0}) {
     Eigen::Vector3d start;
     if (!CircleIntersectionGuess(robot, lengths_m, theta_deg * kDegToRad, &start)) continue;

@@ -104,8 +104,8 @@ struct ForwardResult {
 
 // Forward geometrico-static model: cable lengths (exit point -> anchor) -> the pose where
 // the platform settles. Newton on the square system [l(q) - L; W(q) t + w_g(q)] = 0 in
-// (x, z, theta, t), started from `guess` (e.g. the commanded pose) or, if null, from the
-// intersection of the length circles with theta = 0.
+// (x, z, theta, t), started from `guess` (e.g. the commanded pose) and, if that fails or no
+// guess is given, from the intersections of the length circles at a few orientations.
 ForwardResult SolveForwardGeometricoStatic(const Robot& robot, const Eigen::VectorXd& lengths_m,
                                            const Eigen::Vector3d* guess = nullptr);
 

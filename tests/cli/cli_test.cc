@@ -119,6 +119,67 @@ TEST_F(Cli, TensionBoundsThatEmptyTheWorkspaceAreRejectedAtLoading) {
   EXPECT_FALSE(fs::exists(Path("p.csv")));
 }
 
+TEST_F(Cli, SampleSimulateIdentifyRoundTrip) {
+  ASSERT_EQ(RunCablecal("sample --poses 12 --seed 8 --out " + Path("plan.csv")).exit_code, 0);
+  const RunResult sim = RunCablecal("simulate --plan " + Path("plan.csv") + " --geometry-sigma 0.01 --seed 3 --out " +
+                                    Path("meas.csv") + " --truth-out " + Path("truth.yaml"));
+  ASSERT_EQ(sim.exit_code, 0) << sim.output;
+  EXPECT_NE(Read("meas.csv").find("\npose,dl1,dl2,z,theta\n"), std::string::npos);
+  EXPECT_NE(Read("truth.yaml").find("true_poses:"), std::string::npos);
+  // The truth file is itself a valid robot file.
+  ASSERT_EQ(RunCablecal("sample --poses 2 --robot " + Path("truth.yaml") + " --out " + Path("p2.csv")).exit_code, 0);
+  const RunResult id = RunCablecal("identify --measurements " + Path("meas.csv") + " --out " + Path("result.yaml") +
+                                   " --calibrated-robot " + Path("cal.yaml"));
+  ASSERT_EQ(id.exit_code, 0) << id.output;
+  const std::string result = Read("result.yaml");
+  for (const char* key : {"status: converged", "estimator: ml", "gauge: a1x", "residual_rms:", "a2z: {value: ",
+                          "correlation:", "poses:", "condition_number:", "null_directions: []"}) {
+    EXPECT_NE(result.find(key), std::string::npos) << key << "\n" << result;
+  }
+  // The calibrated robot loads and is usable.
+  EXPECT_EQ(RunCablecal("sample --poses 2 --robot " + Path("cal.yaml") + " --out " + Path("p3.csv")).exit_code, 0);
+  const RunResult none = RunCablecal("identify --gauge none --estimator paper --measurements " + Path("meas.csv") +
+                                     " --out " + Path("none.yaml"));
+  ASSERT_EQ(none.exit_code, 0) << none.output;
+  EXPECT_NE(Read("none.yaml").find("null_directions:\n    - \""), std::string::npos) << Read("none.yaml");
+}
+
+TEST_F(Cli, IdentifyBadMeasurementsExitTwoAndWriteNothing) {
+  auto write = [&](const std::string& name, const std::string& text) { std::ofstream(Path(name)) << text; };
+  std::string rows;
+  for (int j = 1; j <= 8; ++j) rows += std::to_string(j) + ",0.01,-0.01,1.2,0.05\n";  // identical poses
+  write("identical.csv", "pose,dl1,dl2,z,theta\n" + rows);
+  write("header.csv", "pose,dl1,dl2,z\n1,0,0,1\n");
+  write("nan.csv", "pose,dl1,dl2,z,theta\n1,0,0,nan,0\n");
+  write("dup.csv", "pose,dl1,dl2,z,theta\n1,0,0,1,0\n1,0,0,1,0\n");
+  write("few.csv", "pose,dl1,dl2,z,theta\n1,0,0,1,0\n2,0.1,0,1,0\n");
+  write("columns.csv", "pose,dl1,dl2,z,theta\n1,0,0,1\n");
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"identical.csv", "cannot determine"},
+      {"header.csv", "header.csv:1: header: expected 'pose,dl1,dl2,z,theta'"},
+      {"nan.csv", "nan.csv:2: column 'z': must be a finite number (got 'nan')"},
+      {"dup.csv", "dup.csv:3: column 'pose': duplicate pose id 1"},
+      {"few.csv", "2 poses give 8 equations for 11 unknowns"},
+      {"columns.csv", "columns.csv:2: expected 5 columns, got 4"}};
+  for (const auto& [file, message] : cases) {
+    const RunResult r = RunCablecal("identify --measurements " + Path(file) + " --out " + Path("r.yaml"));
+    EXPECT_EQ(r.exit_code, 2) << file << "\n" << r.output;
+    EXPECT_NE(r.output.find(message), std::string::npos) << file << "\n" << r.output;
+    EXPECT_FALSE(fs::exists(Path("r.yaml")));
+  }
+}
+
+TEST_F(Cli, IdentifyNotConvergedExitsThreeAndWritesNothing) {
+  ASSERT_EQ(RunCablecal("sample --poses 10 --seed 8 --out " + Path("plan.csv")).exit_code, 0);
+  ASSERT_EQ(RunCablecal("simulate --plan " + Path("plan.csv") + " --geometry-sigma 0.005 --out " + Path("m.csv")).exit_code, 0);
+  const RunResult r = RunCablecal("identify --max-iterations 1 --measurements " + Path("m.csv") + " --out " +
+                                  Path("r.yaml") + " --calibrated-robot " + Path("c.yaml"));
+  EXPECT_EQ(r.exit_code, 3) << r.output;
+  EXPECT_NE(r.output.find("did not converge"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(Path("r.yaml")));
+  EXPECT_FALSE(fs::exists(Path("c.yaml")));
+}
+
 TEST_F(Cli, VersionAndHelp) {
   const RunResult v = RunCablecal("--version");
   EXPECT_EQ(v.exit_code, 0);

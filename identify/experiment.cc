@@ -1,0 +1,140 @@
+#include "identify/experiment.h"
+
+#include <set>
+
+#include "common/csv.h"
+#include "common/error.h"
+#include "common/format.h"
+#include "model/statics.h"
+
+namespace cablecal {
+
+const char* const kGeometryNames[6] = {"a1x", "a1z", "a2x", "a2z", "l10", "l20"};
+
+GeometryVector GeometryOf(const Robot& robot) {
+  CABLECAL_CHECK(robot.num_cables() == 2, "identification is implemented for 2 cables");
+  const Eigen::VectorXd l0 = InitialLengths(robot);
+  GeometryVector g;
+  g << robot.cables[0].p_F_exit_m, robot.cables[1].p_F_exit_m, l0(0), l0(1);
+  return g;
+}
+
+Robot WithGeometry(const Robot& robot, const GeometryVector& geometry) {
+  Robot r = robot;
+  for (int i = 0; i < 2; ++i) {
+    r.cables[i].p_F_exit_m = geometry.segment<2>(2 * i);
+    r.cables[i].initial_length_m = geometry(4 + i);
+  }
+  return r;
+}
+
+Robot PerturbGeometry(const Robot& nominal, double sigma_m, Rng& rng) {
+  GeometryVector g = GeometryOf(nominal);
+  for (int k = 0; k < 6; ++k) g(k) += rng.Normal(0.0, sigma_m);
+  return WithGeometry(nominal, g);
+}
+
+NoisySensors ParseNoisySensors(const std::string& text) {
+  if (text == "both") return NoisySensors::kBoth;
+  if (text == "laser") return NoisySensors::kLaser;
+  if (text == "inclinometer") return NoisySensors::kInclinometer;
+  if (text == "none") return NoisySensors::kNone;
+  throw InputError("--sensors", "", "must be both, laser, inclinometer or none (got '" + text + "')");
+}
+
+const char* ToString(NoisySensors s) {
+  switch (s) {
+    case NoisySensors::kBoth: return "both";
+    case NoisySensors::kLaser: return "laser";
+    case NoisySensors::kInclinometer: return "inclinometer";
+    case NoisySensors::kNone: return "none";
+  }
+  return "unknown";
+}
+
+SimulatedExperiment SimulateExperiment(const Robot& nominal, const Robot& truth,
+                                       const std::vector<PlanPose>& plan, const SimulationOptions& options,
+                                       Rng& rng) {
+  const Eigen::VectorXd l0_true = InitialLengths(truth);
+  const bool laser = options.noisy == NoisySensors::kBoth || options.noisy == NoisySensors::kLaser;
+  const bool inclinometer = options.noisy == NoisySensors::kBoth || options.noisy == NoisySensors::kInclinometer;
+  const SensorNoise& s = nominal.sensors;
+  SimulatedExperiment out;
+  for (std::size_t j = 0; j < plan.size(); ++j) {
+    const PlanPose& p = plan[j];
+    const Eigen::VectorXd lengths_true = l0_true + p.length_change_m;
+    // The commanded (nominal) pose is a good start: the true one is millimetres away.
+    const ForwardResult fwd = SolveForwardGeometricoStatic(truth, lengths_true, &p.q);
+    if (fwd.status != ForwardStatus::kConverged) {
+      throw SolverFailure("pose " + std::to_string(j + 1) + ": the true robot cannot hold the commanded lengths (" +
+                          ToString(fwd.status) + ")");
+    }
+    Measurement m;
+    m.pose_id = static_cast<int>(j + 1);
+    m.dl_m = p.length_change_m;
+    // Draw order is fixed (encoders, laser accuracy, repeatability, inclinometer accuracy,
+    // repeatability) and every draw is made whether or not it is used, so that switching
+    // a sensor's noise off leaves the other sensors' noise unchanged.
+    for (int i = 0; i < m.dl_m.size(); ++i) {
+      const double e = rng.Normal(0.0, s.encoder_sigma_m);
+      if (options.encoder_noise) m.dl_m(i) += e;
+    }
+    const double laser_acc = rng.Normal(0.0, s.laser_accuracy_m / 3.0);
+    const double laser_rep = rng.Normal(0.0, s.laser_repeatability_m / 3.0);
+    const double inc_acc = rng.Normal(0.0, s.inclinometer_accuracy_rad / 3.0);
+    const double inc_rep = rng.Normal(0.0, s.inclinometer_repeatability_rad / 3.0);
+    m.z_m = fwd.equilibrium.q(1) + (laser ? laser_acc + laser_rep : 0.0);
+    m.theta_rad = fwd.equilibrium.q(2) + (inclinometer ? inc_acc + inc_rep : 0.0);
+    out.measurements.push_back(m);
+    out.true_poses.push_back(fwd.equilibrium.q);
+  }
+  return out;
+}
+
+std::string MeasurementsCsv(const std::vector<Measurement>& measurements, const std::string& provenance) {
+  std::string out = provenance + "pose";
+  const int m = measurements.empty() ? 2 : static_cast<int>(measurements.front().dl_m.size());
+  for (int i = 1; i <= m; ++i) out += ",dl" + std::to_string(i);
+  out += ",z,theta\n";
+  for (const Measurement& r : measurements) {
+    out += std::to_string(r.pose_id);
+    for (int i = 0; i < m; ++i) out += "," + FormatDouble(r.dl_m(i));
+    out += "," + FormatDouble(r.z_m) + "," + FormatDouble(r.theta_rad) + "\n";
+  }
+  return out;
+}
+
+std::vector<Measurement> ReadMeasurementsCsv(const std::string& path, int num_cables) {
+  std::vector<std::string> header = {"pose"};
+  for (int i = 1; i <= num_cables; ++i) header.push_back("dl" + std::to_string(i));
+  header.push_back("z");
+  header.push_back("theta");
+  std::vector<Measurement> out;
+  std::set<int> ids;
+  ForEachCsvRow(path, header, [&](const CsvRow& row) {
+    Measurement m;
+    m.pose_id = row.PositiveInt(0);
+    if (!ids.insert(m.pose_id).second) {
+      throw InputError(row.Where(), "column 'pose'", "duplicate pose id " + std::to_string(m.pose_id));
+    }
+    m.dl_m.resize(num_cables);
+    for (int i = 0; i < num_cables; ++i) m.dl_m(i) = row.Number(1 + i);
+    m.z_m = row.Number(1 + num_cables);
+    m.theta_rad = row.Number(2 + num_cables);
+    out.push_back(m);
+  });
+  return out;
+}
+
+std::string TruthYaml(const Robot& truth, const std::vector<Measurement>& measurements,
+                      const std::vector<Eigen::Vector3d>& true_poses) {
+  std::string out = RobotToYaml(truth);
+  out += "true_poses:   # where the platform settled at each measured pose: x, z (m), theta (rad)\n";
+  for (std::size_t j = 0; j < true_poses.size(); ++j) {
+    out += "  - {pose: " + std::to_string(measurements[j].pose_id) + ", x: " + FormatDouble(true_poses[j](0)) +
+           ", z: " + FormatDouble(true_poses[j](1)) + ", theta: " + FormatDouble(true_poses[j](2)) + "}\n";
+  }
+  return out;
+}
+
+}  // namespace cablecal

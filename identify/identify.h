@@ -1,0 +1,96 @@
+// identify: estimates the robot's real geometry (exit points a_i, initial lengths l_i0) and
+// the unmeasured pose coordinates from encoder, laser and inclinometer readings, with
+// uncertainties (Ceres: Levenberg-Marquardt, Schur elimination of the per-pose blocks,
+// autodiff through model/cable.h, ceres::Covariance).
+//   experiment.h  simulated or measured readings, measurement CSV
+//   residuals.h   the templated residuals (shared with design/)
+//   identify.h    Identify(), its options and result, result YAML
+// Depends on model/, workspace/ (pose plans) and common/.
+//
+// The gauge (DESIGN.md): encoders, a vertical laser and an inclinometer cannot see a
+// common shift of every a_ix and x_j, so the problem has one null direction unless the
+// gauge is fixed: `a1x` holds a1x at its nominal value; `prior` adds a laser-tracker prior
+// on every exit point; `none` keeps the paper's rank-deficient problem (covariance then by
+// pseudo-inverse, and the output says so).
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "identify/experiment.h"
+#include "model/robot.h"
+
+namespace cablecal {
+
+enum class Estimator {
+  kMaximumLikelihood,  // "ml": every sensor's residual whitened by its sigma; z_j, theta_j unknown too
+  kPaper,              // "paper": Eq. (6) residuals, z and theta taken as measured
+};
+enum class Gauge { kA1x, kPrior, kNone };
+
+Estimator ParseEstimator(const std::string& text);  // InputError naming --estimator
+Gauge ParseGauge(const std::string& text);          // InputError naming --gauge
+const char* ToString(Estimator e);
+const char* ToString(Gauge g);
+
+struct IdentifyOptions {
+  Estimator estimator = Estimator::kMaximumLikelihood;
+  Gauge gauge = Gauge::kA1x;
+  bool compute_covariance = true;     // off in the Monte Carlo, which needs only the estimates
+  bool compute_identifiability = true;
+  int max_iterations = 100;
+  std::string source = "measurements";  // names the data in messages
+};
+
+enum class IdentifyStatus {
+  kConverged,
+  kNotConverged,   // Ceres stopped without meeting its tolerances: not a result
+  kRankDeficient,  // a null direction beyond the declared gauge: the data cannot fix it
+};
+const char* ToString(IdentifyStatus s);
+
+struct PoseEstimate {
+  int pose_id = 0;
+  Eigen::Vector3d q = Eigen::Vector3d::Zero();          // (x, z, theta) estimated (paper: z, theta measured)
+  Eigen::Vector3d std_dev = Eigen::Vector3d::Zero();    // 0 where not estimated
+};
+
+struct Identifiability {
+  std::vector<std::string> names;     // columns of the whitened Jacobian (estimated coordinates)
+  Eigen::VectorXd singular_values;    // descending
+  double condition_number = 0.0;      // largest / smallest singular value (inf if rank-deficient)
+  std::vector<std::string> null_directions;  // below 1e-9 x largest, as "0.5 a1x + 0.5 a2x + ..."
+  std::vector<Eigen::VectorXd> null_vectors;  // the same as unit vectors over `names`
+};
+
+struct IdentifyResult {
+  IdentifyStatus status = IdentifyStatus::kNotConverged;
+  std::string message;
+  Estimator estimator = Estimator::kMaximumLikelihood;
+  Gauge gauge = Gauge::kA1x;
+  int iterations = 0;
+  double final_cost = 0.0;  // Ceres' cost: half the sum of squared residuals
+  // Residual RMS per sensor in physical units (m, m, rad): encoder length residuals, laser
+  // z_j - z_meas, inclinometer theta_j - theta_meas (zero for `paper`, which fixes them).
+  double rms_encoder_m = 0.0, rms_laser_m = 0.0, rms_inclinometer_rad = 0.0;
+  GeometryVector geometry = GeometryVector::Zero();
+  bool has_covariance = false;
+  GeometryVector geometry_std = GeometryVector::Zero();
+  Eigen::Matrix<double, 6, 6> geometry_correlation = Eigen::Matrix<double, 6, 6>::Identity();
+  std::vector<PoseEstimate> poses;
+  Identifiability identifiability;
+  bool converged() const { return status == IdentifyStatus::kConverged; }
+};
+
+// Identifies the geometry from `measurements`, starting from the nominal robot. Throws
+// InputError for data that cannot determine the unknowns (fewer equations than unknowns,
+// non-positive sigmas for `ml`, a missing tracker sigma for `prior`); a solve that does not
+// converge or is rank-deficient is a status, not an exception.
+IdentifyResult Identify(const Robot& nominal, const std::vector<Measurement>& measurements,
+                        const IdentifyOptions& options);
+
+// result.yaml (README, "identify").
+std::string IdentifyResultYaml(const IdentifyResult& result, const std::string& command_line);
+
+}  // namespace cablecal
