@@ -1,15 +1,19 @@
 #include "cli/commands.h"
 
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <cstdlib>
+#include <cmath>
 #include <filesystem>
+#include <fstream>
 
 #include "common/atomic_output.h"
 #include "common/error.h"
 #include "common/format.h"
 #include "common/version.h"
+#include "design/design.h"
 #include "identify/experiment.h"
 #include "identify/identify.h"
 #include "model/statics.h"
@@ -136,6 +140,49 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
     if (result.has_covariance) std::printf("  (std %.3g mm)", 1e3 * result.geometry_std(k));
     std::printf("\n");
   }
+  return kExitOk;
+}
+
+int RunDesign(const Context& ctx, const DesignCommandOptions& options) {
+  const Robot robot = LoadRobotOption(options.robot_path);
+  DesignOptions design;
+  design.poses = options.poses;
+  design.criterion = ParseCriterion(options.criterion);
+  design.starts = options.starts;
+  design.seed = options.seed;
+  design.min_spacing_m = options.min_spacing_m;
+  design.random_sets = options.random_sets;
+  const DesignResult result = DesignPoses(robot, design);
+  AtomicOutput output;
+  const std::string temp_plan = output.WriteText(options.out_path, PosePlanCsv(result.poses, ProvenanceComment(ctx.command_line)));
+  if (!options.summary_path.empty()) {
+    output.WriteText(options.summary_path, DesignSummaryYaml(result, design, ctx.command_line));
+  }
+  if (!options.plot_path.empty()) {
+    // The background grid is an input of the plot only: written beside it, removed after.
+    const std::string temp_ws = options.plot_path + ".workspace.tmp." + std::to_string(::getpid());
+    std::vector<std::string> args = {temp_plan, output.Add(options.plot_path)};
+    const WorkspaceGrid grid = ComputeWorkspaceGrid(robot, 0.05);
+    std::ofstream(temp_ws) << WorkspaceCsv(robot, grid, "");
+    args.push_back("--workspace=" + temp_ws);
+    args.push_back("--frame=" + FormatDouble(robot.frame_width_m) + "," + FormatDouble(robot.frame_height_m));
+    for (const Cable& c : robot.cables) {
+      args.push_back("--exit=" + FormatDouble(c.p_F_exit_m.x()) + "," + FormatDouble(c.p_F_exit_m.y()));
+      args.push_back("--anchor=" + FormatDouble(c.p_P_anchor_m.x()) + "," + FormatDouble(c.p_P_anchor_m.y()));
+    }
+    args.push_back("--title=" + robot.name + ": " + std::to_string(result.poses.size()) + " poses, criterion " +
+                   ToString(design.criterion) + ", condition number " +
+                   FormatDouble(std::round(result.criteria.condition_number * 10) / 10) + " (random median " +
+                   FormatDouble(std::round(result.random_median.condition_number * 10) / 10) + ")");
+    RunPlotScript("plot_plan.py", args);
+    std::remove(temp_ws.c_str());
+  }
+  output.Commit();
+  std::printf("designed %zu poses (%s, best of %d starts, %d converged): condition number %.4g, random median %.4g "
+              "(%.2fx better), %.1f s\n",
+              result.poses.size(), ToString(design.criterion), design.starts, result.converged_starts,
+              result.criteria.condition_number, result.random_median.condition_number,
+              Improvement(Criterion::kCondition, result.criteria, result.random_median), result.wall_time_s);
   return kExitOk;
 }
 

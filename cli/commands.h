@@ -46,6 +46,15 @@ struct IdentifyCommandOptions {
 };
 int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options);
 
+struct DesignCommandOptions {
+  std::string robot_path, out_path, summary_path, plot_path;
+  int poses = 0, starts = 8, random_sets = 100;
+  std::string criterion = "condition";
+  unsigned long long seed = 1;
+  double min_spacing_m = 0.0;
+};
+int RunDesign(const Context& ctx, const DesignCommandOptions& options);
+
 // Runs a plotting script of scripts/ with the python that has matplotlib. Throws
 // SolverFailure (exit 3) if the script fails.
 void RunPlotScript(const std::string& script, const std::vector<std::string>& args);

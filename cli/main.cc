@@ -81,6 +81,27 @@ int main(int argc, char** argv) {
   id_cmd->add_option("--out", ident.out_path, "result YAML")->required();
   id_cmd->add_option("--calibrated-robot", ident.calibrated_robot_path, "robot file with the identified geometry");
 
+  cablecal::cli::DesignCommandOptions des;
+  CLI::App* des_cmd = app.add_subcommand("design", "choose optimal measurement poses (Ipopt)");
+  AddRobotOption(des_cmd, &des.robot_path);
+  des_cmd->add_option("--poses", des.poses, "number of poses (at least 5)")->required();
+  des_cmd->add_option("--criterion", des.criterion, "condition|d|a|e")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"condition", "d", "a", "e"}));
+  des_cmd->add_option("--starts", des.starts, "random feasible starts (best kept)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  des_cmd->add_option("--seed", des.seed, "random seed")->capture_default_str();
+  des_cmd->add_option("--min-spacing", des.min_spacing_m, "minimum distance between poses, m")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  des_cmd->add_option("--random-sets", des.random_sets, "random sets for the reference median")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  des_cmd->add_option("--out", des.out_path, "pose plan CSV")->required();
+  des_cmd->add_option("--summary", des.summary_path, "summary YAML");
+  des_cmd->add_option("--plot", des.plot_path, "PNG of the workspace with the chosen poses");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -99,6 +120,7 @@ int main(int argc, char** argv) {
     if (sample_cmd->parsed()) return cablecal::cli::RunSample(ctx, sample);
     if (sim_cmd->parsed()) return cablecal::cli::RunSimulate(ctx, sim);
     if (id_cmd->parsed()) return cablecal::cli::RunIdentify(ctx, ident);
+    if (des_cmd->parsed()) return cablecal::cli::RunDesign(ctx, des);
   } catch (const cablecal::InputError& e) {
     std::fprintf(stderr, "cablecal: error: %s\n", e.what());
     return cablecal::kExitBadInput;

@@ -1,0 +1,214 @@
+#include "design/design.h"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "common/error.h"
+#include "common/format.h"
+#include "common/random.h"
+#include "common/version.h"
+#include "design/ipopt_nlp.h"
+#include "design/objective.h"
+#include "model/statics.h"
+
+namespace cablecal {
+
+Criterion ParseCriterion(const std::string& text) {
+  if (text == "condition") return Criterion::kCondition;
+  if (text == "d") return Criterion::kD;
+  if (text == "a") return Criterion::kA;
+  if (text == "e") return Criterion::kE;
+  throw InputError("--criterion", "", "must be condition, d, a or e (got '" + text + "')");
+}
+
+const char* ToString(Criterion c) {
+  switch (c) {
+    case Criterion::kCondition: return "condition";
+    case Criterion::kD: return "d";
+    case Criterion::kA: return "a";
+    case Criterion::kE: return "e";
+  }
+  return "unknown";
+}
+
+namespace {
+
+// Stream ids under the user's seed: starts and the random reference sets never share draws.
+constexpr std::uint64_t kStartStream = 1;
+constexpr std::uint64_t kRandomSetStream = 2;
+// Re-verification of Ipopt's poses with the model.
+constexpr double kEquilibriumTol_N = 1e-8;
+constexpr double kSameRootTol_rad = 1e-6;  // the model's equilibrium is Ipopt's, not another root
+
+double Median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+std::vector<Eigen::Vector3d> PosesOf(const std::vector<PlanPose>& plan) {
+  std::vector<Eigen::Vector3d> q;
+  for (const PlanPose& p : plan) q.push_back(p.q);
+  return q;
+}
+
+// Re-solves every pose's equilibrium at Ipopt's (x, z) with the model and checks it: the same
+// root, a residual below tolerance, every workspace bound held exactly, the spacing kept.
+bool VerifyPoses(const Robot& robot, const DesignOptions& options, const std::vector<Eigen::Vector3d>& ipopt_poses,
+                 const Eigen::VectorXd& l0, std::vector<PlanPose>* verified) {
+  verified->clear();
+  for (const Eigen::Vector3d& q : ipopt_poses) {
+    const EquilibriumResult eq = SolveEquilibrium(robot, q(0), q(1));
+    if (eq.status != EquilibriumStatus::kFound) return false;
+    if (std::abs(eq.equilibrium.q(2) - q(2)) > kSameRootTol_rad) return false;
+    if (!(eq.equilibrium.residual_N < kEquilibriumTol_N)) return false;
+    if (CheckFeasibility(robot, eq.equilibrium.q, eq.equilibrium.tensions_N) != Feasibility::kFeasible) return false;
+    verified->push_back(MakePlanPose(robot, eq.equilibrium, l0));
+  }
+  for (std::size_t a = 0; a < verified->size(); ++a) {
+    for (std::size_t b = a + 1; b < verified->size(); ++b) {
+      const double d = ((*verified)[a].q.head<2>() - (*verified)[b].q.head<2>()).norm();
+      if (d < options.min_spacing_m - 1e-9) return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const int n = options.poses;
+  if (n < 5) {
+    throw InputError("--poses", "", "at least 5 poses are needed to identify the 5 gauge-fixed geometric parameters "
+                                    "and the per-pose unknowns (got " + std::to_string(n) + ")");
+  }
+  if (n > 500) throw InputError("--poses", "", "at most 500 poses (got " + std::to_string(n) + ")");
+  if (options.starts < 1) throw InputError("--starts", "", "must be at least 1");
+  if (options.random_sets < 1) throw InputError("--random-sets", "", "must be at least 1");
+  if (!(options.min_spacing_m >= 0.0) || !std::isfinite(options.min_spacing_m)) {
+    throw InputError("--min-spacing", "", "must be a non-negative number of metres");
+  }
+  const Eigen::VectorXd l0 = InitialLengths(robot);
+  const int K = options.starts;
+
+  // Feasible random starts, each from its own stream (seed, start index).
+  std::vector<std::vector<PlanPose>> starts(K);
+  std::vector<std::string> start_errors(K);
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int k = 0; k < K; ++k) {
+    try {
+      starts[k] = SampleFeasiblePoses(robot, n, StreamSeed(options.seed, {kStartStream, static_cast<std::uint64_t>(k)}));
+    } catch (const std::exception& e) {
+      start_errors[k] = e.what();
+    }
+  }
+  for (int k = 0; k < K; ++k) {
+    if (!start_errors[k].empty()) throw SolverFailure("cannot draw a feasible start: " + start_errors[k]);
+  }
+
+  std::vector<internal::StartOutcome> outcomes(K);
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int k = 0; k < K; ++k) {
+    // MUMPS, Ipopt's linear solver in Debian, is not thread-safe (coin-or/Ipopt#733), so the
+    // solves themselves take turns; sampling, verification and the reference sets run in parallel.
+#pragma omp critical(cablecal_ipopt)
+    outcomes[k] = internal::SolveDesignNlp(robot, options, starts[k]);
+  }
+
+  DesignResult result;
+  std::vector<std::vector<PlanPose>> verified(K);
+  double best = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < K; ++k) {
+    StartReport report;
+    report.start = k;
+    report.ipopt_status = outcomes[k].status;
+    report.iterations = outcomes[k].iterations;
+    report.converged = outcomes[k].converged;
+    report.objective = std::numeric_limits<double>::infinity();
+    if (report.converged) {
+      ++result.converged_starts;
+      report.verified = VerifyPoses(robot, options, outcomes[k].poses, l0, &verified[k]);
+      if (report.verified) {
+        report.objective = internal::ExactObjective(robot, options.criterion, PosesOf(verified[k]));
+        if (report.objective < best) {  // ties keep the lowest start index
+          best = report.objective;
+          result.best_start = k;
+        }
+      }
+    }
+    result.starts.push_back(report);
+  }
+  if (result.best_start < 0) {
+    std::string statuses;
+    for (const StartReport& r : result.starts) {
+      statuses += (statuses.empty() ? "" : ", ") + r.ipopt_status + (r.converged && !r.verified ? " (failed re-verification)" : "");
+    }
+    throw SolverFailure("none of the " + std::to_string(K) + " starts gave verified poses: " + statuses);
+  }
+  result.poses = verified[result.best_start];
+  result.criteria = EvaluateCriteria(robot, PosesOf(result.poses));
+
+  // Reference: random feasible sets of the same size.
+  const int R = options.random_sets;
+  std::vector<CriteriaValues> random(R);
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int r = 0; r < R; ++r) {
+    const auto set = SampleFeasiblePoses(robot, n, StreamSeed(options.seed, {kRandomSetStream, static_cast<std::uint64_t>(r)}));
+    random[r] = EvaluateCriteria(robot, PosesOf(set));
+  }
+  std::vector<double> c, d, a, e;
+  for (const CriteriaValues& v : random) {
+    c.push_back(v.condition_number);
+    d.push_back(v.d_log_det_information);
+    a.push_back(v.a_trace_covariance_m2);
+    e.push_back(v.e_min_eigenvalue);
+  }
+  result.random_median = {Median(c), Median(d), Median(a), Median(e)};
+  result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return result;
+}
+
+std::string DesignSummaryYaml(const DesignResult& r, const DesignOptions& options, const std::string& command_line) {
+  auto criteria = [](const CriteriaValues& v) {
+    return "{condition_number: " + FormatDouble(v.condition_number) +
+           ", d_log_det_information: " + FormatDouble(v.d_log_det_information) +
+           ", a_trace_covariance_m2: " + FormatDouble(v.a_trace_covariance_m2) +
+           ", e_min_eigenvalue: " + FormatDouble(v.e_min_eigenvalue) + "}";
+  };
+  std::ostringstream o;
+  o << "# cablecal design summary (README, \"Experiment design\"). Criteria of the returned set are\n"
+    << "# recomputed from its verified poses. S: information of a1z a2x a2z l10 l20 (1/m^2).\n";
+  o << "cablecal: {version: " << Version() << ", commit: " << GitCommit() << "}\n";
+  o << "command: \"" << command_line << "\"\n";
+  o << "poses: " << options.poses << "\n";
+  o << "criterion: " << ToString(options.criterion) << "\n";
+  o << "seed: " << options.seed << "\n";
+  o << "min_spacing_m: " << FormatDouble(options.min_spacing_m) << "\n";
+  o << "criteria: " << criteria(r.criteria) << "\n";
+  o << "random_sets: {count: " << options.random_sets << ", median: " << criteria(r.random_median) << "}\n";
+  o << "condition_number: {optimized: " << FormatDouble(r.criteria.condition_number)
+    << ", random_median: " << FormatDouble(r.random_median.condition_number) << "}\n";
+  o << "improvement_over_random_median:   # factor, > 1 is better (see README)\n";
+  for (const Criterion c : {Criterion::kCondition, Criterion::kD, Criterion::kA, Criterion::kE}) {
+    o << "  " << ToString(c) << ": " << FormatDouble(Improvement(c, r.criteria, r.random_median)) << "\n";
+  }
+  o << "starts: {count: " << options.starts << ", converged: " << r.converged_starts << ", best: " << r.best_start
+    << "}\n";
+  o << "per_start:\n";
+  for (const StartReport& s : r.starts) {
+    o << "  - {start: " << s.start << ", ipopt_status: " << s.ipopt_status << ", iterations: " << s.iterations
+      << ", verified: " << (s.verified ? "true" : "false");
+    if (s.verified) o << ", objective: " << FormatDouble(s.objective);
+    o << "}\n";
+  }
+  o << "wall_time_s: " << FormatDouble(std::round(r.wall_time_s * 1000.0) / 1000.0) << "\n";
+  return o.str();
+}
+
+}  // namespace cablecal

@@ -1,0 +1,87 @@
+// design: picks n measurement poses inside the feasible cable-tension workspace that make
+// the identification best conditioned (Ipopt, exact first derivatives, L-BFGS Hessian,
+// OpenMP multi-start from the workspace sampler).
+//
+// Criteria (README, "Experiment design"):
+//   condition  the condition number of the gauge-fixed length Jacobian: residuals
+//              r_ij = l_i(pose_j; a_i) - (dl_ij + l_i0) in m (the paper's Eq. 6 without
+//              squares) by the unknowns a1z a2x a2z l10 l20 x1..xn, at the nominal robot,
+//              unscaled. Minimised as log(kappa): the same optimum, a better-scaled function.
+//   d, a, e    D-, A-, E-optimality of the information S of the geometric parameters
+//              (a1x held) once every pose's own unknowns (x, z, theta) are eliminated,
+//              with the maximum-likelihood estimator's sensor sigmas.
+// Depends on identify/ (the Jacobian rows), workspace/ (sampler, pose plans), model/.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "model/robot.h"
+#include "workspace/workspace.h"
+
+namespace cablecal {
+
+enum class Criterion { kCondition, kD, kA, kE };
+Criterion ParseCriterion(const std::string& text);  // InputError naming --criterion
+const char* ToString(Criterion c);
+
+// All four criteria of one pose set.
+struct CriteriaValues {
+  double condition_number = 0.0;       // kappa of the length Jacobian (lower is better)
+  double d_log_det_information = 0.0;  // log det S, S in 1/m^2 (higher is better)
+  double a_trace_covariance_m2 = 0.0;  // trace S^-1 (lower is better)
+  double e_min_eigenvalue = 0.0;       // smallest eigenvalue of S, 1/m^2 (higher is better)
+};
+
+// Poses as (x, z, theta) equilibria; fewer than 5 poses cannot identify the geometry (the
+// criteria are then infinite or zero, as appropriate).
+CriteriaValues EvaluateCriteria(const Robot& robot, const std::vector<Eigen::Vector3d>& poses);
+
+// How much better `set` is than `reference` on criterion c, as a factor (> 1: better):
+// kappa_ref / kappa; (det S / det S_ref)^(1/5) (per-eigenvalue geometric mean);
+// trace_ref / trace; lambda_min / lambda_min_ref.
+double Improvement(Criterion c, const CriteriaValues& set, const CriteriaValues& reference);
+
+struct DesignOptions {
+  int poses = 0;
+  Criterion criterion = Criterion::kCondition;
+  int starts = 8;
+  std::uint64_t seed = 1;
+  double min_spacing_m = 0.0;  // 0: off
+  int random_sets = 100;       // for the median of random feasible sets in the summary
+  int max_iterations = 300;    // Ipopt, per start
+  // Testing aids: run Ipopt's derivative checker and keep its journal in this file.
+  bool derivative_test = false;
+  std::string ipopt_journal_path;
+};
+
+struct StartReport {
+  int start = 0;
+  std::string ipopt_status;
+  int iterations = 0;
+  bool converged = false;  // Ipopt reported success (or an acceptable point)
+  bool verified = false;   // every pose re-verified with the model
+  double objective = 0.0;  // the criterion's exact objective (log kappa, -log det S, log trace S^-1,
+                           // -log lambda_min), recomputed from the verified poses
+};
+
+struct DesignResult {
+  std::vector<PlanPose> poses;     // verified equilibria of the best start
+  CriteriaValues criteria;         // recomputed from `poses`, not copied from Ipopt
+  CriteriaValues random_median;    // per criterion, over options.random_sets random sets
+  int best_start = -1;
+  int converged_starts = 0;
+  std::vector<StartReport> starts;
+  double wall_time_s = 0.0;
+};
+
+// Throws InputError for bad options (too few poses, spacing that cannot fit) and
+// SolverFailure when no start converges to verified poses.
+DesignResult DesignPoses(const Robot& robot, const DesignOptions& options);
+
+// summary.yaml of `cablecal design`.
+std::string DesignSummaryYaml(const DesignResult& result, const DesignOptions& options,
+                              const std::string& command_line);
+
+}  // namespace cablecal

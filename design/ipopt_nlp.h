@@ -1,0 +1,28 @@
+// Internal to design/: the Ipopt adapter, built per start, writing into a StartOutcome.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "design/design.h"
+
+namespace cablecal::internal {
+
+// Bounds are tightened by these amounts so that poses re-solved exactly by the model after
+// Ipopt (which may sit on a bound to within its tolerance) still satisfy the exact bounds.
+constexpr double kBoundMargin_m = 1e-6;
+constexpr double kBoundMargin_rad = 1e-6;
+constexpr double kBoundMargin_N = 1e-5;
+
+struct StartOutcome {
+  std::string status;
+  int iterations = 0;
+  bool converged = false;
+  std::vector<Eigen::Vector3d> poses;  // Ipopt's (x, z, theta)
+};
+
+// One Ipopt solve from `start` (equilibria with their tensions).
+StartOutcome SolveDesignNlp(const Robot& robot, const DesignOptions& options, const std::vector<PlanPose>& start);
+
+}  // namespace cablecal::internal

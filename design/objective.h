@@ -1,0 +1,28 @@
+// Internal to design/: the criteria's minimised objectives and their exact gradients with
+// respect to every pose's (x, z, theta), through single-level Jets of identify/jacobian.h.
+#pragma once
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "design/design.h"
+
+namespace cablecal::internal {
+
+// Sharpness of the smooth surrogates (objective.cc): the minimiser of the condition-number
+// surrogate has kappa within d^(1/p) of the optimum, d = 5 + n columns (n = 50: 1.13);
+// the E surrogate is within 5^(1/p) of lambda_min (1.05).
+constexpr double kConditionPower = 32.0;
+constexpr double kEigenvaluePower = 32.0;
+
+// What Ipopt minimises: the smooth surrogate of log kappa (condition), -log det S (d),
+// log trace S^-1 (a), the smooth surrogate of -log lambda_min(S) (e). Returns +inf where
+// the set cannot identify the geometry. If `gradient` is given it receives
+// d objective / d(x_j, z_j, theta_j), 3 per pose.
+double DesignObjective(const Robot& robot, Criterion criterion, const std::vector<Eigen::Vector3d>& poses,
+                       Eigen::VectorXd* gradient);
+
+// The same criteria exactly (log kappa, -log lambda_min without surrogate), for reporting.
+double ExactObjective(const Robot& robot, Criterion criterion, const std::vector<Eigen::Vector3d>& poses);
+
+}  // namespace cablecal::internal
