@@ -59,24 +59,30 @@ std::vector<Eigen::Vector3d> PosesOf(const std::vector<PlanPose>& plan) {
 
 // Re-solves every pose's equilibrium at Ipopt's (x, z) with the model and checks it: the same
 // root, a residual below tolerance, every workspace bound held exactly, the spacing kept.
-bool VerifyPoses(const Robot& robot, const DesignOptions& options, const std::vector<Eigen::Vector3d>& ipopt_poses,
-                 const Eigen::VectorXd& l0, std::vector<PlanPose>* verified) {
+// Returns "" when all hold, else the first failure.
+std::string VerifyPoses(const Robot& robot, const DesignOptions& options, const std::vector<Eigen::Vector3d>& ipopt_poses,
+                        const Eigen::VectorXd& l0, std::vector<PlanPose>* verified) {
   verified->clear();
-  for (const Eigen::Vector3d& q : ipopt_poses) {
+  for (std::size_t j = 0; j < ipopt_poses.size(); ++j) {
+    const Eigen::Vector3d& q = ipopt_poses[j];
+    const std::string pose = "pose " + std::to_string(j + 1) + ": ";
     const EquilibriumResult eq = SolveEquilibrium(robot, q(0), q(1));
-    if (eq.status != EquilibriumStatus::kFound) return false;
-    if (std::abs(eq.equilibrium.q(2) - q(2)) > kSameRootTol_rad) return false;
-    if (!(eq.equilibrium.residual_N < kEquilibriumTol_N)) return false;
-    if (CheckFeasibility(robot, eq.equilibrium.q, eq.equilibrium.tensions_N) != Feasibility::kFeasible) return false;
+    if (eq.status != EquilibriumStatus::kFound) return pose + "no stable equilibrium at Ipopt's position";
+    if (std::abs(eq.equilibrium.q(2) - q(2)) > kSameRootTol_rad) return pose + "Ipopt's theta is not the model's equilibrium";
+    if (!(eq.equilibrium.residual_N < kEquilibriumTol_N)) return pose + "equilibrium residual too large";
+    const Feasibility f = CheckFeasibility(robot, eq.equilibrium.q, eq.equilibrium.tensions_N);
+    if (f != Feasibility::kFeasible) return pose + ToString(f);
     verified->push_back(MakePlanPose(robot, eq.equilibrium, l0));
   }
   for (std::size_t a = 0; a < verified->size(); ++a) {
     for (std::size_t b = a + 1; b < verified->size(); ++b) {
       const double d = ((*verified)[a].q.head<2>() - (*verified)[b].q.head<2>()).norm();
-      if (d < options.min_spacing_m - 1e-9) return false;
+      if (d < options.min_spacing_m) {
+        return "poses " + std::to_string(a + 1) + " and " + std::to_string(b + 1) + " closer than --min-spacing";
+      }
     }
   }
-  return true;
+  return "";
 }
 
 }  // namespace
@@ -133,7 +139,8 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
     report.objective = std::numeric_limits<double>::infinity();
     if (report.converged) {
       ++result.converged_starts;
-      report.verified = VerifyPoses(robot, options, outcomes[k].poses, l0, &verified[k]);
+      report.verification_failure = VerifyPoses(robot, options, outcomes[k].poses, l0, &verified[k]);
+      report.verified = report.verification_failure.empty();
       if (report.verified) {
         report.objective = internal::ExactObjective(robot, options.criterion, PosesOf(verified[k]));
         if (report.objective < best) {  // ties keep the lowest start index
@@ -147,7 +154,8 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
   if (result.best_start < 0) {
     std::string statuses;
     for (const StartReport& r : result.starts) {
-      statuses += (statuses.empty() ? "" : ", ") + r.ipopt_status + (r.converged && !r.verified ? " (failed re-verification)" : "");
+      statuses += (statuses.empty() ? "" : ", ") + r.ipopt_status +
+                  (r.converged && !r.verified ? " (re-verification failed: " + r.verification_failure + ")" : "");
     }
     throw SolverFailure("none of the " + std::to_string(K) + " starts gave verified poses: " + statuses);
   }
@@ -205,6 +213,7 @@ std::string DesignSummaryYaml(const DesignResult& r, const DesignOptions& option
     o << "  - {start: " << s.start << ", ipopt_status: " << s.ipopt_status << ", iterations: " << s.iterations
       << ", verified: " << (s.verified ? "true" : "false");
     if (s.verified) o << ", objective: " << FormatDouble(s.objective);
+    if (s.converged && !s.verified) o << ", verification_failure: \"" << s.verification_failure << "\"";
     o << "}\n";
   }
   o << "wall_time_s: " << FormatDouble(std::round(r.wall_time_s * 1000.0) / 1000.0) << "\n";

@@ -62,6 +62,7 @@ struct StartReport {
   int iterations = 0;
   bool converged = false;  // Ipopt reported success (or an acceptable point)
   bool verified = false;   // every pose re-verified with the model
+  std::string verification_failure;  // why not, when converged but not verified
   double objective = 0.0;  // the criterion's exact objective (log kappa, -log det S, log trace S^-1,
                            // -log lambda_min), recomputed from the verified poses
 };

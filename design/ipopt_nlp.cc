@@ -64,7 +64,8 @@ class DesignNlp : public Ipopt::TNLP {
         g_u[R * j + 4 + 2 * p] = robot_.frame_height_m - robot_.margin_m - kBoundMargin_m;
       }
     }
-    const double d2 = options_.min_spacing_m * options_.min_spacing_m;
+    const double d = options_.min_spacing_m + kBoundMargin_m;
+    const double d2 = d * d;
     for (int k = 0; k < NumPairs(); ++k) {
       g_l[R * n_ + k] = d2;
       g_u[R * n_ + k] = 2e19;  // Ipopt's +infinity
@@ -274,6 +275,10 @@ StartOutcome SolveDesignNlp(const Robot& robot, const DesignOptions& options, co
   if (options.derivative_test) {
     app->Options()->SetStringValue("derivative_test", "first-order");
     app->Options()->SetNumericValue("derivative_test_tol", 1e-4);
+    // The criteria come from eigenvalues of matrices with condition numbers up to ~1e5, so
+    // they carry absolute noise near 1e-12; Ipopt's default 1e-8 perturbation would turn it
+    // into 1e-4 of finite-difference error. 1e-6 keeps truncation and noise both small.
+    app->Options()->SetNumericValue("derivative_test_perturbation", 1e-6);
     app->Options()->SetIntegerValue("max_iter", 0);
   }
   if (!options.ipopt_journal_path.empty()) {

@@ -10,7 +10,7 @@
 // Ceres evaluates inside Identify.
 #pragma once
 
-#include <Eigen/Core>
+#include <Eigen/Dense>
 
 #include "model/cable.h"
 #include "model/robot.h"
@@ -59,16 +59,28 @@ MlRows<T> MlResidualRows(const Robot& robot, const Pose<T>& q) {
 }
 
 // One pose's contribution to the information of the geometric parameters once its own
-// unknowns are eliminated (Schur complement): S_j = G'G - G'P (P'P)^-1 P'G over the rows
-// of MlResidualRows, G the geometric columns kept by the gauge (a1x dropped: 5 x 5), P the
-// pose columns. The information of the whole experiment is the sum over its poses.
+// unknowns are eliminated (Schur complement): S_j = G'(I - P (P'P)^-1 P')G over the rows of
+// MlResidualRows, G the geometric columns kept by the gauge (a1x dropped: 5 x 5), P the pose
+// columns. With 4 rows and 3 pose unknowns the projector onto the complement of P's columns
+// has rank one, I - P (P'P)^-1 P' = n n' with n the unit normal of P's columns (their
+// generalised cross product in R^4), so S_j = g g' with g = G'n: no normal equations, no
+// cancellation. The information of the whole experiment is the sum over its poses.
 template <typename T>
 Eigen::Matrix<T, 5, 5> ReducedInformation(const MlRows<T>& rows) {
   const Eigen::Matrix<T, 4, 5> G = rows.template block<4, 5>(0, 1);
   const Eigen::Matrix<T, 4, 3> P = rows.template block<4, 3>(0, 6);
-  const Eigen::Matrix<T, 3, 3> PtP = P.transpose() * P;
-  const Eigen::Matrix<T, 3, 5> PtG = P.transpose() * G;
-  return G.transpose() * G - PtG.transpose() * (PtP.inverse() * PtG);
+  Eigen::Matrix<T, 4, 1> n;
+  for (int i = 0; i < 4; ++i) {
+    Eigen::Matrix<T, 3, 3> minor;
+    for (int r = 0, k = 0; r < 4; ++r) {
+      if (r != i) minor.row(k++) = P.row(r);
+    }
+    n(i) = (i % 2 == 0 ? T(1.0) : T(-1.0)) * minor.determinant();
+  }
+  using std::sqrt;
+  n /= sqrt(n.squaredNorm());
+  const Eigen::Matrix<T, 5, 1> g = G.transpose() * n;
+  return g * g.transpose();
 }
 
 }  // namespace cablecal

@@ -19,7 +19,9 @@ struct RunResult {
 };
 
 RunResult RunCablecal(const std::string& args) {
-  const std::string command = std::string(CABLECAL_BINARY) + " " + args + " 2>&1";
+  // `args` may start with its own command (e.g. "env OMP_NUM_THREADS=1 <binary> ...").
+  const bool own_command = args.rfind("env ", 0) == 0;
+  const std::string command = (own_command ? args : std::string(CABLECAL_BINARY) + " " + args) + " 2>&1";
   FILE* pipe = popen(command.c_str(), "r");
   std::string output;
   std::array<char, 4096> buffer;
@@ -178,6 +180,38 @@ TEST_F(Cli, IdentifyNotConvergedExitsThreeAndWritesNothing) {
   EXPECT_NE(r.output.find("did not converge"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(Path("r.yaml")));
   EXPECT_FALSE(fs::exists(Path("c.yaml")));
+}
+
+TEST_F(Cli, DesignWritesPlanSummaryAndPlotAndIsThreadCountIndependent) {
+  const std::string args = "design --poses 7 --starts 3 --random-sets 20 --seed 5 --out ";
+  const RunResult one = RunCablecal("env OMP_NUM_THREADS=1 " + std::string(CABLECAL_BINARY) + " " + args +
+                                    Path("p1.csv") + " --summary " + Path("s.yaml") + " --plot " + Path("p.png"));
+  ASSERT_EQ(one.exit_code, 0) << one.output;
+  const RunResult two = RunCablecal("env OMP_NUM_THREADS=2 " + std::string(CABLECAL_BINARY) + " " + args + Path("p2.csv"));
+  ASSERT_EQ(two.exit_code, 0) << two.output;
+  const std::string p1 = Read("p1.csv"), p2 = Read("p2.csv");
+  EXPECT_EQ(p1.substr(p1.find("\npose,")), p2.substr(p2.find("\npose,")));  // provenance names the file
+  EXPECT_NE(p1.find("\npose,x,z,theta,t1,t2,l1,l2,dl1,dl2\n"), std::string::npos);
+  const std::string summary = Read("s.yaml");
+  for (const char* key : {"criterion: condition", "criteria: {condition_number: ", "random_sets: {count: 20",
+                          "improvement_over_random_median:", "per_start:", "ipopt_status: ", "wall_time_s: "}) {
+    EXPECT_NE(summary.find(key), std::string::npos) << key << "\n" << summary;
+  }
+  EXPECT_GT(fs::file_size(Path("p.png")), 10000u);
+  // The designed plan drives a simulation and an identification.
+  ASSERT_EQ(RunCablecal("simulate --plan " + Path("p1.csv") + " --out " + Path("m.csv")).exit_code, 0);
+  EXPECT_EQ(RunCablecal("identify --measurements " + Path("m.csv") + " --out " + Path("r.yaml")).exit_code, 0);
+}
+
+TEST_F(Cli, DesignFailuresWriteNothing) {
+  const RunResult few = RunCablecal("design --poses 4 --out " + Path("p.csv") + " --summary " + Path("s.yaml"));
+  EXPECT_EQ(few.exit_code, 2) << few.output;
+  EXPECT_NE(few.output.find("--poses: at least 5 poses are needed"), std::string::npos) << few.output;
+  const RunResult spacing = RunCablecal("design --poses 6 --starts 2 --random-sets 5 --min-spacing 10 --out " +
+                                        Path("p.csv") + " --summary " + Path("s.yaml"));
+  EXPECT_EQ(spacing.exit_code, 3) << spacing.output;
+  EXPECT_NE(spacing.output.find("none of the 2 starts gave verified poses"), std::string::npos) << spacing.output;
+  EXPECT_TRUE(DirIsEmpty());
 }
 
 TEST_F(Cli, VersionAndHelp) {

@@ -1,0 +1,79 @@
+#!/usr/bin/python3
+"""Draws a pose plan over the feasible workspace: each pose's bar (anchor to anchor) and its
+two cables (straight from the anchor to the exit point: the pulley wrap, a few centimetres,
+is not drawn). Called by `cablecal design --plot`; usable alone:
+  /usr/bin/python3 scripts/plot_plan.py plan.csv out.png --workspace ws.csv --frame 5.209,2.8 \
+      --exit 0,2.8 --anchor -0.25,0 --exit 5.209,2.8 --anchor 0.25,0
+"""
+import argparse
+import csv
+import math
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+
+def pair(text):
+    a, b = text.split(",")
+    return float(a), float(b)
+
+
+def read_csv(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(line for line in f if not line.startswith("#")))
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("plan")
+    ap.add_argument("png")
+    ap.add_argument("--workspace")
+    ap.add_argument("--frame", type=pair, required=True)
+    ap.add_argument("--exit", type=pair, action="append", default=[])
+    ap.add_argument("--anchor", type=pair, action="append", default=[])
+    ap.add_argument("--title", default="Measurement poses")
+    args = ap.parse_args()
+
+    fig, ax = plt.subplots(figsize=(10, 5.6))
+    if args.workspace:
+        ws = read_csv(args.workspace)
+        xs = np.array(sorted({float(r["x"]) for r in ws}))
+        zs = np.array(sorted({float(r["z"]) for r in ws}))
+        ix = {v: i for i, v in enumerate(xs)}
+        iz = {v: i for i, v in enumerate(zs)}
+        feas = np.zeros((len(zs), len(xs)))
+        for r in ws:
+            feas[iz[float(r["z"])], ix[float(r["x"])]] = 1.0 if r["feasible"] == "1" else np.nan
+        step = xs[1] - xs[0]
+        ax.imshow(feas, origin="lower", cmap="Greens", vmin=0, vmax=4, aspect="equal",
+                  extent=(xs[0] - step / 2, xs[-1] + step / 2, zs[0] - step / 2, zs[-1] + step / 2))
+    w, h = args.frame
+    ax.plot([0, w, w, 0, 0], [0, 0, h, h, 0], color="black", lw=1.5)
+    for x, z in args.exit:
+        ax.plot(x, z, "rv", ms=9)
+    for row in read_csv(args.plan):
+        x, z, th = float(row["x"]), float(row["z"]), float(row["theta"])
+        c, s = math.cos(th), math.sin(th)
+        anchors = [(x + c * bx - s * bz, z + s * bx + c * bz) for bx, bz in args.anchor]
+        for (ax_, az_), (ex, ez) in zip(anchors, args.exit):
+            ax.plot([ax_, ex], [az_, ez], color="0.6", lw=0.5, zorder=1)
+        ax.plot([p[0] for p in anchors], [p[1] for p in anchors], color="tab:blue", lw=2.5, zorder=2)
+        ax.annotate(row["pose"], (x, z), textcoords="offset points", xytext=(0, -9), fontsize=6,
+                    ha="center", zorder=3)
+    ax.set_title(args.title, fontsize=10)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("z (m)")
+    ax.set_xlim(-0.2, w + 0.2)
+    ax.set_ylim(-0.2, h + 0.3)
+    ax.set_aspect("equal")
+    fig.tight_layout()
+    fig.savefig(args.png, dpi=120, format="png")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
