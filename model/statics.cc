@@ -14,10 +14,11 @@ namespace cablecal {
 namespace {
 
 constexpr double kDegToRad = M_PI / 180.0;
-// The theta search covers the bar's orientations short of vertical, on a 1-degree grid;
-// roots closer than that are a fold at the workspace boundary and are left out.
+// The theta search covers the bar's orientations short of vertical, on a ~5-degree grid
+// (36 intervals); two roots closer than that are a fold at the workspace boundary and are
+// left out. Each bracket is then refined by the Illinois method.
 constexpr double kThetaSearchMax_rad = 89.0 * kDegToRad;
-constexpr int kThetaSearchSteps = 178;
+constexpr int kThetaSearchSteps = 36;
 // A force matrix this close to singular means parallel cables: no equilibrium there.
 constexpr double kParallelCablesDet = 1e-12;
 // Bisection stops at this bracket width (rad): double rounding near theta = O(1).
@@ -116,19 +117,31 @@ EquilibriumResult SolveEquilibrium(const Robot& robot, double x_m, double z_m) {
         consider_root(theta);
       } else if ((prev.scaled_moment < 0.0) != (cur.scaled_moment < 0.0) &&
                  prev.scaled_moment != 0.0) {
+        // Illinois (modified regula falsi): superlinear, and keeps the bracket.
         double lo = theta_prev, hi = theta;
-        double g_lo = prev.scaled_moment;
-        while (hi - lo > kThetaTol_rad) {
-          const double mid = 0.5 * (lo + hi);
-          if (mid <= lo || mid >= hi) break;
+        double g_lo = prev.scaled_moment, g_hi = cur.scaled_moment;
+        int side = 0;
+        for (int it = 0; it < 100 && hi - lo > kThetaTol_rad; ++it) {
+          double mid = (lo * g_hi - hi * g_lo) / (g_hi - g_lo);
+          if (!(mid > lo && mid < hi)) mid = 0.5 * (lo + hi);
           const MomentBalance m = EvaluateMomentBalance(robot, x_m, z_m, mid);
           if (!m.valid) break;
+          if (m.scaled_moment == 0.0) {
+            lo = hi = mid;
+            break;
+          }
           if ((m.scaled_moment < 0.0) == (g_lo < 0.0)) {
             lo = mid;
             g_lo = m.scaled_moment;
+            if (side == -1) g_hi *= 0.5;
+            side = -1;
           } else {
             hi = mid;
+            g_hi = m.scaled_moment;
+            if (side == 1) g_lo *= 0.5;
+            side = 1;
           }
+          if (std::abs(g_lo) == 0.0 || std::abs(g_hi) == 0.0) break;
         }
         // Keep the bracket end with the smaller residual.
         const MomentBalance b_lo = EvaluateMomentBalance(robot, x_m, z_m, lo);
