@@ -55,6 +55,23 @@ struct DesignCommandOptions {
 };
 int RunDesign(const Context& ctx, const DesignCommandOptions& options);
 
+struct MonteCarloCommandOptions {
+  std::string robot_path, poses, designs = "random,optimized", estimator = "ml", gauge = "a1x", sensors = "both",
+                          out_dir;
+  int trials = 0, threads = 0, design_starts = 2;
+  double geometry_sigma_m = 0.01;
+  unsigned long long seed = 1;
+  bool plot = true;
+};
+int RunMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptions& options);
+
+struct ReproduceOptions {
+  std::string robot_path, out_dir = "results";
+  int trials = 500, threads = 0;
+  unsigned long long seed = 2022;
+};
+int RunReproduce(const Context& ctx, const ReproduceOptions& options);
+
 // Runs a plotting script of scripts/ with the python that has matplotlib. Throws
 // SolverFailure (exit 3) if the script fails.
 void RunPlotScript(const std::string& script, const std::vector<std::string>& args);

@@ -102,6 +102,36 @@ int main(int argc, char** argv) {
   des_cmd->add_option("--summary", des.summary_path, "summary YAML");
   des_cmd->add_option("--plot", des.plot_path, "PNG of the workspace with the chosen poses");
 
+  cablecal::cli::MonteCarloCommandOptions mc;
+  CLI::App* mc_cmd = app.add_subcommand("montecarlo", "predict the calibration accuracy by Monte Carlo (OpenMP)");
+  AddRobotOption(mc_cmd, &mc.robot_path);
+  mc_cmd->add_option("--poses", mc.poses, "pose counts first:last[:step], e.g. 6:50 or 6:50:4")->required();
+  mc_cmd->add_option("--trials", mc.trials, "trials per cell")->required()->check(CLI::PositiveNumber);
+  mc_cmd->add_option("--designs", mc.designs, "comma list of random, optimized, d, a, e")->capture_default_str();
+  mc_cmd->add_option("--estimator", mc.estimator, "ml|paper")->capture_default_str()->check(CLI::IsMember({"ml", "paper"}));
+  mc_cmd->add_option("--gauge", mc.gauge, "a1x|prior|none")->capture_default_str()->check(CLI::IsMember({"a1x", "prior", "none"}));
+  mc_cmd->add_option("--sensors", mc.sensors, "noisy sensors: both|laser|inclinometer|none")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"both", "laser", "inclinometer", "none"}));
+  mc_cmd->add_option("--geometry-sigma", mc.geometry_sigma_m, "true geometry's deviation from nominal, m")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  mc_cmd->add_option("--design-starts", mc.design_starts, "Ipopt starts per designed set")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  mc_cmd->add_option("--threads", mc.threads, "OpenMP threads (default: all cores)")->check(CLI::PositiveNumber);
+  mc_cmd->add_option("--seed", mc.seed, "random seed")->capture_default_str();
+  mc_cmd->add_flag("!--no-plot", mc.plot, "skip the figures");
+  mc_cmd->add_option("--out", mc.out_dir, "output folder")->required();
+
+  cablecal::cli::ReproduceOptions rep;
+  CLI::App* rep_cmd = app.add_subcommand("reproduce", "run the paper's study on the built-in robot into results/");
+  AddRobotOption(rep_cmd, &rep.robot_path);
+  rep_cmd->add_option("--trials", rep.trials, "trials per cell")->capture_default_str()->check(CLI::PositiveNumber);
+  rep_cmd->add_option("--threads", rep.threads, "OpenMP threads (default: all cores)")->check(CLI::PositiveNumber);
+  rep_cmd->add_option("--seed", rep.seed, "random seed")->capture_default_str();
+  rep_cmd->add_option("--out", rep.out_dir, "output folder")->capture_default_str();
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -121,12 +151,17 @@ int main(int argc, char** argv) {
     if (sim_cmd->parsed()) return cablecal::cli::RunSimulate(ctx, sim);
     if (id_cmd->parsed()) return cablecal::cli::RunIdentify(ctx, ident);
     if (des_cmd->parsed()) return cablecal::cli::RunDesign(ctx, des);
+    if (mc_cmd->parsed()) return cablecal::cli::RunMonteCarloCommand(ctx, mc);
+    if (rep_cmd->parsed()) return cablecal::cli::RunReproduce(ctx, rep);
   } catch (const cablecal::InputError& e) {
     std::fprintf(stderr, "cablecal: error: %s\n", e.what());
     return cablecal::kExitBadInput;
   } catch (const cablecal::SolverFailure& e) {
     std::fprintf(stderr, "cablecal: solver failure: %s\n", e.what());
     return cablecal::kExitSolverFailed;
+  } catch (const cablecal::Interrupted& e) {
+    std::fprintf(stderr, "\ncablecal: %s\n", e.what());
+    return cablecal::kExitInterrupted;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "cablecal: internal error: %s\n", e.what());
     return cablecal::kExitInternal;

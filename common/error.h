@@ -44,6 +44,12 @@ class SolverFailure : public std::runtime_error {
   explicit SolverFailure(const std::string& message) : std::runtime_error(message) {}
 };
 
+// The user stopped a run (Ctrl-C); nothing is written. Exit code 130.
+class Interrupted : public std::runtime_error {
+ public:
+  Interrupted() : std::runtime_error("interrupted: no output written") {}
+};
+
 [[noreturn]] inline void CheckFailed(const char* expr, const char* file, int line,
                                      const std::string& message) {
   std::fprintf(stderr, "cablecal: internal error: %s:%d: check '%s' failed: %s\n", file, line,

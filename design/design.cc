@@ -96,7 +96,7 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
   }
   if (n > 500) throw InputError("--poses", "", "at most 500 poses (got " + std::to_string(n) + ")");
   if (options.starts < 1) throw InputError("--starts", "", "must be at least 1");
-  if (options.random_sets < 1) throw InputError("--random-sets", "", "must be at least 1");
+  if (options.random_sets < 0) throw InputError("--random-sets", "", "must not be negative");
   if (!(options.min_spacing_m >= 0.0) || !std::isfinite(options.min_spacing_m)) {
     throw InputError("--min-spacing", "", "must be a non-negative number of metres");
   }
@@ -163,7 +163,11 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
   result.criteria = EvaluateCriteria(robot, PosesOf(result.poses));
 
   // Reference: random feasible sets of the same size.
-  const int R = options.random_sets;
+  const int R = options.random_sets;  // 0: no reference (the Monte Carlo needs none)
+  if (R == 0) {
+    result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return result;
+  }
   std::vector<CriteriaValues> random(R);
 #pragma omp parallel for schedule(dynamic, 1)
   for (int r = 0; r < R; ++r) {

@@ -1,0 +1,177 @@
+// `cablecal montecarlo` and `cablecal reproduce`.
+#include <omp.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+
+#include "cli/commands.h"
+#include "common/atomic_output.h"
+#include "common/error.h"
+#include "common/format.h"
+#include "common/version.h"
+#include "montecarlo/montecarlo.h"
+
+namespace cablecal::cli {
+namespace {
+
+std::atomic<bool> g_interrupted{false};
+extern "C" void OnSigint(int) { g_interrupted = true; }
+
+// A progress bar with rate and time left when stderr is a terminal; nothing otherwise.
+std::function<void(long, long)> ProgressBar(const std::string& label) {
+  if (!::isatty(2)) return nullptr;
+  const auto start = std::chrono::steady_clock::now();
+  auto last = std::make_shared<std::chrono::steady_clock::time_point>(start - std::chrono::seconds(1));
+  return [=](long done, long total) {
+    const auto now = std::chrono::steady_clock::now();
+    if (done < total && now - *last < std::chrono::milliseconds(200)) return;
+    *last = now;
+    const double elapsed = std::chrono::duration<double>(now - start).count();
+    const double rate = elapsed > 0 ? done / elapsed : 0.0;
+    const double left = rate > 0 ? (total - done) / rate : 0.0;
+    const int width = 30, filled = static_cast<int>(width * done / std::max(1L, total));
+    std::fprintf(stderr, "\r%s [%s%s] %ld/%ld trials, %.0f/s, %.0f s left   ", label.c_str(),
+                 std::string(filled, '#').c_str(), std::string(width - filled, ' ').c_str(), done, total, rate, left);
+    if (done == total) std::fprintf(stderr, "\n");
+  };
+}
+
+void EnsureFolder(const std::string& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec || !std::filesystem::is_directory(dir)) {
+    throw InputError("--out", "", "cannot create the folder '" + dir + "': " + ec.message());
+  }
+}
+
+std::string RunYaml(const Robot& robot, const MonteCarloOptions& o, const std::string& poses_text,
+                    const MonteCarloResult& r, const std::string& command_line, int threads) {
+  std::string designs;
+  for (PoseSetDesign d : o.designs) designs += (designs.empty() ? "" : ", ") + std::string(ToString(d));
+  int failures = 0;
+  long trials = 0;
+  for (const MonteCarloCell& c : r.cells) {
+    failures += c.failures();
+    trials += static_cast<long>(c.trials.size());
+  }
+  std::string s;
+  s += "cablecal: {version: " + std::string(Version()) + ", commit: " + GitCommit() + "}\n";
+  s += "command: \"" + command_line + "\"\n";
+  s += "robot: {name: " + robot.name + ", source: \"" + robot.source + "\"}\n";
+  s += "poses: \"" + poses_text + "\"\n";
+  s += "designs: [" + designs + "]\n";
+  s += "trials: " + std::to_string(o.trials) + "\n";
+  s += "estimator: " + std::string(ToString(o.estimator)) + "\n";
+  s += "gauge: " + std::string(ToString(o.gauge)) + "\n";
+  s += "sensors: " + std::string(ToString(o.sensors)) + "\n";
+  s += "geometry_sigma_m: " + FormatDouble(o.geometry_sigma_m) + "\n";
+  s += "design_starts: " + std::to_string(o.design_starts) + "\n";
+  s += "seed: " + std::to_string(o.seed) + "\n";
+  s += "threads: " + std::to_string(threads) + "\n";
+  s += "trials_run: " + std::to_string(trials) + "\n";
+  s += "failed_trials: " + std::to_string(failures) + "\n";
+  s += "wall_time_s: " + FormatDouble(std::round(r.wall_time_s * 1000.0) / 1000.0) + "\n";
+  return s;
+}
+
+// Writes every output of one study into `dir` (atomically, as one set).
+void WriteStudy(const std::string& dir, const Robot& robot, const MonteCarloOptions& o, const std::string& poses_text,
+                const MonteCarloResult& r, const std::string& command_line, int threads, bool plot,
+                const std::string& title) {
+  EnsureFolder(dir);
+  AtomicOutput output;
+  output.WriteText(dir + "/errors.csv", ErrorsCsv(r));
+  const std::string summary = output.WriteText(dir + "/summary.csv", SummaryCsv(r));
+  output.WriteText(dir + "/summary.md", SummaryMarkdown(r, title));
+  output.WriteText(dir + "/run.yaml", RunYaml(robot, o, poses_text, r, command_line, threads));
+  (void)summary;
+  output.Commit();
+  if (plot) RunPlotScript("plot_montecarlo.py", {dir});
+}
+
+MonteCarloResult RunInterruptible(const Robot& robot, MonteCarloOptions o, const std::string& label) {
+  g_interrupted = false;
+  struct sigaction action {};
+  action.sa_handler = OnSigint;
+  struct sigaction previous {};
+  sigaction(SIGINT, &action, &previous);
+  o.interrupted = &g_interrupted;
+  o.progress = ProgressBar(label);
+  MonteCarloResult r = RunMonteCarlo(robot, o);
+  sigaction(SIGINT, &previous, nullptr);
+  if (r.interrupted) throw Interrupted();
+  return r;
+}
+
+}  // namespace
+
+int RunMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptions& options) {
+  const Robot robot = LoadRobotOption(options.robot_path);
+  MonteCarloOptions o;
+  o.pose_counts = ParsePoseCounts(options.poses);
+  o.designs = ParseDesigns(options.designs);
+  o.trials = options.trials;
+  o.estimator = ParseEstimator(options.estimator);
+  o.gauge = ParseGauge(options.gauge);
+  o.sensors = ParseNoisySensors(options.sensors);
+  o.geometry_sigma_m = options.geometry_sigma_m;
+  o.seed = options.seed;
+  o.design_starts = options.design_starts;
+  if (options.threads > 0) omp_set_num_threads(options.threads);
+  const int threads = omp_get_max_threads();
+  const MonteCarloResult r = RunInterruptible(robot, o, "montecarlo");
+  WriteStudy(options.out_dir, robot, o, options.poses, r, ctx.command_line, threads, options.plot,
+             "Monte Carlo: " + robot.name);
+  int failures = 0;
+  for (const MonteCarloCell& c : r.cells) failures += c.failures();
+  std::printf("ran %zu cells x %d trials in %.1f s on %d threads (%d failed trials); wrote %s/\n", r.cells.size(),
+              o.trials, r.wall_time_s, threads, failures, options.out_dir.c_str());
+  return kExitOk;
+}
+
+int RunReproduce(const Context& ctx, const ReproduceOptions& options) {
+  const Robot robot = LoadRobotOption(options.robot_path);
+  if (options.threads > 0) omp_set_num_threads(options.threads);
+  const int threads = omp_get_max_threads();
+  const auto t0 = std::chrono::steady_clock::now();
+  MonteCarloOptions base;
+  base.trials = options.trials;
+  base.seed = options.seed;
+  base.geometry_sigma_m = 0.01;
+  // 1. The paper's study: random pose sets for every n, optimized sets every 4th n.
+  MonteCarloOptions random = base;
+  random.pose_counts = ParsePoseCounts("6:50");
+  random.designs = {PoseSetDesign::kRandom};
+  MonteCarloOptions optimized = base;
+  optimized.pose_counts = ParsePoseCounts("6:50:4");
+  optimized.designs = {PoseSetDesign::kOptimized};
+  MonteCarloResult study = RunInterruptible(robot, random, "study, random sets   ");
+  const MonteCarloResult opt = RunInterruptible(robot, optimized, "study, optimized sets");
+  study.cells.insert(study.cells.end(), opt.cells.begin(), opt.cells.end());
+  study.wall_time_s += opt.wall_time_s;
+  MonteCarloOptions described = base;
+  described.pose_counts = random.pose_counts;
+  described.designs = {PoseSetDesign::kRandom, PoseSetDesign::kOptimized};
+  WriteStudy(options.out_dir + "/study", robot, described, "6:50 (random), 6:50:4 (optimized)", study, ctx.command_line,
+             threads, false, "The paper's study: " + robot.name);
+  // 2. The sensor ablation at n = 50 (the paper's Section 4.2, Fig. 10).
+  for (const NoisySensors s : {NoisySensors::kBoth, NoisySensors::kLaser, NoisySensors::kInclinometer, NoisySensors::kNone}) {
+    MonteCarloOptions ab = base;
+    ab.pose_counts = {50};
+    ab.designs = {PoseSetDesign::kRandom};
+    ab.sensors = s;
+    const MonteCarloResult r = RunInterruptible(robot, ab, std::string("ablation, ") + ToString(s) + "          ");
+    WriteStudy(options.out_dir + "/ablation/" + ToString(s), robot, ab, "50", r, ctx.command_line, threads, false,
+               std::string("Sensor ablation, noisy sensors: ") + ToString(s));
+  }
+  RunPlotScript("plot_montecarlo.py", {options.out_dir + "/study", "--ablation", options.out_dir + "/ablation"});
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("reproduced the study in %.1f s on %d threads; wrote %s/\n", wall, threads, options.out_dir.c_str());
+  return kExitOk;
+}
+
+}  // namespace cablecal::cli

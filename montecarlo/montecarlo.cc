@@ -1,0 +1,296 @@
+#include "montecarlo/montecarlo.h"
+
+#include <omp.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <sstream>
+
+#include "common/error.h"
+#include "common/format.h"
+#include "common/random.h"
+#include "design/design.h"
+
+namespace cablecal {
+
+const char* ToString(PoseSetDesign d) {
+  switch (d) {
+    case PoseSetDesign::kRandom: return "random";
+    case PoseSetDesign::kOptimized: return "optimized";
+    case PoseSetDesign::kD: return "d";
+    case PoseSetDesign::kA: return "a";
+    case PoseSetDesign::kE: return "e";
+  }
+  return "unknown";
+}
+
+std::vector<PoseSetDesign> ParseDesigns(const std::string& text) {
+  std::vector<PoseSetDesign> out;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    PoseSetDesign d;
+    if (item == "random") d = PoseSetDesign::kRandom;
+    else if (item == "optimized") d = PoseSetDesign::kOptimized;
+    else if (item == "d") d = PoseSetDesign::kD;
+    else if (item == "a") d = PoseSetDesign::kA;
+    else if (item == "e") d = PoseSetDesign::kE;
+    else throw InputError("--designs", "", "unknown design '" + item + "' (random, optimized, d, a, e)");
+    for (PoseSetDesign seen : out) {
+      if (seen == d) throw InputError("--designs", "", "'" + item + "' given twice");
+    }
+    out.push_back(d);
+  }
+  if (out.empty()) throw InputError("--designs", "", "give at least one design");
+  return out;
+}
+
+std::vector<int> ParsePoseCounts(const std::string& text) {
+  std::vector<int> parts;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ':')) {
+    double v = 0.0;
+    if (!ParseFiniteDouble(item, &v) || v != std::floor(v) || v < 1 || v > 1000) {
+      throw InputError("--poses", "", "expected first:last[:step] with whole numbers (got '" + text + "')");
+    }
+    parts.push_back(static_cast<int>(v));
+  }
+  if (parts.size() == 1) parts.push_back(parts[0]);
+  if (parts.size() < 2 || parts.size() > 3) throw InputError("--poses", "", "expected first:last[:step] (got '" + text + "')");
+  const int step = parts.size() == 3 ? parts[2] : 1;
+  if (parts[0] > parts[1]) throw InputError("--poses", "", "first must not exceed last (got '" + text + "')");
+  if (parts[0] < 5) throw InputError("--poses", "", "at least 5 poses are needed to identify the geometry (got '" + text + "')");
+  std::vector<int> out;
+  for (int n = parts[0]; n <= parts[1]; n += step) out.push_back(n);
+  return out;
+}
+
+int MonteCarloCell::failures() const {
+  int f = 0;
+  for (const TrialOutcome& t : trials) f += !t.ok;
+  return f;
+}
+
+Robot TrueGeometryForTrial(const Robot& nominal, double sigma_m, Gauge gauge, Rng& rng) {
+  GeometryVector g = GeometryOf(nominal);
+  GeometryVector draw;
+  for (int k = 0; k < 6; ++k) draw(k) = rng.Normal();  // always six draws: streams stay aligned
+  for (int k = 0; k < 6; ++k) {
+    double sigma = sigma_m;
+    if (gauge == Gauge::kA1x && k == 0) sigma = 0.0;
+    if (gauge == Gauge::kPrior && k < 4 && nominal.sensors.tracker_sigma_m) sigma = *nominal.sensors.tracker_sigma_m;
+    g(k) += sigma * draw(k);
+  }
+  return WithGeometry(nominal, g);
+}
+
+namespace {
+
+TrialOutcome RunTrial(const Robot& nominal, const MonteCarloOptions& o, int n, PoseSetDesign design, int trial,
+                      const std::vector<PlanPose>* designed) {
+  const std::uint64_t n64 = static_cast<std::uint64_t>(n), d64 = static_cast<std::uint64_t>(design),
+                      t64 = static_cast<std::uint64_t>(trial);
+  Rng rng(StreamSeed(o.seed, {n64, d64, t64, 0}));
+  TrialOutcome out;
+  try {
+    const Robot truth = TrueGeometryForTrial(nominal, o.geometry_sigma_m, o.gauge, rng);
+    const std::vector<PlanPose> poses =
+        designed ? *designed : SampleFeasiblePoses(nominal, n, StreamSeed(o.seed, {n64, d64, t64, 1}));
+    SimulatedExperiment sim;
+    try {
+      sim = SimulateExperiment(nominal, truth, poses, SimulationOptions{o.sensors, true}, rng);
+    } catch (const SolverFailure& e) {
+      out.failure = std::string("simulation: ") + e.what();
+      return out;
+    }
+    IdentifyOptions id;
+    id.estimator = o.estimator;
+    id.gauge = o.gauge;
+    id.compute_covariance = false;
+    id.compute_identifiability = false;
+    const IdentifyResult r = Identify(nominal, sim.measurements, id);
+    if (!r.converged()) {
+      out.failure = std::string("identification: ") + ToString(r.status);
+      return out;
+    }
+    const GeometryVector g_true = GeometryOf(truth);
+    for (int k = 0; k < 6; ++k) out.errors_m.push_back(r.geometry(k) - g_true(k));  // paper, Eq. (9)
+    for (int j = 0; j < n; ++j) out.errors_m.push_back(r.poses[j].q(0) - sim.true_poses[j](0));
+    out.ok = true;
+  } catch (const SolverFailure& e) {
+    out.failure = std::string("sampling: ") + e.what();
+  }
+  return out;
+}
+
+Criterion CriterionOf(PoseSetDesign d) {
+  switch (d) {
+    case PoseSetDesign::kD: return Criterion::kD;
+    case PoseSetDesign::kA: return Criterion::kA;
+    case PoseSetDesign::kE: return Criterion::kE;
+    default: return Criterion::kCondition;
+  }
+}
+
+}  // namespace
+
+MonteCarloResult RunMonteCarlo(const Robot& nominal, const MonteCarloOptions& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (o.trials < 1) throw InputError("--trials", "", "must be at least 1");
+  if (o.pose_counts.empty()) throw InputError("--poses", "", "no pose counts");
+  if (!(o.geometry_sigma_m >= 0.0) || !std::isfinite(o.geometry_sigma_m)) {
+    throw InputError("--geometry-sigma", "", "must be a non-negative number of metres");
+  }
+  MonteCarloResult result;
+  // Designed sets first: once per (n, criterion), each from its own seed stream.
+  std::map<std::pair<int, int>, std::vector<PlanPose>> designed;
+  for (int n : o.pose_counts) {
+    for (PoseSetDesign d : o.designs) {
+      if (d == PoseSetDesign::kRandom) continue;
+      if (o.interrupted && o.interrupted->load()) {
+        result.interrupted = true;
+        return result;
+      }
+      DesignOptions opt;
+      opt.poses = n;
+      opt.criterion = CriterionOf(d);
+      opt.starts = o.design_starts;
+      opt.seed = StreamSeed(o.seed, {static_cast<std::uint64_t>(n), static_cast<std::uint64_t>(d), 0xde5});
+      opt.random_sets = 0;
+      designed[{n, static_cast<int>(d)}] = DesignPoses(nominal, opt).poses;
+    }
+  }
+  for (int n : o.pose_counts) {
+    for (PoseSetDesign d : o.designs) {
+      MonteCarloCell cell;
+      cell.n = n;
+      cell.design = d;
+      cell.trials.resize(o.trials);
+      result.cells.push_back(std::move(cell));
+    }
+  }
+  const long total = static_cast<long>(result.cells.size()) * o.trials;
+  std::atomic<long> done{0};
+  std::atomic<bool> stop{false};
+#pragma omp parallel for schedule(dynamic, 4)
+  for (long item = 0; item < total; ++item) {
+    if (stop.load(std::memory_order_relaxed)) continue;
+    if (o.interrupted && o.interrupted->load()) {
+      stop = true;
+      continue;
+    }
+    MonteCarloCell& cell = result.cells[item / o.trials];
+    const int trial = static_cast<int>(item % o.trials);
+    const auto it = designed.find({cell.n, static_cast<int>(cell.design)});
+    cell.trials[trial] = RunTrial(nominal, o, cell.n, cell.design, trial, it == designed.end() ? nullptr : &it->second);
+    const long now = ++done;
+    if (o.progress && omp_get_thread_num() == 0) o.progress(now, total);
+  }
+  result.interrupted = stop.load();
+  if (o.progress && !result.interrupted) o.progress(total, total);
+  result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return result;
+}
+
+std::vector<std::string> SummaryParameters() { return {"a1x", "a1z", "a2x", "a2z", "l10", "l20", "x4", "x_all"}; }
+
+ErrorStats Summarise(const MonteCarloCell& cell, const std::string& parameter) {
+  std::vector<double> e;
+  for (const TrialOutcome& t : cell.trials) {
+    if (!t.ok) continue;
+    if (parameter == "x_all") {
+      e.insert(e.end(), t.errors_m.begin() + 6, t.errors_m.end());
+    } else if (parameter == "x4") {
+      if (cell.n >= 4) e.push_back(t.errors_m[6 + 3]);
+    } else {
+      for (int k = 0; k < 6; ++k) {
+        if (parameter == kGeometryNames[k]) e.push_back(t.errors_m[k]);
+      }
+    }
+  }
+  ErrorStats s;
+  s.count = static_cast<int>(e.size());
+  if (e.empty()) return s;
+  double sum = 0, sum2 = 0;
+  int within = 0;
+  for (double v : e) {
+    sum += v;
+    sum2 += v * v;
+    s.max_abs = std::max(s.max_abs, std::abs(v));
+    within += std::abs(v) <= 0.005;
+  }
+  s.mean = sum / e.size();
+  s.rms = std::sqrt(sum2 / e.size());
+  double var = 0;
+  for (double v : e) var += (v - s.mean) * (v - s.mean);
+  s.std = e.size() > 1 ? std::sqrt(var / (e.size() - 1)) : 0.0;
+  s.share_within_5mm = static_cast<double>(within) / e.size();
+  return s;
+}
+
+std::string ErrorsCsv(const MonteCarloResult& r) {
+  std::string out = "n,design,trial,parameter,error\n";
+  for (const MonteCarloCell& c : r.cells) {
+    for (std::size_t t = 0; t < c.trials.size(); ++t) {
+      const TrialOutcome& tr = c.trials[t];
+      if (!tr.ok) continue;
+      const std::string prefix = std::to_string(c.n) + "," + ToString(c.design) + "," + std::to_string(t + 1) + ",";
+      for (std::size_t k = 0; k < tr.errors_m.size(); ++k) {
+        const std::string name = k < 6 ? kGeometryNames[k] : "x" + std::to_string(k - 5);
+        out += prefix + name + "," + FormatDouble(tr.errors_m[k]) + "\n";
+      }
+    }
+  }
+  return out;
+}
+
+std::string SummaryCsv(const MonteCarloResult& r) {
+  std::string out = "n,design,parameter,mean,std,rms,max_abs,share_within_5mm,failures\n";
+  for (const MonteCarloCell& c : r.cells) {
+    for (const std::string& p : SummaryParameters()) {
+      const ErrorStats s = Summarise(c, p);
+      out += std::to_string(c.n) + "," + ToString(c.design) + "," + p + "," + FormatDouble(s.mean) + "," +
+             FormatDouble(s.std) + "," + FormatDouble(s.rms) + "," + FormatDouble(s.max_abs) + "," +
+             FormatDouble(s.share_within_5mm) + "," + std::to_string(c.failures()) + "\n";
+    }
+  }
+  return out;
+}
+
+std::string SummaryMarkdown(const MonteCarloResult& r, const std::string& title) {
+  std::ostringstream o;
+  o << "# " << title << "\n\n";
+  o << "Standard deviation of the identification error (identified - true) in mm, per pose count n\n"
+       "and pose-set design; `x4` is the 4th pose's x, `x_all` every pose's x pooled. `failed` counts\n"
+       "trials whose simulation or identification failed (left out of the statistics).\n\n";
+  o << "| n | design |";
+  for (const std::string& p : SummaryParameters()) o << " " << p << " |";
+  o << " within ±5 mm | failed |\n|---|---|";
+  for (std::size_t k = 0; k < SummaryParameters().size() + 2; ++k) o << "---|";
+  o << "\n";
+  char buf[32];
+  for (const MonteCarloCell& c : r.cells) {
+    o << "| " << c.n << " | " << ToString(c.design) << " |";
+    int within = 0, count = 0;
+    for (const std::string& p : SummaryParameters()) {
+      const ErrorStats s = Summarise(c, p);
+      std::snprintf(buf, sizeof(buf), " %.3f |", 1e3 * s.std);
+      o << buf;
+      if (p != "x_all" && p != "x4") {
+        within += static_cast<int>(std::lround(s.share_within_5mm * s.count));
+        count += s.count;
+      }
+    }
+    const ErrorStats xs = Summarise(c, "x_all");
+    within += static_cast<int>(std::lround(xs.share_within_5mm * xs.count));
+    count += xs.count;
+    std::snprintf(buf, sizeof(buf), " %.1f %% |", count ? 100.0 * within / count : 0.0);
+    o << buf << " " << c.failures() << " / " << c.trials.size() << " |\n";
+  }
+  return o.str();
+}
+
+}  // namespace cablecal

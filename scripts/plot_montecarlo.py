@@ -1,0 +1,141 @@
+#!/usr/bin/python3
+"""Figures of a `cablecal montecarlo` study (the paper's Figs. 6-11, extended), written into
+the study folder:
+  sigma_vs_n.png       sigma of each identified variable against n, per design (Fig. 6)
+  distributions.png    error distributions at n = 6, 10, 20, 50, random sets (Figs. 7-9)
+  one_calibration.png  every variable's error in one calibration at the largest n (Fig. 11)
+  ablation.png         with --ablation DIR: a2x errors at n = 50 per noisy-sensor setting (Fig. 10)
+Usage: /usr/bin/python3 scripts/plot_montecarlo.py STUDY_DIR [--ablation ABLATION_DIR]
+"""
+import argparse
+import collections
+import csv
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+
+def read_summary(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def read_errors(path, keep):
+    """{(n, design, parameter): [errors in mm]} for parameters in `keep`, and the trial-1 rows."""
+    errors = collections.defaultdict(list)
+    first_trial = collections.defaultdict(dict)
+    with open(path, newline="") as f:
+        for row in csv.DictReader(f):
+            key = (int(row["n"]), row["design"])
+            e = 1e3 * float(row["error"])
+            if row["parameter"] in keep:
+                errors[key + (row["parameter"],)].append(e)
+            if row["trial"] == "1":
+                first_trial[key][row["parameter"]] = e
+    return errors, first_trial
+
+
+def sigma_vs_n(summary, out):
+    params = ["a1z", "a2x", "a2z", "l10", "l20", "x4"]
+    fig, axes = plt.subplots(2, 3, figsize=(13, 7), sharex=True)
+    designs = sorted({r["design"] for r in summary})
+    for ax, p in zip(axes.flat, params):
+        for d in designs:
+            rows = sorted((int(r["n"]), 1e3 * float(r["std"])) for r in summary if r["parameter"] == p and r["design"] == d)
+            if rows:
+                ax.plot([r[0] for r in rows], [r[1] for r in rows], "o-", ms=3, label=d)
+        ax.set_title(p)
+        ax.set_ylabel("sigma (mm)")
+        ax.grid(alpha=0.3)
+    for ax in axes[-1]:
+        ax.set_xlabel("number of poses n")
+    axes.flat[0].legend()
+    fig.suptitle("Standard deviation of the identification error against the number of poses")
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+
+
+def distributions(errors, out):
+    params = ["a2x", "l10", "x4"]
+    ns = [6, 10, 20, 50]
+    fig, axes = plt.subplots(1, 3, figsize=(14, 4.2))
+    for ax, p in zip(axes, params):
+        for n in ns:
+            e = errors.get((n, "random", p))
+            if not e:
+                continue
+            lim = max(5.0, np.percentile(np.abs(e), 99.5))
+            ax.hist(e, bins=60, range=(-lim, lim), density=True, histtype="step", lw=1.4,
+                    label=f"n = {n}, sigma = {np.std(e, ddof=1):.2f} mm")
+        ax.set_title(f"{p}, random pose sets")
+        ax.set_xlabel("error (mm)")
+        ax.set_ylabel("probability density")
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+
+
+def one_calibration(first_trial, out):
+    if not first_trial:
+        return
+    key = max((k for k in first_trial if k[1] == "random"), default=None) or max(first_trial)
+    row = first_trial[key]
+    names = [p for p in ["a1x", "a1z", "a2x", "a2z", "l10", "l20"] if p in row]
+    names += sorted((p for p in row if p.startswith("x")), key=lambda s: int(s[1:]))
+    values = [row[p] for p in names]
+    within = 100.0 * np.mean(np.abs(values) <= 5.0)
+    fig, ax = plt.subplots(figsize=(13, 4))
+    ax.bar(range(len(names)), values, color=["tab:red"] * 6 + ["tab:blue"] * (len(names) - 6))
+    ax.axhline(5, color="0.5", ls="--", lw=0.8)
+    ax.axhline(-5, color="0.5", ls="--", lw=0.8)
+    ax.set_xticks(range(len(names)))
+    ax.set_xticklabels(names, rotation=90, fontsize=7)
+    ax.set_ylabel("error (mm)")
+    ax.set_title(f"All identified variables in one calibration (n = {key[0]}, {key[1]} poses, trial 1): "
+                 f"max |error| {np.max(np.abs(values)):.2f} mm, {within:.1f} % within ±5 mm")
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+
+
+def ablation(folder, out):
+    settings = ["both", "laser", "inclinometer", "none"]
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    for s in settings:
+        path = os.path.join(folder, s, "errors.csv")
+        if not os.path.exists(path):
+            continue
+        errors, _ = read_errors(path, {"a2x"})
+        e = [v for k, vals in errors.items() for v in vals]
+        if e:
+            ax.hist(e, bins=60, range=(-20, 20), density=True, histtype="step", lw=1.4,
+                    label=f"noisy: {s}, sigma = {np.std(e, ddof=1):.3f} mm")
+    ax.set_xlabel("a2x error (mm)")
+    ax.set_ylabel("probability density")
+    ax.set_title("Effect of each sensor's noise on a2x at n = 50 (random pose sets)")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("study")
+    ap.add_argument("--ablation")
+    args = ap.parse_args()
+    summary = read_summary(os.path.join(args.study, "summary.csv"))
+    errors, first_trial = read_errors(os.path.join(args.study, "errors.csv"), {"a2x", "l10", "x4"})
+    sigma_vs_n(summary, os.path.join(args.study, "sigma_vs_n.png"))
+    distributions(errors, os.path.join(args.study, "distributions.png"))
+    one_calibration(first_trial, os.path.join(args.study, "one_calibration.png"))
+    if args.ablation:
+        ablation(args.ablation, os.path.join(args.ablation, "ablation.png"))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,110 @@
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <atomic>
+#include <cmath>
+
+#include "common/error.h"
+#include "montecarlo/montecarlo.h"
+
+namespace cablecal {
+namespace {
+
+MonteCarloOptions Small() {
+  MonteCarloOptions o;
+  o.pose_counts = {6, 12};
+  o.designs = {PoseSetDesign::kRandom, PoseSetDesign::kOptimized};
+  o.trials = 12;
+  o.seed = 9;
+  return o;
+}
+
+TEST(MonteCarlo, BitIdenticalForOneAndTwoThreads) {
+  const Robot& robot = BuiltinRobot();
+  omp_set_num_threads(1);
+  const MonteCarloResult one = RunMonteCarlo(robot, Small());
+  omp_set_num_threads(2);
+  const MonteCarloResult two = RunMonteCarlo(robot, Small());
+  EXPECT_EQ(ErrorsCsv(one), ErrorsCsv(two));
+  EXPECT_EQ(SummaryCsv(one), SummaryCsv(two));
+  EXPECT_GT(ErrorsCsv(one).size(), 1000u);
+}
+
+TEST(MonteCarlo, TrialStreamsDependOnlyOnTheirIndices) {
+  // Adding pose counts or designs does not change the trials already there.
+  const Robot& robot = BuiltinRobot();
+  MonteCarloOptions a = Small();
+  a.pose_counts = {12};
+  a.designs = {PoseSetDesign::kRandom};
+  const MonteCarloResult ra = RunMonteCarlo(robot, a);
+  const MonteCarloResult rb = RunMonteCarlo(robot, Small());
+  const MonteCarloCell* cell = nullptr;
+  for (const MonteCarloCell& c : rb.cells) {
+    if (c.n == 12 && c.design == PoseSetDesign::kRandom) cell = &c;
+  }
+  ASSERT_NE(cell, nullptr);
+  for (int t = 0; t < a.trials; ++t) EXPECT_EQ(ra.cells[0].trials[t].errors_m, cell->trials[t].errors_m);
+}
+
+TEST(MonteCarlo, ErrorsShrinkWithMorePosesAndMatchTheNoiseFreeLimit) {
+  const Robot& robot = BuiltinRobot();
+  MonteCarloOptions o;
+  o.pose_counts = {6, 30};
+  o.designs = {PoseSetDesign::kRandom};
+  o.trials = 60;
+  const MonteCarloResult r = RunMonteCarlo(robot, o);
+  EXPECT_GT(Summarise(r.cells[0], "a2x").std, 2.0 * Summarise(r.cells[1], "a2x").std);
+  // No sensor noise at all: identification errors vanish (encoders keep their 0.05 mm).
+  o.sensors = NoisySensors::kNone;
+  o.pose_counts = {30};
+  const MonteCarloResult quiet = RunMonteCarlo(robot, o);
+  EXPECT_LT(Summarise(quiet.cells[0], "a2x").std, 0.2 * Summarise(r.cells[1], "a2x").std);
+  // Gauge a1x: the true a1x is the nominal one, so its error is exactly zero.
+  EXPECT_EQ(Summarise(r.cells[1], "a1x").max_abs, 0.0);
+}
+
+TEST(MonteCarlo, FailuresAreCountedNotDropped) {
+  // A large geometry error makes some commanded poses unreachable for the true robot.
+  const Robot& robot = BuiltinRobot();
+  MonteCarloOptions o;
+  o.pose_counts = {20};
+  o.designs = {PoseSetDesign::kRandom};
+  o.trials = 40;
+  o.geometry_sigma_m = 0.05;
+  const MonteCarloResult r = RunMonteCarlo(robot, o);
+  const MonteCarloCell& c = r.cells[0];
+  int failed = 0;
+  for (const TrialOutcome& t : c.trials) {
+    if (!t.ok) {
+      ++failed;
+      EXPECT_FALSE(t.failure.empty());
+    }
+  }
+  EXPECT_EQ(c.failures(), failed);
+  EXPECT_GT(failed, 0);
+  EXPECT_EQ(Summarise(c, "a2x").count, o.trials - failed);
+  EXPECT_NE(SummaryCsv(r).find("," + std::to_string(failed) + "\n"), std::string::npos);
+}
+
+TEST(MonteCarlo, InterruptStopsEarly) {
+  std::atomic<bool> stop{true};
+  MonteCarloOptions o = Small();
+  o.designs = {PoseSetDesign::kRandom};
+  o.interrupted = &stop;
+  EXPECT_TRUE(RunMonteCarlo(BuiltinRobot(), o).interrupted);
+}
+
+TEST(MonteCarlo, ParsesPoseRangesAndDesigns) {
+  EXPECT_EQ(ParsePoseCounts("6:10"), (std::vector<int>{6, 7, 8, 9, 10}));
+  EXPECT_EQ(ParsePoseCounts("6:50:22"), (std::vector<int>{6, 28, 50}));
+  EXPECT_EQ(ParsePoseCounts("7"), (std::vector<int>{7}));
+  for (const char* bad : {"4:10", "10:6", "6:x", "6:10:0", "", "6.5:10"}) {
+    EXPECT_THROW(ParsePoseCounts(bad), InputError) << bad;
+  }
+  EXPECT_EQ(ParseDesigns("random,e").size(), 2u);
+  EXPECT_THROW(ParseDesigns("random,random"), InputError);
+  EXPECT_THROW(ParseDesigns("best"), InputError);
+}
+
+}  // namespace
+}  // namespace cablecal
