@@ -160,7 +160,14 @@ MonteCarloResult RunMonteCarlo(const Robot& nominal, const MonteCarloOptions& o)
       opt.starts = o.design_starts;
       opt.seed = StreamSeed(o.seed, {static_cast<std::uint64_t>(n), static_cast<std::uint64_t>(d), 0xde5});
       opt.random_sets = 0;
-      designed[{n, static_cast<int>(d)}] = DesignPoses(nominal, opt).poses;
+      try {
+        designed[{n, static_cast<int>(d)}] = DesignPoses(nominal, opt).poses;
+      } catch (const SolverFailure&) {
+        // No start converged within Ipopt's iteration limit: add starts (the first ones
+        // are the same streams, so this only extends the search).
+        opt.starts = 4 * o.design_starts;
+        designed[{n, static_cast<int>(d)}] = DesignPoses(nominal, opt).poses;
+      }
     }
   }
   for (int n : o.pose_counts) {

@@ -39,7 +39,7 @@ struct MonteCarloOptions {
   NoisySensors sensors = NoisySensors::kBoth;
   double geometry_sigma_m = 0.01;
   std::uint64_t seed = 1;
-  int design_starts = 2;  // Ipopt starts per designed set
+  int design_starts = 2;  // Ipopt starts per designed set (4x as many if none converges)
   // Called from one thread now and then with (trials done, trials in all).
   std::function<void(long, long)> progress;
   const std::atomic<bool>* interrupted = nullptr;  // set (e.g. by SIGINT) to stop early

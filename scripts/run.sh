@@ -7,4 +7,5 @@ root="$(cd "$(dirname "$0")/.." && pwd)"
 build="${CABLECAL_BUILD_DIR:-$root/build}"
 cd "$root"
 mkdir -p results
-"$build/cablecal" workspace --out results/workspace.csv --plot results/workspace.png "$@"
+"$build/cablecal" workspace --out results/workspace.csv --plot results/workspace.png
+"$build/cablecal" reproduce --out results "$@"
