@@ -214,6 +214,40 @@ TEST_F(Cli, DesignFailuresWriteNothing) {
   EXPECT_TRUE(DirIsEmpty());
 }
 
+TEST_F(Cli, MonteCarloWritesEveryOutput) {
+  const RunResult r = RunCablecal("montecarlo --poses 6:8 --trials 5 --designs random --seed 4 --out " + Path("mc"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* f : {"errors.csv", "summary.csv", "summary.md", "run.yaml", "sigma_vs_n.png", "distributions.png",
+                        "one_calibration.png"}) {
+    EXPECT_TRUE(fs::exists(Path(std::string("mc/") + f))) << f;
+  }
+  EXPECT_EQ(Read("mc/summary.csv").rfind("n,design,parameter,mean,std,rms,max_abs,share_within_5mm,failures\n", 0), 0u);
+  const std::string run = Read("mc/run.yaml");
+  for (const char* key : {"commit: ", "command: ", "seed: 4", "threads: ", "wall_time_s: ", "trials: 5"}) {
+    EXPECT_NE(run.find(key), std::string::npos) << key;
+  }
+}
+
+TEST_F(Cli, InterruptedMonteCarloLeavesNoOutput) {
+  // SIGINT after one second of a run that would take minutes: exit 130, nothing written.
+  const RunResult r = RunCablecal("env timeout --preserve-status -s INT 1 " + std::string(CABLECAL_BINARY) +
+                                  " montecarlo --poses 50 --trials 100000 --designs random --no-plot --out " + Path("mc"));
+  EXPECT_EQ(r.exit_code, 130) << r.output;
+  EXPECT_NE(r.output.find("interrupted: no output written"), std::string::npos) << r.output;
+  EXPECT_TRUE(DirIsEmpty());
+}
+
+TEST_F(Cli, MonteCarloBadFlagsExitTwo) {
+  for (const std::string& args : std::vector<std::string>{"montecarlo --poses 4:10 --trials 5 --out " + Path("m"),
+                                                          "montecarlo --poses 6:10 --trials 0 --out " + Path("m"),
+                                                          "montecarlo --poses 6:10 --trials 5 --designs best --out " + Path("m"),
+                                                          "montecarlo --poses 6:10 --trials 5 --geometry-sigma -1 --out " + Path("m")}) {
+    const RunResult r = RunCablecal(args);
+    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
+  }
+  EXPECT_TRUE(DirIsEmpty());
+}
+
 TEST_F(Cli, VersionAndHelp) {
   const RunResult v = RunCablecal("--version");
   EXPECT_EQ(v.exit_code, 0);
