@@ -85,10 +85,9 @@ void WriteStudy(const std::string& dir, const Robot& robot, const MonteCarloOpti
   EnsureFolder(dir);
   AtomicOutput output;
   output.WriteText(dir + "/errors.csv", ErrorsCsv(r));
-  const std::string summary = output.WriteText(dir + "/summary.csv", SummaryCsv(r));
+  output.WriteText(dir + "/summary.csv", SummaryCsv(r));
   output.WriteText(dir + "/summary.md", SummaryMarkdown(r, title));
   output.WriteText(dir + "/run.yaml", RunYaml(robot, o, poses_text, r, command_line, threads));
-  (void)summary;
   output.Commit();
   if (plot) RunPlotScript("plot_montecarlo.py", {dir});
 }
