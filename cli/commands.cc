@@ -119,7 +119,7 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   id.max_iterations = options.max_iterations;
   const std::vector<Measurement> measurements = ReadMeasurementsCsv(options.measurements_path, nominal.num_cables());
   const IdentifyResult result = Identify(nominal, measurements, id);
-  if (result.status == IdentifyStatus::kRankDeficient) {
+  if (result.status == IdentifyStatus::kRankDeficient || result.status == IdentifyStatus::kPoorFit) {
     throw InputError(options.measurements_path, "", result.message);
   }
   if (!result.converged()) throw SolverFailure(options.measurements_path + ": " + result.message);

@@ -59,6 +59,11 @@ void ForEachCsvRow(const std::string& path, const std::vector<std::string>& expe
                    const std::function<void(const CsvRow&)>& on_row) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "", "cannot open the file");
+  ForEachCsvRow(in, path, expected_header, on_row);
+}
+
+void ForEachCsvRow(std::istream& in, const std::string& path, const std::vector<std::string>& expected_header,
+                   const std::function<void(const CsvRow&)>& on_row) {
   std::string line;
   int line_no = 0;
   bool have_header = false;

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <functional>
+#include <istream>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,9 @@ struct CsvRow {
 // the header. Throws InputError for a missing file, a wrong header, a wrong cell count or
 // a file with no data rows.
 void ForEachCsvRow(const std::string& path, const std::vector<std::string>& expected_header,
+                   const std::function<void(const CsvRow&)>& on_row);
+// The same from a stream; `name` stands for the file in messages.
+void ForEachCsvRow(std::istream& in, const std::string& name, const std::vector<std::string>& expected_header,
                    const std::function<void(const CsvRow&)>& on_row);
 
 std::string JoinCsv(const std::vector<std::string>& cells);

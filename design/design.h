@@ -50,7 +50,7 @@ struct DesignOptions {
   std::uint64_t seed = 1;
   double min_spacing_m = 0.0;  // 0: off
   int random_sets = 100;       // for the median of random feasible sets in the summary (0: none)
-  int max_iterations = 300;    // Ipopt, per start
+  int max_iterations = 500;    // Ipopt, per start
   // Testing aids: run Ipopt's derivative checker and keep its journal in this file.
   bool derivative_test = false;
   std::string ipopt_journal_path;

@@ -157,9 +157,11 @@ double InformationObjective(const Robot& robot, Criterion criterion, const std::
 }  // namespace
 
 double DesignObjective(const Robot& robot, Criterion criterion, const std::vector<Eigen::Vector3d>& poses,
-                       Eigen::VectorXd* gradient) {
-  if (criterion == Criterion::kCondition) return ConditionObjective(robot, poses, gradient, kConditionPower);
-  return InformationObjective(robot, criterion, poses, gradient, kEigenvaluePower);
+                       Eigen::VectorXd* gradient, double power) {
+  if (criterion == Criterion::kCondition) {
+    return ConditionObjective(robot, poses, gradient, power > 0.0 ? power : kConditionPower);
+  }
+  return InformationObjective(robot, criterion, poses, gradient, power > 0.0 ? power : kEigenvaluePower);
 }
 
 double ExactObjective(const Robot& robot, Criterion criterion, const std::vector<Eigen::Vector3d>& poses) {

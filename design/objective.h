@@ -19,8 +19,11 @@ constexpr double kEigenvaluePower = 32.0;
 // log trace S^-1 (a), the smooth surrogate of -log lambda_min(S) (e). Returns +inf where
 // the set cannot identify the geometry. If `gradient` is given it receives
 // d objective / d(x_j, z_j, theta_j), 3 per pose.
+// `power` overrides the surrogates' sharpness (0: the defaults above); the design starts
+// with a smoother surrogate and sharpens it (continuation, kContinuationPower).
+constexpr double kContinuationPower = 8.0;
 double DesignObjective(const Robot& robot, Criterion criterion, const std::vector<Eigen::Vector3d>& poses,
-                       Eigen::VectorXd* gradient);
+                       Eigen::VectorXd* gradient, double power = 0.0);
 
 // The same criteria exactly (log kappa, -log lambda_min without surrogate), for reporting.
 double ExactObjective(const Robot& robot, Criterion criterion, const std::vector<Eigen::Vector3d>& poses);

@@ -1,5 +1,6 @@
 #include "identify/experiment.h"
 
+#include <fstream>
 #include <set>
 
 #include "common/csv.h"
@@ -105,13 +106,22 @@ std::string MeasurementsCsv(const std::vector<Measurement>& measurements, const 
 }
 
 std::vector<Measurement> ReadMeasurementsCsv(const std::string& path, int num_cables) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "", "cannot open the file");
+  return ReadMeasurementsCsv(in, path, num_cables);
+}
+
+std::vector<Measurement> ReadMeasurementsCsv(std::istream& in, const std::string& path, int num_cables) {
   std::vector<std::string> header = {"pose"};
   for (int i = 1; i <= num_cables; ++i) header.push_back("dl" + std::to_string(i));
   header.push_back("z");
   header.push_back("theta");
   std::vector<Measurement> out;
   std::set<int> ids;
-  ForEachCsvRow(path, header, [&](const CsvRow& row) {
+  ForEachCsvRow(in, path, header, [&](const CsvRow& row) {
+    if (static_cast<int>(out.size()) >= kMaxMeasuredPoses) {
+      throw InputError(row.Where(), "", "more than " + std::to_string(kMaxMeasuredPoses) + " poses");
+    }
     Measurement m;
     m.pose_id = row.PositiveInt(0);
     if (!ids.insert(m.pose_id).second) {

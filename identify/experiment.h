@@ -8,6 +8,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <istream>
 #include <string>
 #include <vector>
 
@@ -61,7 +62,10 @@ SimulatedExperiment SimulateExperiment(const Robot& nominal, const Robot& truth,
 std::string MeasurementsCsv(const std::vector<Measurement>& measurements, const std::string& provenance);
 // Throws InputError naming file, line and column (wrong header or count, non-finite number,
 // duplicate or non-positive pose id).
+// At most kMaxMeasuredPoses rows (the file is streamed and rejected at the next row).
 std::vector<Measurement> ReadMeasurementsCsv(const std::string& path, int num_cables);
+std::vector<Measurement> ReadMeasurementsCsv(std::istream& in, const std::string& name, int num_cables);
+constexpr int kMaxMeasuredPoses = 100000;
 
 // Truth file: the true robot in the robot-file format plus its `true_poses` list.
 std::string TruthYaml(const Robot& truth, const std::vector<Measurement>& measurements,

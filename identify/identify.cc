@@ -42,6 +42,7 @@ const char* ToString(IdentifyStatus s) {
     case IdentifyStatus::kConverged: return "converged";
     case IdentifyStatus::kNotConverged: return "not_converged";
     case IdentifyStatus::kRankDeficient: return "rank_deficient";
+    case IdentifyStatus::kPoorFit: return "poor_fit";
   }
   return "unknown";
 }
@@ -269,6 +270,22 @@ IdentifyResult Identify(const Robot& nominal, const std::vector<Measurement>& me
   result.rms_encoder_m = std::sqrt(sum_enc / (2.0 * n));
   result.rms_laser_m = std::sqrt(sum_laser / n);
   result.rms_inclinometer_rad = std::sqrt(sum_inc / n);
+
+  // Goodness of fit. With the right model the whitened residuals have RMS near 1 (ml), and
+  // the paper estimator's length residuals are of the order of the laser's noise, which
+  // z_j carries into them. Ten times that is not noise: the result is flagged, not returned.
+  constexpr double kPoorFitFactor = 10.0;
+  const double fit = ml ? std::sqrt(2.0 * summary.final_cost / summary.num_residuals)
+                        : result.rms_encoder_m / std::max(s.laser_sigma_m(), s.encoder_sigma_m);
+  if (!(fit <= kPoorFitFactor)) {
+    result.status = IdentifyStatus::kPoorFit;
+    char buffer[160];
+    std::snprintf(buffer, sizeof(buffer),
+                  "the residuals are %.3g times the sensors' noise (more than %g): the measurements do not fit "
+                  "this robot", fit, kPoorFitFactor);
+    result.message = buffer;
+    return result;
+  }
 
   const int expected_null = options.gauge == Gauge::kNone ? 1 : 0;
   if (options.compute_identifiability) {

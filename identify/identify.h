@@ -47,6 +47,8 @@ enum class IdentifyStatus {
   kConverged,
   kNotConverged,   // Ceres stopped without meeting its tolerances: not a result
   kRankDeficient,  // a null direction beyond the declared gauge: the data cannot fix it
+  kPoorFit,        // converged, but the residuals are far larger than the sensors' noise:
+                   // the data do not come from this robot (wrong file, units, outliers)
 };
 const char* ToString(IdentifyStatus s);
 

@@ -13,6 +13,7 @@ PACKAGES=(
   libgtest-dev           # unit tests
   libbenchmark-dev       # bench/
   python3-matplotlib     # figures (scripts/*.py, run with /usr/bin/python3)
+  clang libclang-rt-dev  # libFuzzer targets of tests/fuzz (the test command only)
 )
 
 missing=()

@@ -1,9 +1,31 @@
 #!/usr/bin/env bash
-# Quick start, command 2: install what is missing, build, and run every test.
+# Quick start, command 2: install what is missing, build, and run every test:
+#   1. the Release build and its whole test suite (ctest);
+#   2. the same suite built with AddressSanitizer + UndefinedBehaviorSanitizer (build-sanitize/);
+#   3. the libFuzzer targets (clang, build-fuzz/), each for CABLECAL_FUZZ_SECONDS (default 30).
+# Set CABLECAL_QUICK=1 to run step 1 only.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 "$root/scripts/setup.sh"
+jobs="$(nproc)"
+
+echo "== Release build and tests"
 "$root/scripts/build.sh"
-build="${CABLECAL_BUILD_DIR:-$root/build}"
-cd "$build"
-ctest --output-on-failure --parallel "$(nproc)" --timeout 900
+(cd "${CABLECAL_BUILD_DIR:-$root/build}" && ctest --output-on-failure --parallel "$jobs" --timeout 900)
+
+if [ "${CABLECAL_QUICK:-0}" = "1" ]; then exit 0; fi
+
+echo "== Sanitizer build (ASan + UBSan) and tests"
+export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1"
+export LSAN_OPTIONS="suppressions=$root/tests/sanitizers/lsan.supp:print_suppressions=0"
+export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+# -O1: sanitizer reports stay readable and the (Ceres-template-heavy) build stays short.
+CABLECAL_BUILD_DIR="$root/build-sanitize" CMAKE_BUILD_TYPE=RelWithDebInfo \
+  "$root/scripts/build.sh" -DCABLECAL_SANITIZE=ON -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g"
+(cd "$root/build-sanitize" && ctest --output-on-failure --parallel "$jobs" --timeout 1800)
+
+echo "== Fuzzers (libFuzzer, ${CABLECAL_FUZZ_SECONDS:-30} s each)"
+CC=clang CXX=clang++ CABLECAL_BUILD_DIR="$root/build-fuzz" CMAKE_BUILD_TYPE=RelWithDebInfo \
+  "$root/scripts/build.sh" -DCABLECAL_FUZZ=ON -DCABLECAL_FUZZ_SECONDS="${CABLECAL_FUZZ_SECONDS:-30}" \
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g"
+(cd "$root/build-fuzz" && ctest --output-on-failure --parallel "$jobs" -L fuzz)

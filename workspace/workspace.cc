@@ -114,13 +114,22 @@ std::string PosePlanCsv(const std::vector<PlanPose>& plan, const std::string& pr
 namespace cablecal {
 
 std::vector<PlanPose> ReadPosePlanCsv(const std::string& path, int num_cables) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "", "cannot open the file");
+  return ReadPosePlanCsv(in, path, num_cables);
+}
+
+std::vector<PlanPose> ReadPosePlanCsv(std::istream& in, const std::string& path, int num_cables) {
   std::vector<std::string> header = {"pose", "x", "z", "theta"};
   for (const char* prefix : {"t", "l", "dl"}) {
     for (int i = 1; i <= num_cables; ++i) header.push_back(prefix + std::to_string(i));
   }
   std::vector<PlanPose> plan;
   std::set<int> ids;
-  ForEachCsvRow(path, header, [&](const CsvRow& row) {
+  ForEachCsvRow(in, path, header, [&](const CsvRow& row) {
+    if (static_cast<int>(plan.size()) >= kMaxPlanPoses) {
+      throw InputError(row.Where(), "", "more than " + std::to_string(kMaxPlanPoses) + " poses");
+    }
     const int id = row.PositiveInt(0);
     if (!ids.insert(id).second) {
       throw InputError(row.Where(), "column 'pose'", "duplicate pose id " + std::to_string(id));

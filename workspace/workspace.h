@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstdint>
+#include <istream>
 #include <string>
 #include <vector>
 
@@ -59,6 +60,9 @@ std::string PosePlanCsv(const std::vector<PlanPose>& plan, const std::string& pr
 
 // Reads a pose plan CSV; '#' lines are comments. Throws InputError naming file, line and
 // column on a wrong header, a bad number, a duplicate or non-positive pose id.
+// At most kMaxPlanPoses rows are accepted (the file is streamed and rejected at the next row).
 std::vector<PlanPose> ReadPosePlanCsv(const std::string& path, int num_cables);
+std::vector<PlanPose> ReadPosePlanCsv(std::istream& in, const std::string& name, int num_cables);
+constexpr int kMaxPlanPoses = 100000;
 
 }  // namespace cablecal

@@ -1,0 +1,114 @@
+// Numerical edge cases (hardening): each ends in a clear error or a flagged result, never a
+// silent wrong number.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "common/error.h"
+#include "identify/experiment.h"
+#include "identify/identify.h"
+#include "model/cable.h"
+#include "model/statics.h"
+#include "workspace/workspace.h"
+
+namespace cablecal {
+namespace {
+
+namespace fs = std::filesystem;
+
+TEST(EdgeCases, AnchorInsideThePulleyIsInvalidGeometry) {
+  const Eigen::Vector2d A(0.0, 2.8);
+  const double r = 0.025;
+  for (const Eigen::Vector2d B : {Eigen::Vector2d(r, 2.8), Eigen::Vector2d(r + 0.5 * r, 2.8), Eigen::Vector2d(2 * r, 2.8)}) {
+    EXPECT_FALSE(CableGeometryValid(CableGeometry<double>(A, r, 1.0, B), r)) << B.transpose();
+  }
+  // A platform pushed into the pulley: never feasible, and the reason is said.
+  Robot robot = BuiltinRobot();
+  robot.margin_m = 0.0;
+  const PoseEvaluation e = EvaluatePose(robot, r + 0.25, 2.8);
+  EXPECT_FALSE(e.feasible());
+  EXPECT_TRUE(e.feasibility == Feasibility::kCableGeometry || e.feasibility == Feasibility::kNoEquilibrium ||
+              e.feasibility == Feasibility::kTensionHigh)
+      << ToString(e.feasibility);
+}
+
+TEST(EdgeCases, PosesOnTheWorkspaceBoundaryAreJudgedConsistently) {
+  // Walk up from the centre until infeasible: the last feasible and first infeasible points
+  // bracket the boundary, and the reason at the first infeasible one is a real bound.
+  const Robot& robot = BuiltinRobot();
+  double z = 1.4;
+  PoseEvaluation last = EvaluatePose(robot, 2.6045, z);
+  ASSERT_TRUE(last.feasible());
+  while (z < 3.0) {
+    const PoseEvaluation e = EvaluatePose(robot, 2.6045, z + 0.001);
+    if (!e.feasible()) {
+      EXPECT_EQ(e.feasibility, Feasibility::kTensionHigh) << "z = " << z;
+      EXPECT_LE(last.equilibrium.tensions_N.maxCoeff(), robot.tension_max_N);
+      EXPECT_GT(e.equilibrium.tensions_N.maxCoeff(), robot.tension_max_N);
+      return;
+    }
+    last = e;
+    z += 0.001;
+  }
+  FAIL() << "no upper boundary found";
+}
+
+TEST(EdgeCases, MeasurementsFarFromAnyReachablePoseAreFlagged) {
+  std::vector<Measurement> m;
+  for (int j = 1; j <= 8; ++j) {
+    Measurement r;
+    r.pose_id = j;
+    r.dl_m = Eigen::Vector2d(5.0 * j, -7.0 * j);  // lengths no robot of this frame can have
+    r.z_m = 0.1 * j;
+    r.theta_rad = 0.05 * j;
+    m.push_back(r);
+  }
+  for (const Estimator e : {Estimator::kMaximumLikelihood, Estimator::kPaper}) {
+    IdentifyOptions options;
+    options.estimator = e;
+    const IdentifyResult r = Identify(BuiltinRobot(), m, options);
+    EXPECT_NE(r.status, IdentifyStatus::kConverged) << ToString(e) << ": " << r.message;
+  }
+}
+
+TEST(EdgeCases, MillionRowCsvIsStreamedAndRejectedAtTheCap) {
+  const fs::path path = fs::temp_directory_path() / ("cablecal_million_" + std::to_string(::getpid()) + ".csv");
+  {
+    std::ofstream out(path);
+    out << "pose,dl1,dl2,z,theta\n";
+    for (int j = 1; j <= 1000000; ++j) out << j << ",0.01,-0.01,1.2,0.05\n";
+  }
+  try {
+    ReadMeasurementsCsv(path.string(), 2);
+    FAIL() << "10^6 rows accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), path.string() + ":" + std::to_string(kMaxMeasuredPoses + 2) +
+                                         ": more than " + std::to_string(kMaxMeasuredPoses) + " poses");
+  }
+  fs::remove(path);
+}
+
+TEST(EdgeCases, RobotFileWithBomCrlfAndCommentsLoads) {
+  // A byte-order mark, a comment, CRLF line ends and trailing blanks on every line.
+  std::string yaml = "\xEF\xBB\xBF# exported on a lab PC\r\n";
+  std::istringstream in(BuiltinRobotYaml());
+  std::string line;
+  while (std::getline(in, line)) yaml += line + "   \r\n";
+  const Robot r = LoadRobotFromString(yaml, "crlf.yaml");
+  EXPECT_EQ(RobotToYaml(r), RobotToYaml(BuiltinRobot()));
+}
+
+TEST(EdgeCases, PlanCsvNonFiniteNumbersAreRejectedWithLineAndColumn) {
+  std::istringstream in("pose,x,z,theta,t1,t2,l1,l2,dl1,dl2\n1,2,1,0,10,10,2,2,0,0\n2,2,1,0,10,10,2,2,1e400,0\n");
+  try {
+    ReadPosePlanCsv(in, "plan.csv", 2);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), "plan.csv:3: column 'dl1': must be a finite number (got '1e400')");
+  }
+}
+
+}  // namespace
+}  // namespace cablecal
