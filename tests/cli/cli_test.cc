@@ -237,6 +237,16 @@ TEST_F(Cli, InterruptedMonteCarloLeavesNoOutput) {
   EXPECT_TRUE(DirIsEmpty());
 }
 
+TEST_F(Cli, KilledMonteCarloLeavesNoFinalFile) {
+  // SIGKILL cannot be handled: whatever the run had written can only be a temporary.
+  const RunResult r = RunCablecal("env timeout -s KILL 1 " + std::string(CABLECAL_BINARY) +
+                                  " montecarlo --poses 50 --trials 100000 --designs random --no-plot --out " + Path("mc"));
+  EXPECT_NE(r.exit_code, 0);
+  for (const char* f : {"errors.csv", "summary.csv", "summary.md", "run.yaml"}) {
+    EXPECT_FALSE(fs::exists(Path(std::string("mc/") + f))) << f;
+  }
+}
+
 TEST_F(Cli, MonteCarloBadFlagsExitTwo) {
   for (const std::string& args : std::vector<std::string>{"montecarlo --poses 4:10 --trials 5 --out " + Path("m"),
                                                           "montecarlo --poses 6:10 --trials 0 --out " + Path("m"),
