@@ -12,9 +12,9 @@ namespace {
 
 MonteCarloOptions Small() {
   MonteCarloOptions o;
-  o.pose_counts = {6, 12};
+  o.pose_counts = {6, 9};  // small: this runs twice, and again under the sanitizers
   o.designs = {PoseSetDesign::kRandom, PoseSetDesign::kOptimized};
-  o.trials = 12;
+  o.trials = 10;
   o.seed = 9;
   return o;
 }
@@ -34,13 +34,13 @@ TEST(MonteCarlo, TrialStreamsDependOnlyOnTheirIndices) {
   // Adding pose counts or designs does not change the trials already there.
   const Robot& robot = BuiltinRobot();
   MonteCarloOptions a = Small();
-  a.pose_counts = {12};
+  a.pose_counts = {9};
   a.designs = {PoseSetDesign::kRandom};
   const MonteCarloResult ra = RunMonteCarlo(robot, a);
   const MonteCarloResult rb = RunMonteCarlo(robot, Small());
   const MonteCarloCell* cell = nullptr;
   for (const MonteCarloCell& c : rb.cells) {
-    if (c.n == 12 && c.design == PoseSetDesign::kRandom) cell = &c;
+    if (c.n == 9 && c.design == PoseSetDesign::kRandom) cell = &c;
   }
   ASSERT_NE(cell, nullptr);
   for (int t = 0; t < a.trials; ++t) EXPECT_EQ(ra.cells[0].trials[t].errors_m, cell->trials[t].errors_m);
