@@ -174,7 +174,12 @@ int RunDesign(const Context& ctx, const DesignCommandOptions& options) {
                    ToString(design.criterion) + ", condition number " +
                    FormatDouble(std::round(result.criteria.condition_number * 10) / 10) + " (random median " +
                    FormatDouble(std::round(result.random_median.condition_number * 10) / 10) + ")");
-    RunPlotScript("plot_plan.py", args);
+    try {
+      RunPlotScript("plot_plan.py", args);
+    } catch (...) {
+      std::remove(temp_ws.c_str());
+      throw;
+    }
     std::remove(temp_ws.c_str());
   }
   output.Commit();
