@@ -25,6 +25,22 @@ Robot LoadRobotOption(const std::string& robot_path) {
   return robot_path.empty() ? BuiltinRobot() : LoadRobotFile(robot_path);
 }
 
+namespace {
+
+// "--flag=x,z" for a plotting script.
+std::string PointArg(const std::string& flag, const Eigen::Vector2d& p) {
+  return "--" + flag + "=" + FormatDouble(p.x()) + "," + FormatDouble(p.y());
+}
+
+// The frame and the exit points, which every plot draws.
+std::vector<std::string> FrameArgs(const Robot& robot) {
+  std::vector<std::string> args = {PointArg("frame", Eigen::Vector2d(robot.frame_width_m, robot.frame_height_m))};
+  for (const Cable& c : robot.cables) args.push_back(PointArg("exit", c.p_F_exit_m));
+  return args;
+}
+
+}  // namespace
+
 void RunPlotScript(const std::string& script, const std::vector<std::string>& args) {
   const char* scripts_env = std::getenv("CABLECAL_SCRIPTS_DIR");
   const std::string scripts_dir = scripts_env ? scripts_env : CABLECAL_SCRIPTS_DIR;
@@ -52,11 +68,8 @@ int RunWorkspace(const Context& ctx, const WorkspaceOptions& options) {
   if (!options.plot_path.empty()) {
     // The script reads the CSV's temporary: final files appear only when both succeeded.
     std::vector<std::string> args = {temp_csv, output.Add(options.plot_path)};
-    args.push_back("--frame=" + FormatDouble(robot.frame_width_m) + "," + FormatDouble(robot.frame_height_m));
-    for (const Cable& c : robot.cables) {
-      args.push_back("--exit=" + FormatDouble(c.p_F_exit_m.x()) + "," + FormatDouble(c.p_F_exit_m.y()));
-    }
-    args.push_back("--home=" + FormatDouble(robot.p_F_home_m.x()) + "," + FormatDouble(robot.p_F_home_m.y()));
+    for (const std::string& a : FrameArgs(robot)) args.push_back(a);
+    args.push_back(PointArg("home", robot.p_F_home_m));
     args.push_back("--title=" + robot.name);
     RunPlotScript("plot_workspace.py", args);
   }
@@ -165,11 +178,9 @@ int RunDesign(const Context& ctx, const DesignCommandOptions& options) {
     const WorkspaceGrid grid = ComputeWorkspaceGrid(robot, 0.05);
     std::ofstream(temp_ws) << WorkspaceCsv(robot, grid, "");
     args.push_back("--workspace=" + temp_ws);
-    args.push_back("--frame=" + FormatDouble(robot.frame_width_m) + "," + FormatDouble(robot.frame_height_m));
-    for (const Cable& c : robot.cables) {
-      args.push_back("--exit=" + FormatDouble(c.p_F_exit_m.x()) + "," + FormatDouble(c.p_F_exit_m.y()));
-      args.push_back("--anchor=" + FormatDouble(c.p_P_anchor_m.x()) + "," + FormatDouble(c.p_P_anchor_m.y()));
-    }
+    // plot_plan.py pairs the i-th --exit with the i-th --anchor.
+    for (const std::string& a : FrameArgs(robot)) args.push_back(a);
+    for (const Cable& c : robot.cables) args.push_back(PointArg("anchor", c.p_P_anchor_m));
     args.push_back("--title=" + robot.name + ": " + std::to_string(result.poses.size()) + " poses, criterion " +
                    ToString(design.criterion) + ", condition number " +
                    FormatDouble(std::round(result.criteria.condition_number * 10) / 10) + " (random median " +

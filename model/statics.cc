@@ -21,7 +21,7 @@ constexpr double kThetaSearchMax_rad = 89.0 * kDegToRad;
 constexpr int kThetaSearchSteps = 36;
 // A force matrix this close to singular means parallel cables: no equilibrium there.
 constexpr double kParallelCablesDet = 1e-12;
-// Bisection stops at this bracket width (rad): double rounding near theta = O(1).
+// Root refinement stops at this bracket width (rad): double rounding near theta = O(1).
 constexpr double kThetaTol_rad = 1e-15;
 
 // Moment balance with the forces solved exactly for this theta (Cramer's rule). Returns
@@ -141,7 +141,6 @@ EquilibriumResult SolveEquilibrium(const Robot& robot, double x_m, double z_m) {
             if (side == 1) g_lo *= 0.5;
             side = 1;
           }
-          if (std::abs(g_lo) == 0.0 || std::abs(g_hi) == 0.0) break;
         }
         // Keep the bracket end with the smaller residual.
         const MomentBalance b_lo = EvaluateMomentBalance(robot, x_m, z_m, lo);
