@@ -6,12 +6,14 @@
 #include <string>
 #include <vector>
 
+#include "cli/processes.h"
 #include "model/robot.h"
 
 namespace cablecal::cli {
 
 struct Context {
   std::string command_line;  // for provenance in outputs
+  Processes processes;       // MPI ranks (one process without MPI)
 };
 
 // The robot of --robot FILE, or the built-in one when the path is empty.

@@ -1,6 +1,7 @@
 // cablecal: plan, identify and predict the calibration of cable-driven parallel robots.
 // Parses the command line (CLI11) and maps every failure to a documented exit code:
-// 0 success, 1 internal error, 2 bad input (file, flag, value), 3 solver failure.
+// 0 success, 1 internal error, 2 bad input (file, flag, value), 3 solver failure, 4 a
+// process of an MPI run failed, 130 interrupted.
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
@@ -9,6 +10,7 @@
 #include <vector>
 
 #include "cli/commands.h"
+#include "cli/processes.h"
 #include "common/error.h"
 #include "common/version.h"
 
@@ -24,7 +26,10 @@ void AddRobotOption(CLI::App* app, std::string* path) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  const cablecal::cli::ProcessSession session(&argc, &argv);
   Context ctx;
+  ctx.processes = session.processes();
+  const bool root = ctx.processes.root();
   // argv[0] is recorded as "cablecal" so that outputs do not depend on where it was built.
   std::vector<std::string> args(argv, argv + argc);
   args[0] = "cablecal";
@@ -103,7 +108,9 @@ int main(int argc, char** argv) {
   des_cmd->add_option("--plot", des.plot_path, "PNG of the workspace with the chosen poses");
 
   cablecal::cli::MonteCarloCommandOptions mc;
-  CLI::App* mc_cmd = app.add_subcommand("montecarlo", "predict the calibration accuracy by Monte Carlo (OpenMP)");
+  CLI::App* mc_cmd = app.add_subcommand(
+      "montecarlo", cablecal::cli::BuiltWithMpi() ? "predict the calibration accuracy by Monte Carlo (OpenMP, MPI)"
+                                                  : "predict the calibration accuracy by Monte Carlo (OpenMP)");
   AddRobotOption(mc_cmd, &mc.robot_path);
   mc_cmd->add_option("--poses", mc.poses, "pose counts first:last[:step], e.g. 6:50 or 6:50:4")->required();
   mc_cmd->add_option("--trials", mc.trials, "trials per cell")->required()->check(CLI::PositiveNumber);
@@ -132,16 +139,25 @@ int main(int argc, char** argv) {
   rep_cmd->add_option("--seed", rep.seed, "random seed")->capture_default_str();
   rep_cmd->add_option("--out", rep.out_dir, "output folder")->capture_default_str();
 
+  // Every rank parses the same arguments; only rank 0 prints what parsing says.
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
+    return root ? app.exit(e) : e.get_exit_code();
   } catch (const CLI::CallForAllHelp& e) {
-    return app.exit(e);
+    return root ? app.exit(e) : e.get_exit_code();
   } catch (const CLI::CallForVersion& e) {
-    return app.exit(e);
+    return root ? app.exit(e) : e.get_exit_code();
   } catch (const CLI::ParseError& e) {
-    std::fprintf(stderr, "cablecal: error: %s\nRun with --help for usage.\n", e.what());
+    if (root) std::fprintf(stderr, "cablecal: error: %s\nRun with --help for usage.\n", e.what());
+    return cablecal::kExitBadInput;
+  }
+  if (ctx.processes.count > 1 && !mc_cmd->parsed() && !rep_cmd->parsed()) {
+    if (root) {
+      std::fprintf(stderr, "cablecal: error: only montecarlo and reproduce run on several MPI processes (got %d); "
+                           "run '%s' without mpirun or srun\n", ctx.processes.count,
+                   app.get_subcommands().front()->get_name().c_str());
+    }
     return cablecal::kExitBadInput;
   }
 
@@ -153,18 +169,13 @@ int main(int argc, char** argv) {
     if (des_cmd->parsed()) return cablecal::cli::RunDesign(ctx, des);
     if (mc_cmd->parsed()) return cablecal::cli::RunMonteCarloCommand(ctx, mc);
     if (rep_cmd->parsed()) return cablecal::cli::RunReproduce(ctx, rep);
-  } catch (const cablecal::InputError& e) {
-    std::fprintf(stderr, "cablecal: error: %s\n", e.what());
-    return cablecal::kExitBadInput;
-  } catch (const cablecal::SolverFailure& e) {
-    std::fprintf(stderr, "cablecal: solver failure: %s\n", e.what());
-    return cablecal::kExitSolverFailed;
-  } catch (const cablecal::Interrupted& e) {
-    std::fprintf(stderr, "\ncablecal: %s\n", e.what());
-    return cablecal::kExitInterrupted;
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "cablecal: internal error: %s\n", e.what());
-    return cablecal::kExitInternal;
+  } catch (const cablecal::AlreadyReported& e) {
+    return e.exit_code();  // every process knows; the message is out
+  } catch (...) {
+    const int code = cablecal::cli::ReportCurrentError(ctx.processes);
+    // The other processes may be waiting for this one: end them all.
+    if (ctx.processes.count > 1) cablecal::cli::AbortJob(code);
+    return code;
   }
   return cablecal::kExitInternal;
 }

@@ -14,6 +14,9 @@
 #include "common/format.h"
 #include "common/version.h"
 #include "montecarlo/montecarlo.h"
+#ifdef CABLECAL_WITH_MPI
+#include "montecarlo/mpi.h"
+#endif
 
 namespace cablecal::cli {
 namespace {
@@ -49,7 +52,7 @@ void EnsureFolder(const std::string& dir) {
 }
 
 std::string RunYaml(const Robot& robot, const MonteCarloOptions& o, const std::string& poses_text,
-                    const MonteCarloResult& r, const std::string& command_line, int threads) {
+                    const MonteCarloResult& r, const Context& ctx, int threads) {
   std::string designs;
   for (PoseSetDesign d : o.designs) designs += (designs.empty() ? "" : ", ") + std::string(ToString(d));
   int failures = 0;
@@ -60,7 +63,7 @@ std::string RunYaml(const Robot& robot, const MonteCarloOptions& o, const std::s
   }
   std::string s;
   s += "cablecal: {version: " + std::string(Version()) + ", commit: " + GitCommit() + "}\n";
-  s += "command: \"" + command_line + "\"\n";
+  s += "command: \"" + ctx.command_line + "\"\n";
   s += "robot: {name: " + robot.name + ", source: \"" + robot.source + "\"}\n";
   s += "poses: \"" + poses_text + "\"\n";
   s += "designs: [" + designs + "]\n";
@@ -71,69 +74,98 @@ std::string RunYaml(const Robot& robot, const MonteCarloOptions& o, const std::s
   s += "geometry_sigma_m: " + FormatDouble(o.geometry_sigma_m) + "\n";
   s += "design_starts: " + std::to_string(o.design_starts) + "\n";
   s += "seed: " + std::to_string(o.seed) + "\n";
-  s += "threads: " + std::to_string(threads) + "\n";
+  s += "processes: " + std::to_string(ctx.processes.count) + "\n";
+  s += "threads: " + std::to_string(threads) + "  # per process\n";
   s += "trials_run: " + std::to_string(trials) + "\n";
   s += "failed_trials: " + std::to_string(failures) + "\n";
   s += "wall_time_s: " + FormatDouble(std::round(r.wall_time_s * 1000.0) / 1000.0) + "\n";
   return s;
 }
 
-// Writes every output of one study into `dir` (atomically, as one set).
+// Writes every output of one study into `dir` (atomically, as one set), on rank 0 only.
 void WriteStudy(const std::string& dir, const Robot& robot, const MonteCarloOptions& o, const std::string& poses_text,
-                const MonteCarloResult& r, const std::string& command_line, int threads, bool plot,
-                const std::string& title) {
+                const MonteCarloResult& r, const Context& ctx, int threads, bool plot, const std::string& title) {
+  if (!ctx.processes.root()) return;
   EnsureFolder(dir);
   AtomicOutput output;
   output.WriteText(dir + "/errors.csv", ErrorsCsv(r));
   output.WriteText(dir + "/summary.csv", SummaryCsv(r));
   output.WriteText(dir + "/summary.md", SummaryMarkdown(r, title));
-  output.WriteText(dir + "/run.yaml", RunYaml(robot, o, poses_text, r, command_line, threads));
+  output.WriteText(dir + "/run.yaml", RunYaml(robot, o, poses_text, r, ctx, threads));
   output.Commit();
   if (plot) RunPlotScript("plot_montecarlo.py", {dir});
 }
 
-MonteCarloResult RunInterruptible(const Robot& robot, MonteCarloOptions o, const std::string& label) {
-  g_interrupted = false;
-  struct sigaction action {};
-  action.sa_handler = OnSigint;
-  struct sigaction previous {};
-  sigaction(SIGINT, &action, &previous);
-  o.interrupted = &g_interrupted;
-  o.progress = ProgressBar(label);
-  MonteCarloResult r = RunMonteCarlo(robot, o);
-  sigaction(SIGINT, &previous, nullptr);
-  if (r.interrupted) throw Interrupted();
+// Ctrl-C stops the run at the next trial (SIGINT reaches every rank under srun; mpirun
+// ends the ranks itself). Nothing is written either way.
+class SigintScope {
+ public:
+  SigintScope() {
+    g_interrupted = false;
+    struct sigaction action {};
+    action.sa_handler = OnSigint;
+    sigaction(SIGINT, &action, &previous_);
+  }
+  ~SigintScope() { sigaction(SIGINT, &previous_, nullptr); }
+
+ private:
+  struct sigaction previous_ {};
+};
+
+// Runs one study on every process of the run (agreed: all succeed or all fail together);
+// the whole result is on rank 0, an empty one elsewhere.
+MonteCarloResult RunStudy(const Context& ctx, const Robot& robot, MonteCarloOptions o, const std::string& label) {
+  MonteCarloResult r;
+  RunAgreed(ctx.processes, [&] {
+    const SigintScope sigint;
+    o.interrupted = &g_interrupted;
+    if (ctx.processes.root()) o.progress = ProgressBar(label);
+#ifdef CABLECAL_WITH_MPI
+    r = ctx.processes.count > 1 ? RunMonteCarloMpi(robot, o) : RunMonteCarlo(robot, o);
+#else
+    r = RunMonteCarlo(robot, o);
+#endif
+    if (r.interrupted) throw Interrupted();
+  });
   return r;
 }
 
 }  // namespace
 
 int RunMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptions& options) {
-  const Robot robot = LoadRobotOption(options.robot_path);
+  Robot robot;
   MonteCarloOptions o;
-  o.pose_counts = ParsePoseCounts(options.poses);
-  o.designs = ParseDesigns(options.designs);
-  o.trials = options.trials;
-  o.estimator = ParseEstimator(options.estimator);
-  o.gauge = ParseGauge(options.gauge);
-  o.sensors = ParseNoisySensors(options.sensors);
-  o.geometry_sigma_m = options.geometry_sigma_m;
-  o.seed = options.seed;
-  o.design_starts = options.design_starts;
+  RunAgreed(ctx.processes, [&] {
+    robot = LoadRobotOption(options.robot_path);
+    o.pose_counts = ParsePoseCounts(options.poses);
+    o.designs = ParseDesigns(options.designs);
+    o.trials = options.trials;
+    o.estimator = ParseEstimator(options.estimator);
+    o.gauge = ParseGauge(options.gauge);
+    o.sensors = ParseNoisySensors(options.sensors);
+    o.geometry_sigma_m = options.geometry_sigma_m;
+    o.seed = options.seed;
+    o.design_starts = options.design_starts;
+    ValidateOptions(o);
+  });
   if (options.threads > 0) omp_set_num_threads(options.threads);
   const int threads = omp_get_max_threads();
-  const MonteCarloResult r = RunInterruptible(robot, o, "montecarlo");
-  WriteStudy(options.out_dir, robot, o, options.poses, r, ctx.command_line, threads, options.plot,
-             "Monte Carlo: " + robot.name);
+  const MonteCarloResult r = RunStudy(ctx, robot, o, "montecarlo");
+  RunAgreed(ctx.processes, [&] {
+    WriteStudy(options.out_dir, robot, o, options.poses, r, ctx, threads, options.plot, "Monte Carlo: " + robot.name);
+  });
+  if (!ctx.processes.root()) return kExitOk;
   int failures = 0;
   for (const MonteCarloCell& c : r.cells) failures += c.failures();
-  std::printf("ran %zu cells x %d trials in %.1f s on %d threads (%d failed trials); wrote %s/\n", r.cells.size(),
-              o.trials, r.wall_time_s, threads, failures, options.out_dir.c_str());
+  std::printf("ran %zu cells x %d trials in %.1f s on %d process%s x %d threads (%d failed trials); wrote %s/\n",
+              r.cells.size(), o.trials, r.wall_time_s, ctx.processes.count, ctx.processes.count > 1 ? "es" : "",
+              threads, failures, options.out_dir.c_str());
   return kExitOk;
 }
 
 int RunReproduce(const Context& ctx, const ReproduceOptions& options) {
-  const Robot robot = LoadRobotOption(options.robot_path);
+  Robot robot;
+  RunAgreed(ctx.processes, [&] { robot = LoadRobotOption(options.robot_path); });
   if (options.threads > 0) omp_set_num_threads(options.threads);
   const int threads = omp_get_max_threads();
   const auto t0 = std::chrono::steady_clock::now();
@@ -148,28 +180,38 @@ int RunReproduce(const Context& ctx, const ReproduceOptions& options) {
   MonteCarloOptions optimized = base;
   optimized.pose_counts = ParsePoseCounts("6:50:4");
   optimized.designs = {PoseSetDesign::kOptimized};
-  MonteCarloResult study = RunInterruptible(robot, random, "study, random sets   ");
-  const MonteCarloResult opt = RunInterruptible(robot, optimized, "study, optimized sets");
+  MonteCarloResult study = RunStudy(ctx, robot, random, "study, random sets   ");
+  const MonteCarloResult opt = RunStudy(ctx, robot, optimized, "study, optimized sets");
   study.cells.insert(study.cells.end(), opt.cells.begin(), opt.cells.end());
   study.wall_time_s += opt.wall_time_s;
   MonteCarloOptions described = base;
   described.pose_counts = random.pose_counts;
   described.designs = {PoseSetDesign::kRandom, PoseSetDesign::kOptimized};
-  WriteStudy(options.out_dir + "/study", robot, described, "6:50 (random), 6:50:4 (optimized)", study, ctx.command_line,
-             threads, false, "The paper's study: " + robot.name);
+  RunAgreed(ctx.processes, [&] {
+    WriteStudy(options.out_dir + "/study", robot, described, "6:50 (random), 6:50:4 (optimized)", study, ctx, threads,
+               false, "The paper's study: " + robot.name);
+  });
   // 2. The sensor ablation at n = 50 (the paper's Section 4.2, Fig. 10).
   for (const NoisySensors s : {NoisySensors::kBoth, NoisySensors::kLaser, NoisySensors::kInclinometer, NoisySensors::kNone}) {
     MonteCarloOptions ab = base;
     ab.pose_counts = {50};
     ab.designs = {PoseSetDesign::kRandom};
     ab.sensors = s;
-    const MonteCarloResult r = RunInterruptible(robot, ab, std::string("ablation, ") + ToString(s) + "          ");
-    WriteStudy(options.out_dir + "/ablation/" + ToString(s), robot, ab, "50", r, ctx.command_line, threads, false,
-               std::string("Sensor ablation, noisy sensors: ") + ToString(s));
+    const MonteCarloResult r = RunStudy(ctx, robot, ab, std::string("ablation, ") + ToString(s) + "          ");
+    RunAgreed(ctx.processes, [&] {
+      WriteStudy(options.out_dir + "/ablation/" + ToString(s), robot, ab, "50", r, ctx, threads, false,
+                 std::string("Sensor ablation, noisy sensors: ") + ToString(s));
+    });
   }
-  RunPlotScript("plot_montecarlo.py", {options.out_dir + "/study", "--ablation", options.out_dir + "/ablation"});
+  RunAgreed(ctx.processes, [&] {
+    if (ctx.processes.root()) {
+      RunPlotScript("plot_montecarlo.py", {options.out_dir + "/study", "--ablation", options.out_dir + "/ablation"});
+    }
+  });
+  if (!ctx.processes.root()) return kExitOk;
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::printf("reproduced the study in %.1f s on %d threads; wrote %s/\n", wall, threads, options.out_dir.c_str());
+  std::printf("reproduced the study in %.1f s on %d process%s x %d threads; wrote %s/\n", wall, ctx.processes.count,
+              ctx.processes.count > 1 ? "es" : "", threads, options.out_dir.c_str());
   return kExitOk;
 }
 

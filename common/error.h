@@ -2,6 +2,7 @@
 //   InputError     bad user input: a file, a flag, a value. Exit code 2.
 //   SolverFailure  a solver that did not converge or returned a result that failed
 //                  verification. Exit code 3.
+//   RankFailure    a process of an MPI run could not finish its share. Exit code 4.
 //   CABLECAL_CHECK a broken internal invariant: always on, aborts with a message.
 #pragma once
 
@@ -17,6 +18,7 @@ enum ExitCode : int {
   kExitInternal = 1,   // a bug: an unexpected exception or a failed invariant
   kExitBadInput = 2,   // bad file, flag or value
   kExitSolverFailed = 3,
+  kExitRankFailed = 4,  // a process of an MPI run failed; nothing written
   kExitInterrupted = 130,
 };
 
@@ -48,6 +50,25 @@ class SolverFailure : public std::runtime_error {
 class Interrupted : public std::runtime_error {
  public:
   Interrupted() : std::runtime_error("interrupted: no output written") {}
+};
+
+// One or more processes of an MPI run could not finish their share of a study; the message
+// names them and the cells they lost. Nothing is written. Exit code 4.
+class RankFailure : public std::runtime_error {
+ public:
+  explicit RankFailure(const std::string& message) : std::runtime_error(message) {}
+};
+
+// In a run of several processes, the failure has been reported by the process that prints
+// it (rank 0, or the rank where it happened); this one exits with the same code quietly.
+class AlreadyReported : public std::runtime_error {
+ public:
+  explicit AlreadyReported(int exit_code)
+      : std::runtime_error("reported by another process"), exit_code_(exit_code) {}
+  int exit_code() const { return exit_code_; }
+
+ private:
+  int exit_code_;
 };
 
 [[noreturn]] inline void CheckFailed(const char* expr, const char* file, int line,

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <map>
 #include <sstream>
+#include <stdexcept>
 
 #include "common/error.h"
 #include "common/format.h"
@@ -137,67 +138,102 @@ Criterion CriterionOf(PoseSetDesign d) {
 
 }  // namespace
 
-MonteCarloResult RunMonteCarlo(const Robot& nominal, const MonteCarloOptions& o) {
-  const auto t0 = std::chrono::steady_clock::now();
+void ValidateOptions(const MonteCarloOptions& o) {
   if (o.trials < 1) throw InputError("--trials", "", "must be at least 1");
   if (o.pose_counts.empty()) throw InputError("--poses", "", "no pose counts");
+  if (o.designs.empty()) throw InputError("--designs", "", "no designs");
   if (!(o.geometry_sigma_m >= 0.0) || !std::isfinite(o.geometry_sigma_m)) {
     throw InputError("--geometry-sigma", "", "must be a non-negative number of metres");
   }
-  MonteCarloResult result;
-  // Designed sets first: once per (n, criterion), each from its own seed stream.
-  std::map<std::pair<int, int>, std::vector<PlanPose>> designed;
-  for (int n : o.pose_counts) {
-    for (PoseSetDesign d : o.designs) {
-      if (d == PoseSetDesign::kRandom) continue;
-      if (o.interrupted && o.interrupted->load()) {
-        result.interrupted = true;
-        return result;
-      }
-      DesignOptions opt;
-      opt.poses = n;
-      opt.criterion = CriterionOf(d);
-      opt.starts = o.design_starts;
-      opt.seed = StreamSeed(o.seed, {static_cast<std::uint64_t>(n), static_cast<std::uint64_t>(d), 0xde5});
-      opt.random_sets = 0;
-      try {
-        designed[{n, static_cast<int>(d)}] = DesignPoses(nominal, opt).poses;
-      } catch (const SolverFailure&) {
-        // No start converged within Ipopt's iteration limit: add starts (the first ones
-        // are the same streams, so this only extends the search).
-        opt.starts = 4 * o.design_starts;
-        designed[{n, static_cast<int>(d)}] = DesignPoses(nominal, opt).poses;
-      }
-    }
+}
+
+std::vector<PlanPose> MakeDesignedSet(const Robot& nominal, const MonteCarloOptions& o, const DesignedSetKey& key) {
+  DesignOptions opt;
+  opt.poses = key.n;
+  opt.criterion = CriterionOf(key.design);
+  opt.starts = o.design_starts;
+  opt.seed = StreamSeed(o.seed, {static_cast<std::uint64_t>(key.n), static_cast<std::uint64_t>(key.design), 0xde5});
+  opt.random_sets = 0;
+  try {
+    return DesignPoses(nominal, opt).poses;
+  } catch (const SolverFailure&) {
+    // No start converged within Ipopt's iteration limit: add starts (the first ones are
+    // the same streams, so this only extends the search).
+    opt.starts = 4 * o.design_starts;
+    return DesignPoses(nominal, opt).poses;
   }
-  for (int n : o.pose_counts) {
-    for (PoseSetDesign d : o.designs) {
-      MonteCarloCell cell;
-      cell.n = n;
-      cell.design = d;
-      cell.trials.resize(o.trials);
-      result.cells.push_back(std::move(cell));
-    }
-  }
-  const long total = static_cast<long>(result.cells.size()) * o.trials;
-  std::atomic<long> done{0};
-  std::atomic<bool> stop{false};
-#pragma omp parallel for schedule(dynamic, 4)
+}
+
+ShareResult RunShare(const Robot& nominal, const MonteCarloOptions& o, const DesignedSets& designed,
+                     const StudyShare& share) {
+  const long total = StudyItems(o);
+  std::vector<long> items;
+  items.reserve(ItemsOwned(share, total));
   for (long item = 0; item < total; ++item) {
+    if (OwnsItem(share, item)) items.push_back(item);
+  }
+  const int designs = static_cast<int>(o.designs.size());
+  ShareResult out;
+  out.outcomes.resize(items.size());
+  const long owned = static_cast<long>(items.size());
+  std::atomic<long> done{0};
+  std::atomic<bool> stop{false}, interrupted{false};
+#pragma omp parallel for schedule(dynamic, 4)
+  for (long k = 0; k < owned; ++k) {
     if (stop.load(std::memory_order_relaxed)) continue;
     if (o.interrupted && o.interrupted->load()) {
+      interrupted = true;
       stop = true;
       continue;
     }
-    MonteCarloCell& cell = result.cells[item / o.trials];
-    const int trial = static_cast<int>(item % o.trials);
-    const auto it = designed.find({cell.n, static_cast<int>(cell.design)});
-    cell.trials[trial] = RunTrial(nominal, o, cell.n, cell.design, trial, it == designed.end() ? nullptr : &it->second);
+    const long cell = items[k] / o.trials;
+    const int n = o.pose_counts[cell / designs];
+    const PoseSetDesign d = o.designs[cell % designs];
+    const auto it = designed.find({n, static_cast<int>(d)});
+    try {
+      if (d != PoseSetDesign::kRandom && it == designed.end()) {
+        throw std::logic_error("no designed set for n=" + std::to_string(n) + " " + ToString(d));
+      }
+      out.outcomes[k] = RunTrial(nominal, o, n, d, static_cast<int>(items[k] % o.trials),
+                                 it == designed.end() ? nullptr : &it->second);
+    } catch (const std::exception& e) {
+      // Not a failed trial (those are caught in RunTrial) but something that makes the
+      // whole share suspect, such as running out of memory: stop and report it.
+#pragma omp critical(cablecal_share_failure)
+      if (out.failure.empty()) out.failure = e.what();
+      stop = true;
+      continue;
+    }
     const long now = ++done;
-    if (o.progress && omp_get_thread_num() == 0) o.progress(now, total);
+    if (o.progress && omp_get_thread_num() == 0) o.progress(now, owned);
   }
-  result.interrupted = stop.load();
-  if (o.progress && !result.interrupted) o.progress(total, total);
+  out.interrupted = interrupted.load();
+  if (!out.failure.empty()) out.outcomes.clear();
+  if (o.progress && !stop.load()) o.progress(owned, owned);
+  return out;
+}
+
+MonteCarloResult RunMonteCarlo(const Robot& nominal, const MonteCarloOptions& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  ValidateOptions(o);
+  MonteCarloResult result;
+  // Designed sets first: once per (n, criterion), each from its own seed stream.
+  DesignedSets designed;
+  for (const DesignedSetKey& key : DesignedSetKeys(o)) {
+    if (o.interrupted && o.interrupted->load()) {
+      result.interrupted = true;
+      return result;
+    }
+    designed[{key.n, static_cast<int>(key.design)}] = MakeDesignedSet(nominal, o, key);
+  }
+  std::vector<ShareResult> shares(1);
+  shares[0] = RunShare(nominal, o, designed, StudyShare{0, 1});
+  if (!shares[0].failure.empty()) throw std::runtime_error(shares[0].failure);
+  if (shares[0].interrupted) {
+    result.interrupted = true;
+    return result;
+  }
+  result = AssembleShares(o, std::move(shares));
   result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;
 }

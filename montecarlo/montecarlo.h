@@ -6,12 +6,17 @@
 // trial writes its own slot, so results are bit-identical for any thread count. A failed
 // trial (the true robot cannot hold a pose, or the identification does not converge) is
 // counted per cell, never dropped silently.
+//
+// A study can also be split into shares (one per MPI rank, say): each share makes some of
+// the designed sets and runs some of the trials, and the shares' outcomes are assembled
+// into exactly the result of the whole run (montecarlo/mpi.h does this over MPI).
 // Depends on design/ (optimized pose sets), identify/, workspace/, model/.
 #pragma once
 
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -66,6 +71,58 @@ struct MonteCarloResult {
 
 // Throws InputError for bad options and SolverFailure if a designed set cannot be made.
 MonteCarloResult RunMonteCarlo(const Robot& nominal, const MonteCarloOptions& options);
+void ValidateOptions(const MonteCarloOptions& options);  // the InputErrors of RunMonteCarlo
+
+// ---- Splitting a study into shares -------------------------------------------------------
+// Items are the study's trials numbered cell by cell (cells n-major, then designs in the
+// order given). Share k of K owns the chunks of kChunkTrials consecutive items whose chunk
+// index is k modulo K, so every share gets a similar mix of cheap (small n) and costly
+// items; designed sets are dealt round-robin too. Every item's result depends only on its
+// own seed stream, so how a study is split never changes a number.
+struct StudyShare {
+  int index = 0;
+  int count = 1;
+};
+constexpr long kChunkTrials = 4;
+long StudyItems(const MonteCarloOptions& options);  // cells x trials
+bool OwnsItem(const StudyShare& share, long item);
+long ItemsOwned(const StudyShare& share, long items);
+
+// The designed sets a study needs, one per (n, non-random design), in a fixed order; the
+// i-th is made by share i modulo K.
+struct DesignedSetKey {
+  int n = 0;
+  PoseSetDesign design = PoseSetDesign::kRandom;
+};
+std::vector<DesignedSetKey> DesignedSetKeys(const MonteCarloOptions& options);
+using DesignedSets = std::map<std::pair<int, int>, std::vector<PlanPose>>;  // (n, design)
+// Throws SolverFailure if no start converges, even after 4x as many starts.
+std::vector<PlanPose> MakeDesignedSet(const Robot& nominal, const MonteCarloOptions& options,
+                                      const DesignedSetKey& key);
+
+struct ShareResult {
+  std::vector<TrialOutcome> outcomes;  // one per owned item, in increasing item order
+  bool interrupted = false;
+  std::string failure;  // why this share could not finish (not a failed trial); then no outcomes
+};
+// Runs the share's trials with OpenMP; `designed` holds at least the sets of its cells.
+// An unexpected exception in a trial stops the share and is returned in `failure`.
+ShareResult RunShare(const Robot& nominal, const MonteCarloOptions& options, const DesignedSets& designed,
+                     const StudyShare& share);
+// The result of the whole study from shares[k] = the result of share k of shares.size().
+// Every share must have finished (no failure, not interrupted).
+MonteCarloResult AssembleShares(const MonteCarloOptions& options, std::vector<ShareResult>&& shares);
+// The cells in which `share` owns trials, as "n=6 random (8 of 20 trials), ...", at most
+// `max_cells` of them named: what is lost when that share fails.
+std::string DescribeShareCells(const MonteCarloOptions& options, const StudyShare& share, int max_cells = 12);
+
+// Byte encodings for sending outcomes and pose sets between processes of one job (same
+// architecture: doubles are copied bit for bit). Decoding throws std::runtime_error on a
+// malformed buffer.
+std::string EncodeOutcomes(const std::vector<TrialOutcome>& outcomes);
+std::vector<TrialOutcome> DecodeOutcomes(const std::string& bytes);
+std::string EncodePoses(const std::vector<PlanPose>& poses);
+std::vector<PlanPose> DecodePoses(const std::string& bytes);
 
 // The true geometry of one trial: nominal with every parameter perturbed by N(0, sigma^2),
 // except what the gauge defines: a1x under `a1x` (the frame's origin is exit point 1), and

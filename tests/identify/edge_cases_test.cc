@@ -21,7 +21,7 @@ namespace fs = std::filesystem;
 TEST(EdgeCases, AnchorInsideThePulleyIsInvalidGeometry) {
   const Eigen::Vector2d A(0.0, 2.8);
   const double r = 0.025;
-  for (const Eigen::Vector2d B : {Eigen::Vector2d(r, 2.8), Eigen::Vector2d(r + 0.5 * r, 2.8), Eigen::Vector2d(2 * r, 2.8)}) {
+  for (const Eigen::Vector2d& B : {Eigen::Vector2d(r, 2.8), Eigen::Vector2d(r + 0.5 * r, 2.8), Eigen::Vector2d(2 * r, 2.8)}) {
     EXPECT_FALSE(CableGeometryValid(CableGeometry<double>(A, r, 1.0, B), r)) << B.transpose();
   }
   // A platform pushed into the pulley: never feasible, and the reason is said.
