@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Installs the Debian packages cablecal needs, and only those that are missing.
 # Nothing else is downloaded: every dependency is a Debian package (see README, "Dependencies").
+#   scripts/setup.sh          what the default build needs (scripts/run.sh)
+#   scripts/setup.sh --tests  and what the whole test suite needs (scripts/test.sh)
 set -euo pipefail
 
 PACKAGES=(
@@ -13,8 +15,16 @@ PACKAGES=(
   libgtest-dev           # unit tests
   libbenchmark-dev       # bench/
   python3-matplotlib     # figures (scripts/*.py, run with /usr/bin/python3)
-  clang libclang-rt-dev  # libFuzzer targets of tests/fuzz (the test command only)
 )
+case "${1:-}" in
+  "") ;;
+  --tests)
+    PACKAGES+=(
+      clang libclang-rt-dev       # libFuzzer targets of tests/fuzz
+      libopenmpi-dev openmpi-bin  # the CABLECAL_MPI build and its mpirun tests
+    ) ;;
+  *) echo "cablecal setup: unknown option '$1' (use --tests or nothing)" >&2; exit 2 ;;
+esac
 
 missing=()
 for p in "${PACKAGES[@]}"; do

@@ -1,21 +1,23 @@
 #!/usr/bin/env bash
 # Quick start, command 2: install what is missing, build, and run every test:
-#   1. the Release build and its whole test suite (ctest);
+#   1. the Release build, with MPI (CABLECAL_MPI), and its whole test suite (ctest),
+#      including the mpirun tests (label "mpi");
 #   2. the same suite built with AddressSanitizer + UndefinedBehaviorSanitizer (build-sanitize/);
 #   3. the libFuzzer targets (clang, build-fuzz/), each for CABLECAL_FUZZ_SECONDS (default 30).
 # Set CABLECAL_QUICK=1 to run step 1 only.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
-"$root/scripts/setup.sh"
+"$root/scripts/setup.sh" --tests
 jobs="$(nproc)"
 
-echo "== Release build and tests"
-"$root/scripts/build.sh"
+echo "== Release build (with MPI) and tests"
+"$root/scripts/build.sh" -DCABLECAL_MPI=ON
 (cd "${CABLECAL_BUILD_DIR:-$root/build}" && ctest --output-on-failure --parallel "$jobs" --timeout 900)
 
 if [ "${CABLECAL_QUICK:-0}" = "1" ]; then exit 0; fi
 
-echo "== Sanitizer build (ASan + UBSan) and tests"
+# The sanitizer build is the default one, without MPI: both configurations get tested.
+echo "== Sanitizer build (ASan + UBSan, without MPI) and tests"
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1"
 export LSAN_OPTIONS="suppressions=$root/tests/sanitizers/lsan.supp:print_suppressions=0"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
