@@ -4,12 +4,12 @@
 # build (cmake -DCABLECAL_MPI=ON). Prints a Markdown table (bench/README.md). Usage:
 #   bench/mpi_scaling.sh ["P T" ...] > table.md        (default: "1 1" "1 2" "2 1")
 # The study (override with CABLECAL_BENCH_STUDY): random pose sets for n = 6, 10, ..., 50,
-# 1000 trials each, so that the trials (not the designed sets) dominate.
+# 3000 trials each, so that the trials (not the designed sets) dominate.
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 bin="${CABLECAL_BUILD_DIR:-$root/build}/cablecal"
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
-read -r -a study <<<"${CABLECAL_BENCH_STUDY:-montecarlo --poses 6:50:4 --designs random --trials 1000 --seed 3 --no-plot}"
+read -r -a study <<<"${CABLECAL_BENCH_STUDY:-montecarlo --poses 6:50:4 --designs random --trials 3000 --seed 3 --no-plot}"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 runs=("$@")

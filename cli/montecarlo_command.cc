@@ -74,6 +74,8 @@ std::string RunYaml(const Robot& robot, const MonteCarloOptions& o, const std::s
   s += "geometry_sigma_m: " + FormatDouble(o.geometry_sigma_m) + "\n";
   s += "design_starts: " + std::to_string(o.design_starts) + "\n";
   s += "seed: " + std::to_string(o.seed) + "\n";
+  s += "blas: " + LoadedLibraryPath("libblas.so") + "\n";
+  s += "lapack: " + LoadedLibraryPath("liblapack.so") + "\n";
   s += "processes: " + std::to_string(ctx.processes.count) + "\n";
   s += "threads: " + std::to_string(threads) + "  # per process\n";
   s += "trials_run: " + std::to_string(trials) + "\n";

@@ -1,5 +1,7 @@
 #include "common/version.h"
 
+#include <fstream>
+
 #include "common/version_info.h"  // generated at build time: kVersion, kGitCommit
 
 namespace cablecal {
@@ -28,6 +30,18 @@ std::string CommandLine(const std::vector<std::string>& argv) {
 std::string ProvenanceComment(const std::string& command_line) {
   return std::string("# cablecal ") + Version() + " (commit " + GitCommit() + ")\n# command: " +
          command_line + "\n";
+}
+
+std::string LoadedLibraryPath(const std::string& name) {
+  std::ifstream maps("/proc/self/maps");
+  std::string line;
+  while (std::getline(maps, line)) {
+    const std::size_t slash = line.rfind('/');
+    const std::size_t path = line.find('/');
+    if (slash == std::string::npos || line.compare(slash + 1, name.size(), name) != 0) continue;
+    return line.substr(path);
+  }
+  return "not loaded";
 }
 
 }  // namespace cablecal

@@ -16,4 +16,9 @@ std::string CommandLine(const std::vector<std::string>& argv);
 // Lines "# cablecal <version> (commit <c>)" and "# command: <line>" for CSV heads.
 std::string ProvenanceComment(const std::string& command_line);
 
+// Where this process loaded a shared library from (its first mapping in /proc/self/maps
+// whose file name starts with `name`, e.g. "libblas.so"), or "not loaded". Designs are
+// bit-reproducible only with the reference BLAS (CMakeLists.txt); outputs record it.
+std::string LoadedLibraryPath(const std::string& name);
+
 }  // namespace cablecal

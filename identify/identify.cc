@@ -49,6 +49,18 @@ const char* ToString(IdentifyStatus s) {
 
 namespace internal {
 
+// A trial step of Levenberg-Marquardt can put an anchor inside its pulley, where the cable
+// length is undefined (NaN). Saying so (false) makes Ceres reject the step quietly, exactly
+// as it does for a NaN it finds itself, but without a multi-line warning per block.
+template <typename T, int kCount>
+bool AllFinite(const T* residual) {
+  using std::isfinite;  // ceres::isfinite for Jets, by argument-dependent lookup
+  for (int i = 0; i < kCount; ++i) {
+    if (!isfinite(residual[i])) return false;
+  }
+  return true;
+}
+
 // Maximum likelihood, errors in variables: per pose, both cables' length residuals and the
 // laser and inclinometer residuals, each whitened by its sensor's sigma.
 struct MlPoseCost {
@@ -65,7 +77,7 @@ struct MlPoseCost {
     }
     residual[2] = (pose[1] - z_meas_m) * inv_sigma_laser;
     residual[3] = (pose[2] - theta_meas_rad) * inv_sigma_inclinometer;
-    return true;
+    return AllFinite<T, 2>(residual);
   }
 };
 
@@ -79,7 +91,7 @@ struct PaperPoseCost {
   bool operator()(const T* geometry, const T* x, T* residual) const {
     const auto anchors = AnchorsInF<T>(*robot, Pose<T>(x[0], T(z_meas_m), T(theta_meas_rad)));
     for (int i = 0; i < 2; ++i) residual[i] = PaperResidual<T>(robot->cables[i], i, geometry, anchors[i], dl_m(i));
-    return true;
+    return AllFinite<T, 2>(residual);
   }
 };
 

@@ -10,6 +10,7 @@ PACKAGES=(
   libeigen3-dev          # fixed-size 2-D/3-D geometry and small dense linear algebra
   libceres-dev           # identification (Levenberg-Marquardt, autodiff Jets, covariance)
   coinor-libipopt-dev    # experiment design NLP
+  libblas3 liblapack3    # the reference BLAS/LAPACK, loaded for bit-reproducible designs (CMakeLists.txt)
   libyaml-cpp-dev        # robot files
   libcli11-dev           # command line
   libgtest-dev           # unit tests
