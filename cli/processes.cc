@@ -2,6 +2,8 @@
 
 #ifdef CABLECAL_WITH_MPI
 #include <mpi.h>
+
+#include "montecarlo/mpi.h"
 #endif
 
 #include <cstdio>
@@ -13,33 +15,6 @@
 #include "common/error.h"
 
 namespace cablecal::cli {
-namespace {
-
-// The exit code of an exception (error.h's tiers) and the words in front of its message.
-int ExitCodeOf(const std::exception_ptr& error, const char** label) {
-  *label = "internal error";
-  try {
-    std::rethrow_exception(error);
-  } catch (const AlreadyReported& e) {
-    return e.exit_code();
-  } catch (const InputError&) {
-    *label = "error";
-    return kExitBadInput;
-  } catch (const SolverFailure&) {
-    *label = "solver failure";
-    return kExitSolverFailed;
-  } catch (const RankFailure&) {
-    *label = "MPI run failed";
-    return kExitRankFailed;
-  } catch (const Interrupted&) {
-    *label = "";
-    return kExitInterrupted;
-  } catch (...) {
-    return kExitInternal;
-  }
-}
-
-}  // namespace
 
 bool BuiltWithMpi() {
 #ifdef CABLECAL_WITH_MPI
@@ -54,11 +29,8 @@ ProcessSession::ProcessSession(int* argc, char*** argv) {
   // Only the main thread calls MPI; OpenMP threads never do.
   int provided = 0;
   MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided);
-  // PMPI_: Debian's sequential MUMPS (under Ipopt) exports stand-ins for MPI_Comm_rank,
-  // MPI_Init, MPI_Finalize and MPI_Wtime that take precedence over Open MPI's; the
-  // profiling names (which every MPI provides) always reach the real library.
-  PMPI_Comm_rank(MPI_COMM_WORLD, &processes_.rank);
-  MPI_Comm_size(MPI_COMM_WORLD, &processes_.count);
+  const MpiWorld world = WorldOf();
+  processes_ = {world.rank, world.size};
 #else
   (void)argc;
   (void)argv;
@@ -67,33 +39,22 @@ ProcessSession::ProcessSession(int* argc, char*** argv) {
 
 ProcessSession::~ProcessSession() {
 #ifdef CABLECAL_WITH_MPI
-  PMPI_Finalize();  // not MPI_Finalize: see the constructor
+  PMPI_Finalize();  // not MPI_Finalize, which MUMPS's stand-in would answer (WorldOf, montecarlo/mpi.cc)
 #endif
 }
 
 int ReportCurrentError(const Processes& processes) {
-  const std::exception_ptr error = std::current_exception();
-  const char* label = "";
-  const int code = ExitCodeOf(error, &label);
-  std::string message;
-  try {
-    std::rethrow_exception(error);
-  } catch (const AlreadyReported&) {
-    return code;
-  } catch (const std::exception& e) {
-    message = e.what();
-  } catch (...) {
-    message = "unknown exception";
-  }
+  const ErrorOutcome error = OutcomeOf(std::current_exception());
+  if (error.already_reported) return error.exit_code;
   const std::string who =
       processes.count > 1 ? " (rank " + std::to_string(processes.rank) + " of " + std::to_string(processes.count) + ")"
                           : "";
-  if (code == kExitInterrupted) {
-    std::fprintf(stderr, "\ncablecal%s: %s\n", who.c_str(), message.c_str());
+  if (error.exit_code == kExitInterrupted) {
+    std::fprintf(stderr, "\ncablecal%s: %s\n", who.c_str(), error.message.c_str());
   } else {
-    std::fprintf(stderr, "cablecal%s: %s: %s\n", who.c_str(), label, message.c_str());
+    std::fprintf(stderr, "cablecal%s: %s: %s\n", who.c_str(), error.label, error.message.c_str());
   }
-  return code;
+  return error.exit_code;
 }
 
 void RunAgreed(const Processes& processes, const std::function<void()>& step) {
@@ -108,8 +69,7 @@ void RunAgreed(const Processes& processes, const std::function<void()>& step) {
     step();
   } catch (...) {
     error = std::current_exception();
-    const char* label = nullptr;
-    code = ExitCodeOf(error, &label);
+    code = OutcomeOf(error).exit_code;
   }
   std::vector<int> codes(processes.count);
   MPI_Allgather(&code, 1, MPI_INT, codes.data(), 1, MPI_INT, MPI_COMM_WORLD);

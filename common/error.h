@@ -8,6 +8,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <stdexcept>
 #include <string>
 
@@ -70,6 +71,38 @@ class AlreadyReported : public std::runtime_error {
  private:
   int exit_code_;
 };
+
+// How an exception ends a run: its exit code (the tiers above), the words printed in front
+// of its message, and the message. The one place that maps exceptions to exit codes, for
+// main() and for the ranks of an MPI run alike.
+struct ErrorOutcome {
+  int exit_code = kExitInternal;
+  const char* label = "internal error";
+  std::string message = "unknown exception";
+  bool already_reported = false;  // AlreadyReported: exit quietly with exit_code
+};
+inline ErrorOutcome OutcomeOf(const std::exception_ptr& error) {
+  ErrorOutcome out;
+  try {
+    std::rethrow_exception(error);
+  } catch (const AlreadyReported& e) {
+    out.exit_code = e.exit_code();
+    out.already_reported = true;
+    out.message = e.what();
+  } catch (const InputError& e) {
+    out = {kExitBadInput, "error", e.what()};
+  } catch (const SolverFailure& e) {
+    out = {kExitSolverFailed, "solver failure", e.what()};
+  } catch (const RankFailure& e) {
+    out = {kExitRankFailed, "MPI run failed", e.what()};
+  } catch (const Interrupted& e) {
+    out = {kExitInterrupted, "", e.what()};
+  } catch (const std::exception& e) {
+    out.message = e.what();
+  } catch (...) {
+  }
+  return out;
+}
 
 [[noreturn]] inline void CheckFailed(const char* expr, const char* file, int line,
                                      const std::string& message) {

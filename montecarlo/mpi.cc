@@ -52,21 +52,8 @@ Status DecodeStatus(const std::string& bytes) {
 
 // The exit code and message of the exception being handled (error.h's tiers).
 Status StatusOfCurrentException() {
-  try {
-    throw;
-  } catch (const InputError& e) {
-    return {kExitBadInput, e.what(), ""};
-  } catch (const SolverFailure& e) {
-    return {kExitSolverFailed, e.what(), ""};
-  } catch (const RankFailure& e) {
-    return {kExitRankFailed, e.what(), ""};
-  } catch (const Interrupted& e) {
-    return {kExitInterrupted, e.what(), ""};
-  } catch (const AlreadyReported& e) {
-    return {e.exit_code(), e.what(), ""};
-  } catch (const std::exception& e) {
-    return {kExitInternal, e.what(), ""};
-  }
+  const ErrorOutcome error = OutcomeOf(std::current_exception());
+  return {error.exit_code, error.message, ""};
 }
 
 [[noreturn]] void ThrowStatus(const Status& s) {
@@ -108,14 +95,19 @@ std::string Receive(int from) {
   return bytes;
 }
 
-// Rank 0 decides, every rank learns the verdict: rank 0 throws the failure, the others
-// AlreadyReported with its exit code. Returns normally when the verdict is 0.
+// A failure every rank knows of: rank 0 throws it (and main() prints it), the others
+// AlreadyReported with its exit code.
+[[noreturn]] void ThrowOnEveryRank(const MpiWorld& world, const Status& failure) {
+  if (world.rank == 0) ThrowStatus(failure);
+  throw AlreadyReported(failure.code);
+}
+
+// Rank 0 decides, every rank learns the verdict. Returns normally when the verdict is 0.
 void Verdict(const MpiWorld& world, const Status& decided) {
   std::int32_t code = decided.code;
   MPI_Bcast(&code, 1, MPI_INT32_T, 0, MPI_COMM_WORLD);
   if (code == 0) return;
-  if (world.rank == 0) ThrowStatus(decided);
-  throw AlreadyReported(code);
+  ThrowOnEveryRank(world, Status{code, decided.text, ""});
 }
 
 // CABLECAL_TEST_FAIL_RANK: "k" fails rank k's share, "k:crash" aborts rank k.
@@ -166,10 +158,7 @@ DesignedSets MakeDesignedSets(const Robot& nominal, const MonteCarloOptions& o, 
   }
   // Every rank saw the same messages, so every rank reaches the same verdict.
   const Status& verdict = first_failure.code != 0 ? first_failure : interrupted;
-  if (verdict.code != 0) {
-    if (world.rank == 0) ThrowStatus(verdict);
-    throw AlreadyReported(verdict.code);
-  }
+  if (verdict.code != 0) ThrowOnEveryRank(world, verdict);
   return designed;
 }
 
@@ -177,8 +166,10 @@ DesignedSets MakeDesignedSets(const Robot& nominal, const MonteCarloOptions& o, 
 
 MpiWorld WorldOf() {
   MpiWorld w;
-  // PMPI_: Debian's sequential MUMPS (linked through Ipopt) exports its own stand-in
-  // MPI_Comm_rank, which would answer 0 on every rank.
+  // PMPI_: Debian's sequential MUMPS (linked through Ipopt) exports stand-ins for
+  // MPI_Comm_rank, MPI_Init, MPI_Finalize and MPI_Wtime that take precedence over Open
+  // MPI's (its MPI_Comm_rank answers 0 on every rank); the profiling names, which every MPI
+  // provides, always reach the real library.
   PMPI_Comm_rank(MPI_COMM_WORLD, &w.rank);
   MPI_Comm_size(MPI_COMM_WORLD, &w.size);
   return w;

@@ -13,7 +13,12 @@ long StudyItems(const MonteCarloOptions& o) {
   return static_cast<long>(o.pose_counts.size()) * static_cast<long>(o.designs.size()) * o.trials;
 }
 
-bool OwnsItem(const StudyShare& share, long item) { return (item / kChunkTrials) % share.count == share.index; }
+namespace {
+// The index of the share that owns `item` when a study is split into `count` shares.
+int OwnerOf(long item, int count) { return static_cast<int>((item / kChunkTrials) % count); }
+}  // namespace
+
+bool OwnsItem(const StudyShare& share, long item) { return OwnerOf(item, share.count) == share.index; }
 
 long ItemsOwned(const StudyShare& share, long items) {
   const long chunks = (items + kChunkTrials - 1) / kChunkTrials;
@@ -55,7 +60,7 @@ MonteCarloResult AssembleShares(const MonteCarloOptions& o, std::vector<ShareRes
   }
   std::vector<std::size_t> next(count, 0);
   for (long item = 0; item < total; ++item) {
-    const int k = static_cast<int>((item / kChunkTrials) % count);
+    const int k = OwnerOf(item, count);
     result.cells[item / o.trials].trials[item % o.trials] = std::move(shares[k].outcomes[next[k]++]);
   }
   return result;
