@@ -51,6 +51,11 @@ struct DesignOptions {
   double min_spacing_m = 0.0;  // 0: off
   int random_sets = 100;       // for the median of random feasible sets in the summary (0: none)
   int max_iterations = 500;    // Ipopt, per start
+  // Robustness to the unknown true geometry (robust.h): every pose stays holdable, to first
+  // order, for true exit points and initial lengths within robust_sigmas x geometry_sigma_m
+  // of nominal (0: nominal bounds only).
+  double geometry_sigma_m = 0.01;
+  double robust_sigmas = 3.0;
   // Testing aids: run Ipopt's derivative checker and keep its journal in this file.
   bool derivative_test = false;
   std::string ipopt_journal_path;

@@ -9,6 +9,7 @@
 #include <cmath>
 
 #include "design/objective.h"
+#include "design/robust.h"
 #include "model/cable.h"
 
 namespace cablecal::internal {
@@ -18,30 +19,38 @@ using Ipopt::Index;
 using Ipopt::Number;
 
 // Variables: per pose j, [x, z, theta, t1, t2] at 5 j.
-// Constraints: per pose j, 3 equilibrium rows (W t + w_g = 0) then 2 frame rows per platform
-// point (x and z of each anchor, and of the centre of mass if it is not p, within the frame
-// minus the margin); then one row per pair of poses for the optional minimum spacing.
+// Constraints: per pose j, 3 equilibrium rows (W t + w_g = 0), then one row per bound of every
+// pose quantity (robust.h): c - k sigma |dc/dg| >= lo and c + k sigma |dc/dg| <= hi, with
+// sigma = --geometry-sigma (0: the nominal bounds); then one row per pair of poses for the
+// optional minimum spacing.
 class DesignNlp : public Ipopt::TNLP {
  public:
   DesignNlp(const Robot& robot, const DesignOptions& options, const std::vector<PlanPose>& start, double power)
-      : robot_(robot), options_(options), start_(start), n_(static_cast<int>(start.size())), power_(power) {
-    // Platform points that must stay inside the frame: the anchors, and the centre of mass
-    // unless it is the reference point p, which the variable bounds already keep inside.
-    for (const Cable& c : robot.cables) points_.push_back(c.p_P_anchor_m);
-    if (robot.p_P_com_m.norm() > 0.0) points_.push_back(robot.p_P_com_m);
-    R = 3 + 2 * P();
+      : robot_(robot), options_(options), start_(start), n_(static_cast<int>(start.size())), power_(power),
+        points_(FramePoints(robot)), quantities_(PoseQuantities(robot)),
+        k_sigma_m_(options.robust_sigmas * options.geometry_sigma_m) {
+    for (int k = 0; k < static_cast<int>(quantities_.size()); ++k) {
+      const PoseQuantity& q = quantities_[k];
+      // A variable's own nominal bound is already a variable bound; repeating it as a
+      // constraint would only make the constraint Jacobian degenerate.
+      if (q.is_variable && k_sigma_m_ == 0.0) continue;
+      if (std::isfinite(q.lo)) rows_.push_back({k, -1});
+      if (std::isfinite(q.hi)) rows_.push_back({k, +1});
+    }
+    R = 3 + static_cast<int>(rows_.size());
   }
 
   bool get_nlp_info(Index& n, Index& m, Index& nnz_jac_g, Index& nnz_h_lag, IndexStyleEnum& index_style) override {
     n = 5 * n_;
     m = R * n_ + NumPairs();
-    nnz_jac_g = n_ * (3 * 5 + 2 * P() * 3) + NumPairs() * 4;
+    nnz_jac_g = n_ * R * 5 + NumPairs() * 4;
     nnz_h_lag = 0;  // limited-memory Hessian
     index_style = C_STYLE;
     return true;
   }
 
   bool get_bounds_info(Index n, Number* x_l, Number* x_u, Index m, Number* g_l, Number* g_u) override {
+    constexpr double kIpoptInf = 2e19;
     const double lo = robot_.margin_m + kBoundMargin_m;
     const double x_hi = robot_.frame_width_m - robot_.margin_m - kBoundMargin_m;
     const double z_hi = std::min(robot_.frame_height_m - robot_.margin_m, robot_.laser_range_m) - kBoundMargin_m;
@@ -57,18 +66,23 @@ class DesignNlp : public Ipopt::TNLP {
         x_u[5 * j + 3 + i] = robot_.tension_max_N - kBoundMargin_N;
       }
       for (int r = 0; r < 3; ++r) g_l[R * j + r] = g_u[R * j + r] = 0.0;
-      for (int p = 0; p < P(); ++p) {
-        g_l[R * j + 3 + 2 * p] = lo;
-        g_u[R * j + 3 + 2 * p] = robot_.frame_width_m - robot_.margin_m - kBoundMargin_m;
-        g_l[R * j + 4 + 2 * p] = lo;
-        g_u[R * j + 4 + 2 * p] = robot_.frame_height_m - robot_.margin_m - kBoundMargin_m;
+      for (int r = 0; r < static_cast<int>(rows_.size()); ++r) {
+        const PoseQuantity& q = quantities_[rows_[r].quantity];
+        const int row = R * j + 3 + r;
+        if (rows_[r].sign < 0) {
+          g_l[row] = q.lo + q.bound_margin;
+          g_u[row] = kIpoptInf;
+        } else {
+          g_l[row] = -kIpoptInf;
+          g_u[row] = q.hi - q.bound_margin;
+        }
       }
     }
     const double d = options_.min_spacing_m + kBoundMargin_m;
     const double d2 = d * d;
     for (int k = 0; k < NumPairs(); ++k) {
       g_l[R * n_ + k] = d2;
-      g_u[R * n_ + k] = 2e19;  // Ipopt's +infinity
+      g_u[R * n_ + k] = kIpoptInf;
     }
     (void)n;
     (void)m;
@@ -103,15 +117,7 @@ class DesignNlp : public Ipopt::TNLP {
 
   bool eval_g(Index, const Number* x, bool, Index, Number* g) override {
     for (int j = 0; j < n_; ++j) {
-      const Pose<double> q(x[5 * j], x[5 * j + 1], x[5 * j + 2]);
-      const Eigen::VectorXd t = Eigen::Vector2d(x[5 * j + 3], x[5 * j + 4]);
-      const Eigen::Vector3d r = EquilibriumResidual<double>(robot_, q, t);
-      for (int k = 0; k < 3; ++k) g[R * j + k] = r(k);
-      for (int p = 0; p < P(); ++p) {
-        const Eigen::Vector2d pf = PlatformPointInF<double>(q, points_[p]);
-        g[R * j + 3 + 2 * p] = pf.x();
-        g[R * j + 4 + 2 * p] = pf.y();
-      }
+      if (!PoseRows(x + 5 * j, g + R * j, nullptr)) return false;
     }
     int k = 0;
     for (int a = 0; a < n_; ++a) {
@@ -127,15 +133,9 @@ class DesignNlp : public Ipopt::TNLP {
     int e = 0;
     if (values == nullptr) {
       for (int j = 0; j < n_; ++j) {
-        for (int r = 0; r < 3; ++r) {
+        for (int r = 0; r < R; ++r) {
           for (int c = 0; c < 5; ++c, ++e) {
             iRow[e] = R * j + r;
-            jCol[e] = 5 * j + c;
-          }
-        }
-        for (int r = 0; r < 2 * P(); ++r) {
-          for (int c = 0; c < 3; ++c, ++e) {
-            iRow[e] = R * j + 3 + r;
             jCol[e] = 5 * j + c;
           }
         }
@@ -152,24 +152,10 @@ class DesignNlp : public Ipopt::TNLP {
       }
       return true;
     }
-    using Jet5 = ceres::Jet<double, 5>;
-    using Jet3 = ceres::Jet<double, 3>;
+    std::vector<double> unused(R);
     for (int j = 0; j < n_; ++j) {
-      Pose<Jet5> q;
-      for (int k = 0; k < 3; ++k) q(k) = Jet5(x[5 * j + k], k);
-      Eigen::Matrix<Jet5, Eigen::Dynamic, 1> t(2);
-      t(0) = Jet5(x[5 * j + 3], 3);
-      t(1) = Jet5(x[5 * j + 4], 4);
-      const Vec3<Jet5> r = EquilibriumResidual<Jet5>(robot_, q, t);
-      for (int row = 0; row < 3; ++row) {
-        for (int c = 0; c < 5; ++c) values[e++] = r(row).v(c);
-      }
-      const Pose<Jet3> q3(Jet3(x[5 * j], 0), Jet3(x[5 * j + 1], 1), Jet3(x[5 * j + 2], 2));
-      for (int p = 0; p < P(); ++p) {
-        const Vec2<Jet3> pf = PlatformPointInF<Jet3>(q3, points_[p].cast<Jet3>());
-        for (int c = 0; c < 3; ++c) values[e++] = pf.x().v(c);
-        for (int c = 0; c < 3; ++c) values[e++] = pf.y().v(c);
-      }
+      if (!PoseRows(x + 5 * j, unused.data(), values + e)) return false;
+      e += R * 5;
     }
     for (int a = 0; a < n_; ++a) {
       for (int b = a + 1; b < n_ && NumPairs() > 0; ++b) {
@@ -195,6 +181,9 @@ class DesignNlp : public Ipopt::TNLP {
     for (Index k = 0; k < m; ++k) g_scaling[k] = 1.0;
     for (int j = 0; j < n_; ++j) {
       for (int r = 0; r < 3; ++r) g_scaling[R * j + r] = 1.0 / weight_N;
+      for (int r = 0; r < static_cast<int>(rows_.size()); ++r) {
+        if (rows_[r].quantity < robot_.num_cables()) g_scaling[R * j + 3 + r] = 1.0 / weight_N;  // tensions
+      }
     }
     return true;
   }
@@ -216,8 +205,61 @@ class DesignNlp : public Ipopt::TNLP {
   const std::vector<Eigen::Vector3d>& poses() const { return poses_; }
 
  private:
-  int P() const { return static_cast<int>(points_.size()); }
+  struct Row {
+    int quantity;  // index into quantities_
+    int sign;      // -1: c - k sigma s >= lo; +1: c + k sigma s <= hi
+  };
   int NumPairs() const { return options_.min_spacing_m > 0.0 ? n_ * (n_ - 1) / 2 : 0; }
+
+  // Pose j's R constraint rows from its 5 variables at x5 into g; if `jac` is given, also
+  // their R x 5 Jacobian block, row by row. The equilibrium rows and the quantities' values
+  // are differentiated exactly (Jets); the spreads by central differences (robust.h).
+  bool PoseRows(const Number* x5, Number* g, Number* jac) const {
+    const Eigen::Matrix<double, 5, 1> y = Eigen::Map<const Eigen::Matrix<double, 5, 1>>(x5);
+    std::vector<double> value, spread;
+    Eigen::MatrixXd dvalue;
+    if (!RobustQuantities(robot_, points_, y, &value, &spread, jac ? &dvalue : nullptr)) return false;
+    using Jet5 = ceres::Jet<double, 5>;
+    Eigen::Matrix<Jet5, 5, 1> yj;
+    for (int k = 0; k < 5; ++k) yj(k) = Jet5(y(k), k);
+    const Eigen::Matrix<Jet5, Eigen::Dynamic, 1> t = yj.tail<2>();
+    const Vec3<Jet5> eq = EquilibriumResidual<Jet5>(robot_, Pose<Jet5>(yj.head<3>()), t);
+    for (int r = 0; r < 3; ++r) {
+      g[r] = eq(r).a;
+      if (jac) {
+        for (int c = 0; c < 5; ++c) jac[5 * r + c] = eq(r).v(c);
+      }
+    }
+    for (int r = 0; r < static_cast<int>(rows_.size()); ++r) {
+      const int k = rows_[r].quantity;
+      g[3 + r] = value[k] + rows_[r].sign * k_sigma_m_ * spread[k];
+      if (jac) {
+        for (int c = 0; c < 5; ++c) jac[5 * (3 + r) + c] = dvalue(k, c);
+      }
+    }
+    for (int r = 0; r < R; ++r) {
+      if (!std::isfinite(g[r])) return false;
+    }
+    if (jac && k_sigma_m_ > 0.0) {
+      // d spread / dy by central differences; steps of ~cbrt(eps) of each variable's scale.
+      const double weight_N = robot_.platform_mass_kg * robot_.gravity_mps2;
+      for (int c = 0; c < 5; ++c) {
+        const double h = 6e-6 * (c >= 3 ? weight_N : 1.0);
+        Eigen::Matrix<double, 5, 1> yp = y, ym = y;
+        yp(c) += h;
+        ym(c) -= h;
+        std::vector<double> vp, sp, vm, sm;
+        if (!RobustQuantities(robot_, points_, yp, &vp, &sp) || !RobustQuantities(robot_, points_, ym, &vm, &sm)) {
+          return false;
+        }
+        for (int r = 0; r < static_cast<int>(rows_.size()); ++r) {
+          const int k = rows_[r].quantity;
+          jac[5 * (3 + r) + c] += rows_[r].sign * k_sigma_m_ * (sp[k] - sm[k]) / (2.0 * h);
+        }
+      }
+    }
+    return true;
+  }
 
   double Objective(const Number* x, Eigen::VectorXd* gradient) const {
     std::vector<Eigen::Vector3d> q(n_);
@@ -230,8 +272,11 @@ class DesignNlp : public Ipopt::TNLP {
   const std::vector<PlanPose>& start_;
   const int n_;
   const double power_;  // surrogate sharpness; 0: the default
-  std::vector<Eigen::Vector2d> points_;
-  int R = 0;  // constraint rows per pose: 3 equilibrium, 2 per platform point
+  const std::vector<Eigen::Vector2d> points_;
+  const std::vector<PoseQuantity> quantities_;
+  const double k_sigma_m_;  // k sigma: the half-width of the linearised worst case
+  std::vector<Row> rows_;
+  int R = 0;  // constraint rows per pose: 3 equilibrium, then rows_
   Ipopt::SolverReturn final_status_ = Ipopt::INTERNAL_ERROR;
   std::vector<Eigen::Vector3d> poses_;
   std::vector<Eigen::Vector2d> tensions_;

@@ -23,6 +23,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <cmath>
 
 #include "model/robot.h"
@@ -138,20 +139,30 @@ inline bool CableGeometryValid(const CableState<double>& s, double pulley_radius
 
 // Wrench matrix W (3 x m): column i = [u_i; (R b_i) x u_i], the force and the moment
 // about p of a unit tension in cable i. W = -(dl/dq)^T (virtual work), which
-// tests/model/statics_test.cc checks with Jets.
+// tests/model/statics_test.cc checks with Jets. `p_F_exits_m[i]` is exit point i; the
+// overload without it takes the robot's nominal exit points (the design's robustness
+// differentiates W with respect to the exit points too).
 template <typename T>
-Eigen::Matrix<T, 3, Eigen::Dynamic> WrenchMatrix(const Robot& robot, const Pose<T>& q) {
+Eigen::Matrix<T, 3, Eigen::Dynamic> WrenchMatrix(const Robot& robot, const Pose<T>& q, const Vec2<T>* p_F_exits_m) {
   Eigen::Matrix<T, 3, Eigen::Dynamic> W(3, robot.num_cables());
   const Eigen::Matrix<T, 2, 2> R = Rotation(q(2));
   for (int i = 0; i < robot.num_cables(); ++i) {
     const Cable& c = robot.cables[i];
-    const CableState<T> s = CableAtPose<T>(c, q);
     const Vec2<T> r_F_anchor = R * c.p_P_anchor_m.cast<T>();
+    const Vec2<T> p_F_anchor = Vec2<T>(q(0), q(1)) + r_F_anchor;
+    const CableState<T> s = CableGeometry<T>(p_F_exits_m[i], T(c.pulley_radius_m), SideSign(c.side), p_F_anchor);
     W(0, i) = s.u_F_cable.x();
     W(1, i) = s.u_F_cable.y();
     W(2, i) = Cross2<T>(r_F_anchor, s.u_F_cable);
   }
   return W;
+}
+
+template <typename T>
+Eigen::Matrix<T, 3, Eigen::Dynamic> WrenchMatrix(const Robot& robot, const Pose<T>& q) {
+  std::array<Vec2<T>, kMaxCables> exits;  // no heap allocation in the statics' inner loop
+  for (int i = 0; i < robot.num_cables(); ++i) exits[i] = robot.cables[i].p_F_exit_m.cast<T>();
+  return WrenchMatrix<T>(robot, q, exits.data());
 }
 
 // Gravity wrench at p: [0; -m g; (R c) x (0, -m g)] = -grad V.

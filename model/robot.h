@@ -19,6 +19,10 @@ enum class PulleySide { kLeft, kRight };
 // +1 for kLeft, -1 for kRight: the pulley centre is at exit + SideSign * (r, 0).
 inline double SideSign(PulleySide side) { return side == PulleySide::kLeft ? 1.0 : -1.0; }
 
+// The most cables a robot file may declare (the loader enforces it; fixed-size scratch
+// arrays in the model rely on it).
+constexpr int kMaxCables = 8;
+
 struct Cable {
   Eigen::Vector2d p_F_exit_m;        // exit point A_i: the pulley's outermost point at centre height
   double pulley_radius_m = 0.0;

@@ -104,6 +104,40 @@ EquilibriumResult SolveEquilibrium(const Robot& robot, double x_m, double z_m) {
     }
   };
 
+  // Refines a sign change of det*M in [lo, hi] (both ends valid) and considers the root.
+  auto refine = [&](double lo, double hi, double g_lo, double g_hi) {
+    // Illinois (modified regula falsi): superlinear, and keeps the bracket.
+    int side = 0;
+    for (int it = 0; it < 100 && hi - lo > kThetaTol_rad; ++it) {
+      double mid = (lo * g_hi - hi * g_lo) / (g_hi - g_lo);
+      if (!(mid > lo && mid < hi)) mid = 0.5 * (lo + hi);
+      const MomentBalance m = EvaluateMomentBalance(robot, x_m, z_m, mid);
+      if (!m.valid) break;
+      if (m.scaled_moment == 0.0) {
+        lo = hi = mid;
+        break;
+      }
+      if ((m.scaled_moment < 0.0) == (g_lo < 0.0)) {
+        lo = mid;
+        g_lo = m.scaled_moment;
+        if (side == -1) g_hi *= 0.5;
+        side = -1;
+      } else {
+        hi = mid;
+        g_hi = m.scaled_moment;
+        if (side == 1) g_lo *= 0.5;
+        side = 1;
+      }
+    }
+    // Keep the bracket end with the smaller residual.
+    const MomentBalance b_lo = EvaluateMomentBalance(robot, x_m, z_m, lo);
+    const MomentBalance b_hi = EvaluateMomentBalance(robot, x_m, z_m, hi);
+    consider_root(std::abs(b_lo.scaled_moment) <= std::abs(b_hi.scaled_moment) ? lo : hi);
+  };
+  auto changes_sign = [](const MomentBalance& a, const MomentBalance& b) {
+    return a.scaled_moment != 0.0 && b.scaled_moment != 0.0 && (a.scaled_moment < 0.0) != (b.scaled_moment < 0.0);
+  };
+
   const double step = 2.0 * kThetaSearchMax_rad / kThetaSearchSteps;
   double theta_prev = -kThetaSearchMax_rad;
   MomentBalance prev = EvaluateMomentBalance(robot, x_m, z_m, theta_prev);
@@ -115,37 +149,32 @@ EquilibriumResult SolveEquilibrium(const Robot& robot, double x_m, double z_m) {
     if (prev.valid && cur.valid) {
       if (cur.scaled_moment == 0.0) {
         consider_root(theta);
-      } else if ((prev.scaled_moment < 0.0) != (cur.scaled_moment < 0.0) &&
-                 prev.scaled_moment != 0.0) {
-        // Illinois (modified regula falsi): superlinear, and keeps the bracket.
-        double lo = theta_prev, hi = theta;
-        double g_lo = prev.scaled_moment, g_hi = cur.scaled_moment;
-        int side = 0;
-        for (int it = 0; it < 100 && hi - lo > kThetaTol_rad; ++it) {
-          double mid = (lo * g_hi - hi * g_lo) / (g_hi - g_lo);
-          if (!(mid > lo && mid < hi)) mid = 0.5 * (lo + hi);
-          const MomentBalance m = EvaluateMomentBalance(robot, x_m, z_m, mid);
-          if (!m.valid) break;
-          if (m.scaled_moment == 0.0) {
-            lo = hi = mid;
-            break;
-          }
-          if ((m.scaled_moment < 0.0) == (g_lo < 0.0)) {
-            lo = mid;
-            g_lo = m.scaled_moment;
-            if (side == -1) g_hi *= 0.5;
-            side = -1;
-          } else {
-            hi = mid;
-            g_hi = m.scaled_moment;
-            if (side == 1) g_lo *= 0.5;
-            side = 1;
-          }
+      } else if (changes_sign(prev, cur)) {
+        refine(theta_prev, theta, prev.scaled_moment, cur.scaled_moment);
+      }
+    } else if (prev.valid != cur.valid) {
+      // The cable geometry turns invalid (an anchor sweeping through its pulley) inside
+      // this interval: a root between the valid end and that boundary would be missed by
+      // the scan alone. Bisect for the last valid angle and bracket from there.
+      double valid = prev.valid ? theta_prev : theta, invalid = prev.valid ? theta : theta_prev;
+      MomentBalance at_valid = prev.valid ? prev : cur;
+      const MomentBalance end = at_valid;
+      for (int it = 0; it < 60 && std::abs(invalid - valid) > kThetaTol_rad; ++it) {
+        const double mid = 0.5 * (valid + invalid);
+        const MomentBalance m = EvaluateMomentBalance(robot, x_m, z_m, mid);
+        if (m.valid) {
+          valid = mid;
+          at_valid = m;
+        } else {
+          invalid = mid;
         }
-        // Keep the bracket end with the smaller residual.
-        const MomentBalance b_lo = EvaluateMomentBalance(robot, x_m, z_m, lo);
-        const MomentBalance b_hi = EvaluateMomentBalance(robot, x_m, z_m, hi);
-        consider_root(std::abs(b_lo.scaled_moment) <= std::abs(b_hi.scaled_moment) ? lo : hi);
+      }
+      const double end_theta = prev.valid ? theta_prev : theta;
+      if (at_valid.scaled_moment == 0.0) {
+        consider_root(valid);
+      } else if (changes_sign(end, at_valid)) {
+        if (end_theta < valid) refine(end_theta, valid, end.scaled_moment, at_valid.scaled_moment);
+        else refine(valid, end_theta, at_valid.scaled_moment, end.scaled_moment);
       }
     }
     prev = cur;
@@ -211,9 +240,12 @@ Feasibility CheckFeasibility(const Robot& robot, const Eigen::Vector3d& q,
   if (!InsideFrame(robot, q.head<2>())) return Feasibility::kOutsideFrame;
   if (q(1) > robot.laser_range_m) return Feasibility::kLaserRange;
   for (const Cable& c : robot.cables) {
-    if (!CableGeometryValid(CableAtPose<double>(c, q), c.pulley_radius_m)) {
-      return Feasibility::kCableGeometry;
-    }
+    const CableState<double> s = CableAtPose<double>(c, q);
+    if (!CableGeometryValid(s, c.pulley_radius_m)) return Feasibility::kCableGeometry;
+    // The pulleys are part of the frame: an anchor keeps the frame margin from its pulley
+    // too. Without this, robots whose exit points lie below the frame top let the platform
+    // climb into a pulley, where the equilibrium degenerates (README, "Model").
+    if (s.centre_distance_m - c.pulley_radius_m < robot.margin_m) return Feasibility::kCableGeometry;
   }
   if (std::abs(q(2)) > robot.theta_max_rad) return Feasibility::kThetaLimit;
   if (!InsideFrame(robot, PlatformPointInF<double>(q, robot.p_P_com_m))) {
