@@ -54,6 +54,8 @@ struct DesignCommandOptions {
   std::string criterion = "condition";
   unsigned long long seed = 1;
   double min_spacing_m = 0.0;
+  double geometry_sigma_m = 0.01, robust_sigmas = 3.0;
+  std::string prior_path;
 };
 int RunDesign(const Context& ctx, const DesignCommandOptions& options);
 

@@ -100,9 +100,19 @@ int main(int argc, char** argv) {
   des_cmd->add_option("--min-spacing", des.min_spacing_m, "minimum distance between poses, m")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
-  des_cmd->add_option("--random-sets", des.random_sets, "random sets for the reference median")
+  des_cmd->add_option("--random-sets", des.random_sets, "random sets for the reference median (0: none)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(0, 100000));
+  des_cmd->add_option("--geometry-sigma", des.geometry_sigma_m,
+                      "uncertainty of the true exit points and initial lengths the plan must survive, m (0: off)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 0.5));
+  des_cmd->add_option("--robust-sigmas", des.robust_sigmas, "k: poses hold for geometry errors up to k sigma")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 10.0));
+  des_cmd->add_option("--prior", des.prior_path,
+                      "result.yaml of an earlier identification: plan the next poses around its estimate and "
+                      "count its information");
   des_cmd->add_option("--out", des.out_path, "pose plan CSV")->required();
   des_cmd->add_option("--summary", des.summary_path, "summary YAML");
   des_cmd->add_option("--plot", des.plot_path, "PNG of the workspace with the chosen poses");

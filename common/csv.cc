@@ -64,13 +64,21 @@ void ForEachCsvRow(const std::string& path, const std::vector<std::string>& expe
 
 void ForEachCsvRow(std::istream& in, const std::string& path, const std::vector<std::string>& expected_header,
                    const std::function<void(const CsvRow&)>& on_row) {
+  ForEachCsvRow(in, path, expected_header, {}, on_row);
+}
+
+void ForEachCsvRow(std::istream& in, const std::string& path, const std::vector<std::string>& expected_header,
+                   const std::vector<std::string>& optional_trailing, const std::function<void(const CsvRow&)>& on_row) {
+  std::vector<std::string> full_header = expected_header;
+  full_header.insert(full_header.end(), optional_trailing.begin(), optional_trailing.end());
+  std::vector<std::string> found_header = expected_header;
   std::string line;
   int line_no = 0;
   bool have_header = false;
   int rows = 0;
   CsvRow row;
   row.path = &path;
-  row.header = &expected_header;
+  row.header = &found_header;
   while (std::getline(in, line)) {
     ++line_no;
     if (line_no == 1 && line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);  // UTF-8 BOM
@@ -78,16 +86,17 @@ void ForEachCsvRow(std::istream& in, const std::string& path, const std::vector<
     if (trimmed.empty() || trimmed[0] == '#') continue;
     std::vector<std::string> cells = Split(trimmed);
     if (!have_header) {
-      if (cells != expected_header) {
+      if (!optional_trailing.empty() && cells == full_header) found_header = full_header;
+      if (cells != found_header) {
         throw InputError(path + ":" + std::to_string(line_no), "header",
                          "expected '" + JoinCsv(expected_header) + "', got '" + trimmed + "'");
       }
       have_header = true;
       continue;
     }
-    if (cells.size() != expected_header.size()) {
+    if (cells.size() != found_header.size()) {
       throw InputError(path + ":" + std::to_string(line_no), "",
-                       "expected " + std::to_string(expected_header.size()) + " columns, got " +
+                       "expected " + std::to_string(found_header.size()) + " columns, got " +
                            std::to_string(cells.size()));
     }
     row.line = line_no;

@@ -33,6 +33,10 @@ void ForEachCsvRow(const std::string& path, const std::vector<std::string>& expe
 // The same from a stream; `name` stands for the file in messages.
 void ForEachCsvRow(std::istream& in, const std::string& name, const std::vector<std::string>& expected_header,
                    const std::function<void(const CsvRow&)>& on_row);
+// The same, where the header may also be `expected_header` followed by `optional_trailing`
+// (all of them): rows then have that many cells, and row.header is the header found.
+void ForEachCsvRow(std::istream& in, const std::string& name, const std::vector<std::string>& expected_header,
+                   const std::vector<std::string>& optional_trailing, const std::function<void(const CsvRow&)>& on_row);
 
 std::string JoinCsv(const std::vector<std::string>& cells);
 

@@ -14,6 +14,8 @@
 #include "common/version.h"
 #include "design/ipopt_nlp.h"
 #include "design/objective.h"
+#include "design/robust.h"
+#include "identify/experiment.h"
 #include "model/statics.h"
 
 namespace cablecal {
@@ -44,6 +46,9 @@ constexpr std::uint64_t kRandomSetStream = 2;
 // Re-verification of Ipopt's poses with the model.
 constexpr double kEquilibriumTol_N = 1e-8;
 constexpr double kSameRootTol_rad = 1e-6;  // the model's equilibrium is Ipopt's, not another root
+// Widening of the NLP's linearised robustness rows when the scenario check fails.
+constexpr double kRobustEscalation = 1.3;
+constexpr int kRobustRounds = 3;
 
 double Median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
@@ -85,6 +90,56 @@ std::string VerifyPoses(const Robot& robot, const DesignOptions& options, const 
   return "";
 }
 
+// The robustness the NLP enforced to first order (robust.h), checked with the full model: for
+// each geometry parameter moved by +-k sigma alone (12 true robots), the commanded lengths of
+// every pose must be held -- the forward model converges to a taut, stable equilibrium near
+// the commanded pose that passes every workspace test of the true robot. Fills each pose's
+// linearised worst-case tensions. Returns "" when all hold, else the first failure.
+std::string VerifyRobustness(const Robot& robot, const DesignOptions& options, std::vector<PlanPose>* plan) {
+  const double k_sigma = options.robust_sigmas * options.geometry_sigma_m;
+  const std::vector<Eigen::Vector2d> points = internal::FramePoints(robot);
+  const int m = robot.num_cables();
+  for (std::size_t j = 0; j < plan->size(); ++j) {
+    PlanPose& pose = (*plan)[j];
+    Eigen::Matrix<double, 5, 1> y;
+    y << pose.q, pose.tensions_N;
+    std::vector<double> value, spread;
+    if (!internal::RobustQuantities(robot, points, y, &value, &spread)) {
+      return "pose " + std::to_string(j + 1) + ": the equilibrium is singular (a fold of the statics)";
+    }
+    pose.tensions_worst_min_N.resize(m);
+    pose.tensions_worst_max_N.resize(m);
+    for (int i = 0; i < m; ++i) {
+      pose.tensions_worst_min_N(i) = value[i] - k_sigma * spread[i];
+      pose.tensions_worst_max_N(i) = value[i] + k_sigma * spread[i];
+    }
+  }
+  if (k_sigma == 0.0) return "";
+  const GeometryVector nominal = GeometryOf(robot);
+  for (int k = 0; k < GeometryVector::RowsAtCompileTime; ++k) {
+    for (const double sign : {-1.0, 1.0}) {
+      GeometryVector g = nominal;
+      g(k) += sign * k_sigma;
+      const Robot truth = WithGeometry(robot, g);
+      const std::string scenario = std::string(kGeometryNames[k]) + (sign > 0 ? " +" : " -") +
+                                   FormatDouble(options.robust_sigmas) + " sigma";
+      for (std::size_t j = 0; j < plan->size(); ++j) {
+        const PlanPose& pose = (*plan)[j];
+        const Eigen::VectorXd lengths = pose.length_change_m + g.tail(m);
+        const ForwardResult f = SolveForwardGeometricoStatic(truth, lengths, &pose.q);
+        const std::string where = "pose " + std::to_string(j + 1) + " on a true robot with " + scenario + ": ";
+        if (f.status != ForwardStatus::kConverged) return where + ToString(f.status);
+        if ((f.equilibrium.q - pose.q).head<2>().norm() > 10.0 * k_sigma + 0.05) {
+          return where + "settles far from the commanded pose";
+        }
+        const Feasibility feas = CheckFeasibility(truth, f.equilibrium.q, f.equilibrium.tensions_N);
+        if (feas != Feasibility::kFeasible) return where + ToString(feas);
+      }
+    }
+  }
+  return "";
+}
+
 }  // namespace
 
 DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
@@ -118,17 +173,39 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
     if (!start_errors[k].empty()) throw SolverFailure("cannot draw a feasible start: " + start_errors[k]);
   }
 
+  // Each start: Ipopt, then the re-verification with the model. If only the robustness check
+  // fails (the linearisation underestimates a strongly nonlinear tension near the frame top),
+  // the start is solved again with the linearised half-width k raised by kRobustEscalation,
+  // at most kRobustRounds times: the rows stay first-order, the guarantee is the scenario check.
   std::vector<internal::StartOutcome> outcomes(K);
+  std::vector<std::vector<PlanPose>> verified(K);
+  std::vector<std::string> failures(K);
+  std::vector<double> robust_sigmas_used(K, options.robust_sigmas);
 #pragma omp parallel for schedule(dynamic, 1)
   for (int k = 0; k < K; ++k) {
-    // MUMPS, Ipopt's linear solver in Debian, is not thread-safe (coin-or/Ipopt#733), so the
-    // solves themselves take turns; sampling, verification and the reference sets run in parallel.
+    DesignOptions o = options;
+    for (int round = 0; round <= kRobustRounds; ++round) {
+      internal::StartOutcome outcome;
+      // MUMPS, Ipopt's linear solver in Debian, is not thread-safe (coin-or/Ipopt#733), so the
+      // solves themselves take turns; sampling, verification and the reference sets run in parallel.
 #pragma omp critical(cablecal_ipopt)
-    outcomes[k] = internal::SolveDesignNlp(robot, options, starts[k]);
+      outcome = internal::SolveDesignNlp(robot, o, starts[k]);
+      outcomes[k].iterations += outcome.iterations;
+      outcomes[k].status = outcome.status;
+      outcomes[k].converged = outcome.converged;
+      outcomes[k].poses = outcome.poses;
+      if (!outcome.converged) break;
+      failures[k] = VerifyPoses(robot, options, outcome.poses, l0, &verified[k]);
+      if (!failures[k].empty()) break;
+      // The scenarios are always those of the user's k; only the NLP's rows are widened.
+      failures[k] = VerifyRobustness(robot, options, &verified[k]);
+      robust_sigmas_used[k] = o.robust_sigmas;
+      if (failures[k].empty() || options.geometry_sigma_m == 0.0) break;
+      o.robust_sigmas *= kRobustEscalation;
+    }
   }
 
   DesignResult result;
-  std::vector<std::vector<PlanPose>> verified(K);
   double best = std::numeric_limits<double>::infinity();
   for (int k = 0; k < K; ++k) {
     StartReport report;
@@ -136,10 +213,11 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
     report.ipopt_status = outcomes[k].status;
     report.iterations = outcomes[k].iterations;
     report.converged = outcomes[k].converged;
+    report.robust_sigmas = robust_sigmas_used[k];
     report.objective = std::numeric_limits<double>::infinity();
     if (report.converged) {
       ++result.converged_starts;
-      report.verification_failure = VerifyPoses(robot, options, outcomes[k].poses, l0, &verified[k]);
+      report.verification_failure = failures[k];
       report.verified = report.verification_failure.empty();
       if (report.verified) {
         report.objective = internal::ExactObjective(robot, options.criterion, PosesOf(verified[k]));
@@ -217,7 +295,21 @@ std::string DesignSummaryYaml(const DesignResult& r, const DesignOptions& option
     o << "  - {start: " << s.start << ", ipopt_status: " << s.ipopt_status << ", iterations: " << s.iterations
       << ", verified: " << (s.verified ? "true" : "false");
     if (s.verified) o << ", objective: " << FormatDouble(s.objective);
+    o << ", robust_sigmas_in_nlp: " << FormatDouble(s.robust_sigmas);
     if (s.converged && !s.verified) o << ", verification_failure: \"" << s.verification_failure << "\"";
+    o << "}\n";
+  }
+  o << "robustness: {geometry_sigma_m: " << FormatDouble(options.geometry_sigma_m)
+    << ", robust_sigmas: " << FormatDouble(options.robust_sigmas)
+    << ", scenarios: \"each of a1x a1z a2x a2z l10 l20 moved by +-k sigma alone\"}\n";
+  o << "poses_worst_case_tensions_N:   # linearised over the geometry uncertainty, per cable [min, max]\n";
+  for (std::size_t j = 0; j < r.poses.size(); ++j) {
+    const PlanPose& p = r.poses[j];
+    o << "  - {pose: " << j + 1;
+    for (int i = 0; i < p.tensions_worst_min_N.size(); ++i) {
+      o << ", t" << i + 1 << ": [" << FormatDouble(p.tensions_worst_min_N(i)) << ", "
+        << FormatDouble(p.tensions_worst_max_N(i)) << "]";
+    }
     o << "}\n";
   }
   o << "wall_time_s: " << FormatDouble(std::round(r.wall_time_s * 1000.0) / 1000.0) << "\n";

@@ -68,6 +68,7 @@ struct StartReport {
   bool converged = false;  // Ipopt reported success (or an acceptable point)
   bool verified = false;   // every pose re-verified with the model
   std::string verification_failure;  // why not, when converged but not verified
+  double robust_sigmas = 0.0;  // the k of the NLP's robustness rows in the last round (README)
   double objective = 0.0;  // the criterion's exact objective (log kappa, -log det S, log trace S^-1,
                            // -log lambda_min), recomputed from the verified poses
 };

@@ -96,6 +96,10 @@ std::string PosePlanCsv(const std::vector<PlanPose>& plan, const std::string& pr
   for (const char* prefix : {"t", "l", "dl"}) {
     for (int i = 1; i <= m; ++i) out += "," + std::string(prefix) + std::to_string(i);
   }
+  const bool worst = !plan.empty() && plan.front().tensions_worst_min_N.size() == m;
+  if (worst) {
+    for (int i = 1; i <= m; ++i) out += ",t" + std::to_string(i) + "_worst_min,t" + std::to_string(i) + "_worst_max";
+  }
   out += "\n";
   for (std::size_t j = 0; j < plan.size(); ++j) {
     const PlanPose& p = plan[j];
@@ -104,6 +108,11 @@ std::string PosePlanCsv(const std::vector<PlanPose>& plan, const std::string& pr
     for (int i = 0; i < m; ++i) out += "," + FormatDouble(p.tensions_N(i));
     for (int i = 0; i < m; ++i) out += "," + FormatDouble(p.lengths_m(i));
     for (int i = 0; i < m; ++i) out += "," + FormatDouble(p.length_change_m(i));
+    if (worst) {
+      for (int i = 0; i < m; ++i) {
+        out += "," + FormatDouble(p.tensions_worst_min_N(i)) + "," + FormatDouble(p.tensions_worst_max_N(i));
+      }
+    }
     out += "\n";
   }
   return out;
@@ -124,9 +133,14 @@ std::vector<PlanPose> ReadPosePlanCsv(std::istream& in, const std::string& path,
   for (const char* prefix : {"t", "l", "dl"}) {
     for (int i = 1; i <= num_cables; ++i) header.push_back(prefix + std::to_string(i));
   }
+  std::vector<std::string> worst_columns;  // optional, written by design
+  for (int i = 1; i <= num_cables; ++i) {
+    worst_columns.push_back("t" + std::to_string(i) + "_worst_min");
+    worst_columns.push_back("t" + std::to_string(i) + "_worst_max");
+  }
   std::vector<PlanPose> plan;
   std::set<int> ids;
-  ForEachCsvRow(in, path, header, [&](const CsvRow& row) {
+  ForEachCsvRow(in, path, header, worst_columns, [&](const CsvRow& row) {
     if (static_cast<int>(plan.size()) >= kMaxPlanPoses) {
       throw InputError(row.Where(), "", "more than " + std::to_string(kMaxPlanPoses) + " poses");
     }
@@ -143,6 +157,14 @@ std::vector<PlanPose> ReadPosePlanCsv(std::istream& in, const std::string& path,
       p.tensions_N(i) = row.Number(4 + i);
       p.lengths_m(i) = row.Number(4 + num_cables + i);
       p.length_change_m(i) = row.Number(4 + 2 * num_cables + i);
+    }
+    if (row.cells.size() > header.size()) {
+      p.tensions_worst_min_N.resize(num_cables);
+      p.tensions_worst_max_N.resize(num_cables);
+      for (int i = 0; i < num_cables; ++i) {
+        p.tensions_worst_min_N(i) = row.Number(4 + 3 * num_cables + 2 * i);
+        p.tensions_worst_max_N(i) = row.Number(5 + 3 * num_cables + 2 * i);
+      }
     }
     plan.push_back(p);
   });

@@ -44,6 +44,10 @@ struct PlanPose {
   Eigen::VectorXd tensions_N;
   Eigen::VectorXd lengths_m;        // l_i, exit point -> anchor
   Eigen::VectorXd length_change_m;  // dl_i = l_i - l_i0: the encoder command from home
+  // Designed plans only (else empty): the tension range each cable may see on a true robot
+  // within the design's geometry uncertainty (linearised worst case, README "Experiment
+  // design"); written as the optional columns t<i>_worst_min, t<i>_worst_max.
+  Eigen::VectorXd tensions_worst_min_N, tensions_worst_max_N;
 };
 
 // Fills tensions, lengths and length changes for equilibrium poses.
@@ -55,7 +59,8 @@ PlanPose MakePlanPose(const Robot& robot, const Equilibrium& equilibrium,
 // feasible pose turns up in 10000 + 1000 n draws (an empty or tiny workspace).
 std::vector<PlanPose> SampleFeasiblePoses(const Robot& robot, int n, std::uint64_t seed);
 
-// Pose plan CSV: header pose,x,z,theta,t1,t2,l1,l2,dl1,dl2 (pose numbered from 1).
+// Pose plan CSV: header pose,x,z,theta,t1,t2,l1,l2,dl1,dl2 (pose numbered from 1), then
+// t1_worst_min,t1_worst_max,t2_worst_min,t2_worst_max when the plan carries them.
 std::string PosePlanCsv(const std::vector<PlanPose>& plan, const std::string& provenance);
 
 // Reads a pose plan CSV; '#' lines are comments. Throws InputError naming file, line and

@@ -191,7 +191,7 @@ TEST_F(Cli, DesignWritesPlanSummaryAndPlotAndIsThreadCountIndependent) {
   ASSERT_EQ(two.exit_code, 0) << two.output;
   const std::string p1 = Read("p1.csv"), p2 = Read("p2.csv");
   EXPECT_EQ(p1.substr(p1.find("\npose,")), p2.substr(p2.find("\npose,")));  // provenance names the file
-  EXPECT_NE(p1.find("\npose,x,z,theta,t1,t2,l1,l2,dl1,dl2\n"), std::string::npos);
+  EXPECT_NE(p1.find("\npose,x,z,theta,t1,t2,l1,l2,dl1,dl2,t1_worst_min,t1_worst_max,t2_worst_min,t2_worst_max\n"), std::string::npos);
   const std::string summary = Read("s.yaml");
   for (const char* key : {"criterion: condition", "criteria: {condition_number: ", "random_sets: {count: 20",
                           "improvement_over_random_median:", "per_start:", "ipopt_status: ", "wall_time_s: "}) {
