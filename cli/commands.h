@@ -51,7 +51,7 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options);
 struct DesignCommandOptions {
   std::string robot_path, out_path, summary_path, plot_path;
   int poses = 0, starts = 8, random_sets = 100;
-  std::string criterion = "condition";
+  std::string criterion = "a";  // DesignOptions' default
   unsigned long long seed = 1;
   double min_spacing_m = 0.0;
   double geometry_sigma_m = 0.01, robust_sigmas = 3.0;

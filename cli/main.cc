@@ -90,7 +90,7 @@ int main(int argc, char** argv) {
   CLI::App* des_cmd = app.add_subcommand("design", "choose optimal measurement poses (Ipopt)");
   AddRobotOption(des_cmd, &des.robot_path);
   des_cmd->add_option("--poses", des.poses, "number of poses (at least 5)")->required();
-  des_cmd->add_option("--criterion", des.criterion, "condition|d|a|e")
+  des_cmd->add_option("--criterion", des.criterion, "a|d|e|condition")
       ->capture_default_str()
       ->check(CLI::IsMember({"condition", "d", "a", "e"}));
   des_cmd->add_option("--starts", des.starts, "random feasible starts (best kept)")
@@ -124,7 +124,7 @@ int main(int argc, char** argv) {
   AddRobotOption(mc_cmd, &mc.robot_path);
   mc_cmd->add_option("--poses", mc.poses, "pose counts first:last[:step], e.g. 6:50 or 6:50:4")->required();
   mc_cmd->add_option("--trials", mc.trials, "trials per cell")->required()->check(CLI::PositiveNumber);
-  mc_cmd->add_option("--designs", mc.designs, "comma list of random, optimized, d, a, e")->capture_default_str();
+  mc_cmd->add_option("--designs", mc.designs, "comma list of random, optimized (= a), condition, d, a, e")->capture_default_str();
   mc_cmd->add_option("--estimator", mc.estimator, "ml|paper")->capture_default_str()->check(CLI::IsMember({"ml", "paper"}));
   mc_cmd->add_option("--gauge", mc.gauge, "a1x|prior|none")->capture_default_str()->check(CLI::IsMember({"a1x", "prior", "none"}));
   mc_cmd->add_option("--sensors", mc.sensors, "noisy sensors: both|laser|inclinometer|none")

@@ -45,7 +45,8 @@ double Improvement(Criterion c, const CriteriaValues& set, const CriteriaValues&
 
 struct DesignOptions {
   int poses = 0;
-  Criterion criterion = Criterion::kCondition;
+  // The default: A-optimality (README, "Experiment design", for why not the condition number).
+  Criterion criterion = Criterion::kA;
   int starts = 8;
   std::uint64_t seed = 1;
   double min_spacing_m = 0.0;  // 0: off

@@ -70,6 +70,13 @@ SimulatedExperiment SimulateExperiment(const Robot& nominal, const Robot& truth,
       throw SolverFailure("pose " + std::to_string(j + 1) + ": the true robot cannot hold the commanded lengths (" +
                           ToString(fwd.status) + ")");
     }
+    if (options.require_feasible) {
+      const Feasibility f = CheckFeasibility(truth, fwd.equilibrium.q, fwd.equilibrium.tensions_N);
+      if (f != Feasibility::kFeasible) {
+        throw SolverFailure("pose " + std::to_string(j + 1) + ": the true robot settles outside its workspace (" +
+                            ToString(f) + ")");
+      }
+    }
     Measurement m;
     m.pose_id = static_cast<int>(j + 1);
     m.dl_m = p.length_change_m;

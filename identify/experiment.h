@@ -45,6 +45,10 @@ const char* ToString(NoisySensors s);
 struct SimulationOptions {
   NoisySensors noisy = NoisySensors::kBoth;
   bool encoder_noise = true;
+  // Also refuse a pose where the true robot settles outside its feasible workspace (a
+  // tension beyond the limits, theta beyond the inclinometer range, the margin broken):
+  // the Monte Carlo counts such an experiment as failed, as a lab would.
+  bool require_feasible = false;
 };
 
 struct SimulatedExperiment {

@@ -23,6 +23,7 @@ const char* ToString(PoseSetDesign d) {
     case PoseSetDesign::kD: return "d";
     case PoseSetDesign::kA: return "a";
     case PoseSetDesign::kE: return "e";
+    case PoseSetDesign::kCondition: return "condition";
   }
   return "unknown";
 }
@@ -38,7 +39,8 @@ std::vector<PoseSetDesign> ParseDesigns(const std::string& text) {
     else if (item == "d") d = PoseSetDesign::kD;
     else if (item == "a") d = PoseSetDesign::kA;
     else if (item == "e") d = PoseSetDesign::kE;
-    else throw InputError("--designs", "", "unknown design '" + item + "' (random, optimized, d, a, e)");
+    else if (item == "condition") d = PoseSetDesign::kCondition;
+    else throw InputError("--designs", "", "unknown design '" + item + "' (random, optimized, condition, d, a, e)");
     for (PoseSetDesign seen : out) {
       if (seen == d) throw InputError("--designs", "", "'" + item + "' given twice");
     }
@@ -75,6 +77,17 @@ int MonteCarloCell::failures() const {
   return f;
 }
 
+const std::vector<std::string>& FailureCauses() {
+  static const std::vector<std::string> causes = {"design", "sampling", "simulation", "identification"};
+  return causes;
+}
+
+int MonteCarloCell::failures(const std::string& cause) const {
+  int f = 0;
+  for (const TrialOutcome& t : trials) f += !t.ok && t.failure.compare(0, cause.size() + 1, cause + ":") == 0;
+  return f;
+}
+
 Robot TrueGeometryForTrial(const Robot& nominal, double sigma_m, Gauge gauge, Rng& rng) {
   GeometryVector g = GeometryOf(nominal);
   GeometryVector draw;
@@ -96,13 +109,17 @@ TrialOutcome RunTrial(const Robot& nominal, const MonteCarloOptions& o, int n, P
                       t64 = static_cast<std::uint64_t>(trial);
   Rng rng(StreamSeed(o.seed, {n64, d64, t64, 0}));
   TrialOutcome out;
+  if (designed && designed->empty()) {
+    out.failure = "design: no verified pose set for n=" + std::to_string(n) + ", " + ToString(design);
+    return out;
+  }
   try {
     const Robot truth = TrueGeometryForTrial(nominal, o.geometry_sigma_m, o.gauge, rng);
     const std::vector<PlanPose> poses =
         designed ? *designed : SampleFeasiblePoses(nominal, n, StreamSeed(o.seed, {n64, d64, t64, 1}));
     SimulatedExperiment sim;
     try {
-      sim = SimulateExperiment(nominal, truth, poses, SimulationOptions{o.sensors, true}, rng);
+      sim = SimulateExperiment(nominal, truth, poses, SimulationOptions{o.sensors, true, true}, rng);
     } catch (const SolverFailure& e) {
       out.failure = std::string("simulation: ") + e.what();
       return out;
@@ -132,7 +149,8 @@ Criterion CriterionOf(PoseSetDesign d) {
     case PoseSetDesign::kD: return Criterion::kD;
     case PoseSetDesign::kA: return Criterion::kA;
     case PoseSetDesign::kE: return Criterion::kE;
-    default: return Criterion::kCondition;
+    case PoseSetDesign::kCondition: return Criterion::kCondition;
+    default: return DesignOptions{}.criterion;  // "optimized": the design's default
   }
 }
 
@@ -154,13 +172,21 @@ std::vector<PlanPose> MakeDesignedSet(const Robot& nominal, const MonteCarloOpti
   opt.starts = o.design_starts;
   opt.seed = StreamSeed(o.seed, {static_cast<std::uint64_t>(key.n), static_cast<std::uint64_t>(key.design), 0xde5});
   opt.random_sets = 0;
+  opt.geometry_sigma_m = o.geometry_sigma_m;  // the plan must survive the same true robots
   try {
     return DesignPoses(nominal, opt).poses;
   } catch (const SolverFailure&) {
     // No start converged within Ipopt's iteration limit: add starts (the first ones are
     // the same streams, so this only extends the search).
     opt.starts = 4 * o.design_starts;
+  }
+  try {
     return DesignPoses(nominal, opt).poses;
+  } catch (const SolverFailure& e) {
+    // This cell's trials fail with cause "design"; the other cells still run.
+    std::fprintf(stderr, "cablecal: montecarlo: no designed set for n=%d, %s: %s\n", key.n, ToString(key.design),
+                 e.what());
+    return {};
   }
 }
 
@@ -291,13 +317,17 @@ std::string ErrorsCsv(const MonteCarloResult& r) {
 }
 
 std::string SummaryCsv(const MonteCarloResult& r) {
-  std::string out = "n,design,parameter,mean,std,rms,max_abs,share_within_5mm,failures\n";
+  std::string out = "n,design,parameter,mean,std,rms,max_abs,share_within_5mm,failures";
+  for (const std::string& cause : FailureCauses()) out += ",failed_" + cause;
+  out += "\n";
   for (const MonteCarloCell& c : r.cells) {
     for (const std::string& p : SummaryParameters()) {
       const ErrorStats s = Summarise(c, p);
       out += std::to_string(c.n) + "," + ToString(c.design) + "," + p + "," + FormatDouble(s.mean) + "," +
              FormatDouble(s.std) + "," + FormatDouble(s.rms) + "," + FormatDouble(s.max_abs) + "," +
-             FormatDouble(s.share_within_5mm) + "," + std::to_string(c.failures()) + "\n";
+             FormatDouble(s.share_within_5mm) + "," + std::to_string(c.failures());
+      for (const std::string& cause : FailureCauses()) out += "," + std::to_string(c.failures(cause));
+      out += "\n";
     }
   }
   return out;
@@ -308,7 +338,9 @@ std::string SummaryMarkdown(const MonteCarloResult& r, const std::string& title)
   o << "# " << title << "\n\n";
   o << "Standard deviation of the identification error (identified - true) in mm, per pose count n\n"
        "and pose-set design; `x4` is the 4th pose's x, `x_all` every pose's x pooled. `failed` counts\n"
-       "trials whose simulation or identification failed (left out of the statistics).\n\n";
+       "trials that failed, by cause: design (no verified pose set), sampling, simulation (the true robot cannot\n"
+       "hold a commanded pose within its limits), identification. Failed trials have no error to count, so the\n"
+       "statistics are over the successful ones: compare designs on both columns.\n\n";
   o << "| n | design |";
   for (const std::string& p : SummaryParameters()) o << " " << p << " |";
   o << " within ±5 mm | failed |\n|---|---|";
@@ -320,8 +352,12 @@ std::string SummaryMarkdown(const MonteCarloResult& r, const std::string& title)
     int within = 0, count = 0;
     for (const std::string& p : SummaryParameters()) {
       const ErrorStats s = Summarise(c, p);
-      std::snprintf(buf, sizeof(buf), " %.3f |", 1e3 * s.std);
-      o << buf;
+      if (s.count > 1) {
+        std::snprintf(buf, sizeof(buf), " %.3f |", 1e3 * s.std);
+        o << buf;
+      } else {
+        o << " n/a |";  // no successful trial: no statistic, not zero
+      }
       if (p != "x_all" && p != "x4") {
         within += static_cast<int>(std::lround(s.share_within_5mm * s.count));
         count += s.count;
@@ -331,7 +367,13 @@ std::string SummaryMarkdown(const MonteCarloResult& r, const std::string& title)
     within += static_cast<int>(std::lround(xs.share_within_5mm * xs.count));
     count += xs.count;
     std::snprintf(buf, sizeof(buf), " %.1f %% |", count ? 100.0 * within / count : 0.0);
-    o << buf << " " << c.failures() << " / " << c.trials.size() << " |\n";
+    o << buf << " " << c.failures() << " / " << c.trials.size();
+    std::string causes;
+    for (const std::string& cause : FailureCauses()) {
+      if (c.failures(cause) > 0) causes += (causes.empty() ? "" : ", ") + cause + " " + std::to_string(c.failures(cause));
+    }
+    if (!causes.empty()) o << " (" << causes << ")";
+    o << " |\n";
   }
   return o.str();
 }

@@ -28,8 +28,10 @@
 namespace cablecal {
 
 // Pose-set designs: a fresh random feasible set per trial, or a set designed once per n
-// with one of the experiment-design criteria ("optimized" is the condition number).
-enum class PoseSetDesign { kRandom = 0, kOptimized = 1, kD = 2, kA = 3, kE = 4 };
+// with one of the experiment-design criteria: "optimized" is the design's default criterion
+// (A-optimality, README "Experiment design"), "condition" the paper's condition number. The
+// numbers are part of every trial's seed stream: never renumber them.
+enum class PoseSetDesign { kRandom = 0, kOptimized = 1, kD = 2, kA = 3, kE = 4, kCondition = 5 };
 const char* ToString(PoseSetDesign d);
 std::vector<PoseSetDesign> ParseDesigns(const std::string& text);  // "random,optimized,d"
 // "6:50" or "6:50:2" (first:last[:step]); InputError naming --poses otherwise.
@@ -52,7 +54,7 @@ struct MonteCarloOptions {
 
 struct TrialOutcome {
   bool ok = false;
-  std::string failure;             // "simulation: ..." or "identification: ..."
+  std::string failure;  // "<cause>: why", cause one of FailureCauses()
   std::vector<double> errors_m;    // identified - true: a1x a1z a2x a2z l10 l20 x1..xn
 };
 
@@ -61,7 +63,14 @@ struct MonteCarloCell {
   PoseSetDesign design = PoseSetDesign::kRandom;
   std::vector<TrialOutcome> trials;
   int failures() const;
+  int failures(const std::string& cause) const;
 };
+
+// Why a trial failed: "design" (no verified pose set for its cell), "sampling" (no random
+// feasible set), "simulation" (the true robot cannot hold a commanded pose, or settles
+// outside its workspace: beyond a tension limit, the inclinometer range or the margin),
+// "identification" (not converged, rank-deficient or poor fit).
+const std::vector<std::string>& FailureCauses();
 
 struct MonteCarloResult {
   std::vector<MonteCarloCell> cells;  // n-major, then designs in the order given
@@ -96,7 +105,8 @@ struct DesignedSetKey {
 };
 std::vector<DesignedSetKey> DesignedSetKeys(const MonteCarloOptions& options);
 using DesignedSets = std::map<std::pair<int, int>, std::vector<PlanPose>>;  // (n, design)
-// Throws SolverFailure if no start converges, even after 4x as many starts.
+// An empty set if no start gives verified poses, even after 4x as many starts (the reason
+// goes to stderr, naming n and the criterion): that cell's trials then fail with cause "design".
 std::vector<PlanPose> MakeDesignedSet(const Robot& nominal, const MonteCarloOptions& options,
                                       const DesignedSetKey& key);
 

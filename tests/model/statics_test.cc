@@ -188,5 +188,22 @@ TEST(InitialLengths, HomeEquilibriumUnlessOverridden) {
   EXPECT_NEAR(InitialLengths(robot)(0), home.lengths_m(0), 1e-15);
 }
 
+// Exit point 2 lowered by 0.1 m: at (4.9098, 2.7011) the platform's right anchor is 1.5 mm
+// outside pulley 2, the balance root (theta = 0.0787 rad) lies next to orientations where
+// the anchor sweeps through the pulley. The scan must still find that root, and the
+// feasibility test must refuse the pose: an anchor keeps the frame margin from its pulley.
+TEST(Equilibrium, RootNextToInvalidCableGeometryIsFoundAndThePulleyClearanceRefusesIt) {
+  Robot robot = BuiltinRobot();
+  robot.cables[1].p_F_exit_m.y() = 2.7;
+  const EquilibriumResult eq = SolveEquilibrium(robot, 4.9098, 2.7011);
+  ASSERT_EQ(eq.status, EquilibriumStatus::kFound);
+  EXPECT_NEAR(eq.equilibrium.q(2), 0.0787, 5e-4);
+  EXPECT_LT(eq.equilibrium.residual_N, 1e-9);
+  EXPECT_EQ(CheckFeasibility(robot, eq.equilibrium.q, eq.equilibrium.tensions_N), Feasibility::kCableGeometry);
+  // The same pose is fine once the margin is not asked for.
+  robot.margin_m = 0.0;
+  EXPECT_EQ(CheckFeasibility(robot, eq.equilibrium.q, eq.equilibrium.tensions_N), Feasibility::kTensionHigh);
+}
+
 }  // namespace
 }  // namespace cablecal
