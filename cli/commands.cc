@@ -157,8 +157,14 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
 }
 
 int RunDesign(const Context& ctx, const DesignCommandOptions& options) {
-  const Robot robot = LoadRobotOption(options.robot_path);
+  Robot robot = LoadRobotOption(options.robot_path);
   DesignOptions design;
+  if (!options.prior_path.empty()) {
+    // The next round is planned around the estimate, counting the information gathered.
+    DesignPrior prior = LoadDesignPrior(robot, options.prior_path);
+    robot = prior.robot;
+    design.prior_information = prior.information;
+  }
   design.poses = options.poses;
   design.criterion = ParseCriterion(options.criterion);
   design.starts = options.starts;

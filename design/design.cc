@@ -8,6 +8,9 @@
 #include <limits>
 #include <sstream>
 
+#include <Eigen/Dense>
+#include <yaml-cpp/yaml.h>
+
 #include "common/error.h"
 #include "common/format.h"
 #include "common/random.h"
@@ -46,9 +49,9 @@ constexpr std::uint64_t kRandomSetStream = 2;
 // Re-verification of Ipopt's poses with the model.
 constexpr double kEquilibriumTol_N = 1e-8;
 constexpr double kSameRootTol_rad = 1e-6;  // the model's equilibrium is Ipopt's, not another root
-// Widening of the NLP's linearised robustness rows when the scenario check fails.
+// Widening of a pose's linearised robustness rows when it fails the scenario check.
 constexpr double kRobustEscalation = 1.3;
-constexpr int kRobustRounds = 3;
+constexpr int kRobustRounds = 4;
 
 double Median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
@@ -95,7 +98,9 @@ std::string VerifyPoses(const Robot& robot, const DesignOptions& options, const 
 // every pose must be held -- the forward model converges to a taut, stable equilibrium near
 // the commanded pose that passes every workspace test of the true robot. Fills each pose's
 // linearised worst-case tensions. Returns "" when all hold, else the first failure.
-std::string VerifyRobustness(const Robot& robot, const DesignOptions& options, std::vector<PlanPose>* plan) {
+// `failing`, if given, receives every pose that fails some scenario.
+std::string VerifyRobustness(const Robot& robot, const DesignOptions& options, std::vector<PlanPose>* plan,
+                             std::vector<bool>* failing = nullptr) {
   const double k_sigma = options.robust_sigmas * options.geometry_sigma_m;
   const std::vector<Eigen::Vector2d> points = internal::FramePoints(robot);
   const int m = robot.num_cables();
@@ -115,6 +120,8 @@ std::string VerifyRobustness(const Robot& robot, const DesignOptions& options, s
     }
   }
   if (k_sigma == 0.0) return "";
+  if (failing) failing->assign(plan->size(), false);
+  std::string first;
   const GeometryVector nominal = GeometryOf(robot);
   for (int k = 0; k < GeometryVector::RowsAtCompileTime; ++k) {
     for (const double sign : {-1.0, 1.0}) {
@@ -124,20 +131,28 @@ std::string VerifyRobustness(const Robot& robot, const DesignOptions& options, s
       const std::string scenario = std::string(kGeometryNames[k]) + (sign > 0 ? " +" : " -") +
                                    FormatDouble(options.robust_sigmas) + " sigma";
       for (std::size_t j = 0; j < plan->size(); ++j) {
+        if (failing && (*failing)[j]) continue;
         const PlanPose& pose = (*plan)[j];
         const Eigen::VectorXd lengths = pose.length_change_m + g.tail(m);
         const ForwardResult f = SolveForwardGeometricoStatic(truth, lengths, &pose.q);
         const std::string where = "pose " + std::to_string(j + 1) + " on a true robot with " + scenario + ": ";
-        if (f.status != ForwardStatus::kConverged) return where + ToString(f.status);
-        if ((f.equilibrium.q - pose.q).head<2>().norm() > 10.0 * k_sigma + 0.05) {
-          return where + "settles far from the commanded pose";
+        std::string why;
+        if (f.status != ForwardStatus::kConverged) {
+          why = ToString(f.status);
+        } else if ((f.equilibrium.q - pose.q).head<2>().norm() > 10.0 * k_sigma + 0.05) {
+          why = "settles far from the commanded pose";
+        } else {
+          const Feasibility feas = CheckFeasibility(truth, f.equilibrium.q, f.equilibrium.tensions_N);
+          if (feas != Feasibility::kFeasible) why = ToString(feas);
         }
-        const Feasibility feas = CheckFeasibility(truth, f.equilibrium.q, f.equilibrium.tensions_N);
-        if (feas != Feasibility::kFeasible) return where + ToString(feas);
+        if (why.empty()) continue;
+        if (first.empty()) first = where + why;
+        if (!failing) return first;
+        (*failing)[j] = true;
       }
     }
   }
-  return "";
+  return first;
 }
 
 }  // namespace
@@ -155,6 +170,11 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
   if (!(options.min_spacing_m >= 0.0) || !std::isfinite(options.min_spacing_m)) {
     throw InputError("--min-spacing", "", "must be a non-negative number of metres");
   }
+  if (options.prior_information && options.criterion == Criterion::kCondition) {
+    throw InputError("--prior", "", "the condition-number criterion cannot count an earlier identification's "
+                                    "information: use --criterion a, d or e");
+  }
+  const PriorInformation* prior = options.prior_information ? &*options.prior_information : nullptr;
   const Eigen::VectorXd l0 = InitialLengths(robot);
   const int K = options.starts;
 
@@ -174,22 +194,24 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
   }
 
   // Each start: Ipopt, then the re-verification with the model. If only the robustness check
-  // fails (the linearisation underestimates a strongly nonlinear tension near the frame top),
-  // the start is solved again with the linearised half-width k raised by kRobustEscalation,
-  // at most kRobustRounds times: the rows stay first-order, the guarantee is the scenario check.
+  // fails (the linearisation underestimates a tension that is strongly nonlinear in the
+  // geometry, near the frame top), the poses that failed get their rows' half-width widened
+  // by kRobustEscalation and the start is solved again from where it ended, at most
+  // kRobustRounds times: the rows stay first-order, the guarantee is the scenario check.
   std::vector<internal::StartOutcome> outcomes(K);
   std::vector<std::vector<PlanPose>> verified(K);
   std::vector<std::string> failures(K);
-  std::vector<double> robust_sigmas_used(K, options.robust_sigmas);
+  std::vector<double> widest(K, 1.0);
 #pragma omp parallel for schedule(dynamic, 1)
   for (int k = 0; k < K; ++k) {
-    DesignOptions o = options;
+    std::vector<double> widening(n, 1.0);
+    std::vector<PlanPose> from = starts[k];
     for (int round = 0; round <= kRobustRounds; ++round) {
       internal::StartOutcome outcome;
       // MUMPS, Ipopt's linear solver in Debian, is not thread-safe (coin-or/Ipopt#733), so the
       // solves themselves take turns; sampling, verification and the reference sets run in parallel.
 #pragma omp critical(cablecal_ipopt)
-      outcome = internal::SolveDesignNlp(robot, o, starts[k]);
+      outcome = internal::SolveDesignNlp(robot, options, from, &widening);
       outcomes[k].iterations += outcome.iterations;
       outcomes[k].status = outcome.status;
       outcomes[k].converged = outcome.converged;
@@ -197,11 +219,14 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
       if (!outcome.converged) break;
       failures[k] = VerifyPoses(robot, options, outcome.poses, l0, &verified[k]);
       if (!failures[k].empty()) break;
-      // The scenarios are always those of the user's k; only the NLP's rows are widened.
-      failures[k] = VerifyRobustness(robot, options, &verified[k]);
-      robust_sigmas_used[k] = o.robust_sigmas;
+      std::vector<bool> failing;
+      failures[k] = VerifyRobustness(robot, options, &verified[k], &failing);
       if (failures[k].empty() || options.geometry_sigma_m == 0.0) break;
-      o.robust_sigmas *= kRobustEscalation;
+      for (int j = 0; j < n; ++j) {
+        if (failing[j]) widening[j] *= kRobustEscalation;
+        widest[k] = std::max(widest[k], widening[j]);
+      }
+      from = verified[k];  // warm start: Ipopt's poses with their tensions
     }
   }
 
@@ -213,14 +238,14 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
     report.ipopt_status = outcomes[k].status;
     report.iterations = outcomes[k].iterations;
     report.converged = outcomes[k].converged;
-    report.robust_sigmas = robust_sigmas_used[k];
+    report.robust_sigmas = options.robust_sigmas * widest[k];
     report.objective = std::numeric_limits<double>::infinity();
     if (report.converged) {
       ++result.converged_starts;
       report.verification_failure = failures[k];
       report.verified = report.verification_failure.empty();
       if (report.verified) {
-        report.objective = internal::ExactObjective(robot, options.criterion, PosesOf(verified[k]));
+        report.objective = internal::ExactObjective(robot, options.criterion, PosesOf(verified[k]), prior);
         if (report.objective < best) {  // ties keep the lowest start index
           best = report.objective;
           result.best_start = k;
@@ -238,7 +263,7 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
     throw SolverFailure("none of the " + std::to_string(K) + " starts gave verified poses: " + statuses);
   }
   result.poses = verified[result.best_start];
-  result.criteria = EvaluateCriteria(robot, PosesOf(result.poses));
+  result.criteria = EvaluateCriteria(robot, PosesOf(result.poses), prior);
 
   // Reference: random feasible sets of the same size.
   const int R = options.random_sets;  // 0: no reference (the Monte Carlo needs none)
@@ -250,7 +275,7 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
 #pragma omp parallel for schedule(dynamic, 1)
   for (int r = 0; r < R; ++r) {
     const auto set = SampleFeasiblePoses(robot, n, StreamSeed(options.seed, {kRandomSetStream, static_cast<std::uint64_t>(r)}));
-    random[r] = EvaluateCriteria(robot, PosesOf(set));
+    random[r] = EvaluateCriteria(robot, PosesOf(set), prior);
   }
   std::vector<double> c, d, a, e;
   for (const CriteriaValues& v : random) {
@@ -262,6 +287,55 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
   result.random_median = {Median(c), Median(d), Median(a), Median(e)};
   result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;
+}
+
+DesignPrior LoadDesignPrior(const Robot& nominal, const std::string& path) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw InputError(path, "", "cannot open the file");
+  } catch (const YAML::Exception& e) {
+    throw InputError(path, "", std::string("not valid YAML: ") + e.what());
+  }
+  if (!root.IsMap() || !root["status"] || !root["parameters"]) {
+    throw InputError(path, "", "not an identification result (cablecal identify --out): no status or parameters");
+  }
+  if (root["status"].as<std::string>("") != "converged") {
+    throw InputError(path, "status", "the identification did not converge: it cannot be a prior");
+  }
+  GeometryVector g, sd;
+  for (int k = 0; k < 6; ++k) {
+    const YAML::Node p = root["parameters"][kGeometryNames[k]];
+    const std::string key = std::string("parameters.") + kGeometryNames[k];
+    if (!p || !p["value"]) throw InputError(path, key, "missing");
+    g(k) = p["value"].as<double>(NAN);
+    sd(k) = p["std"] ? p["std"].as<double>(NAN) : (k == 0 ? 0.0 : NAN);
+    if (!std::isfinite(g(k))) throw InputError(path, key + ".value", "must be a finite number");
+    if (k > 0 && !(sd(k) > 0.0 && std::isfinite(sd(k)))) {
+      throw InputError(path, key + ".std", "needs a positive standard deviation (identify computes it by default)");
+    }
+  }
+  const YAML::Node corr = root["correlation"];
+  if (!corr || !corr.IsSequence() || corr.size() != 6) throw InputError(path, "correlation", "needs the 6 x 6 matrix");
+  Eigen::Matrix<double, 6, 6> C;
+  for (int a = 0; a < 6; ++a) {
+    if (!corr[a].IsSequence() || corr[a].size() != 6) throw InputError(path, "correlation", "needs the 6 x 6 matrix");
+    for (int b = 0; b < 6; ++b) C(a, b) = corr[a][b].as<double>(NAN);
+  }
+  // Covariance of a1z a2x a2z l10 l20 (a1x is the gauge or a tracked exit point).
+  PriorInformation cov;
+  for (int a = 0; a < 5; ++a) {
+    for (int b = 0; b < 5; ++b) cov(a, b) = C(a + 1, b + 1) * sd(a + 1) * sd(b + 1);
+  }
+  Eigen::SelfAdjointEigenSolver<PriorInformation> eig(0.5 * (cov + cov.transpose()));
+  if (!cov.allFinite() || !(eig.eigenvalues()(0) > 0.0)) {
+    throw InputError(path, "correlation", "the covariance of a1z a2x a2z l10 l20 is not positive definite");
+  }
+  DesignPrior prior;
+  prior.robot = WithGeometry(nominal, g);
+  prior.information = eig.eigenvectors() * eig.eigenvalues().cwiseInverse().asDiagonal() * eig.eigenvectors().transpose();
+  return prior;
 }
 
 std::string DesignSummaryYaml(const DesignResult& r, const DesignOptions& options, const std::string& command_line) {

@@ -14,6 +14,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -34,9 +35,23 @@ struct CriteriaValues {
   double e_min_eigenvalue = 0.0;       // smallest eigenvalue of S, 1/m^2 (higher is better)
 };
 
+// Information of a1z a2x a2z l10 l20 (1/m^2) already gathered by an earlier identification.
+using PriorInformation = Eigen::Matrix<double, 5, 5>;
+
 // Poses as (x, z, theta) equilibria; fewer than 5 poses cannot identify the geometry (the
-// criteria are then infinite or zero, as appropriate).
-CriteriaValues EvaluateCriteria(const Robot& robot, const std::vector<Eigen::Vector3d>& poses);
+// criteria are then infinite or zero, as appropriate). With `prior`, D, A and E count it too.
+CriteriaValues EvaluateCriteria(const Robot& robot, const std::vector<Eigen::Vector3d>& poses,
+                                const PriorInformation* prior = nullptr);
+
+// Calibrating in rounds (design --prior): an identification's result.yaml (status converged,
+// with standard deviations) as the nominal robot for the next round -- `robot` with the
+// estimated exit points and initial lengths -- and the information of a1z a2x a2z l10 l20,
+// the inverse of their estimated covariance. InputError naming the file and key otherwise.
+struct DesignPrior {
+  Robot robot;
+  PriorInformation information = PriorInformation::Zero();
+};
+DesignPrior LoadDesignPrior(const Robot& nominal, const std::string& result_yaml_path);
 
 // How much better `set` is than `reference` on criterion c, as a factor (> 1: better):
 // kappa_ref / kappa; (det S / det S_ref)^(1/5) (per-eigenvalue geometric mean);
@@ -57,6 +72,8 @@ struct DesignOptions {
   // of nominal (0: nominal bounds only).
   double geometry_sigma_m = 0.01;
   double robust_sigmas = 3.0;
+  // Information already gathered (design --prior), counted by the D, A and E criteria.
+  std::optional<PriorInformation> prior_information;
   // Testing aids: run Ipopt's derivative checker and keep its journal in this file.
   bool derivative_test = false;
   std::string ipopt_journal_path;
@@ -69,7 +86,7 @@ struct StartReport {
   bool converged = false;  // Ipopt reported success (or an acceptable point)
   bool verified = false;   // every pose re-verified with the model
   std::string verification_failure;  // why not, when converged but not verified
-  double robust_sigmas = 0.0;  // the k of the NLP's robustness rows in the last round (README)
+  double robust_sigmas = 0.0;  // the widest k of the NLP's robustness rows (a widened pose's, README)
   double objective = 0.0;  // the criterion's exact objective (log kappa, -log det S, log trace S^-1,
                            // -log lambda_min), recomputed from the verified poses
 };

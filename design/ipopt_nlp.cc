@@ -25,10 +25,12 @@ using Ipopt::Number;
 // optional minimum spacing.
 class DesignNlp : public Ipopt::TNLP {
  public:
-  DesignNlp(const Robot& robot, const DesignOptions& options, const std::vector<PlanPose>& start, double power)
+  DesignNlp(const Robot& robot, const DesignOptions& options, const std::vector<PlanPose>& start, double power,
+            const std::vector<double>* widening)
       : robot_(robot), options_(options), start_(start), n_(static_cast<int>(start.size())), power_(power),
         points_(FramePoints(robot)), quantities_(PoseQuantities(robot)),
-        k_sigma_m_(options.robust_sigmas * options.geometry_sigma_m) {
+        k_sigma_m_(options.robust_sigmas * options.geometry_sigma_m),
+        widening_(widening ? *widening : std::vector<double>(start.size(), 1.0)) {
     for (int k = 0; k < static_cast<int>(quantities_.size()); ++k) {
       const PoseQuantity& q = quantities_[k];
       // A variable's own nominal bound is already a variable bound; repeating it as a
@@ -117,7 +119,7 @@ class DesignNlp : public Ipopt::TNLP {
 
   bool eval_g(Index, const Number* x, bool, Index, Number* g) override {
     for (int j = 0; j < n_; ++j) {
-      if (!PoseRows(x + 5 * j, g + R * j, nullptr)) return false;
+      if (!PoseRows(x + 5 * j, k_sigma_m_ * widening_[j], g + R * j, nullptr)) return false;
     }
     int k = 0;
     for (int a = 0; a < n_; ++a) {
@@ -154,7 +156,7 @@ class DesignNlp : public Ipopt::TNLP {
     }
     std::vector<double> unused(R);
     for (int j = 0; j < n_; ++j) {
-      if (!PoseRows(x + 5 * j, unused.data(), values + e)) return false;
+      if (!PoseRows(x + 5 * j, k_sigma_m_ * widening_[j], unused.data(), values + e)) return false;
       e += R * 5;
     }
     for (int a = 0; a < n_; ++a) {
@@ -214,7 +216,7 @@ class DesignNlp : public Ipopt::TNLP {
   // Pose j's R constraint rows from its 5 variables at x5 into g; if `jac` is given, also
   // their R x 5 Jacobian block, row by row. The equilibrium rows and the quantities' values
   // are differentiated exactly (Jets); the spreads by central differences (robust.h).
-  bool PoseRows(const Number* x5, Number* g, Number* jac) const {
+  bool PoseRows(const Number* x5, double k_sigma_m, Number* g, Number* jac) const {
     const Eigen::Matrix<double, 5, 1> y = Eigen::Map<const Eigen::Matrix<double, 5, 1>>(x5);
     std::vector<double> value, spread;
     Eigen::MatrixXd dvalue;
@@ -232,7 +234,7 @@ class DesignNlp : public Ipopt::TNLP {
     }
     for (int r = 0; r < static_cast<int>(rows_.size()); ++r) {
       const int k = rows_[r].quantity;
-      g[3 + r] = value[k] + rows_[r].sign * k_sigma_m_ * spread[k];
+      g[3 + r] = value[k] + rows_[r].sign * k_sigma_m * spread[k];
       if (jac) {
         for (int c = 0; c < 5; ++c) jac[5 * (3 + r) + c] = dvalue(k, c);
       }
@@ -240,7 +242,7 @@ class DesignNlp : public Ipopt::TNLP {
     for (int r = 0; r < R; ++r) {
       if (!std::isfinite(g[r])) return false;
     }
-    if (jac && k_sigma_m_ > 0.0) {
+    if (jac && k_sigma_m > 0.0) {
       // d spread / dy by central differences; steps of ~cbrt(eps) of each variable's scale.
       const double weight_N = robot_.platform_mass_kg * robot_.gravity_mps2;
       for (int c = 0; c < 5; ++c) {
@@ -254,7 +256,7 @@ class DesignNlp : public Ipopt::TNLP {
         }
         for (int r = 0; r < static_cast<int>(rows_.size()); ++r) {
           const int k = rows_[r].quantity;
-          jac[5 * (3 + r) + c] += rows_[r].sign * k_sigma_m_ * (sp[k] - sm[k]) / (2.0 * h);
+          jac[5 * (3 + r) + c] += rows_[r].sign * k_sigma_m * (sp[k] - sm[k]) / (2.0 * h);
         }
       }
     }
@@ -264,7 +266,8 @@ class DesignNlp : public Ipopt::TNLP {
   double Objective(const Number* x, Eigen::VectorXd* gradient) const {
     std::vector<Eigen::Vector3d> q(n_);
     for (int j = 0; j < n_; ++j) q[j] = Eigen::Vector3d(x[5 * j], x[5 * j + 1], x[5 * j + 2]);
-    return DesignObjective(robot_, options_.criterion, q, gradient, power_);
+    return DesignObjective(robot_, options_.criterion, q, gradient, power_,
+                           options_.prior_information ? &*options_.prior_information : nullptr);
   }
 
   const Robot& robot_;
@@ -275,6 +278,7 @@ class DesignNlp : public Ipopt::TNLP {
   const std::vector<Eigen::Vector2d> points_;
   const std::vector<PoseQuantity> quantities_;
   const double k_sigma_m_;  // k sigma: the half-width of the linearised worst case
+  const std::vector<double> widening_;  // per pose, on k_sigma_m_
   std::vector<Row> rows_;
   int R = 0;  // constraint rows per pose: 3 equilibrium, then rows_
   Ipopt::SolverReturn final_status_ = Ipopt::INTERNAL_ERROR;
@@ -310,8 +314,9 @@ namespace {
 // One Ipopt run from `start` with surrogate sharpness `power` (0: the default); `next`, if
 // given, receives the final point as a start for another run.
 StartOutcome RunIpopt(const Robot& robot, const DesignOptions& options, const std::vector<PlanPose>& start,
-                      double power, int max_iterations, std::vector<PlanPose>* next) {
-  Ipopt::SmartPtr<DesignNlp> nlp = new DesignNlp(robot, options, start, power);
+                      const std::vector<double>* widening, double power, int max_iterations,
+                      std::vector<PlanPose>* next) {
+  Ipopt::SmartPtr<DesignNlp> nlp = new DesignNlp(robot, options, start, power, widening);
   Ipopt::SmartPtr<Ipopt::IpoptApplication> app = IpoptApplicationFactory();
   app->Options()->SetStringValue("hessian_approximation", "limited-memory");
   app->Options()->SetIntegerValue("limited_memory_max_history", 6);
@@ -357,6 +362,7 @@ StartOutcome RunIpopt(const Robot& robot, const DesignOptions& options, const st
   out.converged = status == Ipopt::Solve_Succeeded || status == Ipopt::Solved_To_Acceptable_Level;
   if (Ipopt::IsValid(app->Statistics())) out.iterations = app->Statistics()->IterationCount();
   out.poses = nlp->poses();
+  out.tensions_N = nlp->tensions();
   if (next) {
     *next = start;
     for (std::size_t j = 0; j < next->size() && j < out.poses.size(); ++j) {
@@ -369,20 +375,21 @@ StartOutcome RunIpopt(const Robot& robot, const DesignOptions& options, const st
 
 }  // namespace
 
-StartOutcome SolveDesignNlp(const Robot& robot, const DesignOptions& options, const std::vector<PlanPose>& start) {
+StartOutcome SolveDesignNlp(const Robot& robot, const DesignOptions& options, const std::vector<PlanPose>& start,
+                            const std::vector<double>* widening) {
   const bool sharp = options.criterion == Criterion::kCondition || options.criterion == Criterion::kE;
   if (!sharp || options.derivative_test) {
-    return RunIpopt(robot, options, start, 0.0, options.max_iterations, nullptr);
+    return RunIpopt(robot, options, start, widening, 0.0, options.max_iterations, nullptr);
   }
   // Continuation: the smooth surrogate (p = 8) brings the poses near the optimum in few
   // iterations; the sharp one (the default p) finishes from there. Only the final run's
   // status counts as the start's convergence; the iterations are the sum of both.
   std::vector<PlanPose> warm;
   const StartOutcome first =
-      RunIpopt(robot, options, start, kContinuationPower, options.max_iterations / 2, &warm);
+      RunIpopt(robot, options, start, widening, kContinuationPower, options.max_iterations / 2, &warm);
   // Any point is a valid start for the second run, converged or not.
   const bool usable = warm.size() == start.size() && first.status != "Invalid_Number_Detected";
-  StartOutcome out = RunIpopt(robot, options, usable ? warm : start, 0.0, options.max_iterations, nullptr);
+  StartOutcome out = RunIpopt(robot, options, usable ? warm : start, widening, 0.0, options.max_iterations, nullptr);
   out.iterations += first.iterations;
   return out;
 }

@@ -20,9 +20,13 @@ struct StartOutcome {
   int iterations = 0;
   bool converged = false;
   std::vector<Eigen::Vector3d> poses;  // Ipopt's (x, z, theta)
+  std::vector<Eigen::Vector2d> tensions_N;
 };
 
-// One Ipopt solve from `start` (equilibria with their tensions).
-StartOutcome SolveDesignNlp(const Robot& robot, const DesignOptions& options, const std::vector<PlanPose>& start);
+// One Ipopt solve from `start` (equilibria with their tensions). `widening`, if given, holds
+// one factor per pose on the robustness rows' half-width k sigma (design.cc widens the poses
+// whose scenario check failed).
+StartOutcome SolveDesignNlp(const Robot& robot, const DesignOptions& options, const std::vector<PlanPose>& start,
+                            const std::vector<double>* widening = nullptr);
 
 }  // namespace cablecal::internal

@@ -86,10 +86,11 @@ double ConditionObjective(const Robot& robot, const std::vector<Eigen::Vector3d>
 
 // D, A, E objectives of S = sum_j S_j(q_j) and their gradients through dS_j/dq_j.
 double InformationObjective(const Robot& robot, Criterion criterion, const std::vector<Eigen::Vector3d>& poses,
-                            Eigen::VectorXd* gradient, double e_power) {
+                            Eigen::VectorXd* gradient, double e_power, const PriorInformation* prior) {
   const int n = static_cast<int>(poses.size());
   std::vector<Eigen::Matrix<Jet3, 5, 5>> parts(n);
-  Eigen::Matrix<double, 5, 5> S = Eigen::Matrix<double, 5, 5>::Zero();
+  // A calibration in rounds: the earlier identification's information adds to the new poses'.
+  Eigen::Matrix<double, 5, 5> S = prior ? *prior : PriorInformation::Zero();
   for (int j = 0; j < n; ++j) {
     parts[j] = ReducedInformation<Jet3>(MlResidualRows<Jet3>(robot, Seeded(poses[j])));
     for (int a = 0; a < 5; ++a) {
@@ -157,26 +158,28 @@ double InformationObjective(const Robot& robot, Criterion criterion, const std::
 }  // namespace
 
 double DesignObjective(const Robot& robot, Criterion criterion, const std::vector<Eigen::Vector3d>& poses,
-                       Eigen::VectorXd* gradient, double power) {
+                       Eigen::VectorXd* gradient, double power, const PriorInformation* prior) {
   if (criterion == Criterion::kCondition) {
     return ConditionObjective(robot, poses, gradient, power > 0.0 ? power : kConditionPower);
   }
-  return InformationObjective(robot, criterion, poses, gradient, power > 0.0 ? power : kEigenvaluePower);
+  return InformationObjective(robot, criterion, poses, gradient, power > 0.0 ? power : kEigenvaluePower, prior);
 }
 
-double ExactObjective(const Robot& robot, Criterion criterion, const std::vector<Eigen::Vector3d>& poses) {
+double ExactObjective(const Robot& robot, Criterion criterion, const std::vector<Eigen::Vector3d>& poses,
+                      const PriorInformation* prior) {
   if (criterion == Criterion::kCondition) return ConditionObjective(robot, poses, nullptr, 0.0);
-  return InformationObjective(robot, criterion, poses, nullptr, 0.0);
+  return InformationObjective(robot, criterion, poses, nullptr, 0.0, prior);
 }
 
 }  // namespace internal
 
-CriteriaValues EvaluateCriteria(const Robot& robot, const std::vector<Eigen::Vector3d>& poses) {
+CriteriaValues EvaluateCriteria(const Robot& robot, const std::vector<Eigen::Vector3d>& poses,
+                                const PriorInformation* prior) {
   CriteriaValues v;
   v.condition_number = std::exp(internal::ExactObjective(robot, Criterion::kCondition, poses));
-  v.d_log_det_information = -internal::ExactObjective(robot, Criterion::kD, poses);
-  v.a_trace_covariance_m2 = std::exp(internal::ExactObjective(robot, Criterion::kA, poses));
-  v.e_min_eigenvalue = std::exp(-internal::ExactObjective(robot, Criterion::kE, poses));
+  v.d_log_det_information = -internal::ExactObjective(robot, Criterion::kD, poses, prior);
+  v.a_trace_covariance_m2 = std::exp(internal::ExactObjective(robot, Criterion::kA, poses, prior));
+  v.e_min_eigenvalue = std::exp(-internal::ExactObjective(robot, Criterion::kE, poses, prior));
   return v;
 }
 

@@ -22,10 +22,12 @@ constexpr double kEigenvaluePower = 32.0;
 // `power` overrides the surrogates' sharpness (0: the defaults above); the design starts
 // with a smoother surrogate and sharpens it (continuation, kContinuationPower).
 constexpr double kContinuationPower = 8.0;
+// `prior` (D, A, E only): information already gathered, added to the poses' (design --prior).
 double DesignObjective(const Robot& robot, Criterion criterion, const std::vector<Eigen::Vector3d>& poses,
-                       Eigen::VectorXd* gradient, double power = 0.0);
+                       Eigen::VectorXd* gradient, double power = 0.0, const PriorInformation* prior = nullptr);
 
 // The same criteria exactly (log kappa, -log lambda_min without surrogate), for reporting.
-double ExactObjective(const Robot& robot, Criterion criterion, const std::vector<Eigen::Vector3d>& poses);
+double ExactObjective(const Robot& robot, Criterion criterion, const std::vector<Eigen::Vector3d>& poses,
+                      const PriorInformation* prior = nullptr);
 
 }  // namespace cablecal::internal
