@@ -2,6 +2,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -11,6 +14,7 @@
 #include "design/design.h"
 #include "design/robust.h"
 #include "identify/experiment.h"
+#include "identify/identify.h"
 #include "model/statics.h"
 #include "tests/support/random_robot.h"
 
@@ -187,6 +191,58 @@ TEST(RobustDesign, TensionSpreadMatchesTheForwardModel) {
     }
     EXPECT_NEAR(spread[i], std::sqrt(sum2), 1e-4 * std::sqrt(sum2)) << "cable " << i + 1;
   }
+}
+
+// Calibrating in rounds: round 1 (8 poses) is identified; LoadDesignPrior turns its result.yaml
+// into the next round's nominal robot and prior information; the second round then plans
+// around the estimate and counts what is already known.
+TEST(DesignPrior, SecondRoundCountsTheFirstRoundsInformation) {
+  const Robot robot = AsymmetricRobot();
+  DesignOptions options;
+  options.poses = 8;
+  options.starts = 2;
+  options.random_sets = 0;
+  const DesignResult first = DesignPoses(robot, options);
+  Rng rng(3);
+  const Robot truth = PerturbGeometry(robot, 0.01, rng);
+  const SimulatedExperiment sim = SimulateExperiment(robot, truth, first.poses, SimulationOptions{}, rng);
+  const IdentifyResult id = Identify(robot, sim.measurements, IdentifyOptions{});
+  ASSERT_TRUE(id.converged());
+  const std::string dir = (std::filesystem::temp_directory_path() / ("cablecal_prior_" + std::to_string(getpid()))).string();
+  std::filesystem::create_directories(dir);
+  const std::string path = dir + "/result.yaml";
+  std::ofstream(path) << IdentifyResultYaml(id, "test");
+
+  const DesignPrior prior = LoadDesignPrior(robot, path);
+  // The next round's nominal robot is the estimate.
+  const GeometryVector g = GeometryOf(prior.robot);
+  for (int k = 0; k < 6; ++k) EXPECT_NEAR(g(k), id.geometry(k), 1e-12) << kGeometryNames[k];
+  // Its information is the inverse of the estimated covariance of a1z a2x a2z l10 l20.
+  PriorInformation cov;
+  for (int a = 0; a < 5; ++a) {
+    for (int b = 0; b < 5; ++b) {
+      cov(a, b) = id.geometry_correlation(a + 1, b + 1) * id.geometry_std(a + 1) * id.geometry_std(b + 1);
+    }
+  }
+  EXPECT_LT((prior.information * cov - PriorInformation::Identity()).cwiseAbs().maxCoeff(), 1e-6);
+
+  options.prior_information = prior.information;
+  const DesignResult second = DesignPoses(prior.robot, options);
+  // Prior plus new poses beats either alone on the A criterion.
+  const double prior_trace = cov.trace();
+  EXPECT_LT(second.criteria.a_trace_covariance_m2, 0.9 * prior_trace);
+  const CriteriaValues alone = EvaluateCriteria(prior.robot, PosesOf(second.poses));
+  EXPECT_LT(second.criteria.a_trace_covariance_m2, 0.9 * alone.a_trace_covariance_m2);
+
+  // What cannot be a prior.
+  options.criterion = Criterion::kCondition;
+  EXPECT_THROW(DesignPoses(prior.robot, options), InputError);
+  EXPECT_THROW(LoadDesignPrior(robot, dir + "/missing.yaml"), InputError);
+  std::ofstream(dir + "/bad.yaml") << "status: not_converged\nparameters: {}\n";
+  EXPECT_THROW(LoadDesignPrior(robot, dir + "/bad.yaml"), InputError);
+  std::ofstream(dir + "/notyaml.yaml") << "a: [\n";
+  EXPECT_THROW(LoadDesignPrior(robot, dir + "/notyaml.yaml"), InputError);
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -83,7 +83,43 @@ TEST(MonteCarlo, FailuresAreCountedNotDropped) {
   EXPECT_EQ(c.failures(), failed);
   EXPECT_GT(failed, 0);
   EXPECT_EQ(Summarise(c, "a2x").count, o.trials - failed);
-  EXPECT_NE(SummaryCsv(r).find("," + std::to_string(failed) + "\n"), std::string::npos);
+  // Every failure has exactly one cause, and the summary counts them per cause.
+  int by_cause = 0;
+  for (const std::string& cause : FailureCauses()) by_cause += c.failures(cause);
+  EXPECT_EQ(by_cause, failed);
+  EXPECT_GT(c.failures("simulation"), 0);
+  const std::string expected_tail = "," + std::to_string(failed) + "," + std::to_string(c.failures("design")) + "," +
+                                    std::to_string(c.failures("sampling")) + "," +
+                                    std::to_string(c.failures("simulation")) + "," +
+                                    std::to_string(c.failures("identification")) + "\n";
+  EXPECT_NE(SummaryCsv(r).find(expected_tail), std::string::npos) << SummaryCsv(r);
+  EXPECT_NE(SummaryCsv(r).find("failures,failed_design,failed_sampling,failed_simulation,failed_identification\n"),
+            std::string::npos);
+}
+
+// A designed set that could not be made fails its own cell's trials (cause "design"), and
+// every other cell still runs; the table says n/a rather than a zero sigma.
+TEST(MonteCarlo, AFailedDesignFailsOnlyItsCell) {
+  const Robot& robot = BuiltinRobot();
+  MonteCarloOptions o;
+  o.pose_counts = {6, 8};
+  o.designs = {PoseSetDesign::kRandom, PoseSetDesign::kOptimized};
+  o.trials = 6;
+  DesignedSets designed;
+  designed[{6, static_cast<int>(PoseSetDesign::kOptimized)}] = {};  // as MakeDesignedSet returns on failure
+  designed[{8, static_cast<int>(PoseSetDesign::kOptimized)}] = SampleFeasiblePoses(robot, 8, 5);
+  std::vector<ShareResult> shares = {RunShare(robot, o, designed, StudyShare{0, 1})};
+  ASSERT_TRUE(shares[0].failure.empty()) << shares[0].failure;
+  const MonteCarloResult r = AssembleShares(o, std::move(shares));
+  ASSERT_EQ(r.cells.size(), 4u);
+  for (const MonteCarloCell& c : r.cells) {
+    const bool broken = c.n == 6 && c.design == PoseSetDesign::kOptimized;
+    EXPECT_EQ(c.failures("design"), broken ? o.trials : 0) << c.n << " " << ToString(c.design);
+    if (!broken) EXPECT_LT(c.failures(), o.trials) << c.n << " " << ToString(c.design);
+  }
+  const std::string md = SummaryMarkdown(r, "t");
+  EXPECT_NE(md.find("| 6 | optimized | n/a |"), std::string::npos) << md;
+  EXPECT_NE(md.find("(design 6)"), std::string::npos) << md;
 }
 
 TEST(MonteCarlo, InterruptStopsEarly) {
@@ -102,6 +138,7 @@ TEST(MonteCarlo, ParsesPoseRangesAndDesigns) {
     EXPECT_THROW(ParsePoseCounts(bad), InputError) << bad;
   }
   EXPECT_EQ(ParseDesigns("random,e").size(), 2u);
+  EXPECT_EQ(ParseDesigns("condition"), (std::vector<PoseSetDesign>{PoseSetDesign::kCondition}));
   EXPECT_THROW(ParseDesigns("random,random"), InputError);
   EXPECT_THROW(ParseDesigns("best"), InputError);
 }
