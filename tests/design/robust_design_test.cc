@@ -232,6 +232,9 @@ TEST(DesignPrior, SecondRoundCountsTheFirstRoundsInformation) {
   const double prior_trace = cov.trace();
   EXPECT_LT(second.criteria.a_trace_covariance_m2, 0.9 * prior_trace);
   const CriteriaValues alone = EvaluateCriteria(prior.robot, PosesOf(second.poses));
+  const CriteriaValues both = EvaluateCriteria(prior.robot, PosesOf(second.poses), &prior.information);
+  EXPECT_NEAR(both.a_trace_covariance_m2, second.criteria.a_trace_covariance_m2,
+              1e-9 * second.criteria.a_trace_covariance_m2);
   EXPECT_LT(second.criteria.a_trace_covariance_m2, 0.9 * alone.a_trace_covariance_m2);
 
   // What cannot be a prior.
