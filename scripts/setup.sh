@@ -16,6 +16,7 @@ PACKAGES=(
   libgtest-dev           # unit tests
   libbenchmark-dev       # bench/
   python3-matplotlib     # figures (scripts/*.py, run with /usr/bin/python3)
+  python3-yaml           # bench/rounds.py reads result YAML
 )
 case "${1:-}" in
   "") ;;

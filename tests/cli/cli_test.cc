@@ -193,14 +193,45 @@ TEST_F(Cli, DesignWritesPlanSummaryAndPlotAndIsThreadCountIndependent) {
   EXPECT_EQ(p1.substr(p1.find("\npose,")), p2.substr(p2.find("\npose,")));  // provenance names the file
   EXPECT_NE(p1.find("\npose,x,z,theta,t1,t2,l1,l2,dl1,dl2,t1_worst_min,t1_worst_max,t2_worst_min,t2_worst_max\n"), std::string::npos);
   const std::string summary = Read("s.yaml");
-  for (const char* key : {"criterion: condition", "criteria: {condition_number: ", "random_sets: {count: 20",
-                          "improvement_over_random_median:", "per_start:", "ipopt_status: ", "wall_time_s: "}) {
+  for (const char* key : {"criterion: a\n", "criteria: {condition_number: ", "random_sets: {count: 20",
+                          "improvement_over_random_median:", "per_start:", "ipopt_status: ", "wall_time_s: ",
+                          "robustness: {geometry_sigma_m: 0.01, robust_sigmas: 3,", "poses_worst_case_tensions_N:",
+                          "  - {pose: 7, t1: ["}) {
     EXPECT_NE(summary.find(key), std::string::npos) << key << "\n" << summary;
   }
   EXPECT_GT(fs::file_size(Path("p.png")), 10000u);
   // The designed plan drives a simulation and an identification.
   ASSERT_EQ(RunCablecal("simulate --plan " + Path("p1.csv") + " --out " + Path("m.csv")).exit_code, 0);
   EXPECT_EQ(RunCablecal("identify --measurements " + Path("m.csv") + " --out " + Path("r.yaml")).exit_code, 0);
+}
+
+// Planning the next round from an identification (--prior), and the robustness flags.
+TEST_F(Cli, DesignRoundsAndRobustnessFlags) {
+  ASSERT_EQ(RunCablecal("design --poses 8 --starts 2 --random-sets 0 --out " + Path("p.csv")).exit_code, 0);
+  ASSERT_EQ(RunCablecal("simulate --plan " + Path("p.csv") + " --geometry-sigma 0.01 --seed 2 --out " + Path("m.csv"))
+                .exit_code, 0);
+  ASSERT_EQ(RunCablecal("identify --measurements " + Path("m.csv") + " --out " + Path("r.yaml") +
+                        " --calibrated-robot " + Path("cal.yaml")).exit_code, 0);
+  const RunResult next = RunCablecal("design --robot " + Path("cal.yaml") + " --prior " + Path("r.yaml") +
+                                     " --poses 8 --starts 2 --random-sets 10 --out " + Path("p2.csv"));
+  EXPECT_EQ(next.exit_code, 0) << next.output;
+  const RunResult cond = RunCablecal("design --prior " + Path("r.yaml") + " --criterion condition --poses 8 --out " +
+                                     Path("p3.csv"));
+  EXPECT_EQ(cond.exit_code, 2) << cond.output;
+  EXPECT_NE(cond.output.find("--prior: the condition-number criterion cannot count"), std::string::npos) << cond.output;
+  const RunResult missing = RunCablecal("design --prior " + Path("nope.yaml") + " --poses 8 --out " + Path("p3.csv"));
+  EXPECT_EQ(missing.exit_code, 2) << missing.output;
+  EXPECT_NE(missing.output.find("nope.yaml: cannot open the file"), std::string::npos) << missing.output;
+  for (const char* bad : {"--geometry-sigma -1", "--geometry-sigma 1e300", "--robust-sigmas 100", "--random-sets -1"}) {
+    const RunResult r = RunCablecal(std::string("design --poses 8 ") + bad + " --out " + Path("p3.csv"));
+    EXPECT_EQ(r.exit_code, 2) << bad << "\n" << r.output;
+  }
+  EXPECT_FALSE(fs::exists(Path("p3.csv")));
+  // --random-sets 0 means none (it was refused with a 300-digit range).
+  const RunResult none = RunCablecal("design --poses 6 --starts 1 --random-sets 0 --geometry-sigma 0 --out " +
+                                     Path("p4.csv"));
+  EXPECT_EQ(none.exit_code, 0) << none.output;
+  EXPECT_EQ(none.output.find("random"), std::string::npos) << none.output;
 }
 
 TEST_F(Cli, DesignFailuresWriteNothing) {
@@ -221,7 +252,10 @@ TEST_F(Cli, MonteCarloWritesEveryOutput) {
                         "one_calibration.png"}) {
     EXPECT_TRUE(fs::exists(Path(std::string("mc/") + f))) << f;
   }
-  EXPECT_EQ(Read("mc/summary.csv").rfind("n,design,parameter,mean,std,rms,max_abs,share_within_5mm,failures\n", 0), 0u);
+  EXPECT_EQ(Read("mc/summary.csv")
+                .rfind("n,design,parameter,mean,std,rms,max_abs,share_within_5mm,failures,failed_design,"
+                       "failed_sampling,failed_simulation,failed_identification\n", 0),
+            0u);
   const std::string run = Read("mc/run.yaml");
   for (const char* key : {"commit: ", "command: ", "seed: 4", "/blas/libblas.so.3", "processes: 1", "threads: ", "wall_time_s: ", "trials: 5"}) {
     EXPECT_NE(run.find(key), std::string::npos) << key;
