@@ -92,6 +92,7 @@ void WriteStudy(const std::string& dir, const Robot& robot, const MonteCarloOpti
   AtomicOutput output;
   output.WriteText(dir + "/errors.csv", ErrorsCsv(r));
   output.WriteText(dir + "/summary.csv", SummaryCsv(r));
+  output.WriteText(dir + "/failures.csv", FailuresCsv(r));
   output.WriteText(dir + "/summary.md", SummaryMarkdown(r, title));
   output.WriteText(dir + "/run.yaml", RunYaml(robot, o, poses_text, r, ctx, threads));
   output.Commit();

@@ -316,6 +316,27 @@ std::string ErrorsCsv(const MonteCarloResult& r) {
   return out;
 }
 
+std::string FailuresCsv(const MonteCarloResult& r) {
+  std::string out = "n,design,trial,cause,reason\n";
+  for (const MonteCarloCell& c : r.cells) {
+    for (std::size_t t = 0; t < c.trials.size(); ++t) {
+      const TrialOutcome& tr = c.trials[t];
+      if (tr.ok) continue;
+      const std::size_t colon = tr.failure.find(':');
+      const std::string cause = colon == std::string::npos ? "unknown" : tr.failure.substr(0, colon);
+      std::string reason = colon == std::string::npos ? tr.failure : tr.failure.substr(colon + 1);
+      if (!reason.empty() && reason[0] == ' ') reason.erase(0, 1);
+      // RFC 4180 quoting: reasons contain commas.
+      std::string quoted = "\"";
+      for (const char ch : reason) quoted += ch == '"' ? std::string("\"\"") : std::string(1, ch == '\n' ? ' ' : ch);
+      quoted += "\"";
+      out += std::to_string(c.n) + "," + ToString(c.design) + "," + std::to_string(t + 1) + "," + cause + "," + quoted +
+             "\n";
+    }
+  }
+  return out;
+}
+
 std::string SummaryCsv(const MonteCarloResult& r) {
   std::string out = "n,design,parameter,mean,std,rms,max_abs,share_within_5mm,failures";
   for (const std::string& cause : FailureCauses()) out += ",failed_" + cause;

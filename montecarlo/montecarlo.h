@@ -150,7 +150,8 @@ struct ErrorStats {
 ErrorStats Summarise(const MonteCarloCell& cell, const std::string& parameter);
 
 std::string ErrorsCsv(const MonteCarloResult& r);   // n,design,trial,parameter,error
-std::string SummaryCsv(const MonteCarloResult& r);  // n,design,parameter,mean,std,rms,max_abs,share_within_5mm,failures
+std::string SummaryCsv(const MonteCarloResult& r);
+std::string FailuresCsv(const MonteCarloResult& r);  // n,design,trial,cause,reason: one row per failed trial  // n,design,parameter,mean,std,rms,max_abs,share_within_5mm,failures
 std::string SummaryMarkdown(const MonteCarloResult& r, const std::string& title);
 
 }  // namespace cablecal

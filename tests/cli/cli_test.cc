@@ -248,7 +248,7 @@ TEST_F(Cli, DesignFailuresWriteNothing) {
 TEST_F(Cli, MonteCarloWritesEveryOutput) {
   const RunResult r = RunCablecal("montecarlo --poses 6:8 --trials 5 --designs random --seed 4 --out " + Path("mc"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  for (const char* f : {"errors.csv", "summary.csv", "summary.md", "run.yaml", "sigma_vs_n.png", "distributions.png",
+  for (const char* f : {"errors.csv", "summary.csv", "failures.csv", "summary.md", "run.yaml", "sigma_vs_n.png", "distributions.png",
                         "one_calibration.png"}) {
     EXPECT_TRUE(fs::exists(Path(std::string("mc/") + f))) << f;
   }

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 
@@ -95,6 +96,11 @@ TEST(MonteCarlo, FailuresAreCountedNotDropped) {
   EXPECT_NE(SummaryCsv(r).find(expected_tail), std::string::npos) << SummaryCsv(r);
   EXPECT_NE(SummaryCsv(r).find("failures,failed_design,failed_sampling,failed_simulation,failed_identification\n"),
             std::string::npos);
+  // failures.csv: one row per failed trial with its cause and reason.
+  const std::string failures = FailuresCsv(r);
+  EXPECT_EQ(std::count(failures.begin(), failures.end(), '\n'), failed + 1) << failures;
+  EXPECT_NE(failures.find("\n20,random,"), std::string::npos);
+  EXPECT_NE(failures.find(",simulation,\"pose "), std::string::npos) << failures;
 }
 
 // A designed set that could not be made fails its own cell's trials (cause "design"), and
