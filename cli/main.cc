@@ -105,11 +105,9 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 100000));
   des_cmd->add_option("--geometry-sigma", des.geometry_sigma_m,
                       "uncertainty of the true exit points and initial lengths the plan must survive, m (0: off)")
-      ->capture_default_str()
-      ->check(CLI::Range(0.0, 0.5));
+      ->capture_default_str();
   des_cmd->add_option("--robust-sigmas", des.robust_sigmas, "k: poses hold for geometry errors up to k sigma")
-      ->capture_default_str()
-      ->check(CLI::Range(0.0, 10.0));
+      ->capture_default_str();
   des_cmd->add_option("--prior", des.prior_path,
                       "result.yaml of an earlier identification: plan the next poses around its estimate and "
                       "count its information");

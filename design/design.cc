@@ -170,6 +170,13 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
   if (!(options.min_spacing_m >= 0.0) || !std::isfinite(options.min_spacing_m)) {
     throw InputError("--min-spacing", "", "must be a non-negative number of metres");
   }
+  if (!(options.geometry_sigma_m >= 0.0 && options.geometry_sigma_m <= kMaxGeometrySigma_m)) {
+    throw InputError("--geometry-sigma", "", "must be between 0 and " + FormatDouble(kMaxGeometrySigma_m) +
+                                                 " m (got " + FormatDouble(options.geometry_sigma_m) + ")");
+  }
+  if (!(options.robust_sigmas >= 0.0 && options.robust_sigmas <= 10.0)) {
+    throw InputError("--robust-sigmas", "", "must be between 0 and 10 (got " + FormatDouble(options.robust_sigmas) + ")");
+  }
   if (options.prior_information && options.criterion == Criterion::kCondition) {
     throw InputError("--prior", "", "the condition-number criterion cannot count an earlier identification's "
                                     "information: use --criterion a, d or e");

@@ -58,6 +58,9 @@ DesignPrior LoadDesignPrior(const Robot& nominal, const std::string& result_yaml
 // trace_ref / trace; lambda_min / lambda_min_ref.
 double Improvement(Criterion c, const CriteriaValues& set, const CriteriaValues& reference);
 
+// A geometry error beyond this is not a calibration problem (the robot file is wrong).
+constexpr double kMaxGeometrySigma_m = 0.5;
+
 struct DesignOptions {
   int poses = 0;
   // The default: A-optimality (README, "Experiment design", for why not the condition number).

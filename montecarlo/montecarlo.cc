@@ -160,8 +160,10 @@ void ValidateOptions(const MonteCarloOptions& o) {
   if (o.trials < 1) throw InputError("--trials", "", "must be at least 1");
   if (o.pose_counts.empty()) throw InputError("--poses", "", "no pose counts");
   if (o.designs.empty()) throw InputError("--designs", "", "no designs");
-  if (!(o.geometry_sigma_m >= 0.0) || !std::isfinite(o.geometry_sigma_m)) {
-    throw InputError("--geometry-sigma", "", "must be a non-negative number of metres");
+  if (!(o.geometry_sigma_m >= 0.0 && o.geometry_sigma_m <= kMaxGeometrySigma_m)) {
+    throw InputError("--geometry-sigma", "", "must be between 0 and " + FormatDouble(kMaxGeometrySigma_m) +
+                                                 " m: a larger error is not a calibration problem (got " +
+                                                 FormatDouble(o.geometry_sigma_m) + ")");
   }
 }
 
