@@ -21,26 +21,9 @@
 namespace cablecal {
 namespace {
 
-// An asymmetric robot: exits at different heights below the frame top, offset centre of
+// robots/asymmetric.yaml: exits at different heights below the frame top, offset centre of
 // mass, anchors off the bar line, unequal radii.
-Robot AsymmetricRobot() {
-  Robot r = BuiltinRobot();
-  r.name = "asymmetric";
-  r.frame_width_m = 4.0;
-  r.frame_height_m = 2.6;
-  r.platform_mass_kg = 3.0;
-  r.p_P_com_m = Eigen::Vector2d(0.05, -0.04);
-  r.cables[0].p_P_anchor_m = Eigen::Vector2d(-0.22, 0.03);
-  r.cables[1].p_P_anchor_m = Eigen::Vector2d(0.28, -0.02);
-  r.cables[0].p_F_exit_m = Eigen::Vector2d(0.0, 2.45);
-  r.cables[1].p_F_exit_m = Eigen::Vector2d(4.0, 2.25);
-  r.cables[0].pulley_radius_m = 0.02;
-  r.cables[1].pulley_radius_m = 0.035;
-  r.tension_min_N = 2.0;
-  r.tension_max_N = 120.0;
-  r.p_F_home_m = Eigen::Vector2d(2.0, 1.2);
-  return LoadRobotFromString(RobotToYaml(r), "asymmetric");
-}
+Robot AsymmetricRobot() { return LoadRobotFile(CABLECAL_SOURCE_DIR "/robots/asymmetric.yaml"); }
 
 std::vector<Eigen::Vector3d> PosesOf(const std::vector<PlanPose>& plan) {
   std::vector<Eigen::Vector3d> q;
