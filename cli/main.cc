@@ -121,7 +121,7 @@ int main(int argc, char** argv) {
                                                   : "predict the calibration accuracy by Monte Carlo (OpenMP)");
   AddRobotOption(mc_cmd, &mc.robot_path);
   mc_cmd->add_option("--poses", mc.poses, "pose counts first:last[:step], e.g. 6:50 or 6:50:4")->required();
-  mc_cmd->add_option("--trials", mc.trials, "trials per cell")->required()->check(CLI::PositiveNumber);
+  mc_cmd->add_option("--trials", mc.trials, "trials per cell")->required()->check(CLI::Range(1, 100000000));
   mc_cmd->add_option("--designs", mc.designs, "comma list of random, optimized (= a), condition, d, a, e")->capture_default_str();
   mc_cmd->add_option("--estimator", mc.estimator, "ml|paper")->capture_default_str()->check(CLI::IsMember({"ml", "paper"}));
   mc_cmd->add_option("--gauge", mc.gauge, "a1x|prior|none")->capture_default_str()->check(CLI::IsMember({"a1x", "prior", "none"}));
@@ -142,7 +142,7 @@ int main(int argc, char** argv) {
   cablecal::cli::ReproduceOptions rep;
   CLI::App* rep_cmd = app.add_subcommand("reproduce", "run the paper's study on the built-in robot into results/");
   AddRobotOption(rep_cmd, &rep.robot_path);
-  rep_cmd->add_option("--trials", rep.trials, "trials per cell")->capture_default_str()->check(CLI::PositiveNumber);
+  rep_cmd->add_option("--trials", rep.trials, "trials per cell")->capture_default_str()->check(CLI::Range(1, 100000000));
   rep_cmd->add_option("--threads", rep.threads, "OpenMP threads (default: all cores)")->check(CLI::PositiveNumber);
   rep_cmd->add_option("--seed", rep.seed, "random seed")->capture_default_str();
   rep_cmd->add_option("--out", rep.out_dir, "output folder")->capture_default_str();

@@ -41,6 +41,26 @@ const char* ToString(Criterion c) {
   return "unknown";
 }
 
+std::string DescribeCriterion(Criterion c, const CriteriaValues& v, bool with_name) {
+  char buf[96];
+  switch (c) {
+    case Criterion::kCondition:
+      std::snprintf(buf, sizeof(buf), "%s%.4g", with_name ? "condition number " : "", v.condition_number);
+      break;
+    case Criterion::kD:
+      std::snprintf(buf, sizeof(buf), "%s%.4g", with_name ? "log det of the information " : "", v.d_log_det_information);
+      break;
+    case Criterion::kA:
+      std::snprintf(buf, sizeof(buf), "%s%.4g m^2", with_name ? "trace of the covariance " : "", v.a_trace_covariance_m2);
+      break;
+    case Criterion::kE:
+      std::snprintf(buf, sizeof(buf), "%s%.4g 1/m^2", with_name ? "smallest information eigenvalue " : "",
+                    v.e_min_eigenvalue);
+      break;
+  }
+  return buf;
+}
+
 namespace {
 
 // Stream ids under the user's seed: starts and the random reference sets never share draws.
@@ -362,12 +382,16 @@ std::string DesignSummaryYaml(const DesignResult& r, const DesignOptions& option
   o << "seed: " << options.seed << "\n";
   o << "min_spacing_m: " << FormatDouble(options.min_spacing_m) << "\n";
   o << "criteria: " << criteria(r.criteria) << "\n";
-  o << "random_sets: {count: " << options.random_sets << ", median: " << criteria(r.random_median) << "}\n";
-  o << "condition_number: {optimized: " << FormatDouble(r.criteria.condition_number)
-    << ", random_median: " << FormatDouble(r.random_median.condition_number) << "}\n";
-  o << "improvement_over_random_median:   # factor, > 1 is better (see README)\n";
-  for (const Criterion c : {Criterion::kCondition, Criterion::kD, Criterion::kA, Criterion::kE}) {
-    o << "  " << ToString(c) << ": " << FormatDouble(Improvement(c, r.criteria, r.random_median)) << "\n";
+  if (options.random_sets > 0) {
+    o << "random_sets: {count: " << options.random_sets << ", median: " << criteria(r.random_median) << "}\n";
+    o << "condition_number: {optimized: " << FormatDouble(r.criteria.condition_number)
+      << ", random_median: " << FormatDouble(r.random_median.condition_number) << "}\n";
+    o << "improvement_over_random_median:   # factor, > 1 is better (see README)\n";
+    for (const Criterion c : {Criterion::kCondition, Criterion::kD, Criterion::kA, Criterion::kE}) {
+      o << "  " << ToString(c) << ": " << FormatDouble(Improvement(c, r.criteria, r.random_median)) << "\n";
+    }
+  } else {
+    o << "random_sets: {count: 0}   # no random reference (--random-sets 0)\n";
   }
   o << "starts: {count: " << options.starts << ", converged: " << r.converged_starts << ", best: " << r.best_start
     << "}\n";
@@ -376,7 +400,7 @@ std::string DesignSummaryYaml(const DesignResult& r, const DesignOptions& option
     o << "  - {start: " << s.start << ", ipopt_status: " << s.ipopt_status << ", iterations: " << s.iterations
       << ", verified: " << (s.verified ? "true" : "false");
     if (s.verified) o << ", objective: " << FormatDouble(s.objective);
-    o << ", robust_sigmas_in_nlp: " << FormatDouble(s.robust_sigmas);
+    o << ", robust_sigmas_in_nlp: " << FormatDouble(std::round(s.robust_sigmas * 1e6) / 1e6);
     if (s.converged && !s.verified) o << ", verification_failure: \"" << s.verification_failure << "\"";
     o << "}\n";
   }

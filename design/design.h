@@ -61,6 +61,10 @@ double Improvement(Criterion c, const CriteriaValues& set, const CriteriaValues&
 // A geometry error beyond this is not a calibration problem (the robot file is wrong).
 constexpr double kMaxGeometrySigma_m = 0.5;
 
+// "A: trace of the covariance 1.23e-05 m^2" (4 significant digits), for messages and
+// titles; without the name if `with_name` is false.
+std::string DescribeCriterion(Criterion c, const CriteriaValues& v, bool with_name = true);
+
 struct DesignOptions {
   int poses = 0;
   // The default: A-optimality (README, "Experiment design", for why not the condition number).

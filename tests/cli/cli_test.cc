@@ -171,8 +171,20 @@ TEST_F(Cli, IdentifyBadMeasurementsExitTwoAndWriteNothing) {
   }
 }
 
-TEST_F(Cli, IdentifyNotConvergedExitsThreeAndWritesNothing) {
+// A random plan has poses near the workspace limits: a true robot 5 mm off nominal settles
+// beyond one of them, which would stop a lab's experiment (exit 3, the pose and reason named).
+TEST_F(Cli, SimulateRefusesAPoseTheTrueRobotSettlesOutsideItsWorkspace) {
   ASSERT_EQ(RunCablecal("sample --poses 10 --seed 8 --out " + Path("plan.csv")).exit_code, 0);
+  const RunResult r = RunCablecal("simulate --plan " + Path("plan.csv") + " --geometry-sigma 0.005 --out " +
+                                  Path("m.csv") + " --truth-out " + Path("t.yaml"));
+  EXPECT_EQ(r.exit_code, 3) << r.output;
+  EXPECT_NE(r.output.find("the true robot settles outside its workspace ("), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(Path("m.csv")));
+  EXPECT_FALSE(fs::exists(Path("t.yaml")));
+}
+
+TEST_F(Cli, IdentifyNotConvergedExitsThreeAndWritesNothing) {
+  ASSERT_EQ(RunCablecal("design --poses 10 --starts 1 --random-sets 0 --out " + Path("plan.csv")).exit_code, 0);
   ASSERT_EQ(RunCablecal("simulate --plan " + Path("plan.csv") + " --geometry-sigma 0.005 --out " + Path("m.csv")).exit_code, 0);
   const RunResult r = RunCablecal("identify --max-iterations 1 --measurements " + Path("m.csv") + " --out " +
                                   Path("r.yaml") + " --calibrated-robot " + Path("c.yaml"));

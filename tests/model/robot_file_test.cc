@@ -99,6 +99,12 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"ShortVector", "com: [0.0, 0.0]", "com: [0.0]", "platform\\.com: must be a list of two numbers"},
         BadCase{"NegativeNoise", "encoder: {sigma: 0.00005}", "encoder: {sigma: -0.00005}",
                 "sensors\\.encoder\\.sigma: must be >= 0"},
+        BadCase{"ExitOutsideTheFrame", "exit: [5.209, 2.8]", "exit: [7.0, 2.8]",
+                "cables\\[1\\]\\.exit: \\(7, 2\\.8\\) m is outside the frame"},
+        BadCase{"ExitAboveTheFrame", "exit: [0.0, 2.8]", "exit: [0.0, 3.5]",
+                "cables\\[0\\]\\.exit: \\(0, 3\\.5\\) m is outside the frame"},
+        BadCase{"RadiusInMillimetres", "pulley_radius: 0.025, side: left", "pulley_radius: 25, side: left",
+                "cables\\[0\\]\\.pulley_radius: 25 m is more than a quarter of the frame"},
         BadCase{"InvalidYaml", "frame: {width: 5.209, height: 2.8}", "frame: {width: 5.209, height: [2.8}",
                 "not valid YAML"}),
     [](const ::testing::TestParamInfo<BadCase>& info) { return std::string(info.param.name); });
