@@ -121,7 +121,9 @@ TEST(MonteCarlo, AFailedDesignFailsOnlyItsCell) {
   for (const MonteCarloCell& c : r.cells) {
     const bool broken = c.n == 6 && c.design == PoseSetDesign::kOptimized;
     EXPECT_EQ(c.failures("design"), broken ? o.trials : 0) << c.n << " " << ToString(c.design);
-    if (!broken) EXPECT_LT(c.failures(), o.trials) << c.n << " " << ToString(c.design);
+    if (!broken) {
+      EXPECT_LT(c.failures(), o.trials) << c.n << " " << ToString(c.design);
+    }
   }
   const std::string md = SummaryMarkdown(r, "t");
   EXPECT_NE(md.find("| 6 | optimized | n/a |"), std::string::npos) << md;
