@@ -346,9 +346,11 @@ std::string SummaryCsv(const MonteCarloResult& r) {
   for (const MonteCarloCell& c : r.cells) {
     for (const std::string& p : SummaryParameters()) {
       const ErrorStats s = Summarise(c, p);
-      out += std::to_string(c.n) + "," + ToString(c.design) + "," + p + "," + FormatDouble(s.mean) + "," +
-             FormatDouble(s.std) + "," + FormatDouble(s.rms) + "," + FormatDouble(s.max_abs) + "," +
-             FormatDouble(s.share_within_5mm) + "," + std::to_string(c.failures());
+      // No successful trial: no statistic (empty cells), never a zero; one trial: no std.
+      auto stat = [&](double v, int needed) { return s.count >= needed ? FormatDouble(v) : std::string(); };
+      out += std::to_string(c.n) + "," + ToString(c.design) + "," + p + "," + stat(s.mean, 1) + "," + stat(s.std, 2) +
+             "," + stat(s.rms, 1) + "," + stat(s.max_abs, 1) + "," + stat(s.share_within_5mm, 1) + "," +
+             std::to_string(c.failures());
       for (const std::string& cause : FailureCauses()) out += "," + std::to_string(c.failures(cause));
       out += "\n";
     }

@@ -40,21 +40,39 @@ def read_errors(path, keep):
     return errors, first_trial
 
 
+# Full names and fixed colours, so that a design keeps its colour from one figure to the next.
+DESIGN_STYLE = {
+    "random": ("random sets", "tab:gray"),
+    "optimized": ("optimized (A-optimal, the default)", "tab:red"),
+    "a": ("A-optimal", "tab:orange"),
+    "d": ("D-optimal", "tab:green"),
+    "e": ("E-optimal", "tab:purple"),
+    "condition": ("condition number (the paper's)", "tab:blue"),
+}
+
+
 def sigma_vs_n(summary, out):
     params = ["a1z", "a2x", "a2z", "l10", "l20", "x4"]
     fig, axes = plt.subplots(2, 3, figsize=(13, 7), sharex=True)
-    designs = sorted({r["design"] for r in summary})
+    order = list(DESIGN_STYLE)
+    designs = sorted({r["design"] for r in summary}, key=lambda d: order.index(d) if d in order else len(order))
     for ax, p in zip(axes.flat, params):
         for d in designs:
-            rows = sorted((int(r["n"]), 1e3 * float(r["std"])) for r in summary if r["parameter"] == p and r["design"] == d)
+            # Cells with too few successful trials have no sigma (empty or non-finite): skip them.
+            rows = sorted((int(r["n"]), 1e3 * float(r["std"])) for r in summary
+                          if r["parameter"] == p and r["design"] == d and r["std"] not in ("", "nan"))
             if rows:
-                ax.plot([r[0] for r in rows], [r[1] for r in rows], "o-", ms=3, label=d)
+                label, colour = DESIGN_STYLE.get(d, (d, None))
+                ax.plot([r[0] for r in rows], [r[1] for r in rows], "o-", ms=3, label=label, color=colour)
         ax.set_title(p)
-        ax.set_ylabel("sigma (mm)")
+        # Log scale: sigma falls by an order of magnitude from n = 6 to 50, and the designs'
+        # differences at large n would vanish on a linear axis.
+        ax.set_yscale("log")
+        ax.set_ylabel("sigma (mm, log scale)")
         ax.grid(alpha=0.3)
     for ax in axes[-1]:
         ax.set_xlabel("number of poses n")
-    axes.flat[0].legend()
+    axes.flat[0].legend(fontsize=8)
     fig.suptitle("Standard deviation of the identification error against the number of poses")
     fig.tight_layout()
     fig.savefig(out, dpi=110)

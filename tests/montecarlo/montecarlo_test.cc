@@ -128,6 +128,7 @@ TEST(MonteCarlo, AFailedDesignFailsOnlyItsCell) {
   const std::string md = SummaryMarkdown(r, "t");
   EXPECT_NE(md.find("| 6 | optimized | n/a |"), std::string::npos) << md;
   EXPECT_NE(md.find("(design 6)"), std::string::npos) << md;
+  EXPECT_NE(SummaryCsv(r).find("\n6,optimized,a2x,,,,,,6,6,0,0,0\n"), std::string::npos) << SummaryCsv(r);
 }
 
 TEST(MonteCarlo, InterruptStopsEarly) {
