@@ -44,11 +44,13 @@ TEST(Format, ParseRejectsNonFinite) {
 
 TEST(Random, SameSeedSameStreamAndStreamsDiffer) {
   Rng a(42), b(42), c(43);
+  int same_as_other_seed = 0;
   for (int i = 0; i < 100; ++i) {
     const double x = a.Normal();
     EXPECT_EQ(x, b.Normal());
-    (void)c;
+    same_as_other_seed += x == c.Normal();
   }
+  EXPECT_EQ(same_as_other_seed, 0);  // another seed gives another stream
   std::set<std::uint64_t> seeds;
   for (std::uint64_t n = 0; n < 50; ++n) {
     for (std::uint64_t t = 0; t < 50; ++t) seeds.insert(StreamSeed(1, {n, t}));

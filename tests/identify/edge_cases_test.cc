@@ -24,14 +24,21 @@ TEST(EdgeCases, AnchorInsideThePulleyIsInvalidGeometry) {
   for (const Eigen::Vector2d& B : {Eigen::Vector2d(r, 2.8), Eigen::Vector2d(r + 0.5 * r, 2.8), Eigen::Vector2d(2 * r, 2.8)}) {
     EXPECT_FALSE(CableGeometryValid(CableGeometry<double>(A, r, 1.0, B), r)) << B.transpose();
   }
-  // A platform pushed into the pulley: never feasible, and the reason is said.
+  // A platform pushed into the pulley (its left anchor on the pulley's centre): no
+  // orientation balances it with valid cables.
   Robot robot = BuiltinRobot();
   robot.margin_m = 0.0;
-  const PoseEvaluation e = EvaluatePose(robot, r + 0.25, 2.8);
-  EXPECT_FALSE(e.feasible());
-  EXPECT_TRUE(e.feasibility == Feasibility::kCableGeometry || e.feasibility == Feasibility::kNoEquilibrium ||
-              e.feasibility == Feasibility::kTensionHigh)
-      << ToString(e.feasibility);
+  EXPECT_EQ(EvaluatePose(robot, r + 0.25, 2.8).feasibility, Feasibility::kNoEquilibrium);
+  // A known pose with an anchor inside its pulley, or within the margin of it, is refused as
+  // cable geometry whatever its tensions.
+  const Eigen::Vector3d q(r + 0.25 + 0.01, 2.8, 0.0);  // anchor 1 at 10 mm from the centre
+  EXPECT_EQ(CheckFeasibility(robot, q, Eigen::Vector2d(10.0, 10.0)), Feasibility::kCableGeometry);
+  robot.margin_m = 0.05;
+  const Eigen::Vector3d q2(r + 0.25 + 0.04, 2.7, 0.0);  // anchor 1 about 0.11 m from the centre
+  robot.frame_height_m = 3.0;                             // keep the frame test out of the way
+  EXPECT_EQ(CheckFeasibility(robot, q2, Eigen::Vector2d(10.0, 10.0)), Feasibility::kFeasible);
+  robot.margin_m = 0.1;
+  EXPECT_EQ(CheckFeasibility(robot, q2, Eigen::Vector2d(10.0, 10.0)), Feasibility::kCableGeometry);
 }
 
 TEST(EdgeCases, PosesOnTheWorkspaceBoundaryAreJudgedConsistently) {
