@@ -60,6 +60,8 @@ void RunPlotScript(const std::string& script, const std::vector<std::string>& ar
 }
 
 int RunWorkspace(const Context& ctx, const WorkspaceOptions& options) {
+  CheckCommandPaths({{"--robot", options.robot_path}},
+                    {{"--out", options.out_path}, {"--plot", options.plot_path}});
   const Robot robot = LoadRobotOption(options.robot_path);
   const WorkspaceGrid grid = ComputeWorkspaceGrid(robot, options.step_m);
   AtomicOutput output;
@@ -81,6 +83,7 @@ int RunWorkspace(const Context& ctx, const WorkspaceOptions& options) {
 }
 
 int RunSample(const Context& ctx, const SampleOptions& options) {
+  CheckCommandPaths({{"--robot", options.robot_path}}, {{"--out", options.out_path}});
   const Robot robot = LoadRobotOption(options.robot_path);
   const std::vector<PlanPose> plan = SampleFeasiblePoses(robot, options.poses, options.seed);
   AtomicOutput output;
@@ -92,6 +95,8 @@ int RunSample(const Context& ctx, const SampleOptions& options) {
 }
 
 int RunSimulate(const Context& ctx, const SimulateOptions& options) {
+  CheckCommandPaths({{"--robot", options.robot_path}, {"--truth", options.truth_path}, {"--plan", options.plan_path}},
+                    {{"--out", options.out_path}, {"--truth-out", options.truth_out_path}});
   const Robot nominal = LoadRobotOption(options.robot_path);
   // A pose where the true robot settles outside its own workspace (beyond a tension limit,
   // the inclinometer range or the margin) would stop a lab's experiment: exit 3, as the
@@ -127,6 +132,8 @@ int RunSimulate(const Context& ctx, const SimulateOptions& options) {
 }
 
 int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
+  CheckCommandPaths({{"--robot", options.robot_path}, {"--measurements", options.measurements_path}},
+                    {{"--out", options.out_path}, {"--calibrated-robot", options.calibrated_robot_path}});
   const Robot nominal = LoadRobotOption(options.robot_path);
   IdentifyOptions id;
   id.estimator = ParseEstimator(options.estimator);
@@ -160,6 +167,8 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
 }
 
 int RunDesign(const Context& ctx, const DesignCommandOptions& options) {
+  CheckCommandPaths({{"--robot", options.robot_path}, {"--prior", options.prior_path}},
+                    {{"--out", options.out_path}, {"--summary", options.summary_path}, {"--plot", options.plot_path}});
   Robot robot = LoadRobotOption(options.robot_path);
   DesignOptions design;
   if (!options.prior_path.empty()) {

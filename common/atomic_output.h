@@ -9,6 +9,19 @@
 
 namespace cablecal {
 
+// A command's file argument: the flag that named it and the path given.
+struct PathArgument {
+  std::string flag;
+  std::string path;  // empty: not given
+};
+
+// Checks a command's files before any work is done: every output's folder exists; no output
+// is an existing folder or a non-regular file (a device such as /dev/null or /dev/stdout, a
+// pipe: cablecal writes regular files only, by renaming a finished temporary into place); no
+// two outputs share a path and no output is one of the inputs (paths compared after resolving
+// the folders and symbolic links). Throws InputError naming the flags otherwise.
+void CheckCommandPaths(const std::vector<PathArgument>& inputs, const std::vector<PathArgument>& outputs);
+
 class AtomicOutput {
  public:
   AtomicOutput() = default;
@@ -16,8 +29,9 @@ class AtomicOutput {
   AtomicOutput& operator=(const AtomicOutput&) = delete;
   ~AtomicOutput();
 
-  // Registers `final_path` and returns the temporary path to write instead.
-  // Throws InputError if the folder of `final_path` does not exist.
+  // Registers `final_path` and returns the temporary path to write instead. Throws
+  // InputError if the folder of `final_path` does not exist, if it is a folder or another
+  // non-regular file, or if it was registered already.
   std::string Add(const std::string& final_path);
 
   // Writes `content` to the temporary path of `final_path` (registering it); returns that path.

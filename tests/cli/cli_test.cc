@@ -246,6 +246,33 @@ TEST_F(Cli, DesignRoundsAndRobustnessFlags) {
   EXPECT_EQ(none.output.find("random"), std::string::npos) << none.output;
 }
 
+// Two outputs on one path, an output that is an input, a device: exit 2 before any work,
+// and the input untouched.
+TEST_F(Cli, CollidingOutputsInputsAndDevicesAreRefusedBeforeAnyWork) {
+  ASSERT_EQ(RunCablecal("sample --poses 5 --out " + Path("p.csv")).exit_code, 0);
+  const std::string plan = Read("p.csv");
+  const struct {
+    std::string args, message;
+  } cases[] = {
+      {"simulate --plan " + Path("p.csv") + " --out " + Path("p.csv"), "--out: would overwrite the input --plan"},
+      {"simulate --plan " + Path("p.csv") + " --out " + Path("m.csv") + " --truth-out " + Path("p.csv"),
+       "--truth-out: would overwrite the input --plan"},
+      {"simulate --plan " + Path("p.csv") + " --out " + Path("m.csv") + " --truth-out " + Path("./m.csv"),
+       "--truth-out: writes the same file as --out"},
+      {"design --poses 6 --out " + Path("d.csv") + " --summary " + Path("d.csv"), "--summary: writes the same file as --out"},
+      {"workspace --out " + Path("w.csv") + " --plot " + Path("w.csv"), "--plot: writes the same file as --out"},
+      {"workspace --out /dev/null", "/dev/null: cannot write: not a regular file"},
+      {"sample --poses 5 --out /dev/stdout", "cannot write: not a regular file"},
+  };
+  for (const auto& c : cases) {
+    const RunResult r = RunCablecal(c.args);
+    EXPECT_EQ(r.exit_code, 2) << c.args << "\n" << r.output;
+    EXPECT_NE(r.output.find(c.message), std::string::npos) << c.args << "\n" << r.output;
+  }
+  EXPECT_EQ(Read("p.csv"), plan);
+  for (const char* f : {"m.csv", "d.csv", "w.csv"}) EXPECT_FALSE(fs::exists(Path(f))) << f;
+}
+
 TEST_F(Cli, DesignFailuresWriteNothing) {
   const RunResult few = RunCablecal("design --poses 4 --out " + Path("p.csv") + " --summary " + Path("s.yaml"));
   EXPECT_EQ(few.exit_code, 2) << few.output;
