@@ -141,6 +141,7 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   id.source = options.measurements_path;
   id.max_iterations = options.max_iterations;
   const std::vector<Measurement> measurements = ReadMeasurementsCsv(options.measurements_path, nominal.num_cables());
+  CheckReadingsPlausible(nominal, measurements, options.measurements_path);
   const IdentifyResult result = Identify(nominal, measurements, id);
   if (result.status == IdentifyStatus::kRankDeficient || result.status == IdentifyStatus::kPoorFit) {
     throw InputError(options.measurements_path, "", result.message);

@@ -130,6 +130,7 @@ std::vector<Measurement> ReadMeasurementsCsv(std::istream& in, const std::string
       throw InputError(row.Where(), "", "more than " + std::to_string(kMaxMeasuredPoses) + " poses");
     }
     Measurement m;
+    m.where = row.Where();
     m.pose_id = row.PositiveInt(0);
     if (!ids.insert(m.pose_id).second) {
       throw InputError(row.Where(), "column 'pose'", "duplicate pose id " + std::to_string(m.pose_id));
@@ -141,6 +142,25 @@ std::vector<Measurement> ReadMeasurementsCsv(std::istream& in, const std::string
     out.push_back(m);
   });
   return out;
+}
+
+void CheckReadingsPlausible(const Robot& robot, const std::vector<Measurement>& measurements,
+                            const std::string& source) {
+  const double z_max = std::min(robot.laser_range_m, robot.frame_height_m);
+  for (const Measurement& m : measurements) {
+    const std::string where = m.where.empty() ? source + ": pose " + std::to_string(m.pose_id) : m.where;
+    if (!(m.z_m >= 0.0 && m.z_m <= z_max)) {
+      throw InputError(where, "column 'z'",
+                       FormatDouble(m.z_m) + " m is outside what the laser can read here, [0, " + FormatDouble(z_max) +
+                           "] m (the laser range and the frame height of " + robot.name + ")");
+    }
+    if (!(std::abs(m.theta_rad) <= robot.theta_max_rad)) {
+      throw InputError(where, "column 'theta'",
+                       FormatDouble(m.theta_rad) + " rad is beyond the inclinometer range of +-" +
+                           FormatDouble(robot.theta_max_rad) + " rad" +
+                           (std::abs(m.theta_rad) > M_PI ? " (degrees? theta is in radians)" : ""));
+    }
+  }
 }
 
 std::string TruthYaml(const Robot& truth, const std::vector<Measurement>& measurements,

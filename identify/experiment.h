@@ -22,6 +22,7 @@ namespace cablecal {
 // height (m); theta: inclinometer angle (rad).
 struct Measurement {
   int pose_id = 0;
+  std::string where;  // "file:line" when read from a file, for messages; empty when simulated
   Eigen::VectorXd dl_m;
   double z_m = 0.0;
   double theta_rad = 0.0;
@@ -66,10 +67,17 @@ SimulatedExperiment SimulateExperiment(const Robot& nominal, const Robot& truth,
 std::string MeasurementsCsv(const std::vector<Measurement>& measurements, const std::string& provenance);
 // Throws InputError naming file, line and column (wrong header or count, non-finite number,
 // duplicate or non-positive pose id).
+// CheckReadingsPlausible (below) then checks them against a robot's sensors.
 // At most kMaxMeasuredPoses rows (the file is streamed and rejected at the next row).
 std::vector<Measurement> ReadMeasurementsCsv(const std::string& path, int num_cables);
 std::vector<Measurement> ReadMeasurementsCsv(std::istream& in, const std::string& name, int num_cables);
 constexpr int kMaxMeasuredPoses = 100000;
+
+// Readings no sensor of `robot` can give: a laser height below 0, above the laser range or
+// above the frame, an inclinometer angle beyond its range. Throws InputError naming the
+// file, line and column (or the pose), the value and the limit; "units?" where it fits.
+void CheckReadingsPlausible(const Robot& robot, const std::vector<Measurement>& measurements,
+                            const std::string& source);
 
 // Truth file: the true robot in the robot-file format plus its `true_poses` list.
 std::string TruthYaml(const Robot& truth, const std::vector<Measurement>& measurements,

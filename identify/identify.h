@@ -43,6 +43,9 @@ struct IdentifyOptions {
   std::string source = "measurements";  // names the data in messages
 };
 
+// A reading whose whitened residual exceeds this many sigma refuses the fit (poor_fit).
+constexpr double kOutlierSigmas = 4.5;
+
 enum class IdentifyStatus {
   kConverged,
   kNotConverged,   // Ceres stopped without meeting its tolerances: not a result

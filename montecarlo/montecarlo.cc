@@ -131,7 +131,7 @@ TrialOutcome RunTrial(const Robot& nominal, const MonteCarloOptions& o, int n, P
     id.compute_identifiability = false;
     const IdentifyResult r = Identify(nominal, sim.measurements, id);
     if (!r.converged()) {
-      out.failure = std::string("identification: ") + ToString(r.status);
+      out.failure = std::string("identification: ") + ToString(r.status) + (r.message.empty() ? "" : " (" + r.message + ")");
       return out;
     }
     const GeometryVector g_true = GeometryOf(truth);

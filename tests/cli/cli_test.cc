@@ -1,13 +1,18 @@
 // End-to-end: the cablecal binary's outputs, exit codes and messages.
 #include <gtest/gtest.h>
+
+#include <functional>
 #include <sys/wait.h>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <vector>
+
+#include "common/format.h"
 
 namespace {
 
@@ -271,6 +276,56 @@ TEST_F(Cli, CollidingOutputsInputsAndDevicesAreRefusedBeforeAnyWork) {
   }
   EXPECT_EQ(Read("p.csv"), plan);
   for (const char* f : {"m.csv", "d.csv", "w.csv"}) EXPECT_FALSE(fs::exists(Path(f))) << f;
+}
+
+// Readings no sensor can give, and single bad readings among good ones (issue "Trust
+// nothing"): exit 2 naming the file, line and column, or the pose and sensor; nothing written.
+TEST_F(Cli, ImpossibleAndOutlyingReadingsAreRefusedByName) {
+  ASSERT_EQ(RunCablecal("design --poses 20 --starts 1 --random-sets 0 --out " + Path("plan.csv")).exit_code, 0);
+  ASSERT_EQ(RunCablecal("simulate --plan " + Path("plan.csv") + " --geometry-sigma 0.01 --seed 5 --out " +
+                        Path("m.csv")).exit_code, 0);
+  const std::string clean = Read("m.csv");
+  ASSERT_EQ(RunCablecal("identify --measurements " + Path("m.csv") + " --out " + Path("r.yaml")).exit_code, 0);
+  fs::remove(Path("r.yaml"));
+  // Rewrites one cell (column `col` of the data row of pose `pose`) or, with pose 0, every row.
+  using cablecal::FormatDouble;
+  auto edit = [&](int pose, int col, const std::function<double(double)>& f) {
+    std::istringstream in(clean);
+    std::string line, out;
+    while (std::getline(in, line)) {
+      if (!line.empty() && line[0] != '#' && line.rfind("pose,", 0) != 0) {
+        std::vector<std::string> cells;
+        std::stringstream ss(line);
+        for (std::string c; std::getline(ss, c, ',');) cells.push_back(c);
+        if (pose == 0 || std::stoi(cells[0]) == pose) cells[col] = FormatDouble(f(std::stod(cells[col])));
+        line = cells[0];
+        for (std::size_t k = 1; k < cells.size(); ++k) line += "," + cells[k];
+      }
+      out += line + "\n";
+    }
+    std::ofstream(Path("bad.csv")) << out;
+  };
+  const struct {
+    int pose, col;
+    std::function<double(double)> f;
+    std::string message;
+  } cases[] = {
+      {7, 3, [](double) { return 5.0; }, ":10: column 'z': 5 m is outside what the laser can read"},
+      {0, 4, [](double t) { return t * 180 / M_PI; }, "column 'theta': "},
+      {0, 4, [](double) { return 3.0; }, "rad is beyond the inclinometer range"},
+      // One redundant reading per pose (4 readings, 3 pose unknowns): the pose is named
+      // reliably, the sensor is that pose's largest whitened residual, which may be another one.
+      {7, 4, [](double t) { return t + 0.3; }, "pose 7: "},
+      {7, 3, [](double z) { return z + 0.05; }, "pose 7: laser"},
+      {12, 1, [](double dl) { return dl + 0.03; }, "pose 12: "},
+  };
+  for (const auto& c : cases) {
+    edit(c.pose, c.col, c.f);
+    const RunResult r = RunCablecal("identify --measurements " + Path("bad.csv") + " --out " + Path("r.yaml"));
+    EXPECT_EQ(r.exit_code, 2) << c.message << "\n" << r.output;
+    EXPECT_NE(r.output.find(c.message), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(Path("r.yaml")));
+  }
 }
 
 TEST_F(Cli, DesignFailuresWriteNothing) {
