@@ -106,6 +106,7 @@ int RunSimulate(const Context& ctx, const SimulateOptions& options) {
     throw InputError("--truth", "", "give either --truth or --geometry-sigma, not both");
   }
   const std::vector<PlanPose> plan = ReadPosePlanCsv(options.plan_path, nominal.num_cables());
+  CheckPlanMatchesRobot(nominal, plan, options.plan_path);
   // The geometry perturbation and the sensor noise use separate streams of the seed, so the
   // same seed gives the same true robot whatever the sensors' settings.
   Rng geometry_rng(StreamSeed(options.seed, {0}));

@@ -9,6 +9,7 @@
 #include "common/error.h"
 #include "common/format.h"
 #include "common/random.h"
+#include "model/cable.h"
 
 namespace cablecal {
 
@@ -121,6 +122,40 @@ std::string PosePlanCsv(const std::vector<PlanPose>& plan, const std::string& pr
 }  // namespace cablecal
 
 namespace cablecal {
+
+void CheckPlanMatchesRobot(const Robot& robot, const std::vector<PlanPose>& plan, const std::string& source) {
+  constexpr double kLengthTol_m = 1e-6;  // files hold shortest round-trip doubles: far below
+  const double weight_N = robot.platform_mass_kg * robot.gravity_mps2;
+  const Eigen::VectorXd l0 = InitialLengths(robot);
+  for (std::size_t j = 0; j < plan.size(); ++j) {
+    const PlanPose& p = plan[j];
+    const std::string where = source + ": pose " + std::to_string(j + 1);
+    if (!(std::abs(p.q(2)) <= robot.theta_max_rad)) {
+      throw InputError(where, "column 'theta'", FormatDouble(p.q(2)) + " rad is beyond the inclinometer range of +-" +
+                                                    FormatDouble(robot.theta_max_rad) + " rad");
+    }
+    const Eigen::VectorXd l = CableLengths(robot, p.q);
+    for (int i = 0; i < robot.num_cables(); ++i) {
+      const std::string c = std::to_string(i + 1);
+      if (!(std::abs(l(i) - p.lengths_m(i)) <= kLengthTol_m)) {
+        throw InputError(where, "column 'l" + c + "'", FormatDouble(p.lengths_m(i)) + " m is not the length of cable " +
+                                                           c + " of " + robot.name + " at this pose (" +
+                                                           FormatDouble(l(i)) + " m): a plan for another robot?");
+      }
+      if (!(std::abs(l(i) - l0(i) - p.length_change_m(i)) <= kLengthTol_m)) {
+        throw InputError(where, "column 'dl" + c + "'", FormatDouble(p.length_change_m(i)) +
+                                                            " m is not l" + c + " minus the initial length " +
+                                                            FormatDouble(l0(i)) + " m of " + robot.name);
+      }
+    }
+    const double residual_N = EquilibriumResidual<double>(robot, p.q, p.tensions_N).norm();
+    if (!(residual_N <= 1e-6 * weight_N)) {
+      throw InputError(where, "columns 'x,z,theta,t1,t2'",
+                       "not a static equilibrium of " + robot.name + " (force and moment residual " +
+                           FormatDouble(residual_N) + " N): the platform would not stay at this pose");
+    }
+  }
+}
 
 std::vector<PlanPose> ReadPosePlanCsv(const std::string& path, int num_cables) {
   std::ifstream in(path, std::ios::binary);

@@ -70,4 +70,10 @@ std::vector<PlanPose> ReadPosePlanCsv(const std::string& path, int num_cables);
 std::vector<PlanPose> ReadPosePlanCsv(std::istream& in, const std::string& name, int num_cables);
 constexpr int kMaxPlanPoses = 100000;
 
+// A plan read from a file must be one of `robot`'s: every pose an equilibrium of its statics
+// with the plan's tensions, |theta| within the inclinometer range, and the lengths and length
+// changes those of the robot's model at that pose (to 1e-6 m). InputError naming the file,
+// the pose and the column otherwise (a plan made for another robot, or edited by hand).
+void CheckPlanMatchesRobot(const Robot& robot, const std::vector<PlanPose>& plan, const std::string& source);
+
 }  // namespace cablecal

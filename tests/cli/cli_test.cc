@@ -328,6 +328,38 @@ TEST_F(Cli, ImpossibleAndOutlyingReadingsAreRefusedByName) {
   }
 }
 
+// A plan must be one of the robot's: poses off its equilibrium, beyond the inclinometer, or
+// made for another robot are refused by pose and column.
+TEST_F(Cli, SimulateRefusesPlansThatAreNotTheRobots) {
+  ASSERT_EQ(RunCablecal("sample --poses 5 --seed 2 --out " + Path("p.csv")).exit_code, 0);
+  const std::string plan = Read("p.csv");
+  const std::size_t row = plan.find("\n1,") + 1;
+  const std::size_t theta_start = [&] {
+    std::size_t at = row;
+    for (int k = 0; k < 3; ++k) at = plan.find(',', at) + 1;
+    return at;
+  }();
+  const std::size_t theta_end = plan.find(',', theta_start);
+  std::string bad = plan;
+  bad.replace(theta_start, theta_end - theta_start, "100");
+  std::ofstream(Path("theta.csv")) << bad;
+  RunResult r = RunCablecal("simulate --plan " + Path("theta.csv") + " --out " + Path("m.csv"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("theta.csv: pose 1: column 'theta': 100 rad is beyond the inclinometer range"),
+            std::string::npos) << r.output;
+  bad = plan;
+  bad.replace(theta_start, theta_end - theta_start, "0.01");
+  std::ofstream(Path("offeq.csv")) << bad;
+  r = RunCablecal("simulate --plan " + Path("offeq.csv") + " --out " + Path("m.csv"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("offeq.csv: pose 1: column 'l1'"), std::string::npos) << r.output;
+  r = RunCablecal("simulate --robot " + std::string(CABLECAL_SOURCE_DIR) + "/robots/asymmetric.yaml --plan " +
+                  Path("p.csv") + " --out " + Path("m.csv"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("a plan for another robot?"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(Path("m.csv")));
+}
+
 TEST_F(Cli, DesignFailuresWriteNothing) {
   const RunResult few = RunCablecal("design --poses 4 --out " + Path("p.csv") + " --summary " + Path("s.yaml"));
   EXPECT_EQ(few.exit_code, 2) << few.output;
