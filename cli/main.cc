@@ -50,7 +50,7 @@ int main(int argc, char** argv) {
   cablecal::cli::SampleOptions sample;
   CLI::App* sample_cmd = app.add_subcommand("sample", "draw random feasible poses as a pose plan CSV");
   AddRobotOption(sample_cmd, &sample.robot_path);
-  sample_cmd->add_option("--poses", sample.poses, "number of poses")->required()->check(CLI::PositiveNumber);
+  sample_cmd->add_option("--poses", sample.poses, "number of poses")->required()->check(CLI::Range(1, 100000));
   sample_cmd->add_option("--seed", sample.seed, "random seed")->capture_default_str();
   sample_cmd->add_option("--out", sample.out_path, "pose plan CSV")->required();
 
@@ -95,7 +95,7 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"condition", "d", "a", "e"}));
   des_cmd->add_option("--starts", des.starts, "random feasible starts (best kept)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(1, 1000));
   des_cmd->add_option("--seed", des.seed, "random seed")->capture_default_str();
   des_cmd->add_option("--min-spacing", des.min_spacing_m, "minimum distance between poses, m")
       ->capture_default_str()
@@ -133,7 +133,7 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   mc_cmd->add_option("--design-starts", mc.design_starts, "Ipopt starts per designed set")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::Range(1, 1000));
   mc_cmd->add_option("--threads", mc.threads, "OpenMP threads (default: all cores)")->check(CLI::PositiveNumber);
   mc_cmd->add_option("--seed", mc.seed, "random seed")->capture_default_str();
   mc_cmd->add_flag("!--no-plot", mc.plot, "skip the figures");

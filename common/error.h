@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <new>
 #include <stdexcept>
 #include <string>
 
@@ -97,6 +98,11 @@ inline ErrorOutcome OutcomeOf(const std::exception_ptr& error) {
     out = {kExitRankFailed, "MPI run failed", e.what()};
   } catch (const Interrupted& e) {
     out = {kExitInterrupted, "", e.what()};
+  } catch (const std::bad_alloc&) {
+    // Not a bug: the inputs asked for more memory than this machine has.
+    out = {kExitBadInput, "error",
+           "out of memory: the inputs ask for more memory than this machine has (fewer poses, trials, "
+           "pose counts or a coarser --step)"};
   } catch (const std::exception& e) {
     out.message = e.what();
   } catch (...) {

@@ -301,6 +301,31 @@ IdentifyResult Identify(const Robot& nominal, const std::vector<Measurement>& me
     return result;
   }
 
+  // An estimate no real robot of this file can have: an exit point off the frame (by more than
+  // the robot file's own 0.1 m tolerance) or any parameter more than kImplausibleChange_m from
+  // nominal. Measurements in other units, or of another robot, converge there.
+  {
+    constexpr double kImplausibleChange_m = 0.5;
+    constexpr double kOffFrame_m = 0.1;
+    for (int k = 0; k < 6; ++k) {
+      const double change = result.geometry(k) - nominal_geometry(k);
+      std::string why;
+      if (k < 4) {
+        const double v = result.geometry(k);
+        const double hi = k % 2 == 0 ? nominal.frame_width_m : nominal.frame_height_m;
+        if (v < -kOffFrame_m || v > hi + kOffFrame_m) why = "outside the frame";
+      }
+      if (why.empty() && std::abs(change) > kImplausibleChange_m) why = "more than 0.5 m from nominal";
+      if (!why.empty()) {
+        result.status = IdentifyStatus::kPoorFit;
+        result.message = std::string("the identified ") + kGeometryNames[k] + " = " + FormatDouble(result.geometry(k)) +
+                         " m is " + why + " (nominal " + FormatDouble(nominal_geometry(k)) +
+                         " m): are the readings in the file's units (m, rad), and of this robot?";
+        return result;
+      }
+    }
+  }
+
   // Per reading: one bad reading among many hardly moves the global RMS above, yet drags the
   // estimate by many sigma. Every whitened residual (ml: each reading over its sigma; paper:
   // each length residual over the laser's sigma, as above) beyond kOutlierSigmas refuses the

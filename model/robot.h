@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <cmath>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -73,7 +74,9 @@ struct Robot {
 // Parses and validates a robot file. Throws InputError naming file, line and key on any
 // problem: missing or unknown key, wrong type, non-finite or out-of-range value,
 // coincident anchors, tension min >= max, or a home pose outside the feasible workspace.
+// Refuses files larger than kMaxRobotFileBytes and anything that is not a regular file.
 Robot LoadRobotFile(const std::string& path);
+constexpr std::uintmax_t kMaxRobotFileBytes = 1 << 20;
 
 // The same from YAML text; `source` names it in messages.
 Robot LoadRobotFromString(const std::string& yaml_text, const std::string& source);

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -262,6 +263,17 @@ Robot LoadRobotFromString(const std::string& yaml_text, const std::string& sourc
 }
 
 Robot LoadRobotFile(const std::string& path) {
+  // A robot file is a page of YAML: refuse devices (/dev/zero would be read forever) and
+  // anything over kMaxRobotFileBytes before reading it.
+  std::error_code ec;
+  const std::filesystem::file_status st = std::filesystem::status(path, ec);
+  if (std::filesystem::exists(st) && !std::filesystem::is_regular_file(st)) {
+    throw InputError(path, "", "is not a regular file (a folder, a device or a pipe)");
+  }
+  if (std::filesystem::exists(st) && std::filesystem::file_size(path, ec) > kMaxRobotFileBytes) {
+    throw InputError(path, "", "is larger than " + std::to_string(kMaxRobotFileBytes / 1024) +
+                                   " KiB: not a robot file");
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "", "cannot open the robot file");
   std::stringstream buffer;

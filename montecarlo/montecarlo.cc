@@ -158,6 +158,16 @@ Criterion CriterionOf(PoseSetDesign d) {
 
 void ValidateOptions(const MonteCarloOptions& o) {
   if (o.trials < 1) throw InputError("--trials", "", "must be at least 1");
+  // Every successful trial keeps 6 + n errors (8 bytes each): refuse a study that would not
+  // fit in memory before starting it, naming the size.
+  double bytes = 0.0;
+  for (const int n : o.pose_counts) bytes += 8.0 * (6 + n) * o.trials * static_cast<double>(o.designs.size());
+  if (bytes > kMaxStudyBytes) {
+    char buffer[160];
+    std::snprintf(buffer, sizeof(buffer), "the study would keep %.3g GB of errors (at most %.3g GB): fewer trials or "
+                  "pose counts, or split it into several runs", bytes / 1e9, kMaxStudyBytes / 1e9);
+    throw InputError("--trials", "", buffer);
+  }
   if (o.pose_counts.empty()) throw InputError("--poses", "", "no pose counts");
   if (o.designs.empty()) throw InputError("--designs", "", "no designs");
   if (!(o.geometry_sigma_m >= 0.0 && o.geometry_sigma_m <= kMaxGeometrySigma_m)) {

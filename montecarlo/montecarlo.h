@@ -81,6 +81,7 @@ struct MonteCarloResult {
 // Throws InputError for bad options and SolverFailure if a designed set cannot be made.
 MonteCarloResult RunMonteCarlo(const Robot& nominal, const MonteCarloOptions& options);
 void ValidateOptions(const MonteCarloOptions& options);  // the InputErrors of RunMonteCarlo
+constexpr double kMaxStudyBytes = 4e9;  // the errors a study keeps in memory, at most
 
 // ---- Splitting a study into shares -------------------------------------------------------
 // Items are the study's trials numbered cell by cell (cells n-major, then designs in the

@@ -80,6 +80,21 @@ TEST(EdgeCases, MeasurementsFarFromAnyReachablePoseAreFlagged) {
   }
 }
 
+// Good readings shifted by 0.8 m in every encoder (a wrong zero, or another robot): the fit
+// converges, but to initial lengths no robot of this file has, and is refused with the cause.
+TEST(EdgeCases, ImplausibleIdentifiedGeometryIsRefusedWithTheLikelyCause) {
+  const Robot& robot = BuiltinRobot();
+  const auto plan = SampleFeasiblePoses(robot, 12, 4);
+  Rng rng(2);
+  SimulatedExperiment sim = SimulateExperiment(robot, robot, plan, SimulationOptions{}, rng);
+  ASSERT_TRUE(Identify(robot, sim.measurements, IdentifyOptions{}).converged());
+  for (Measurement& m : sim.measurements) m.dl_m.array() -= 0.8;
+  const IdentifyResult r = Identify(robot, sim.measurements, IdentifyOptions{});
+  EXPECT_EQ(r.status, IdentifyStatus::kPoorFit) << r.message;
+  EXPECT_NE(r.message.find("more than 0.5 m from nominal"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("units"), std::string::npos) << r.message;
+}
+
 TEST(EdgeCases, MillionRowCsvIsStreamedAndRejectedAtTheCap) {
   const fs::path path = fs::temp_directory_path() / ("cablecal_million_" + std::to_string(::getpid()) + ".csv");
   {

@@ -1,6 +1,8 @@
 // Robot files: the built-in robot, and every rejection with its message.
 #include <gtest/gtest.h>
 
+#include <cstdio>
+#include <fstream>
 #include <regex>
 #include <string>
 
@@ -118,6 +120,24 @@ TEST(RobotFile, MissingAndEmptyFiles) {
   }
   EXPECT_NE(LoadError("").find("empty"), std::string::npos);
   EXPECT_NE(LoadError("# only a comment\n").find("empty"), std::string::npos);
+  // Devices and huge files are refused before reading (/dev/zero would never end).
+  for (const char* device : {"/dev/zero", "/dev/null", "/tmp"}) {
+    try {
+      LoadRobotFile(device);
+      FAIL() << "loaded " << device;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("is not a regular file"), std::string::npos) << e.what();
+    }
+  }
+  const std::string big = ::testing::TempDir() + "cablecal_big_robot.yaml";
+  std::ofstream(big) << BuiltinRobotYaml() << std::string(kMaxRobotFileBytes, '#') << "\n";
+  try {
+    LoadRobotFile(big);
+    FAIL() << "loaded a file over the size cap";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("is larger than 1024 KiB"), std::string::npos) << e.what();
+  }
+  std::remove(big.c_str());
 }
 
 TEST(RobotFile, LineNumberPointsAtTheOffendingKey) {

@@ -131,6 +131,21 @@ TEST(MonteCarlo, AFailedDesignFailsOnlyItsCell) {
   EXPECT_NE(SummaryCsv(r).find("\n6,optimized,a2x,,,,,,6,6,0,0,0\n"), std::string::npos) << SummaryCsv(r);
 }
 
+TEST(MonteCarlo, AStudyTooLargeForMemoryIsRefusedWithItsSize) {
+  MonteCarloOptions o;
+  o.pose_counts = ParsePoseCounts("6:50");
+  o.designs = {PoseSetDesign::kRandom};
+  o.trials = 100000000;
+  try {
+    ValidateOptions(o);
+    FAIL() << "accepted a study of " << o.trials << " trials per cell";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("GB of errors"), std::string::npos) << e.what();
+  }
+  o.trials = 1000;
+  EXPECT_NO_THROW(ValidateOptions(o));
+}
+
 TEST(MonteCarlo, InterruptStopsEarly) {
   std::atomic<bool> stop{true};
   MonteCarloOptions o = Small();
