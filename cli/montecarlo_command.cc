@@ -63,9 +63,9 @@ std::string RunYaml(const Robot& robot, const MonteCarloOptions& o, const std::s
   }
   std::string s;
   s += "cablecal: {version: " + std::string(Version()) + ", commit: " + GitCommit() + "}\n";
-  s += "command: \"" + ctx.command_line + "\"\n";
-  s += "robot: {name: " + robot.name + ", source: \"" + robot.source + "\"}\n";
-  s += "poses: \"" + poses_text + "\"\n";
+  s += "command: " + YamlQuoted(ctx.command_line) + "\n";
+  s += "robot: {name: " + YamlQuoted(robot.name) + ", source: " + YamlQuoted(robot.source) + "}\n";
+  s += "poses: " + YamlQuoted(poses_text) + "\n";
   s += "designs: [" + designs + "]\n";
   s += "trials: " + std::to_string(o.trials) + "\n";
   s += "estimator: " + std::string(ToString(o.estimator)) + "\n";

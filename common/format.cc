@@ -1,5 +1,8 @@
 #include "common/format.h"
 
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <cctype>
@@ -12,18 +15,43 @@ std::string FormatDouble(double value) {
   if (value == 0.0) return "0";  // also folds -0 so that outputs do not depend on its sign
   char buffer[64];
   const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
-  return std::string(buffer, result.ptr);
+  std::string text(buffer, result.ptr);
+  // YAML 1.1 readers (PyYAML) take "1e-05" for a string: a float needs a '.' there. "1.0e-05"
+  // is the same double for every reader.
+  const std::size_t e = text.find('e');
+  if (e != std::string::npos && text.find('.') == std::string::npos) text.insert(e, ".0");
+  return text;
+}
+
+std::string YamlQuoted(const std::string& text) {
+  YAML::Emitter out;
+  out << YAML::DoubleQuoted << text;
+  return out.c_str();
 }
 
 bool ParseFiniteDouble(const std::string& text, double* value) {
-  // strtod would skip leading blanks; a cell or scalar with them is not a plain number.
-  if (text.empty() || std::isspace(static_cast<unsigned char>(text[0]))) return false;
-  errno = 0;
-  char* end = nullptr;
-  const double v = std::strtod(text.c_str(), &end);
-  if (end != text.c_str() + text.size()) return false;
-  if (errno == ERANGE && std::fabs(v) > 1.0) return false;  // overflow; underflow to 0 is fine
-  if (!std::isfinite(v)) return false;
+  // std::from_chars, not strtod: the decimal point must not follow the C locale of the
+  // process (a library user's may be "de_DE", where strtod expects a comma).
+  const char* first = text.data();
+  const char* last = text.data() + text.size();
+  if (first != last && *first == '+') ++first;  // from_chars takes no '+'; hand-written files may
+  if (first == last || std::isspace(static_cast<unsigned char>(*first)) || *first == '+' ||
+      (first != text.data() && *first == '-')) {
+    return false;
+  }
+  double v = 0.0;
+  const auto result = std::from_chars(first, last, v);
+  if (result.ptr != last) return false;
+  if (result.ec == std::errc::result_out_of_range) {
+    // Too small underflows to zero, which is fine; too large is refused. Out of range with a
+    // negative exponent is taken as too small (a mantissa of hundreds of digits is not data).
+    const char* exp = std::find_if(first, last, [](char c) { return c == 'e' || c == 'E'; });
+    if (!(exp != last && exp + 1 != last && exp[1] == '-')) return false;
+    v = 0.0;
+  } else if (result.ec != std::errc()) {
+    return false;
+  }
+  if (!std::isfinite(v)) return false;  // "inf", "nan"
   *value = v;
   return true;
 }

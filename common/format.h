@@ -6,10 +6,16 @@
 
 namespace cablecal {
 
+// With a '.' before any exponent ("1.0e-05"), so that YAML 1.1 readers see a float.
 std::string FormatDouble(double value);
 
+// A string as a double-quoted YAML scalar, escaped by yaml-cpp's emitter: any robot name, path
+// or message (": ", quotes, newlines) reads back as the same string.
+std::string YamlQuoted(const std::string& text);
+
 // Parses a whole string as a finite double; returns false on anything else
-// (empty, trailing characters, nan, inf, out of range such as 1e400).
+// (empty, trailing characters, nan, inf, out of range such as 1e400). Independent of the
+// process's C locale.
 bool ParseFiniteDouble(const std::string& text, double* value);
 
 }  // namespace cablecal

@@ -28,8 +28,10 @@ std::string CommandLine(const std::vector<std::string>& argv) {
 }
 
 std::string ProvenanceComment(const std::string& command_line) {
-  return std::string("# cablecal ") + Version() + " (commit " + GitCommit() + ")\n# command: " +
-         command_line + "\n";
+  // A newline in an argument (a path) would end the comment and start a data line.
+  std::string one_line;
+  for (const char c : command_line) one_line += c == '\n' ? "\\n" : c == '\r' ? "\\r" : std::string(1, c);
+  return std::string("# cablecal ") + Version() + " (commit " + GitCommit() + ")\n# command: " + one_line + "\n";
 }
 
 std::string LoadedLibraryPath(const std::string& name) {

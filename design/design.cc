@@ -376,7 +376,7 @@ std::string DesignSummaryYaml(const DesignResult& r, const DesignOptions& option
   o << "# cablecal design summary (README, \"Experiment design\"). Criteria of the returned set are\n"
     << "# recomputed from its verified poses. S: information of a1z a2x a2z l10 l20 (1/m^2).\n";
   o << "cablecal: {version: " << Version() << ", commit: " << GitCommit() << "}\n";
-  o << "command: \"" << command_line << "\"\n";
+  o << "command: " << YamlQuoted(command_line) << "\n";
   o << "poses: " << options.poses << "\n";
   o << "criterion: " << ToString(options.criterion) << "\n";
   o << "seed: " << options.seed << "\n";
@@ -401,7 +401,7 @@ std::string DesignSummaryYaml(const DesignResult& r, const DesignOptions& option
       << ", verified: " << (s.verified ? "true" : "false");
     if (s.verified) o << ", objective: " << FormatDouble(s.objective);
     o << ", robust_sigmas_in_nlp: " << FormatDouble(std::round(s.robust_sigmas * 1e6) / 1e6);
-    if (s.converged && !s.verified) o << ", verification_failure: \"" << s.verification_failure << "\"";
+    if (s.converged && !s.verified) o << ", verification_failure: " << YamlQuoted(s.verification_failure);
     o << "}\n";
   }
   o << "robustness: {geometry_sigma_m: " << FormatDouble(options.geometry_sigma_m)

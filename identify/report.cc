@@ -15,11 +15,6 @@ std::string Num(double v) {
   return FormatDouble(v);
 }
 
-std::string Quoted(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) out += (c == '"' || c == '\\') ? std::string("\\") + c : std::string(1, c);
-  return out + "\"";
-}
 
 }  // namespace
 
@@ -27,9 +22,9 @@ std::string IdentifyResultYaml(const IdentifyResult& r, const std::string& comma
   std::ostringstream o;
   o << "# cablecal identification result (README, \"identify\"). SI units: m, rad.\n";
   o << "cablecal: {version: " << Version() << ", commit: " << GitCommit() << "}\n";
-  o << "command: " << Quoted(command_line) << "\n";
+  o << "command: " << YamlQuoted(command_line) << "\n";
   o << "status: " << ToString(r.status) << "\n";
-  if (!r.message.empty()) o << "message: " << Quoted(r.message) << "\n";
+  if (!r.message.empty()) o << "message: " << YamlQuoted(r.message) << "\n";
   o << "estimator: " << ToString(r.estimator) << "\n";
   o << "gauge: " << ToString(r.gauge) << "\n";
   switch (r.gauge) {
@@ -89,7 +84,7 @@ std::string IdentifyResultYaml(const IdentifyResult& r, const std::string& comma
     o << "  null_directions:";
     if (id.null_directions.empty()) o << " []";
     o << "\n";
-    for (const std::string& d : id.null_directions) o << "    - " << Quoted(d) << "\n";
+    for (const std::string& d : id.null_directions) o << "    - " << YamlQuoted(d) << "\n";
   }
   return o.str();
 }

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -34,8 +35,11 @@ class Reader {
   void ExpectMap(const YAML::Node& node, const std::string& key,
                  const std::set<std::string>& required, const std::set<std::string>& optional) const {
     if (!node.IsMap()) Fail(node, key, "must be a mapping");
+    std::map<std::string, int> seen_line;  // a repeated key would silently lose one value
     for (const auto& kv : node) {
       const std::string name = kv.first.as<std::string>();
+      const auto [it, fresh] = seen_line.emplace(name, kv.first.Mark().line + 1);
+      if (!fresh) Fail(kv.first, Join(key, name), "given twice (first at line " + std::to_string(it->second) + ")");
       if (!required.count(name) && !optional.count(name)) {
         Fail(kv.first, Join(key, name), "unknown key (misspelt?)");
       }
@@ -249,7 +253,12 @@ Robot LoadRobotFromString(const std::string& yaml_text, const std::string& sourc
   const Reader rd(source);
   YAML::Node root;
   try {
-    root = YAML::Load(yaml_text);
+    const std::vector<YAML::Node> documents = YAML::LoadAll(yaml_text);
+    if (documents.size() > 1) {
+      throw InputError(source + ":" + std::to_string(documents[1].Mark().line + 1), "",
+                       "a second YAML document ('---'): a robot file holds one robot");
+    }
+    if (!documents.empty()) root = documents.front();
   } catch (const YAML::ParserException& e) {
     throw InputError(source + ":" + std::to_string(e.mark.line + 1), "", "not valid YAML: " + e.msg);
   }
@@ -292,7 +301,7 @@ std::string RobotToYaml(const Robot& robot) {
     return "[" + FormatDouble(v.x()) + ", " + FormatDouble(v.y()) + "]";
   };
   std::ostringstream o;
-  o << "name: " << robot.name << "\n";
+  o << "name: " << YamlQuoted(robot.name) << "\n";
   o << "gravity: " << FormatDouble(robot.gravity_mps2) << "\n";
   o << "frame: {width: " << FormatDouble(robot.frame_width_m)
     << ", height: " << FormatDouble(robot.frame_height_m) << "}\n";

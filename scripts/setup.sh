@@ -24,6 +24,7 @@ case "${1:-}" in
     PACKAGES+=(
       clang libclang-rt-dev       # libFuzzer targets of tests/fuzz
       libopenmpi-dev openmpi-bin  # the CABLECAL_MPI build and its mpirun tests
+      locales-all                 # a decimal-comma locale: number parsing must not depend on it
     ) ;;
   *) echo "cablecal setup: unknown option '$1' (use --tests or nothing)" >&2; exit 2 ;;
 esac

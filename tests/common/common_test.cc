@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <clocale>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -40,6 +42,43 @@ TEST(Format, ParseRejectsNonFinite) {
   EXPECT_TRUE(ParseFiniteDouble("1e-400", &v));  // underflow to zero is a number
   EXPECT_TRUE(ParseFiniteDouble("-2.5e3", &v));
   EXPECT_EQ(v, -2500.0);
+}
+
+TEST(Format, YamlReadersSeeFloats) {
+  // PyYAML (YAML 1.1) reads "1e-05" as a string; every number written has a '.' before 'e'.
+  EXPECT_EQ(FormatDouble(1e-5), "1.0e-05");
+  EXPECT_EQ(FormatDouble(2.5e-7), "2.5e-07");
+  EXPECT_EQ(FormatDouble(1e22), "1.0e+22");
+  for (const double v : {1e-5, 3e300, -7e-12}) {
+    double back = 0.0;
+    ASSERT_TRUE(ParseFiniteDouble(FormatDouble(v), &back));
+    EXPECT_EQ(back, v);
+  }
+  double v = 0.0;
+  EXPECT_TRUE(ParseFiniteDouble("+1.5", &v));
+  EXPECT_EQ(v, 1.5);
+  EXPECT_FALSE(ParseFiniteDouble("+-1", &v));
+  EXPECT_FALSE(ParseFiniteDouble("1,5", &v));
+  EXPECT_TRUE(ParseFiniteDouble("1e-400", &v));
+  EXPECT_EQ(v, 0.0);
+}
+
+TEST(Format, ParsingIgnoresADecimalCommaLocale) {
+  // A process whose C locale writes decimal commas (a library user's) reads the same.
+  double v = 0.0;
+  const char* old = std::setlocale(LC_NUMERIC, nullptr);
+  const std::string saved = old ? old : "C";
+  bool switched = false;
+  for (const char* name : {"de_DE.UTF-8", "de_DE.utf8", "fr_FR.UTF-8", "C.UTF-8"}) {
+    if (std::setlocale(LC_NUMERIC, name) && std::string(std::localeconv()->decimal_point) == ",") {
+      switched = true;
+      break;
+    }
+  }
+  EXPECT_TRUE(ParseFiniteDouble("2.75", &v));
+  EXPECT_EQ(v, 2.75);
+  std::setlocale(LC_NUMERIC, saved.c_str());
+  if (!switched) GTEST_SKIP() << "no locale with a decimal comma is installed here";
 }
 
 TEST(Random, SameSeedSameStreamAndStreamsDiffer) {

@@ -57,6 +57,11 @@ TEST(RobotFile, YamlRoundTrip) {
   const Robot back = LoadRobotFromString(RobotToYaml(r), "roundtrip");
   EXPECT_EQ(RobotToYaml(back), RobotToYaml(r));
   EXPECT_EQ(*back.cables[0].initial_length_m, 2.9);
+  // Any name survives the trip: YAML's special characters are quoted by yaml-cpp's emitter.
+  for (const char* name : {"lab: robot #2", "\"quoted\" and \\ back", "two\nlines", "- dash", "1e-04"}) {
+    r.name = name;
+    EXPECT_EQ(LoadRobotFromString(RobotToYaml(r), "roundtrip").name, name);
+  }
 }
 
 struct BadCase {
@@ -107,6 +112,11 @@ INSTANTIATE_TEST_SUITE_P(
                 "cables\\[0\\]\\.exit: \\(0, 3\\.5\\) m is outside the frame"},
         BadCase{"RadiusInMillimetres", "pulley_radius: 0.025, side: left", "pulley_radius: 25, side: left",
                 "cables\\[0\\]\\.pulley_radius: 25 m is more than a quarter of the frame"},
+        BadCase{"DuplicateKey", "gravity: 9.81", "gravity: 9.81\ngravity: 1.62", "gravity: given twice \\(first at line"},
+        BadCase{"DuplicateNestedKey", "{width: 5.209, height: 2.8}", "{width: 5.209, height: 2.8, width: 3}",
+                "frame\\.width: given twice"},
+        BadCase{"SecondDocument", "  tracker: {sigma: 0.0005}", "  tracker: {sigma: 0.0005}\n---\nname: other",
+                "a second YAML document"},
         BadCase{"InvalidYaml", "frame: {width: 5.209, height: 2.8}", "frame: {width: 5.209, height: [2.8}",
                 "not valid YAML"}),
     [](const ::testing::TestParamInfo<BadCase>& info) { return std::string(info.param.name); });
