@@ -149,7 +149,7 @@ int RunMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptions& opt
     o.geometry_sigma_m = options.geometry_sigma_m;
     o.seed = options.seed;
     o.design_starts = options.design_starts;
-    ValidateOptions(o);
+    ValidateOptions(o, &robot);
   });
   if (options.threads > 0) omp_set_num_threads(options.threads);
   const int threads = omp_get_max_threads();

@@ -304,7 +304,7 @@ IdentifyResult Identify(const Robot& nominal, const std::vector<Measurement>& me
   // An estimate no real robot of this file can have: an exit point off the frame (by more than
   // the robot file's own 0.1 m tolerance) or any parameter more than kImplausibleChange_m from
   // nominal. Measurements in other units, or of another robot, converge there.
-  {
+  if (options.check_plausible_geometry) {
     constexpr double kImplausibleChange_m = 0.5;
     constexpr double kOffFrame_m = 0.1;
     for (int k = 0; k < 6; ++k) {

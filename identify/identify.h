@@ -39,6 +39,10 @@ struct IdentifyOptions {
   Gauge gauge = Gauge::kA1x;
   bool compute_covariance = true;     // off in the Monte Carlo, which needs only the estimates
   bool compute_identifiability = true;
+  // Refuse estimates no robot of this file can have (an exit point off the frame, a parameter
+  // more than 0.5 m from nominal) as poor_fit. Off in the Monte Carlo: there a wild estimate
+  // from a poor pose set is a result to count, not a sign of wrong data.
+  bool check_plausible_geometry = true;
   int max_iterations = 100;
   std::string source = "measurements";  // names the data in messages
 };

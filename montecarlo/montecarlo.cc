@@ -129,6 +129,7 @@ TrialOutcome RunTrial(const Robot& nominal, const MonteCarloOptions& o, int n, P
     id.gauge = o.gauge;
     id.compute_covariance = false;
     id.compute_identifiability = false;
+    id.check_plausible_geometry = false;  // a wild estimate from a poor pose set is counted, not refused
     const IdentifyResult r = Identify(nominal, sim.measurements, id);
     if (!r.converged()) {
       out.failure = std::string("identification: ") + ToString(r.status) + (r.message.empty() ? "" : " (" + r.message + ")");
@@ -156,8 +157,11 @@ Criterion CriterionOf(PoseSetDesign d) {
 
 }  // namespace
 
-void ValidateOptions(const MonteCarloOptions& o) {
+void ValidateOptions(const MonteCarloOptions& o, const Robot* nominal) {
   if (o.trials < 1) throw InputError("--trials", "", "must be at least 1");
+  if (nominal && o.gauge == Gauge::kPrior && !nominal->sensors.tracker_sigma_m) {
+    throw InputError(nominal->source, "sensors.tracker.sigma", "is needed for --gauge prior");
+  }
   // Every successful trial keeps 6 + n errors (8 bytes each): refuse a study that would not
   // fit in memory before starting it, naming the size.
   double bytes = 0.0;
@@ -253,7 +257,7 @@ ShareResult RunShare(const Robot& nominal, const MonteCarloOptions& o, const Des
 
 MonteCarloResult RunMonteCarlo(const Robot& nominal, const MonteCarloOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
-  ValidateOptions(o);
+  ValidateOptions(o, &nominal);
   MonteCarloResult result;
   // Designed sets first: once per (n, criterion), each from its own seed stream.
   DesignedSets designed;

@@ -80,7 +80,9 @@ struct MonteCarloResult {
 
 // Throws InputError for bad options and SolverFailure if a designed set cannot be made.
 MonteCarloResult RunMonteCarlo(const Robot& nominal, const MonteCarloOptions& options);
-void ValidateOptions(const MonteCarloOptions& options);  // the InputErrors of RunMonteCarlo
+// The InputErrors of RunMonteCarlo; with `nominal`, also what the options need of the robot
+// (a tracker sigma for --gauge prior).
+void ValidateOptions(const MonteCarloOptions& options, const Robot* nominal = nullptr);
 constexpr double kMaxStudyBytes = 4e9;  // the errors a study keeps in memory, at most
 
 // ---- Splitting a study into shares -------------------------------------------------------

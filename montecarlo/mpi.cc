@@ -179,7 +179,7 @@ MonteCarloResult RunMonteCarloMpi(const Robot& nominal, const MonteCarloOptions&
   const auto t0 = std::chrono::steady_clock::now();
   const MpiWorld world = WorldOf();
   try {
-    ValidateOptions(options);
+    ValidateOptions(options, &nominal);
   } catch (const InputError&) {
     if (world.rank == 0) throw;
     throw AlreadyReported(kExitBadInput);  // every rank has the same options

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <unistd.h>
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -139,8 +140,9 @@ TEST(RobustDesign, RobustPlansSurviveTheTrueGeometryNominalOnesDoNot) {
   const DesignResult nominal = DesignPoses(robot, options);
   const double robust_share = UnholdableShare(robot, robust.poses, 0.01, 100);
   const double nominal_share = UnholdableShare(robot, nominal.poses, 0.01, 100);
-  // Measured: 1.2 % robust against 44 % nominal (per true robot and pose; linearised 3 sigma
-  // bounds leave the strongly nonlinear top of the workspace a little exposed).
+  std::printf("unholdable (true robot, pose) pairs: robust plan %.2f %%, nominal plan %.2f %%\n", 100 * robust_share,
+              100 * nominal_share);
+  // Linearised 3 sigma bounds checked at 12 axis scenarios leave a little exposed (README).
   EXPECT_LE(robust_share, 0.02) << "nominal design: " << nominal_share;
   EXPECT_GE(nominal_share, 0.05) << "robust design: " << robust_share;
 }

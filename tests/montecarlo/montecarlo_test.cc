@@ -146,6 +146,20 @@ TEST(MonteCarlo, AStudyTooLargeForMemoryIsRefusedWithItsSize) {
   EXPECT_NO_THROW(ValidateOptions(o));
 }
 
+TEST(MonteCarlo, GaugePriorWithoutATrackerIsBadInput) {
+  Robot robot = BuiltinRobot();
+  robot.sensors.tracker_sigma_m.reset();
+  MonteCarloOptions o = Small();
+  o.gauge = Gauge::kPrior;
+  try {
+    RunMonteCarlo(robot, o);
+    FAIL() << "ran --gauge prior without a tracker sigma";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("sensors.tracker.sigma: is needed for --gauge prior"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(MonteCarlo, InterruptStopsEarly) {
   std::atomic<bool> stop{true};
   MonteCarloOptions o = Small();
