@@ -165,6 +165,24 @@ Robot Parse(const YAML::Node& root, const Reader& rd) {
     cable.p_P_anchor_m = rd.Vector2(anchors[i], "platform.anchors[" + std::to_string(i) + "]");
     robot.cables.push_back(cable);
   }
+  // Two cables suspend the platform from either side: one runs up its post on the pulley's
+  // outer (-x) side on the left, the other mirrored on the right. Two of one side, or the
+  // "left" one to the right of the other, would run the cables through the frame.
+  if (robot.cables.size() == 2) {
+    const Cable& a = robot.cables[0];
+    const Cable& b = robot.cables[1];
+    if (a.side == b.side) {
+      rd.Fail(cables[1]["side"], "cables[1].side",
+              std::string("both cables are on their pulleys' ") + (a.side == PulleySide::kLeft ? "left" : "right") +
+                  " side: one suspends the platform from the left post (side: left), the other from the right");
+    }
+    const Cable& left = a.side == PulleySide::kLeft ? a : b;
+    const Cable& right = a.side == PulleySide::kLeft ? b : a;
+    if (!(left.p_F_exit_m.x() < right.p_F_exit_m.x())) {
+      rd.Fail(cables[a.side == PulleySide::kLeft ? 0 : 1]["exit"], a.side == PulleySide::kLeft ? "cables[0].exit" : "cables[1].exit",
+              "the cable with side: left must leave from the left of the one with side: right");
+    }
+  }
   for (std::size_t i = 0; i < robot.cables.size(); ++i) {
     for (std::size_t j = i + 1; j < robot.cables.size(); ++j) {
       if ((robot.cables[i].p_P_anchor_m - robot.cables[j].p_P_anchor_m).norm() < 1e-6) {

@@ -117,6 +117,7 @@ INSTANTIATE_TEST_SUITE_P(
                 "frame\\.width: given twice"},
         BadCase{"SecondDocument", "  tracker: {sigma: 0.0005}", "  tracker: {sigma: 0.0005}\n---\nname: other",
                 "a second YAML document"},
+        BadCase{"BothSidesLeft", "side: right", "side: left", "cables\\[1\\]\\.side: both cables are on their pulleys' left side"},
         BadCase{"InvalidYaml", "frame: {width: 5.209, height: 2.8}", "frame: {width: 5.209, height: [2.8}",
                 "not valid YAML"}),
     [](const ::testing::TestParamInfo<BadCase>& info) { return std::string(info.param.name); });
