@@ -1,4 +1,5 @@
 #include "cli/commands.h"
+#include "cli/sigint.h"
 
 #include <sys/wait.h>
 #include <unistd.h>
@@ -187,6 +188,8 @@ int RunDesign(const Context& ctx, const DesignCommandOptions& options) {
   design.random_sets = options.random_sets;
   design.geometry_sigma_m = options.geometry_sigma_m;
   design.robust_sigmas = options.robust_sigmas;
+  const SigintScope sigint;  // Ctrl-C: Ipopt stops at its next iteration, exit 130, nothing written
+  design.interrupted = &SigintFlag();
   const DesignResult result = DesignPoses(robot, design);
   AtomicOutput output;
   const std::string temp_plan = output.WriteText(options.out_path, PosePlanCsv(result.poses, ProvenanceComment(ctx.command_line)));

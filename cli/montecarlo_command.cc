@@ -9,6 +9,7 @@
 #include <filesystem>
 
 #include "cli/commands.h"
+#include "cli/sigint.h"
 #include "common/atomic_output.h"
 #include "common/error.h"
 #include "common/format.h"
@@ -20,9 +21,6 @@
 
 namespace cablecal::cli {
 namespace {
-
-std::atomic<bool> g_interrupted{false};
-extern "C" void OnSigint(int) { g_interrupted = true; }
 
 // A progress bar with rate and time left when stderr is a terminal; nothing otherwise.
 std::function<void(long, long)> ProgressBar(const std::string& label) {
@@ -100,20 +98,7 @@ void WriteStudy(const std::string& dir, const Robot& robot, const MonteCarloOpti
 }
 
 // Ctrl-C stops the run at the next trial (SIGINT reaches every rank under srun; mpirun
-// ends the ranks itself). Nothing is written either way.
-class SigintScope {
- public:
-  SigintScope() {
-    g_interrupted = false;
-    struct sigaction action {};
-    action.sa_handler = OnSigint;
-    sigaction(SIGINT, &action, &previous_);
-  }
-  ~SigintScope() { sigaction(SIGINT, &previous_, nullptr); }
-
- private:
-  struct sigaction previous_ {};
-};
+// ends the ranks itself). Nothing is written either way (cli/sigint.h).
 
 // Runs one study on every process of the run (agreed: all succeed or all fail together);
 // the whole result is on rank 0, an empty one elsewhere.
@@ -121,7 +106,7 @@ MonteCarloResult RunStudy(const Context& ctx, const Robot& robot, MonteCarloOpti
   MonteCarloResult r;
   RunAgreed(ctx.processes, [&] {
     const SigintScope sigint;
-    o.interrupted = &g_interrupted;
+    o.interrupted = &SigintFlag();
     if (ctx.processes.root()) o.progress = ProgressBar(label);
 #ifdef CABLECAL_WITH_MPI
     r = ctx.processes.count > 1 ? RunMonteCarloMpi(robot, o) : RunMonteCarlo(robot, o);

@@ -234,6 +234,7 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
     std::vector<double> widening(n, 1.0);
     std::vector<PlanPose> from = starts[k];
     for (int round = 0; round <= kRobustRounds; ++round) {
+      if (options.interrupted && options.interrupted->load()) break;
       internal::StartOutcome outcome;
       // MUMPS, Ipopt's linear solver in Debian, is not thread-safe (coin-or/Ipopt#733), so the
       // solves themselves take turns; sampling, verification and the reference sets run in parallel.
@@ -257,6 +258,7 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
     }
   }
 
+  if (options.interrupted && options.interrupted->load()) throw Interrupted();
   DesignResult result;
   double best = std::numeric_limits<double>::infinity();
   for (int k = 0; k < K; ++k) {

@@ -13,6 +13,7 @@
 // Depends on identify/ (the Jacobian rows), workspace/ (sampler, pose plans), model/.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -79,6 +80,9 @@ struct DesignOptions {
   // of nominal (0: nominal bounds only).
   double geometry_sigma_m = 0.01;
   double robust_sigmas = 3.0;
+  // Set (e.g. by SIGINT) to stop: Ipopt ends at its next iteration and DesignPoses throws
+  // Interrupted.
+  const std::atomic<bool>* interrupted = nullptr;
   // Information already gathered (design --prior), counted by the D, A and E criteria.
   std::optional<PriorInformation> prior_information;
   // Testing aids: run Ipopt's derivative checker and keep its journal in this file.

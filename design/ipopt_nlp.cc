@@ -190,6 +190,12 @@ class DesignNlp : public Ipopt::TNLP {
     return true;
   }
 
+  // Ctrl-C: returning false makes Ipopt stop at this iteration (User_Requested_Stop).
+  bool intermediate_callback(Ipopt::AlgorithmMode, Index, Number, Number, Number, Number, Number, Number, Number,
+                             Number, Index, const Ipopt::IpoptData*, Ipopt::IpoptCalculatedQuantities*) override {
+    return !(options_.interrupted && options_.interrupted->load());
+  }
+
   void finalize_solution(Ipopt::SolverReturn status, Index, const Number* x, const Number*, const Number*, Index,
                          const Number*, const Number*, Number, const Ipopt::IpoptData*,
                          Ipopt::IpoptCalculatedQuantities*) override {

@@ -189,6 +189,7 @@ std::vector<PlanPose> MakeDesignedSet(const Robot& nominal, const MonteCarloOpti
   opt.seed = StreamSeed(o.seed, {static_cast<std::uint64_t>(key.n), static_cast<std::uint64_t>(key.design), 0xde5});
   opt.random_sets = 0;
   opt.geometry_sigma_m = o.geometry_sigma_m;  // the plan must survive the same true robots
+  opt.interrupted = o.interrupted;
   try {
     return DesignPoses(nominal, opt).poses;
   } catch (const SolverFailure&) {

@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -394,6 +395,23 @@ TEST_F(Cli, InterruptedMonteCarloLeavesNoOutput) {
                                   " montecarlo --poses 50 --trials 100000 --designs random --no-plot --out " + Path("mc"));
   EXPECT_EQ(r.exit_code, 130) << r.output;
   EXPECT_NE(r.output.find("interrupted: no output written"), std::string::npos) << r.output;
+  EXPECT_TRUE(DirIsEmpty());
+}
+
+// SIGINT during Ipopt (a design that would take half a minute; a Monte Carlo's designed set):
+// honoured at the next Ipopt iteration, exit 130, nothing written.
+TEST_F(Cli, InterruptedDesignStopsWithinASecond) {
+  const auto t0 = std::chrono::steady_clock::now();
+  RunResult r = RunCablecal("env timeout --preserve-status -s INT 1 " + std::string(CABLECAL_BINARY) +
+                            " design --poses 50 --criterion condition --starts 8 --out " + Path("p.csv"));
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_EQ(r.exit_code, 130) << r.output;
+  EXPECT_NE(r.output.find("interrupted: no output written"), std::string::npos) << r.output;
+  EXPECT_LT(seconds, 10.0);  // not a timing assertion on speed: a design left running takes ~30 s
+  r = RunCablecal("env timeout --preserve-status -s INT 1 " + std::string(CABLECAL_BINARY) +
+                  " montecarlo --poses 50 --trials 10 --designs optimized --design-starts 8 --no-plot --out " +
+                  Path("mc"));
+  EXPECT_EQ(r.exit_code, 130) << r.output;
   EXPECT_TRUE(DirIsEmpty());
 }
 
