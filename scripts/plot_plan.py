@@ -55,15 +55,20 @@ def main():
     ax.plot([0, w, w, 0, 0], [0, 0, h, h, 0], color="black", lw=1.5)
     for x, z in args.exit:
         ax.plot(x, z, "rv", ms=9)
+    # Information-based designs repeat poses: one label per place, listing its pose numbers.
+    labels = {}
     for row in read_csv(args.plan):
         x, z, th = float(row["x"]), float(row["z"]), float(row["theta"])
+        labels.setdefault((round(x, 3), round(z, 3)), []).append(row["pose"])
         c, s = math.cos(th), math.sin(th)
         anchors = [(x + c * bx - s * bz, z + s * bx + c * bz) for bx, bz in args.anchor]
         for (ax_, az_), (ex, ez) in zip(anchors, args.exit):
             ax.plot([ax_, ex], [az_, ez], color="0.6", lw=0.5, zorder=1)
         ax.plot([p[0] for p in anchors], [p[1] for p in anchors], color="tab:blue", lw=2.5, zorder=2)
-        ax.annotate(row["pose"], (x, z), textcoords="offset points", xytext=(0, -9), fontsize=6,
-                    ha="center", zorder=3)
+    for (x, z), poses in labels.items():
+        text = ("poses " if len(poses) > 1 else "pose ") + ", ".join(poses)
+        ax.annotate(text, (x, z), textcoords="offset points", xytext=(0, -10), fontsize=7, ha="center", zorder=3,
+                    bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.8))
     ax.set_title(args.title, fontsize=10)
     ax.set_xlabel("x (m)")
     ax.set_ylabel("z (m)")
