@@ -1,6 +1,7 @@
 // Robot file parsing and validation (format: README, "Robot file").
 #include <yaml-cpp/yaml.h>
 
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -269,14 +270,27 @@ static std::string Degrees(double rad) {
 
 Robot LoadRobotFromString(const std::string& yaml_text, const std::string& source) {
   const Reader rd(source);
+  // A second document would be silently ignored by YAML::Load. Found from the text: a line
+  // starting with a document marker ("---" or "...") after content. (yaml-cpp 0.7's LoadAll
+  // loops forever on some malformed inputs, which the fuzzer found.)
+  {
+    std::istringstream lines(yaml_text);
+    std::string line;
+    bool content = false;
+    for (int number = 1; std::getline(lines, line); ++number) {
+      const bool marker = (line.rfind("---", 0) == 0 || line.rfind("...", 0) == 0) &&
+                          (line.size() == 3 || std::isspace(static_cast<unsigned char>(line[3])));
+      if (marker && content) {
+        throw InputError(source + ":" + std::to_string(number), "",
+                         "a second YAML document ('" + line.substr(0, 3) + "'): a robot file holds one robot");
+      }
+      const std::size_t first = line.find_first_not_of(" \t\r");
+      if (!marker && first != std::string::npos && line[first] != '#') content = true;
+    }
+  }
   YAML::Node root;
   try {
-    const std::vector<YAML::Node> documents = YAML::LoadAll(yaml_text);
-    if (documents.size() > 1) {
-      throw InputError(source + ":" + std::to_string(documents[1].Mark().line + 1), "",
-                       "a second YAML document ('---'): a robot file holds one robot");
-    }
-    if (!documents.empty()) root = documents.front();
+    root = YAML::Load(yaml_text);
   } catch (const YAML::ParserException& e) {
     throw InputError(source + ":" + std::to_string(e.mark.line + 1), "", "not valid YAML: " + e.msg);
   }
