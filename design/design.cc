@@ -128,15 +128,15 @@ std::string VerifyRobustness(const Robot& robot, const DesignOptions& options, s
     PlanPose& pose = (*plan)[j];
     Eigen::Matrix<double, 5, 1> y;
     y << pose.q, pose.tensions_N;
-    std::vector<double> value, spread;
-    if (!internal::RobustQuantities(robot, points, y, &value, &spread)) {
+    internal::PoseRobustness at;
+    if (!internal::RobustQuantities(robot, points, y, &at)) {
       return "pose " + std::to_string(j + 1) + ": the equilibrium is singular (a fold of the statics)";
     }
     pose.tensions_worst_min_N.resize(m);
     pose.tensions_worst_max_N.resize(m);
     for (int i = 0; i < m; ++i) {
-      pose.tensions_worst_min_N(i) = value[i] - k_sigma * spread[i];
-      pose.tensions_worst_max_N(i) = value[i] + k_sigma * spread[i];
+      pose.tensions_worst_min_N(i) = at.value[i] - k_sigma * at.spread[i];
+      pose.tensions_worst_max_N(i) = at.value[i] + k_sigma * at.spread[i];
     }
   }
   if (k_sigma == 0.0) return "";

@@ -3,14 +3,12 @@
 #include <IpIpoptApplication.hpp>
 #include <IpSolveStatistics.hpp>
 #include <IpTNLP.hpp>
-#include <ceres/jet.h>
 
 #include <algorithm>
 #include <cmath>
 
 #include "design/objective.h"
 #include "design/robust.h"
-#include "model/cable.h"
 
 namespace cablecal::internal {
 namespace {
@@ -221,28 +219,23 @@ class DesignNlp : public Ipopt::TNLP {
 
   // Pose j's R constraint rows from its 5 variables at x5 into g; if `jac` is given, also
   // their R x 5 Jacobian block, row by row. The equilibrium rows and the quantities' values
-  // are differentiated exactly (Jets); the spreads by central differences (robust.h).
+  // are differentiated exactly (the Jets of RobustQuantities); the spreads by central
+  // differences (robust.h).
   bool PoseRows(const Number* x5, double k_sigma_m, Number* g, Number* jac) const {
     const Eigen::Matrix<double, 5, 1> y = Eigen::Map<const Eigen::Matrix<double, 5, 1>>(x5);
-    std::vector<double> value, spread;
-    Eigen::MatrixXd dvalue;
-    if (!RobustQuantities(robot_, points_, y, &value, &spread, jac ? &dvalue : nullptr)) return false;
-    using Jet5 = ceres::Jet<double, 5>;
-    Eigen::Matrix<Jet5, 5, 1> yj;
-    for (int k = 0; k < 5; ++k) yj(k) = Jet5(y(k), k);
-    const Eigen::Matrix<Jet5, Eigen::Dynamic, 1> t = yj.tail<2>();
-    const Vec3<Jet5> eq = EquilibriumResidual<Jet5>(robot_, Pose<Jet5>(yj.head<3>()), t);
+    PoseRobustness at;
+    if (!RobustQuantities(robot_, points_, y, &at, jac != nullptr)) return false;
     for (int r = 0; r < 3; ++r) {
-      g[r] = eq(r).a;
+      g[r] = at.equilibrium_N(r);
       if (jac) {
-        for (int c = 0; c < 5; ++c) jac[5 * r + c] = eq(r).v(c);
+        for (int c = 0; c < 5; ++c) jac[5 * r + c] = at.dequilibrium_dy(r, c);
       }
     }
     for (int r = 0; r < static_cast<int>(rows_.size()); ++r) {
       const int k = rows_[r].quantity;
-      g[3 + r] = value[k] + rows_[r].sign * k_sigma_m * spread[k];
+      g[3 + r] = at.value[k] + rows_[r].sign * k_sigma_m * at.spread[k];
       if (jac) {
-        for (int c = 0; c < 5; ++c) jac[5 * (3 + r) + c] = dvalue(k, c);
+        for (int c = 0; c < 5; ++c) jac[5 * (3 + r) + c] = at.dvalue_dy(k, c);
       }
     }
     for (int r = 0; r < R; ++r) {
@@ -256,13 +249,13 @@ class DesignNlp : public Ipopt::TNLP {
         Eigen::Matrix<double, 5, 1> yp = y, ym = y;
         yp(c) += h;
         ym(c) -= h;
-        std::vector<double> vp, sp, vm, sm;
-        if (!RobustQuantities(robot_, points_, yp, &vp, &sp) || !RobustQuantities(robot_, points_, ym, &vm, &sm)) {
+        PoseRobustness plus, minus;
+        if (!RobustQuantities(robot_, points_, yp, &plus) || !RobustQuantities(robot_, points_, ym, &minus)) {
           return false;
         }
         for (int r = 0; r < static_cast<int>(rows_.size()); ++r) {
           const int k = rows_[r].quantity;
-          jac[5 * (3 + r) + c] += rows_[r].sign * k_sigma_m * (sp[k] - sm[k]) / (2.0 * h);
+          jac[5 * (3 + r) + c] += rows_[r].sign * k_sigma_m * (plus.spread[k] - minus.spread[k]) / (2.0 * h);
         }
       }
     }

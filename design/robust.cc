@@ -43,8 +43,7 @@ std::vector<PoseQuantity> PoseQuantities(const Robot& robot) {
 }
 
 bool RobustQuantities(const Robot& robot, const std::vector<Eigen::Vector2d>& points,
-                      const Eigen::Matrix<double, kPoseVariables, 1>& y, std::vector<double>* value,
-                      std::vector<double>* spread, Eigen::MatrixXd* dvalue_dy) {
+                      const Eigen::Matrix<double, kPoseVariables, 1>& y, PoseRobustness* out, bool with_derivatives) {
   constexpr int N = kPoseVariables + kGeometryParameters;
   using U = ceres::Jet<double, N>;
   const int m = robot.num_cables();
@@ -74,12 +73,7 @@ bool RobustQuantities(const Robot& robot, const std::vector<Eigen::Vector2d>& po
     const CableState<U> s = CableGeometry<U>(exits[i], U(cable.pulley_radius_m), SideSign(cable.side), anchor);
     R(i) = s.length_m - l0[i];
     t(i) = yu(3 + i);
-  }
-  for (int i = 0; i < m; ++i) {  // clearance of anchor i from its pulley
-    const Cable& cable = robot.cables[i];
-    const Vec2<U> anchor = p + rot * cable.p_P_anchor_m.cast<U>();
-    const CableState<U> s = CableGeometry<U>(exits[i], U(cable.pulley_radius_m), SideSign(cable.side), anchor);
-    c.push_back(s.centre_distance_m - U(cable.pulley_radius_m));
+    c.push_back(s.centre_distance_m - U(cable.pulley_radius_m));  // clearance of anchor i from its pulley
   }
   R.tail<3>() = WrenchMatrix<U>(robot, q, exits) * t + GravityWrench<U>(robot, q);
   for (const Eigen::Vector2d& b : points) {
@@ -94,19 +88,21 @@ bool RobustQuantities(const Robot& robot, const std::vector<Eigen::Vector2d>& po
     A.row(r) = R(r).v.head<kPoseVariables>().transpose();
     B.row(r) = R(r).v.tail<kGeometryParameters>().transpose();
   }
+  for (int r = 0; r < 3; ++r) out->equilibrium_N(r) = R(m + r).a;
+  if (with_derivatives) out->dequilibrium_dy = A.bottomRows<3>();
   Eigen::FullPivLU<Eigen::Matrix<double, kPoseVariables, kPoseVariables>> lu(A);
   if (!lu.isInvertible()) return false;
   const Eigen::Matrix<double, kPoseVariables, kGeometryParameters> dy_dg = -lu.solve(B);
-  value->resize(c.size());
-  spread->resize(c.size());
-  if (dvalue_dy) dvalue_dy->resize(static_cast<Eigen::Index>(c.size()), kPoseVariables);
+  out->value.resize(c.size());
+  out->spread.resize(c.size());
+  if (with_derivatives) out->dvalue_dy.resize(static_cast<Eigen::Index>(c.size()), kPoseVariables);
   for (std::size_t k = 0; k < c.size(); ++k) {
     const Eigen::Matrix<double, 1, kGeometryParameters> dc_dg =
         c[k].v.head<kPoseVariables>().transpose() * dy_dg + c[k].v.tail<kGeometryParameters>().transpose();
-    (*value)[k] = c[k].a;
-    (*spread)[k] = dc_dg.norm();
-    if (dvalue_dy) dvalue_dy->row(static_cast<Eigen::Index>(k)) = c[k].v.head<kPoseVariables>().transpose();
-    if (!std::isfinite((*spread)[k]) || !std::isfinite((*value)[k])) return false;
+    out->value[k] = c[k].a;
+    out->spread[k] = dc_dg.norm();
+    if (with_derivatives) out->dvalue_dy.row(static_cast<Eigen::Index>(k)) = c[k].v.head<kPoseVariables>().transpose();
+    if (!std::isfinite(out->spread[k]) || !std::isfinite(out->value[k])) return false;
   }
   return true;
 }

@@ -50,13 +50,23 @@ std::vector<Eigen::Vector2d> FramePoints(const Robot& robot);
 // range), the clearance of each anchor from its pulley (m), then x and z of each frame point.
 std::vector<PoseQuantity> PoseQuantities(const Robot& robot);
 
+// What RobustQuantities finds at one pose.
+struct PoseRobustness {
+  std::vector<double> value;   // c, per quantity (PoseQuantities' order)
+  std::vector<double> spread;  // |dc/dg|_2, per quantity
+  Eigen::MatrixXd dvalue_dy;   // dc/dy, one row per quantity (only with derivatives)
+  Eigen::Vector3d equilibrium_N = Eigen::Vector3d::Zero();  // W t + w_g at y (the NLP's equality rows)
+  Eigen::Matrix<double, 3, kPoseVariables> dequilibrium_dy;  // its Jacobian (only with derivatives)
+};
+
 // Values c and spreads |dc/dg|_2 of every quantity at y (an equilibrium of the nominal robot),
-// and if `dvalue_dy` is given the exact derivatives of the values with respect to y (one row
-// per quantity). Returns false where the sensitivity is undefined (dR/dy singular or not
-// finite). The spreads' own derivatives (second derivatives of the model) are taken by
-// central differences in the NLP: they enter the rows multiplied by k sigma, a few cm.
+// and the equilibrium residual there; with `with_derivatives`, also the exact derivatives of
+// the values and of the residual with respect to y, which the same Jets carry. Returns false
+// where the sensitivity is undefined (dR/dy singular or not finite). The spreads' own
+// derivatives (second derivatives of the model) are taken by central differences in the NLP:
+// they enter the rows multiplied by k sigma, a few cm.
 bool RobustQuantities(const Robot& robot, const std::vector<Eigen::Vector2d>& points,
-                      const Eigen::Matrix<double, kPoseVariables, 1>& y, std::vector<double>* value,
-                      std::vector<double>* spread, Eigen::MatrixXd* dvalue_dy = nullptr);
+                      const Eigen::Matrix<double, kPoseVariables, 1>& y, PoseRobustness* out,
+                      bool with_derivatives = false);
 
 }  // namespace cablecal::internal

@@ -264,7 +264,17 @@ IdentifyResult Identify(const Robot& nominal, const std::vector<Measurement>& me
   }
   result.status = IdentifyStatus::kConverged;
 
-  // Per-pose estimates and residual RMS per sensor in physical units.
+  // Per-pose estimates, residual RMS per sensor in physical units, and every reading's
+  // whitened residual for the per-reading test below (ml: each reading over its sigma; paper:
+  // each length residual over the laser's sigma, as the global test).
+  struct Reading {
+    double sigmas;
+    int pose_id;
+    int sensor;  // 0, 1: encoders; 2: laser; 3: inclinometer
+  };
+  std::vector<Reading> readings;
+  readings.reserve((ml ? 4 : 2) * n);
+  const double length_sigma = ml ? s.encoder_sigma_m : std::max(s.laser_sigma_m(), s.encoder_sigma_m);
   double sum_enc = 0.0, sum_laser = 0.0, sum_inc = 0.0;
   for (int j = 0; j < n; ++j) {
     const Measurement& m = measurements[j];
@@ -276,9 +286,14 @@ IdentifyResult Identify(const Robot& nominal, const std::vector<Measurement>& me
     for (int i = 0; i < 2; ++i) {
       const double r = LengthResidual<double>(nominal.cables[i], i, geometry, anchors[i], m.dl_m(i));
       sum_enc += r * r;
+      readings.push_back({std::abs(r) / length_sigma, m.pose_id, i});
     }
     sum_laser += (e.q(1) - m.z_m) * (e.q(1) - m.z_m);
     sum_inc += (e.q(2) - m.theta_rad) * (e.q(2) - m.theta_rad);
+    if (ml) {
+      readings.push_back({std::abs(e.q(1) - m.z_m) / s.laser_sigma_m(), m.pose_id, 2});
+      readings.push_back({std::abs(e.q(2) - m.theta_rad) / s.inclinometer_sigma_rad(), m.pose_id, 3});
+    }
     result.poses.push_back(e);
   }
   result.rms_encoder_m = std::sqrt(sum_enc / (2.0 * n));
@@ -302,11 +317,11 @@ IdentifyResult Identify(const Robot& nominal, const std::vector<Measurement>& me
   }
 
   // An estimate no real robot of this file can have: an exit point off the frame (by more than
-  // the robot file's own 0.1 m tolerance) or any parameter more than kImplausibleChange_m from
+  // the robot file's own tolerance, kExitOffFrameTolerance_m) or any parameter more than kImplausibleChange_m from
   // nominal. Measurements in other units, or of another robot, converge there.
   if (options.check_plausible_geometry) {
     constexpr double kImplausibleChange_m = 0.5;
-    constexpr double kOffFrame_m = 0.1;
+    constexpr double kOffFrame_m = kExitOffFrameTolerance_m;
     for (int k = 0; k < 6; ++k) {
       const double change = result.geometry(k) - nominal_geometry(k);
       std::string why;
@@ -327,42 +342,24 @@ IdentifyResult Identify(const Robot& nominal, const std::vector<Measurement>& me
   }
 
   // Per reading: one bad reading among many hardly moves the global RMS above, yet drags the
-  // estimate by many sigma. Every whitened residual (ml: each reading over its sigma; paper:
-  // each length residual over the laser's sigma, as above) beyond kOutlierSigmas refuses the
-  // fit, naming the worst readings. For clean data a whitened residual is at most N(0, 1)
-  // (less, by its leverage), so 200 readings (n = 50) trip 4.5 sigma with probability
+  // estimate by many sigma. Every whitened residual (collected above) beyond kOutlierSigmas
+  // refuses the fit, naming the worst readings. For clean data a whitened residual is at most
+  // N(0, 1) (less, by its leverage), so 200 readings (n = 50) trip 4.5 sigma with probability
   // 200 * 6.8e-6 = 0.14 % (measured: 0 of 6000 ml trials, 8 of 2000 paper trials at n = 6
   // and 28). With the ml estimator a pose has 4 readings for its 3 unknowns: one bad reading
   // shows in that pose's residuals along their one redundant direction, so the pose is named
   // reliably but the largest residual may sit on another sensor of the same pose.
   {
-    struct Reading {
-      double sigmas;
-      int pose_id;
-      std::string sensor;
-    };
-    std::vector<Reading> bad;
-    const double length_sigma = ml ? s.encoder_sigma_m : std::max(s.laser_sigma_m(), s.encoder_sigma_m);
-    for (int j = 0; j < n; ++j) {
-      const Measurement& m = measurements[j];
-      const Eigen::Vector3d& q = result.poses[j].q;
-      const auto anchors = AnchorsInF<double>(nominal, q);
-      for (int i = 0; i < 2; ++i) {
-        const double r = LengthResidual<double>(nominal.cables[i], i, geometry, anchors[i], m.dl_m(i)) / length_sigma;
-        bad.push_back({std::abs(r), m.pose_id, "encoder " + std::to_string(i + 1)});
-      }
-      if (ml) {
-        bad.push_back({std::abs(q(1) - m.z_m) / s.laser_sigma_m(), m.pose_id, "laser"});
-        bad.push_back({std::abs(q(2) - m.theta_rad) / s.inclinometer_sigma_rad(), m.pose_id, "inclinometer"});
-      }
-    }
-    std::sort(bad.begin(), bad.end(), [](const Reading& a, const Reading& b) { return a.sigmas > b.sigmas; });
-    if (!bad.empty() && !(bad.front().sigmas <= kOutlierSigmas)) {
+    const std::size_t worst_count = std::min<std::size_t>(3, readings.size());
+    std::partial_sort(readings.begin(), readings.begin() + worst_count, readings.end(),
+                      [](const Reading& a, const Reading& b) { return a.sigmas > b.sigmas; });
+    if (!readings.empty() && !(readings.front().sigmas <= kOutlierSigmas)) {
+      const char* const sensor_names[4] = {"encoder 1", "encoder 2", "laser", "inclinometer"};
       std::string worst;
-      for (std::size_t k = 0; k < bad.size() && k < 3 && !(bad[k].sigmas <= kOutlierSigmas); ++k) {
+      for (std::size_t k = 0; k < worst_count && !(readings[k].sigmas <= kOutlierSigmas); ++k) {
         char buffer[96];
-        std::snprintf(buffer, sizeof(buffer), "%spose %d: %s %.3g sigma", k ? ", " : "", bad[k].pose_id,
-                      bad[k].sensor.c_str(), bad[k].sigmas);
+        std::snprintf(buffer, sizeof(buffer), "%spose %d: %s %.3g sigma", k ? ", " : "", readings[k].pose_id,
+                      sensor_names[readings[k].sensor], readings[k].sigmas);
         worst += buffer;
       }
       result.status = IdentifyStatus::kPoorFit;

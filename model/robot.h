@@ -74,6 +74,11 @@ struct Robot {
 // Parses and validates a robot file. Throws InputError naming file, line and key on any
 // problem: missing or unknown key, wrong type, non-finite or out-of-range value,
 // coincident anchors, tension min >= max, or a home pose outside the feasible workspace.
+// Exit points lie on the frame to within this: a calibrated or true robot's exit points sit a
+// few millimetres off the nominal frame, a typo or a unit error far more (the robot-file loader
+// and the identification's plausibility check both use it).
+constexpr double kExitOffFrameTolerance_m = 0.1;
+
 // Refuses files larger than kMaxRobotFileBytes and anything that is not a regular file.
 Robot LoadRobotFile(const std::string& path);
 constexpr std::uintmax_t kMaxRobotFileBytes = 1 << 20;

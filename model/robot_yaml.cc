@@ -134,15 +134,15 @@ Robot Parse(const YAML::Node& root, const Reader& rd) {
     Cable cable;
     cable.p_F_exit_m = rd.Vector2(c["exit"], key + ".exit");
     // The exit point is on the frame: a point well outside it (a typo, or mm for m) would make
-    // a robot the workspace and the design still accept. A calibrated or true robot's exit
-    // points lie a few millimetres off the nominal frame, hence the tolerance.
-    constexpr double kOnFrameTol_m = 0.1;
+    // a robot the workspace and the design still accept.
+    constexpr double kOnFrameTol_m = kExitOffFrameTolerance_m;
     if (!(cable.p_F_exit_m.x() >= -kOnFrameTol_m && cable.p_F_exit_m.x() <= robot.frame_width_m + kOnFrameTol_m &&
           cable.p_F_exit_m.y() > 0.0 && cable.p_F_exit_m.y() <= robot.frame_height_m + kOnFrameTol_m)) {
       rd.Fail(c["exit"], key + ".exit",
               "(" + FormatDouble(cable.p_F_exit_m.x()) + ", " + FormatDouble(cable.p_F_exit_m.y()) +
                   ") m is outside the frame [0, " + FormatDouble(robot.frame_width_m) + "] x (0, " +
-                  FormatDouble(robot.frame_height_m) + "] m by more than 0.1 m: exit points are on the frame");
+                  FormatDouble(robot.frame_height_m) + "] m by more than " + FormatDouble(kOnFrameTol_m) +
+                  " m: exit points are on the frame");
     }
     cable.pulley_radius_m = rd.Number(c, key, "pulley_radius");
     rd.Positive(c["pulley_radius"], key + ".pulley_radius", cable.pulley_radius_m);

@@ -32,16 +32,6 @@ std::vector<Eigen::Vector3d> PosesOf(const std::vector<PlanPose>& plan) {
   return q;
 }
 
-double CriterionValue(Criterion c, const CriteriaValues& v) {
-  switch (c) {
-    case Criterion::kCondition: return v.condition_number;
-    case Criterion::kD: return v.d_log_det_information;
-    case Criterion::kA: return v.a_trace_covariance_m2;
-    case Criterion::kE: return v.e_min_eigenvalue;
-  }
-  return NAN;
-}
-
 // Share of (true robot, pose) pairs a plan cannot hold: for `robots` true geometries drawn
 // from N(nominal, sigma^2) per parameter, the commanded lengths of every pose are given to the
 // forward model, and the settled pose must be a feasible pose of the true robot.
@@ -155,8 +145,9 @@ TEST(RobustDesign, TensionSpreadMatchesTheForwardModel) {
   ASSERT_EQ(eq.status, EquilibriumStatus::kFound);
   Eigen::Matrix<double, 5, 1> y;
   y << eq.equilibrium.q, eq.equilibrium.tensions_N;
-  std::vector<double> value, spread;
-  ASSERT_TRUE(internal::RobustQuantities(robot, internal::FramePoints(robot), y, &value, &spread));
+  internal::PoseRobustness at;
+  ASSERT_TRUE(internal::RobustQuantities(robot, internal::FramePoints(robot), y, &at));
+  const std::vector<double>& spread = at.spread;
   const PlanPose p = MakePlanPose(robot, eq.equilibrium, l0);
   const GeometryVector g0 = GeometryOf(robot);
   constexpr double h = 1e-5;
