@@ -1,4 +1,4 @@
-// Error tiers (see ../shared/STYLE.md, habit 5):
+// Error tiers:
 //   InputError     bad user input: a file, a flag, a value. Exit code 2.
 //   SolverFailure  a solver that did not converge or returned a result that failed
 //                  verification. Exit code 3.

@@ -1,7 +1,7 @@
 // The calibration experiment: what the sensors read at each measurement pose, either
 // simulated (SimulateExperiment) or read from a lab's measurement CSV.
 //
-// Simulation (DESIGN.md): the controller commands the plan's length changes dl_ij,
+// Simulation (README, "Commands", simulate): the controller commands the plan's length changes dl_ij,
 // computed with the nominal robot; the true robot's cables then have lengths
 // l_i0(true) + dl_ij and the platform settles where the true geometry puts it (forward
 // geometrico-static model). Sensors read that pose with the paper's noise.

@@ -109,7 +109,7 @@ struct ExitPointPriorCost {
 };
 
 // Starting x for one pose: where the nominal model best explains the measured lengths at
-// the measured z and theta (DESIGN.md: starting every x_j at home sends LM to wrong minima).
+// the measured z and theta (README, "Identification": starting every x_j at home sends LM to wrong minima).
 // Start from the straight-cable estimate of each cable, then Gauss-Newton in x.
 double StartingX(const Robot& nominal, const GeometryVector& g, const Measurement& m) {
   using Jet1 = ceres::Jet<double, 1>;

@@ -7,7 +7,7 @@
 //   identify.h    Identify(), its options and result, result YAML
 // Depends on model/, workspace/ (pose plans) and common/.
 //
-// The gauge (DESIGN.md): encoders, a vertical laser and an inclinometer cannot see a
+// The gauge (README, "Identification"): encoders, a vertical laser and an inclinometer cannot see a
 // common shift of every a_ix and x_j, so the problem has one null direction unless the
 // gauge is fixed: `a1x` holds a1x at its nominal value; `prior` adds a laser-tracker prior
 // on every exit point; `none` keeps the paper's rank-deficient problem (covariance then by

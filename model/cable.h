@@ -2,7 +2,7 @@
 // doubles, ceres::Jet (identification, design derivatives) and nested Jets (stiffness)
 // all share the same formula.
 //
-// Construction (DESIGN.md): cable i runs up the post and touches pulley i on its outer
+// Construction (README, "Model and conventions"): cable i runs up the post and touches pulley i on its outer
 // side at the exit point A_i (the pulley's outermost point at the height of its centre
 // C_i = A_i + s_i (r, 0), s_i = +1 left, -1 right), wraps over the top and leaves
 // tangentially at T_i toward the anchor B_i. Its length from A_i to B_i is

@@ -68,7 +68,7 @@ struct PoseEvaluation {
   bool feasible() const { return feasibility == Feasibility::kFeasible; }
 };
 
-// The feasible cable-tension workspace test of DESIGN.md at position (x, z).
+// The feasible cable-tension workspace test (README, "Model and conventions") at (x, z).
 PoseEvaluation EvaluatePose(const Robot& robot, double x_m, double z_m);
 
 // Checks the conditions of EvaluatePose for an already known equilibrium (q, t), e.g. one

@@ -1,5 +1,5 @@
-// workspace: the feasible cable-tension workspace of a robot (DESIGN.md) and the pose
-// plans built on it.
+// workspace: the feasible cable-tension workspace of a robot (README, "Model and
+// conventions") and the pose plans built on it.
 //   ComputeWorkspaceGrid   every grid point's equilibrium and feasibility (with the reason)
 //   SampleFeasiblePoses    uniform random feasible poses, seeded; reused by design and
 //                          the Monte Carlo
