@@ -146,18 +146,26 @@ std::vector<Measurement> ReadMeasurementsCsv(std::istream& in, const std::string
 
 void CheckReadingsPlausible(const Robot& robot, const std::vector<Measurement>& measurements,
                             const std::string& source) {
-  const double z_max = std::min(robot.laser_range_m, robot.frame_height_m);
+  // A sensor's noise can carry the reading of a pose at the edge of its range a little past
+  // it; kNoiseSigmas of that noise is allowed, nothing more.
+  constexpr double kNoiseSigmas = 5.0;
+  const double z_slack = kNoiseSigmas * robot.sensors.laser_sigma_m();
+  const double theta_slack = kNoiseSigmas * robot.sensors.inclinometer_sigma_rad();
+  const double z_min = -z_slack, z_max = std::min(robot.laser_range_m, robot.frame_height_m) + z_slack;
+  const double theta_max = robot.theta_max_rad + theta_slack;
   for (const Measurement& m : measurements) {
     const std::string where = m.where.empty() ? source + ": pose " + std::to_string(m.pose_id) : m.where;
-    if (!(m.z_m >= 0.0 && m.z_m <= z_max)) {
+    if (!(m.z_m >= z_min && m.z_m <= z_max)) {
       throw InputError(where, "column 'z'",
-                       FormatDouble(m.z_m) + " m is outside what the laser can read here, [0, " + FormatDouble(z_max) +
-                           "] m (the laser range and the frame height of " + robot.name + ")");
+                       FormatDouble(m.z_m) + " m is outside what the laser can read here, [" + FormatDouble(z_min) +
+                           ", " + FormatDouble(z_max) + "] m (the laser range and the frame height of " + robot.name +
+                           ", widened by 5 sigma of the laser's noise)");
     }
-    if (!(std::abs(m.theta_rad) <= robot.theta_max_rad)) {
+    if (!(std::abs(m.theta_rad) <= theta_max)) {
       throw InputError(where, "column 'theta'",
                        FormatDouble(m.theta_rad) + " rad is beyond the inclinometer range of +-" +
-                           FormatDouble(robot.theta_max_rad) + " rad" +
+                           FormatDouble(robot.theta_max_rad) + " rad (+-" + FormatDouble(theta_max) +
+                           " with 5 sigma of its noise)" +
                            (std::abs(m.theta_rad) > M_PI ? " (degrees? theta is in radians)" : ""));
     }
   }

@@ -74,8 +74,10 @@ std::vector<Measurement> ReadMeasurementsCsv(std::istream& in, const std::string
 constexpr int kMaxMeasuredPoses = 100000;
 
 // Readings no sensor of `robot` can give: a laser height below 0, above the laser range or
-// above the frame, an inclinometer angle beyond its range. Throws InputError naming the
-// file, line and column (or the pose), the value and the limit; "units?" where it fits.
+// above the frame, an inclinometer angle beyond its range, each limit widened by 5 sigma of
+// that sensor's noise (a pose at the edge of a range reads a little past it). Throws
+// InputError naming the file, line and column (or the pose), the value and the limit;
+// "units?" where it fits.
 void CheckReadingsPlausible(const Robot& robot, const std::vector<Measurement>& measurements,
                             const std::string& source);
 

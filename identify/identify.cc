@@ -9,10 +9,12 @@
 #include <cstdio>
 #include <limits>
 #include <memory>
+#include <optional>
 
 #include "common/error.h"
 #include "common/format.h"
 #include "identify/residuals.h"
+#include "identify/schur.h"
 #include "model/statics.h"
 
 namespace cablecal {
@@ -372,19 +374,51 @@ IdentifyResult Identify(const Robot& nominal, const std::vector<Measurement>& me
   }
 
   const int expected_null = options.gauge == Gauge::kNone ? 1 : 0;
-  if (options.compute_identifiability) {
-    // The Jacobian at the solution, in the tangent space (a1x's column is absent when held).
+  if (!options.compute_identifiability && !options.compute_covariance) return result;
+
+  // The whitened Jacobian at the solution, in the tangent space (a1x's column is absent when
+  // held), by blocks: its rows come in the order the residual blocks were added, one block per
+  // pose, then the prior. Covariance and identifiability from it cost O(n) (identify/schur.h).
+  const int geometry_cols = options.gauge == Gauge::kA1x ? 5 : 6;
+  const int rows_per_pose = ml ? 4 : 2;
+  BlockJacobian blocks;
+  {
     ceres::Problem::EvaluateOptions eval;
     eval.parameter_blocks.push_back(geometry);
     for (int j = 0; j < n; ++j) eval.parameter_blocks.push_back(poses[j].data());
     ceres::CRSMatrix crs;
     problem.Evaluate(eval, nullptr, nullptr, nullptr, &crs);
-    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
+    const int prior_rows = options.gauge == Gauge::kPrior ? 4 : 0;
+    CABLECAL_CHECK(crs.num_rows == rows_per_pose * n + prior_rows &&
+                       crs.num_cols == geometry_cols + per_pose_unknowns * n,
+                   "the Jacobian has one row block per pose and the prior's");
+    blocks.poses.assign(n, PoseBlock{Eigen::MatrixXd::Zero(rows_per_pose, geometry_cols),
+                                     Eigen::MatrixXd::Zero(rows_per_pose, per_pose_unknowns)});
+    blocks.prior = Eigen::MatrixXd::Zero(prior_rows, geometry_cols);
     for (int r = 0; r < crs.num_rows; ++r) {
-      for (int k = crs.rows[r]; k < crs.rows[r + 1]; ++k) J(r, crs.cols[k]) = crs.values[k];
+      const int j = r / rows_per_pose, row_in_block = r % rows_per_pose;
+      for (int k = crs.rows[r]; k < crs.rows[r + 1]; ++k) {
+        const int c = crs.cols[k];
+        if (j >= n) {
+          CABLECAL_CHECK(c < geometry_cols, "prior rows touch the geometry only");
+          blocks.prior(r - rows_per_pose * n, c) = crs.values[k];
+        } else if (c < geometry_cols) {
+          blocks.poses[j].geometry(row_in_block, c) = crs.values[k];
+        } else {
+          const int pose_col = c - geometry_cols - per_pose_unknowns * j;
+          CABLECAL_CHECK(pose_col >= 0 && pose_col < per_pose_unknowns, "a pose's rows touch its own unknowns only");
+          blocks.poses[j].pose(row_in_block, pose_col) = crs.values[k];
+        }
+      }
     }
+  }
+  // A null direction: singular value below 1e-9 of the largest (rounding, not data).
+  const BlockAnalysis analysis = AnalyzeBlocks(blocks, 1e-9);
+
+  if (options.compute_identifiability) {
     Identifiability& id = result.identifiability;
-    for (int k = (options.gauge == Gauge::kA1x ? 1 : 0); k < 6; ++k) id.names.push_back(kGeometryNames[k]);
+    for (int k = (options.gauge == Gauge::kA1x ? 1 : 0); k < 6; ++k) id.geometry_names.push_back(kGeometryNames[k]);
+    id.names = id.geometry_names;
     for (const Measurement& m : measurements) {
       const std::string p = std::to_string(m.pose_id);
       id.names.push_back("x" + p);
@@ -393,17 +427,16 @@ IdentifyResult Identify(const Robot& nominal, const std::vector<Measurement>& me
         id.names.push_back("theta" + p);
       }
     }
-    CABLECAL_CHECK(static_cast<int>(id.names.size()) == J.cols(), "one name per Jacobian column");
-    Eigen::BDCSVD<Eigen::MatrixXd> svd(J, Eigen::ComputeThinV);
-    id.singular_values = svd.singularValues();
-    const double s_max = id.singular_values(0);
+    id.singular_values = analysis.singular_values;
     const double s_min = id.singular_values(id.singular_values.size() - 1);
-    id.condition_number = s_min > 0.0 ? s_max / s_min : std::numeric_limits<double>::infinity();
-    // A null direction: singular value below 1e-9 of the largest (rounding, not data).
-    for (int k = 0; k < id.singular_values.size(); ++k) {
-      if (id.singular_values(k) >= 1e-9 * s_max) continue;
-      id.condition_number = std::numeric_limits<double>::infinity();
-      Eigen::VectorXd v = svd.matrixV().col(k);
+    id.condition_number = analysis.null_vectors.empty() && s_min > 0.0
+                              ? id.singular_values(0) / s_min
+                              : std::numeric_limits<double>::infinity();
+    if (analysis.weakest_pose >= 0) {
+      id.weakest_pose_id = measurements[analysis.weakest_pose].pose_id;
+      id.weakest_pose_singular_value = analysis.poses[analysis.weakest_pose].min_singular_value;
+    }
+    for (Eigen::VectorXd v : analysis.null_vectors) {
       Eigen::Index big;
       v.cwiseAbs().maxCoeff(&big);
       if (v(big) < 0) v = -v;
@@ -428,23 +461,18 @@ IdentifyResult Identify(const Robot& nominal, const std::vector<Measurement>& me
     }
   }
 
-  if (options.compute_covariance) {
-    ceres::Covariance::Options cov_options;
-    cov_options.algorithm_type = ceres::DENSE_SVD;
-    cov_options.null_space_rank = expected_null;  // gauge none: Moore-Penrose pseudo-inverse
-    ceres::Covariance covariance(cov_options);
-    std::vector<std::pair<const double*, const double*>> blocks = {{geometry, geometry}};
-    for (int j = 0; j < n; ++j) blocks.push_back({poses[j].data(), poses[j].data()});
-    if (covariance.Compute(blocks, &problem)) {
+  if (options.compute_covariance && static_cast<int>(analysis.null_vectors.size()) == expected_null) {
+    // gauge none: the Moore-Penrose pseudo-inverse (identify/schur.h).
+    if (const std::optional<BlockCovariance> cov = CovarianceOf(blocks, analysis)) {
       // paper: residuals are not whitened, so scale by the residual variance s^2.
       double scale = 1.0;
       if (!ml) {
         const int dof = summary.num_residuals - (summary.num_effective_parameters - expected_null);
         scale = dof > 0 ? 2.0 * summary.final_cost / dof : std::numeric_limits<double>::quiet_NaN();
       }
-      Eigen::Matrix<double, 6, 6, Eigen::RowMajor> C;
-      covariance.GetCovarianceBlock(geometry, geometry, C.data());
-      C *= scale;
+      // Back from the tangent space: a held a1x has no variance.
+      Eigen::Matrix<double, 6, 6> C = Eigen::Matrix<double, 6, 6>::Zero();
+      C.bottomRightCorner(geometry_cols, geometry_cols) = scale * cov->geometry;
       result.geometry_std = C.diagonal().cwiseMax(0.0).cwiseSqrt();
       for (int a = 0; a < 6; ++a) {
         for (int b = 0; b < 6; ++b) {
@@ -453,11 +481,8 @@ IdentifyResult Identify(const Robot& nominal, const std::vector<Measurement>& me
         }
       }
       for (int j = 0; j < n; ++j) {
-        const int size = ml ? 3 : 1;
-        Eigen::Matrix<double, 3, 3, Eigen::RowMajor> P = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>::Zero();
-        covariance.GetCovarianceBlock(poses[j].data(), poses[j].data(), P.data());
-        for (int k = 0; k < size; ++k) {
-          result.poses[j].std_dev(k) = std::sqrt(std::max(0.0, scale * P.data()[k * size + k]));
+        for (int k = 0; k < per_pose_unknowns; ++k) {
+          result.poses[j].std_dev(k) = std::sqrt(std::max(0.0, scale * cov->poses[j](k, k)));
         }
       }
       result.has_covariance = true;

@@ -1,7 +1,8 @@
 // identify: estimates the robot's real geometry (exit points a_i, initial lengths l_i0) and
 // the unmeasured pose coordinates from encoder, laser and inclinometer readings, with
 // uncertainties (Ceres: Levenberg-Marquardt, Schur elimination of the per-pose blocks,
-// autodiff through model/cable.h, ceres::Covariance).
+// autodiff through model/cable.h; covariance and identifiability through the same block
+// structure, identify/schur.h, so the cost is linear in the number of poses).
 //   experiment.h  simulated or measured readings, measurement CSV
 //   residuals.h   the templated residuals (shared with design/)
 //   identify.h    Identify(), its options and result, result YAML
@@ -65,12 +66,20 @@ struct PoseEstimate {
   Eigen::Vector3d std_dev = Eigen::Vector3d::Zero();    // 0 where not estimated
 };
 
+// What the data can and cannot determine, from the whitened Jacobian at the solution. Its
+// geometric part is the reduced Jacobian that is left once every pose's own unknowns are
+// eliminated (identify/schur.h): the information the data hold on the geometry alone.
 struct Identifiability {
-  std::vector<std::string> names;     // columns of the whitened Jacobian (estimated coordinates)
-  Eigen::VectorXd singular_values;    // descending
-  double condition_number = 0.0;      // largest / smallest singular value (inf if rank-deficient)
-  std::vector<std::string> null_directions;  // below 1e-9 x largest, as "0.5 a1x + 0.5 a2x + ..."
-  std::vector<Eigen::VectorXd> null_vectors;  // the same as unit vectors over `names`
+  std::vector<std::string> geometry_names;  // columns of the reduced Jacobian (a1x absent when held)
+  Eigen::VectorXd singular_values;          // of the reduced Jacobian, descending
+  double condition_number = 0.0;  // largest / smallest of those (inf if any null direction)
+  int weakest_pose_id = 0;                  // the pose whose own block has the smallest singular value
+  double weakest_pose_singular_value = 0.0;
+  std::vector<std::string> names;  // every estimated coordinate: geometry_names, then x, z, theta per pose
+  // Below 1e-9 x the largest singular value of any block, as "0.5 a1x + 0.5 a2x + ..." and as
+  // unit vectors over `names`.
+  std::vector<std::string> null_directions;
+  std::vector<Eigen::VectorXd> null_vectors;
 };
 
 struct IdentifyResult {

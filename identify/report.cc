@@ -74,13 +74,15 @@ std::string IdentifyResultYaml(const IdentifyResult& r, const std::string& comma
   }
   const Identifiability& id = r.identifiability;
   if (!id.names.empty()) {
-    o << "identifiability:   # singular values of the " << (ml ? "whitened " : "")
-      << "Jacobian at the solution, columns:\n";
+    o << "identifiability:   # the " << (ml ? "whitened " : "")
+      << "Jacobian at the solution, every pose's own unknowns eliminated (README, \"identify\")\n";
     o << "  columns: [";
-    for (std::size_t k = 0; k < id.names.size(); ++k) o << (k ? ", " : "") << id.names[k];
+    for (std::size_t k = 0; k < id.geometry_names.size(); ++k) o << (k ? ", " : "") << id.geometry_names[k];
     o << "]\n  singular_values: [";
     for (int k = 0; k < id.singular_values.size(); ++k) o << (k ? ", " : "") << Num(id.singular_values(k));
     o << "]\n  condition_number: " << Num(id.condition_number) << "\n";
+    o << "  weakest_pose: {pose: " << id.weakest_pose_id
+      << ", singular_value: " << Num(id.weakest_pose_singular_value) << "}\n";
     o << "  null_directions:";
     if (id.null_directions.empty()) o << " []";
     o << "\n";
