@@ -134,3 +134,33 @@ TEST(EdgeCases, PlanCsvNonFiniteNumbersAreRejectedWithLineAndColumn) {
 
 }  // namespace
 }  // namespace cablecal
+
+namespace cablecal {
+namespace {
+
+// A pose at the edge of a sensor's range reads past it by its noise: up to 5 sigma passes,
+// more is refused (as is a reading on the wrong side of the laser's zero).
+TEST(EdgeCases, ReadingsPastASensorRangeByItsNoiseOnlyAreAccepted) {
+  const Robot& robot = BuiltinRobot();
+  const double theta_sigma = robot.sensors.inclinometer_sigma_rad();
+  const double z_sigma = robot.sensors.laser_sigma_m();
+  const double z_top = std::min(robot.laser_range_m, robot.frame_height_m);
+  Measurement m;
+  m.pose_id = 1;
+  m.dl_m = Eigen::VectorXd::Zero(2);
+  const auto check = [&](double z, double theta) {
+    m.z_m = z;
+    m.theta_rad = theta;
+    CheckReadingsPlausible(robot, {m}, "test");
+  };
+  EXPECT_NO_THROW(check(1.0, robot.theta_max_rad + 4.5 * theta_sigma));
+  EXPECT_NO_THROW(check(1.0, -robot.theta_max_rad - 4.5 * theta_sigma));
+  EXPECT_NO_THROW(check(-4.5 * z_sigma, 0.0));
+  EXPECT_NO_THROW(check(z_top + 4.5 * z_sigma, 0.0));
+  EXPECT_THROW(check(1.0, robot.theta_max_rad + 5.5 * theta_sigma), InputError);
+  EXPECT_THROW(check(-5.5 * z_sigma, 0.0), InputError);
+  EXPECT_THROW(check(z_top + 5.5 * z_sigma, 0.0), InputError);
+}
+
+}  // namespace
+}  // namespace cablecal
