@@ -55,8 +55,19 @@ void RunPlotScript(const std::string& script, const std::vector<std::string>& ar
   const std::string command = CommandLine(argv);
   const int status = std::system(command.c_str());
   if (status != 0) {
-    throw SolverFailure("plotting failed (exit status " +
+    throw FigureFailure("the figure could not be made: the plotting script failed (exit status " +
                         std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : status) + "): " + command);
+  }
+}
+
+std::string TryPlot(AtomicOutput& output, const std::string& figure_path, const std::string& script,
+                    const std::vector<std::string>& args) {
+  try {
+    RunPlotScript(script, args);
+    return "";
+  } catch (const FigureFailure& e) {
+    output.Drop(figure_path);
+    return e.what();
   }
 }
 
@@ -66,6 +77,7 @@ int RunWorkspace(const Context& ctx, const WorkspaceOptions& options) {
   const Robot robot = LoadRobotOption(options.robot_path);
   const WorkspaceGrid grid = ComputeWorkspaceGrid(robot, options.step_m);
   AtomicOutput output;
+  std::string figure_error;
   const std::string temp_csv =
       output.WriteText(options.out_path, WorkspaceCsv(robot, grid, ProvenanceComment(ctx.command_line)));
   if (!options.plot_path.empty()) {
@@ -74,12 +86,13 @@ int RunWorkspace(const Context& ctx, const WorkspaceOptions& options) {
     for (const std::string& a : FrameArgs(robot)) args.push_back(a);
     args.push_back(PointArg("home", robot.p_F_home_m));
     args.push_back("--title=" + robot.name);
-    RunPlotScript("plot_workspace.py", args);
+    figure_error = TryPlot(output, options.plot_path, "plot_workspace.py", args);
   }
   output.Commit();
   std::printf("workspace of %s: %d of %zu grid points feasible (step %s m), area ~ %s m^2\n", robot.name.c_str(),
               grid.num_feasible, grid.points.size(), FormatDouble(options.step_m).c_str(),
               FormatDouble(grid.feasible_area_m2()).c_str());
+  if (!figure_error.empty()) throw FigureFailure(figure_error + "; " + options.out_path + " was written");
   return kExitOk;
 }
 
@@ -192,6 +205,7 @@ int RunDesign(const Context& ctx, const DesignCommandOptions& options) {
   design.interrupted = &SigintFlag();
   const DesignResult result = DesignPoses(robot, design);
   AtomicOutput output;
+  std::string figure_error;
   const std::string temp_plan = output.WriteText(options.out_path, PosePlanCsv(result.poses, ProvenanceComment(ctx.command_line)));
   if (!options.summary_path.empty()) {
     output.WriteText(options.summary_path, DesignSummaryYaml(result, design, ctx.command_line));
@@ -212,13 +226,9 @@ int RunDesign(const Context& ctx, const DesignCommandOptions& options) {
       title += " (random median " + DescribeCriterion(design.criterion, result.random_median, false) + ")";
     }
     args.push_back("--title=" + title);
-    try {
-      RunPlotScript("plot_plan.py", args);
-    } catch (...) {
-      std::remove(temp_ws.c_str());
-      throw;
-    }
+    figure_error = TryPlot(output, options.plot_path, "plot_plan.py", args);
     std::remove(temp_ws.c_str());
+    if (SigintFlag()) throw Interrupted();  // Ctrl-C reaches the script too; it is not a figure failure
   }
   output.Commit();
   std::printf("designed %zu poses (criterion %s, best of %d starts, %d converged): %s", result.poses.size(),
@@ -236,6 +246,10 @@ int RunDesign(const Context& ctx, const DesignCommandOptions& options) {
     }
   }
   std::printf(", %.1f s\n", result.wall_time_s);
+  if (!figure_error.empty()) {
+    throw FigureFailure(figure_error + "; " + options.out_path +
+                        (options.summary_path.empty() ? "" : " and " + options.summary_path) + " were written");
+  }
   return kExitOk;
 }
 

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "cli/processes.h"
+#include "common/atomic_output.h"
 #include "model/robot.h"
 
 namespace cablecal::cli {
@@ -77,7 +78,12 @@ struct ReproduceOptions {
 int RunReproduce(const Context& ctx, const ReproduceOptions& options);
 
 // Runs a plotting script of scripts/ with the python that has matplotlib. Throws
-// SolverFailure (exit 3) if the script fails.
+// FigureFailure (exit 5) if the script fails.
 void RunPlotScript(const std::string& script, const std::vector<std::string>& args);
+
+// Runs RunPlotScript; if it fails, drops `figure_path` from `output` and returns the message
+// (the caller commits the rest, then throws FigureFailure: results are never lost for a figure).
+std::string TryPlot(AtomicOutput& output, const std::string& figure_path, const std::string& script,
+                    const std::vector<std::string>& args);
 
 }  // namespace cablecal::cli

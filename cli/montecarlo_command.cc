@@ -7,6 +7,7 @@
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 
 #include "cli/commands.h"
 #include "cli/sigint.h"
@@ -41,13 +42,11 @@ std::function<void(long, long)> ProgressBar(const std::string& label) {
   };
 }
 
-void EnsureFolder(const std::string& dir) {
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec || !std::filesystem::is_directory(dir)) {
-    throw InputError("--out", "", "cannot create the folder '" + dir + "': " + ec.message());
-  }
-}
+// Every name a study may write into its folder (the figures only with plots).
+const std::vector<std::string> kStudyFiles = {"errors.csv",     "summary.csv",   "failures.csv",
+                                              "summary.md",     "run.yaml",      "sigma_vs_n.png",
+                                              "distributions.png", "one_calibration.png"};
+const std::vector<std::string> kStudyFigures = {"sigma_vs_n.png", "distributions.png", "one_calibration.png"};
 
 std::string RunYaml(const Robot& robot, const MonteCarloOptions& o, const std::string& poses_text,
                     const MonteCarloResult& r, const Context& ctx, int threads) {
@@ -82,19 +81,30 @@ std::string RunYaml(const Robot& robot, const MonteCarloOptions& o, const std::s
   return s;
 }
 
-// Writes every output of one study into `dir` (atomically, as one set), on rank 0 only.
-void WriteStudy(const std::string& dir, const Robot& robot, const MonteCarloOptions& o, const std::string& poses_text,
-                const MonteCarloResult& r, const Context& ctx, int threads, bool plot, const std::string& title) {
-  if (!ctx.processes.root()) return;
-  EnsureFolder(dir);
-  AtomicOutput output;
-  output.WriteText(dir + "/errors.csv", ErrorsCsv(r));
-  output.WriteText(dir + "/summary.csv", SummaryCsv(r));
-  output.WriteText(dir + "/failures.csv", FailuresCsv(r));
-  output.WriteText(dir + "/summary.md", SummaryMarkdown(r, title));
-  output.WriteText(dir + "/run.yaml", RunYaml(robot, o, poses_text, r, ctx, threads));
-  output.Commit();
-  if (plot) RunPlotScript("plot_montecarlo.py", {dir});
+// Writes the data files of one study into `folder` under `prefix` (staged; the caller commits).
+void WriteStudy(const OutputFolder& folder, const std::string& prefix, const Robot& robot, const MonteCarloOptions& o,
+                const std::string& poses_text, const MonteCarloResult& r, const Context& ctx, int threads,
+                const std::string& title) {
+  folder.WriteText(prefix + "errors.csv", ErrorsCsv(r));
+  folder.WriteText(prefix + "summary.csv", SummaryCsv(r));
+  folder.WriteText(prefix + "failures.csv", FailuresCsv(r));
+  folder.WriteText(prefix + "summary.md", SummaryMarkdown(r, title));
+  folder.WriteText(prefix + "run.yaml", RunYaml(robot, o, poses_text, r, ctx, threads));
+}
+
+// Plots into the staging folder before the commit. A failed plot leaves no figure (a
+// partial one is removed) and returns the message: the data are committed anyway.
+std::string TryPlotStudy(const OutputFolder& folder, const std::vector<std::string>& args,
+                         const std::vector<std::string>& figures) {
+  try {
+    RunPlotScript("plot_montecarlo.py", args);
+  } catch (const FigureFailure& e) {
+    for (const std::string& f : figures) std::filesystem::remove(folder.Path(f));
+    if (SigintFlag()) throw Interrupted();  // Ctrl-C reaches the script too
+    return e.what();
+  }
+  if (SigintFlag()) throw Interrupted();
+  return "";
 }
 
 // Ctrl-C stops the run at the next trial (SIGINT reaches every rank under srun; mpirun
@@ -138,9 +148,19 @@ int RunMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptions& opt
   });
   if (options.threads > 0) omp_set_num_threads(options.threads);
   const int threads = omp_get_max_threads();
-  const MonteCarloResult r = RunStudy(ctx, robot, o, "montecarlo");
+  // The folder is checked (and created) before any work; results go into it as one set.
+  std::unique_ptr<OutputFolder> folder;
   RunAgreed(ctx.processes, [&] {
-    WriteStudy(options.out_dir, robot, o, options.poses, r, ctx, threads, options.plot, "Monte Carlo: " + robot.name);
+    if (ctx.processes.root()) folder = std::make_unique<OutputFolder>("--out", options.out_dir, kStudyFiles);
+  });
+  const SigintScope sigint;  // until the commit: Ctrl-C while plotting writes nothing either
+  const MonteCarloResult r = RunStudy(ctx, robot, o, "montecarlo");
+  std::string figure_error;
+  RunAgreed(ctx.processes, [&] {
+    if (!ctx.processes.root()) return;
+    WriteStudy(*folder, "", robot, o, options.poses, r, ctx, threads, "Monte Carlo: " + robot.name);
+    if (options.plot) figure_error = TryPlotStudy(*folder, {folder->staging()}, kStudyFigures);
+    folder->Commit();
   });
   if (!ctx.processes.root()) return kExitOk;
   int failures = 0;
@@ -148,12 +168,24 @@ int RunMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptions& opt
   std::printf("ran %zu cells x %d trials in %.1f s on %d process%s x %d threads (%d failed trials); wrote %s/\n",
               r.cells.size(), o.trials, r.wall_time_s, ctx.processes.count, ctx.processes.count > 1 ? "es" : "",
               threads, failures, options.out_dir.c_str());
+  if (!figure_error.empty()) throw FigureFailure(figure_error + "; the study's data were written to " + options.out_dir);
   return kExitOk;
 }
 
 int RunReproduce(const Context& ctx, const ReproduceOptions& options) {
   Robot robot;
-  RunAgreed(ctx.processes, [&] { robot = LoadRobotOption(options.robot_path); });
+  std::unique_ptr<OutputFolder> folder;
+  RunAgreed(ctx.processes, [&] {
+    robot = LoadRobotOption(options.robot_path);
+    if (ctx.processes.root()) folder = std::make_unique<OutputFolder>("--out", options.out_dir,
+                                                                      std::vector<std::string>{"study", "ablation"});
+  });
+  // One scope over every phase: Ctrl-C between two studies is seen at the next check, and
+  // nothing is written (the set is committed only at the end).
+  const SigintScope sigint;
+  const auto check_interrupted = [] {
+    if (SigintFlag()) throw Interrupted();
+  };
   if (options.threads > 0) omp_set_num_threads(options.threads);
   const int threads = omp_get_max_threads();
   const auto t0 = std::chrono::steady_clock::now();
@@ -185,8 +217,10 @@ int RunReproduce(const Context& ctx, const ReproduceOptions& options) {
   described.designs = {PoseSetDesign::kRandom, PoseSetDesign::kOptimized, PoseSetDesign::kCondition, PoseSetDesign::kD,
                        PoseSetDesign::kE};
   RunAgreed(ctx.processes, [&] {
-    WriteStudy(options.out_dir + "/study", robot, described,
-               "6:50 (random), 6:50:4 (optimized = A-optimal, condition), 6:50:8 (d, e)", study, ctx, threads, false,
+    check_interrupted();
+    if (!ctx.processes.root()) return;
+    WriteStudy(*folder, "study/", robot, described,
+               "6:50 (random), 6:50:4 (optimized = A-optimal, condition), 6:50:8 (d, e)", study, ctx, threads,
                "The paper's study: " + robot.name);
   });
   // 2. The sensor ablation at n = 50 (the paper's Section 4.2, Fig. 10).
@@ -197,19 +231,27 @@ int RunReproduce(const Context& ctx, const ReproduceOptions& options) {
     ab.sensors = s;
     const MonteCarloResult r = RunStudy(ctx, robot, ab, std::string("ablation, ") + ToString(s) + "          ");
     RunAgreed(ctx.processes, [&] {
-      WriteStudy(options.out_dir + "/ablation/" + ToString(s), robot, ab, "50", r, ctx, threads, false,
+      check_interrupted();
+      if (!ctx.processes.root()) return;
+      WriteStudy(*folder, std::string("ablation/") + ToString(s) + "/", robot, ab, "50", r, ctx, threads,
                  std::string("Sensor ablation, noisy sensors: ") + ToString(s));
     });
   }
+  std::string figure_error;
   RunAgreed(ctx.processes, [&] {
-    if (ctx.processes.root()) {
-      RunPlotScript("plot_montecarlo.py", {options.out_dir + "/study", "--ablation", options.out_dir + "/ablation"});
-    }
+    check_interrupted();
+    if (!ctx.processes.root()) return;
+    std::vector<std::string> figures;
+    for (const std::string& f : kStudyFigures) figures.push_back("study/" + f);
+    figures.push_back("ablation/ablation.png");
+    figure_error = TryPlotStudy(*folder, {folder->Path("study"), "--ablation", folder->Path("ablation")}, figures);
+    folder->Commit();
   });
   if (!ctx.processes.root()) return kExitOk;
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf("reproduced the study in %.1f s on %d process%s x %d threads; wrote %s/\n", wall, ctx.processes.count,
               ctx.processes.count > 1 ? "es" : "", threads, options.out_dir.c_str());
+  if (!figure_error.empty()) throw FigureFailure(figure_error + "; the study's data were written to " + options.out_dir);
   return kExitOk;
 }
 

@@ -1,6 +1,14 @@
 #include "common/atomic_output.h"
 
+#include <signal.h>
+#include <sys/file.h>
+#include <fcntl.h>
 #include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdlib>
+#include <thread>
 
 #include <cerrno>
 #include <cstdio>
@@ -85,7 +93,40 @@ std::string AtomicOutput::WriteText(const std::string& final_path, const std::st
   return temp;
 }
 
+void AtomicOutput::Drop(const std::string& final_path) {
+  for (auto it = entries_.begin(); it != entries_.end(); ++it) {
+    if (it->final_path == final_path) {
+      std::remove(it->temp_path.c_str());
+      entries_.erase(it);
+      return;
+    }
+  }
+}
+
 void AtomicOutput::Commit() {
+  // Locks every folder written into, in one order (no deadlock between two runs); released when
+  // the descriptors close.
+  std::vector<std::string> folders;
+  for (const Entry& e : entries_) {
+    const std::string parent = Resolved(e.final_path).parent_path().string();
+    if (std::find(folders.begin(), folders.end(), parent) == folders.end()) folders.push_back(parent);
+  }
+  std::sort(folders.begin(), folders.end());
+  std::vector<int> locks;
+  struct Closer {
+    std::vector<int>& fds;
+    ~Closer() {
+      for (int fd : fds) ::close(fd);
+    }
+  } closer{locks};
+  for (const std::string& folder : folders) {
+    const int fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd < 0 || ::flock(fd, LOCK_EX) != 0) {
+      if (fd >= 0) ::close(fd);
+      throw InputError(folder, "", std::string("cannot lock the folder: ") + std::strerror(errno));
+    }
+    locks.push_back(fd);
+  }
   for (const Entry& e : entries_) {
     if (std::rename(e.temp_path.c_str(), e.final_path.c_str()) != 0) {
       throw InputError(e.final_path, "", std::string("cannot rename into place: ") +
@@ -93,6 +134,153 @@ void AtomicOutput::Commit() {
     }
   }
   committed_ = true;
+}
+
+namespace {
+
+constexpr const char* kStagePrefix = ".cablecal-stage.";
+constexpr const char* kOldPrefix = ".cablecal-old.";
+
+// After each rename of a commit: CABLECAL_TEST_COMMIT (atomic_output.h), for the tests that
+// show a killed or concurrent commit never mixes two runs.
+void AfterCommitRename(int renames_done) {
+  static const char* hook = std::getenv("CABLECAL_TEST_COMMIT");
+  if (!hook) return;
+  const std::string h = hook;
+  if (h.rfind("delay:", 0) == 0) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(std::atoi(h.c_str() + 6)));
+  } else if (h.rfind("kill:", 0) == 0 && renames_done >= std::atoi(h.c_str() + 5)) {
+    ::kill(::getpid(), SIGKILL);
+  }
+}
+
+// Staging and aside folders of runs that were killed: their process no longer exists.
+void RemoveStaleFolders(const fs::path& dir) {
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    for (const char* prefix : {kStagePrefix, kOldPrefix}) {
+      if (name.rfind(prefix, 0) != 0) continue;
+      const long pid = std::atol(name.c_str() + std::strlen(prefix));
+      if (pid > 0 && pid != ::getpid() && ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) {
+        std::error_code ignored;
+        fs::remove_all(entry.path(), ignored);
+      }
+    }
+  }
+}
+
+}  // namespace
+
+OutputFolder::OutputFolder(const std::string& flag, const std::string& dir, std::vector<std::string> owned)
+    : flag_(flag), dir_(dir), owned_(std::move(owned)) {
+  // Checked now, before any work; created only when the first file is written, so a run that
+  // fails or is killed before that leaves nothing at all.
+  std::error_code ec;
+  if (dir_.empty()) throw InputError(flag_, "", "is empty");
+  if (fs::exists(dir_, ec) && !fs::is_directory(dir_, ec)) {
+    throw InputError(flag_, "", "'" + dir_ + "' exists and is not a folder");
+  }
+  fs::path existing = fs::absolute(dir_).lexically_normal();
+  while (!existing.empty() && !fs::exists(existing, ec)) existing = existing.parent_path();
+  if (!fs::is_directory(existing, ec)) {
+    throw InputError(flag_, "", "cannot create the folder '" + dir_ + "': '" + existing.string() + "' is not a folder");
+  }
+  if (::access(existing.c_str(), W_OK | X_OK) != 0) {
+    throw InputError(flag_, "", "cannot write into '" + existing.string() + "': " + std::strerror(errno));
+  }
+}
+
+void OutputFolder::EnsureStaging() const {
+  if (!staging_.empty()) return;
+  std::error_code ec;
+  // The folders this creates are removed again if the run fails (and they are still empty).
+  for (fs::path p = fs::absolute(dir_).lexically_normal(); !p.empty() && !fs::exists(p, ec); p = p.parent_path()) {
+    if (p.filename().empty()) continue;  // a trailing separator
+    created_.push_back(p.string());
+  }
+  fs::create_directories(dir_, ec);
+  if (ec || !fs::is_directory(dir_)) {
+    throw InputError(flag_, "", "cannot create the folder '" + dir_ + "': " + ec.message());
+  }
+  RemoveStaleFolders(dir_);
+  const std::string staging = (fs::path(dir_) / (kStagePrefix + std::to_string(::getpid()))).string();
+  fs::remove_all(staging, ec);
+  if (!fs::create_directory(staging, ec) || ec) {
+    throw InputError(flag_, "", "cannot write into the folder '" + dir_ + "': " + ec.message());
+  }
+  staging_ = staging;
+}
+
+OutputFolder::~OutputFolder() {
+  if (committed_) return;
+  std::error_code ignored;
+  if (!staging_.empty()) fs::remove_all(staging_, ignored);
+  for (const std::string& p : created_) fs::remove(p, ignored);  // innermost first; only if empty
+}
+
+const std::string& OutputFolder::staging() const {
+  EnsureStaging();
+  return staging_;
+}
+
+std::string OutputFolder::Path(const std::string& relative) const {
+  EnsureStaging();
+  const fs::path p = fs::path(staging_) / relative;
+  std::error_code ec;
+  fs::create_directories(p.parent_path(), ec);
+  if (ec) throw InputError(flag_, "", "cannot create '" + p.parent_path().string() + "': " + ec.message());
+  return p.string();
+}
+
+void OutputFolder::WriteText(const std::string& relative, const std::string& content) const {
+  const std::string path = Path(relative);
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out << content;
+  out.close();
+  if (!out) throw InputError(flag_, "", "cannot write '" + path + "': " + std::strerror(errno));
+}
+
+void OutputFolder::Commit() {
+  EnsureStaging();  // a set with no file still replaces the previous one
+  // The lock serialises commits into this folder by concurrent runs; it is released when the
+  // descriptor closes, also if the process dies.
+  const int fd = ::open(dir_.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) throw InputError(flag_, "", "cannot open the folder '" + dir_ + "': " + std::strerror(errno));
+  struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
+  if (::flock(fd, LOCK_EX) != 0) {
+    throw InputError(flag_, "", "cannot lock the folder '" + dir_ + "': " + std::strerror(errno));
+  }
+  const fs::path dir(dir_), aside = dir / (kOldPrefix + std::to_string(::getpid()));
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(staging_)) {
+    const std::string name = entry.path().filename().string();
+    CABLECAL_CHECK(std::find(owned_.begin(), owned_.end(), name) != owned_.end(),
+                   "every file of an output set is one of its owned names: " + name);
+  }
+  fs::remove_all(aside, ec);
+  fs::create_directory(aside, ec);
+  if (ec) throw InputError(flag_, "", "cannot write into the folder '" + dir_ + "': " + ec.message());
+  int renames = 0;
+  const auto move = [&](const fs::path& from, const fs::path& to) {
+    if (std::rename(from.c_str(), to.c_str()) != 0) {
+      throw InputError(flag_, "", "cannot move '" + from.string() + "' to '" + to.string() + "': " +
+                                      std::strerror(errno));
+    }
+    AfterCommitRename(++renames);
+  };
+  for (const std::string& name : owned_) {
+    if (fs::exists(fs::symlink_status(dir / name))) move(dir / name, aside / name);
+  }
+  for (const std::string& name : owned_) {
+    if (fs::exists(fs::symlink_status(fs::path(staging_) / name))) move(fs::path(staging_) / name, dir / name);
+  }
+  committed_ = true;
+  fs::remove_all(aside, ec);
+  fs::remove_all(staging_, ec);
 }
 
 }  // namespace cablecal

@@ -37,7 +37,11 @@ class AtomicOutput {
   // Writes `content` to the temporary path of `final_path` (registering it); returns that path.
   std::string WriteText(const std::string& final_path, const std::string& content);
 
-  // Renames every temporary to its final path. Throws InputError naming the file on failure.
+  // Forgets `final_path` and removes its temporary (a figure whose script failed).
+  void Drop(const std::string& final_path);
+
+  // Renames every temporary to its final path, holding a lock on each folder involved so that
+  // concurrent runs' commits take turns. Throws InputError naming the file on failure.
   void Commit();
 
  private:
@@ -47,5 +51,50 @@ class AtomicOutput {
   std::vector<Entry> entries_;
   bool committed_ = false;
 };
+
+// A command's output folder: a set of files (and subfolders) that belong together, committed
+// as one. Everything is written into a staging folder inside `dir` (.cablecal-stage.<pid>);
+// Commit, holding an exclusive lock on `dir` (flock), moves the previous run's entries of the
+// owned names aside, moves the new ones in, and deletes the old. So:
+// - a failed, interrupted or killed run leaves the folder as it was (a killed run leaves its
+//   hidden staging folder, removed by the next run into the folder);
+// - two runs into one folder never mix: their commits take turns, and the last one's set is
+//   the folder's, whole;
+// - a run killed inside Commit (between renames that take microseconds) leaves some owned
+//   names missing, the previous set's files in .cablecal-old.<pid>, never files of two runs
+//   side by side;
+// - files in `dir` that the command does not own are left alone.
+class OutputFolder {
+ public:
+  // `owned`: every top-level name the command may write into `dir` (also those it does not
+  // write this time, such as figures, so that a previous run's do not stay beside the new
+  // set). Checks that `dir` is a folder or can be created (throws InputError naming `flag`
+  // otherwise); creates it, and the staging folder, when the first file is written, and
+  // removes the folders it created if the run ends without a commit.
+  OutputFolder(const std::string& flag, const std::string& dir, std::vector<std::string> owned);
+  OutputFolder(const OutputFolder&) = delete;
+  OutputFolder& operator=(const OutputFolder&) = delete;
+  ~OutputFolder();
+
+  // Where to write `relative` (an owned name, or a path under an owned subfolder) before the
+  // commit; its parent folders are created.
+  std::string Path(const std::string& relative) const;
+  // Writes `content` to Path(relative).
+  void WriteText(const std::string& relative, const std::string& content) const;
+  // The staging folder itself (for a script that writes several files into it).
+  const std::string& staging() const;
+  void Commit();
+
+ private:
+  void EnsureStaging() const;
+  std::string flag_, dir_;
+  std::vector<std::string> owned_;
+  mutable std::string staging_;
+  mutable std::vector<std::string> created_;  // folders this run created, innermost first
+  bool committed_ = false;
+};
+
+// Test aid: CABLECAL_TEST_COMMIT=delay:MS sleeps MS milliseconds after each rename of a
+// commit; CABLECAL_TEST_COMMIT=kill:K kills the process (SIGKILL) after K renames.
 
 }  // namespace cablecal

@@ -3,9 +3,11 @@
 //   SolverFailure  a solver that did not converge or returned a result that failed
 //                  verification. Exit code 3.
 //   RankFailure    a process of an MPI run could not finish its share. Exit code 4.
+//   FigureFailure  a figure could not be made; the command's other outputs were written. Exit code 5.
 //   CABLECAL_CHECK a broken internal invariant: always on, aborts with a message.
 #pragma once
 
+#include <atomic>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -21,6 +23,7 @@ enum ExitCode : int {
   kExitBadInput = 2,   // bad file, flag or value
   kExitSolverFailed = 3,
   kExitRankFailed = 4,  // a process of an MPI run failed; nothing written
+  kExitFigureFailed = 5,  // a plotting script failed; the computed results were written
   kExitInterrupted = 130,
 };
 
@@ -48,6 +51,13 @@ class SolverFailure : public std::runtime_error {
   explicit SolverFailure(const std::string& message) : std::runtime_error(message) {}
 };
 
+// A plotting script failed. Computed results are never discarded for a figure: the command
+// commits its other outputs first, then reports this. Exit code 5.
+class FigureFailure : public std::runtime_error {
+ public:
+  explicit FigureFailure(const std::string& message) : std::runtime_error(message) {}
+};
+
 // The user stopped a run (Ctrl-C); nothing is written. Exit code 130.
 class Interrupted : public std::runtime_error {
  public:
@@ -73,6 +83,14 @@ class AlreadyReported : public std::runtime_error {
   int exit_code_;
 };
 
+// The size of the last allocation that failed, in bytes (0: unknown). The cablecal program
+// replaces the global operator new to record it (cli/out_of_memory.cc), so that running out
+// of memory names the size asked for; a library user's program leaves it 0.
+inline std::atomic<std::size_t>& FailedAllocationBytes() {
+  static std::atomic<std::size_t> bytes{0};
+  return bytes;
+}
+
 // How an exception ends a run: its exit code (the tiers above), the words printed in front
 // of its message, and the message. The one place that maps exceptions to exit codes, for
 // main() and for the ranks of an MPI run alike.
@@ -96,13 +114,25 @@ inline ErrorOutcome OutcomeOf(const std::exception_ptr& error) {
     out = {kExitSolverFailed, "solver failure", e.what()};
   } catch (const RankFailure& e) {
     out = {kExitRankFailed, "MPI run failed", e.what()};
+  } catch (const FigureFailure& e) {
+    out = {kExitFigureFailed, "error", e.what()};
   } catch (const Interrupted& e) {
     out = {kExitInterrupted, "", e.what()};
   } catch (const std::bad_alloc&) {
     // Not a bug: the inputs asked for more memory than this machine has.
+    const std::size_t bytes = FailedAllocationBytes().load();
+    char size[64] = "";
+    if (bytes >= 1e9) {
+      std::snprintf(size, sizeof(size), " (an allocation of %.2f GB failed)", bytes / 1e9);
+    } else if (bytes >= 1e6) {
+      std::snprintf(size, sizeof(size), " (an allocation of %.0f MB failed)", bytes / 1e6);
+    } else if (bytes > 0) {
+      std::snprintf(size, sizeof(size), " (an allocation of %zu bytes failed)", bytes);
+    }
     out = {kExitBadInput, "error",
-           "out of memory: the inputs ask for more memory than this machine has (fewer poses, trials, "
-           "pose counts or a coarser --step)"};
+           std::string("out of memory") + size +
+               ": the inputs ask for more memory than this machine has (fewer poses, trials, pose counts or a "
+               "coarser --step)"};
   } catch (const std::exception& e) {
     out.message = e.what();
   } catch (...) {

@@ -10,10 +10,12 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <vector>
 
 #include "common/format.h"
+#include "tests/support/temp_dir.h"
 
 namespace {
 
@@ -38,22 +40,9 @@ RunResult RunCablecal(const std::string& args) {
 
 class Cli : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("cablecal_cli_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
-  std::string Read(const std::string& name) const {
-    std::ifstream in(Path(name));
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-  }
-  bool DirIsEmpty() const { return fs::is_empty(dir_); }
+  std::string Path(const std::string& name) const { return tmp_.Path(name); }
+  std::string Read(const std::string& name) const { return tmp_.Read(name); }
+  bool DirIsEmpty() const { return tmp_.IsEmpty(); }
   void WriteRobot(const std::string& name, const std::string& from, const std::string& to) const {
     std::ifstream in(std::string(CABLECAL_SOURCE_DIR) + "/robots/wang2022.yaml");
     std::stringstream s;
@@ -62,7 +51,8 @@ class Cli : public ::testing::Test {
     text.replace(text.find(from), from.size(), to);
     std::ofstream(Path(name)) << text;
   }
-  fs::path dir_;
+  cablecal::testing_support::TempDir tmp_;
+  const fs::path& dir_ = tmp_.path();
 };
 
 TEST_F(Cli, WorkspaceWritesCsvWithProvenanceAndPlot) {
@@ -415,13 +405,121 @@ TEST_F(Cli, InterruptedDesignStopsWithinASecond) {
   EXPECT_TRUE(DirIsEmpty());
 }
 
-TEST_F(Cli, KilledMonteCarloLeavesNoFinalFile) {
-  // SIGKILL cannot be handled: whatever the run had written can only be a temporary.
-  const RunResult r = RunCablecal("env timeout -s KILL 1 " + std::string(CABLECAL_BINARY) +
-                                  " montecarlo --poses 50 --trials 100000 --designs random --no-plot --out " + Path("mc"));
-  EXPECT_NE(r.exit_code, 0);
-  for (const char* f : {"errors.csv", "summary.csv", "summary.md", "run.yaml"}) {
-    EXPECT_FALSE(fs::exists(Path(std::string("mc/") + f))) << f;
+// A small study's data files, by name (run.yaml without its wall time and command line).
+std::map<std::string, std::string> StudyFiles(const fs::path& dir) {
+  std::map<std::string, std::string> files;
+  for (const char* name : {"errors.csv", "summary.csv", "failures.csv", "summary.md", "run.yaml"}) {
+    std::ifstream in(dir / name);
+    if (!in) continue;
+    std::stringstream text;
+    if (std::string(name) == "run.yaml") {
+      for (std::string line; std::getline(in, line);) {
+        if (line.rfind("seed:", 0) == 0 || line.rfind("trials_run:", 0) == 0) text << line << "\n";
+      }
+    } else {
+      text << in.rdbuf();
+    }
+    files[name] = text.str();
+  }
+  return files;
+}
+
+std::string StudyCommand(const std::string& out, int seed) {
+  return " montecarlo --poses 6:8 --trials 20 --designs random --no-plot --threads 1 --seed " +
+         std::to_string(seed) + " --out " + out;
+}
+
+// Whether `dir` holds some files of the set `reference` and nothing else of a study.
+bool OnlyFilesOf(const fs::path& dir, const std::map<std::string, std::string>& reference) {
+  for (const auto& [name, text] : StudyFiles(dir)) {
+    if (reference.at(name) != text) return false;
+  }
+  return true;
+}
+
+TEST_F(Cli, ConcurrentRunsIntoOneFolderNeverMix) {
+  ASSERT_EQ(RunCablecal(StudyCommand(Path("one"), 1)).exit_code, 0);
+  ASSERT_EQ(RunCablecal(StudyCommand(Path("two"), 2)).exit_code, 0);
+  const auto one = StudyFiles(Path("one")), two = StudyFiles(Path("two"));
+  ASSERT_EQ(one.size(), 5u);
+  ASSERT_NE(one.at("errors.csv"), two.at("errors.csv"));
+  // The first run pauses 300 ms after every rename of its commit; the second starts 0.8 s
+  // later and commits inside that window, without pausing. Without the folder lock the second
+  // run's set lands between the first run's renames, and the folder ends with files of both.
+  const std::string slow = std::string("env CABLECAL_TEST_COMMIT=delay:300 ") + CABLECAL_BINARY;
+  const RunResult r = RunCablecal("env sh -c '" + slow + StudyCommand(Path("shared"), 1) + " & sleep 0.8; " +
+                                  CABLECAL_BINARY + StudyCommand(Path("shared"), 2) + " & wait'");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  const auto shared = StudyFiles(Path("shared"));
+  EXPECT_EQ(shared.size(), 5u);
+  EXPECT_TRUE(shared == one || shared == two) << "the folder mixes the two runs";
+  for (const auto& entry : fs::directory_iterator(Path("shared"))) {
+    EXPECT_NE(entry.path().filename().string().rfind(".cablecal-", 0), 0u) << "left behind: " << entry.path();
+  }
+}
+
+TEST_F(Cli, KilledRunNeverLeavesAMixedSetAndTheNextRunCleansUp) {
+  ASSERT_EQ(RunCablecal(StudyCommand(Path("ref"), 2)).exit_code, 0);
+  const auto next = StudyFiles(Path("ref"));
+  for (const int renames : {3, 7}) {  // killed while moving the old set aside; while moving the new one in
+    ASSERT_EQ(RunCablecal(StudyCommand(Path("mc"), 1)).exit_code, 0);
+    const auto previous = StudyFiles(Path("mc"));
+    const RunResult r = RunCablecal("env CABLECAL_TEST_COMMIT=kill:" + std::to_string(renames) + " " +
+                                    CABLECAL_BINARY + StudyCommand(Path("mc"), 2));
+    EXPECT_NE(r.exit_code, 0);
+    const auto left = StudyFiles(Path("mc"));
+    EXPECT_LT(left.size(), 5u) << "killed after " << renames << " renames";
+    EXPECT_TRUE(OnlyFilesOf(Path("mc"), renames < 5 ? previous : next)) << "killed after " << renames;
+  }
+  // Not even a SIGKILL before any file is written leaves a final file.
+  fs::remove_all(Path("fresh"));
+  const RunResult killed = RunCablecal("env timeout -s KILL 1 " + std::string(CABLECAL_BINARY) +
+                                       " montecarlo --poses 50 --trials 100000 --designs random --no-plot --out " +
+                                       Path("fresh"));
+  EXPECT_NE(killed.exit_code, 0);
+  EXPECT_TRUE(StudyFiles(Path("fresh")).empty());
+  // The next run into the folder removes what the killed ones left.
+  std::ofstream(Path("mc/notes.txt")) << "the lab's own file";
+  ASSERT_EQ(RunCablecal(StudyCommand(Path("mc"), 2)).exit_code, 0);
+  EXPECT_TRUE(StudyFiles(Path("mc")) == next);
+  EXPECT_EQ(Read("mc/notes.txt"), "the lab's own file");  // not cablecal's: left alone
+  std::ofstream(Path("file")) << "x";
+  const RunResult not_folder = RunCablecal(StudyCommand(Path("file"), 2));
+  EXPECT_EQ(not_folder.exit_code, 2);
+  EXPECT_NE(not_folder.output.find("exists and is not a folder"), std::string::npos) << not_folder.output;
+  for (const auto& entry : fs::directory_iterator(Path("mc"))) {
+    EXPECT_NE(entry.path().filename().string().rfind(".cablecal-", 0), 0u) << "left behind: " << entry.path();
+  }
+}
+
+TEST_F(Cli, AFailedFigureKeepsTheResultsAndExitsFive) {
+  const std::string env = "env CABLECAL_PYTHON=/bin/false " + std::string(CABLECAL_BINARY);
+  RunResult r = RunCablecal(env + " workspace --step 0.2 --out " + Path("ws.csv") + " --plot " + Path("ws.png"));
+  EXPECT_EQ(r.exit_code, 5) << r.output;
+  EXPECT_NE(r.output.find("the figure could not be made"), std::string::npos) << r.output;
+  EXPECT_TRUE(fs::exists(Path("ws.csv")));
+  EXPECT_FALSE(fs::exists(Path("ws.png")));
+  r = RunCablecal(env + " design --poses 6 --starts 1 --random-sets 0 --out " + Path("p.csv") + " --plot " +
+                  Path("p.png"));
+  EXPECT_EQ(r.exit_code, 5) << r.output;
+  EXPECT_TRUE(fs::exists(Path("p.csv")));
+  EXPECT_FALSE(fs::exists(Path("p.png")));
+  r = RunCablecal(env + " montecarlo --poses 6 --trials 5 --designs random --out " + Path("mc"));
+  EXPECT_EQ(r.exit_code, 5) << r.output;
+  EXPECT_EQ(StudyFiles(Path("mc")).size(), 5u);
+  EXPECT_FALSE(fs::exists(Path("mc/sigma_vs_n.png")));
+  for (const auto& entry : fs::directory_iterator(dir_)) {
+    EXPECT_EQ(entry.path().string().find(".tmp."), std::string::npos) << "left behind: " << entry.path();
+  }
+}
+
+TEST_F(Cli, InterruptedReproduceWritesNothingInAnyPhase) {
+  // SIGINT early (the random sets' study) and later (the designed sets' Ipopt solves).
+  for (const int seconds : {1, 6}) {
+    const RunResult r = RunCablecal("env timeout --preserve-status -s INT " + std::to_string(seconds) + " " +
+                                    CABLECAL_BINARY + " reproduce --trials 3 --threads 2 --out " + Path("results"));
+    EXPECT_EQ(r.exit_code, 130) << "after " << seconds << " s: " << r.output;
+    EXPECT_TRUE(DirIsEmpty()) << "after " << seconds << " s";
   }
 }
 

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <set>
 
+#include "tests/support/temp_dir.h"
 #include "common/atomic_output.h"
 #include "common/csv.h"
 #include "common/error.h"
@@ -18,11 +19,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path TempDir() {
-  const fs::path dir = fs::temp_directory_path() / ("cablecal_common_test_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  return dir;
-}
 
 TEST(Format, ShortestRoundTrip) {
   for (const double v : {0.1, 2.6045, 1.0 / 3.0, -5.209e-7, 1e300, 123456789.0}) {
@@ -111,7 +107,8 @@ TEST(Random, NormalHasUnitMoments) {
 }
 
 TEST(AtomicOutput, NothingAppearsWithoutCommit) {
-  const fs::path dir = TempDir();
+  const testing_support::TempDir tmp;
+  const fs::path dir = tmp.path();
   const std::string final_path = (dir / "out.csv").string();
   {
     AtomicOutput out;
@@ -127,7 +124,6 @@ TEST(AtomicOutput, NothingAppearsWithoutCommit) {
     out.Commit();
   }
   EXPECT_TRUE(fs::exists(final_path));
-  fs::remove_all(dir);
 }
 
 TEST(AtomicOutput, MissingFolderIsInputError) {
@@ -136,7 +132,8 @@ TEST(AtomicOutput, MissingFolderIsInputError) {
 }
 
 TEST(Csv, ToleratesBomCrlfCommentsAndSpaces) {
-  const fs::path dir = TempDir();
+  const testing_support::TempDir tmp;
+  const fs::path dir = tmp.path();
   const std::string path = (dir / "in.csv").string();
   std::ofstream(path, std::ios::binary) << "\xEF\xBB\xBF# made by hand\r\npose, x\r\n\r\n 1 , 2.5 \r\n# note\r\n2,3\r\n";
   std::vector<double> xs;
@@ -145,11 +142,11 @@ TEST(Csv, ToleratesBomCrlfCommentsAndSpaces) {
     xs.push_back(row.Number(1));
   });
   EXPECT_EQ(xs, (std::vector<double>{2.5, 3.0}));
-  fs::remove_all(dir);
 }
 
 TEST(Csv, ErrorsNameFileLineAndColumn) {
-  const fs::path dir = TempDir();
+  const testing_support::TempDir tmp;
+  const fs::path dir = tmp.path();
   const std::string path = (dir / "in.csv").string();
   auto message = [&](const std::string& content) -> std::string {
     std::ofstream(path, std::ios::binary | std::ios::trunc) << content;
@@ -167,7 +164,6 @@ TEST(Csv, ErrorsNameFileLineAndColumn) {
   EXPECT_EQ(message("pose,x\n0,2\n"), path + ":2: column 'pose': must be a positive integer (got '0')");
   EXPECT_EQ(message(""), path + ": is empty: no header line 'pose,x'");
   EXPECT_EQ(message("pose,x\n"), path + ": has a header but no data rows");
-  fs::remove_all(dir);
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "tests/support/temp_dir.h"
 #include "common/error.h"
 #include "common/random.h"
 #include "common/version.h"
@@ -56,13 +57,12 @@ TEST_P(PerCriterion, IpoptDerivativeCheckerFindsNoError) {
   options.criterion = GetParam();
   options.min_spacing_m = 0.1;  // exercise the spacing rows too
   options.derivative_test = true;
-  options.ipopt_journal_path =
-      (std::filesystem::temp_directory_path() / ("cablecal_ipopt_" + std::to_string(::getpid()) + ".txt")).string();
+  const testing_support::TempDir tmp;
+  options.ipopt_journal_path = tmp.Path("ipopt.txt");
   internal::SolveDesignNlp(robot, options, SampleFeasiblePoses(robot, 7, 5));
   std::ifstream in(options.ipopt_journal_path);
   std::stringstream journal;
   journal << in.rdbuf();
-  std::filesystem::remove(options.ipopt_journal_path);
   EXPECT_NE(journal.str().find("No errors detected by derivative checker"), std::string::npos)
       << journal.str().substr(0, 4000);
 }

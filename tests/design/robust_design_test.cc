@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "tests/support/temp_dir.h"
 #include "common/error.h"
 #include "common/random.h"
 #include "design/design.h"
@@ -184,8 +185,8 @@ TEST(DesignPrior, SecondRoundCountsTheFirstRoundsInformation) {
   const SimulatedExperiment sim = SimulateExperiment(robot, truth, first.poses, SimulationOptions{}, rng);
   const IdentifyResult id = Identify(robot, sim.measurements, IdentifyOptions{});
   ASSERT_TRUE(id.converged());
-  const std::string dir = (std::filesystem::temp_directory_path() / ("cablecal_prior_" + std::to_string(getpid()))).string();
-  std::filesystem::create_directories(dir);
+  const testing_support::TempDir tmp;
+  const std::string dir = tmp.path().string();
   const std::string path = dir + "/result.yaml";
   std::ofstream(path) << IdentifyResultYaml(id, "test");
 
@@ -221,7 +222,6 @@ TEST(DesignPrior, SecondRoundCountsTheFirstRoundsInformation) {
   EXPECT_THROW(LoadDesignPrior(robot, dir + "/bad.yaml"), InputError);
   std::ofstream(dir + "/notyaml.yaml") << "a: [\n";
   EXPECT_THROW(LoadDesignPrior(robot, dir + "/notyaml.yaml"), InputError);
-  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

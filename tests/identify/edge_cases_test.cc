@@ -11,6 +11,7 @@
 #include "identify/identify.h"
 #include "model/cable.h"
 #include "model/statics.h"
+#include "tests/support/temp_dir.h"
 #include "workspace/workspace.h"
 
 namespace cablecal {
@@ -96,7 +97,8 @@ TEST(EdgeCases, ImplausibleIdentifiedGeometryIsRefusedWithTheLikelyCause) {
 }
 
 TEST(EdgeCases, MillionRowCsvIsStreamedAndRejectedAtTheCap) {
-  const fs::path path = fs::temp_directory_path() / ("cablecal_million_" + std::to_string(::getpid()) + ".csv");
+  const testing_support::TempDir tmp;
+  const fs::path path = tmp.Path("million.csv");
   {
     std::ofstream out(path);
     out << "pose,dl1,dl2,z,theta\n";
@@ -109,7 +111,6 @@ TEST(EdgeCases, MillionRowCsvIsStreamedAndRejectedAtTheCap) {
     EXPECT_EQ(std::string(e.what()), path.string() + ":" + std::to_string(kMaxMeasuredPoses + 2) +
                                          ": more than " + std::to_string(kMaxMeasuredPoses) + " poses");
   }
-  fs::remove(path);
 }
 
 TEST(EdgeCases, RobotFileWithBomCrlfAndCommentsLoads) {

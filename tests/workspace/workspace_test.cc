@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "tests/support/temp_dir.h"
 #include "common/error.h"
 #include "model/cable.h"
 #include "workspace/workspace.h"
@@ -112,7 +113,8 @@ TEST(Sampler, EmptyWorkspaceFailsClearly) {
 TEST(PosePlan, CsvRoundTrip) {
   const Robot& robot = BuiltinRobot();
   const auto plan = SampleFeasiblePoses(robot, 7, 99);
-  const fs::path path = fs::temp_directory_path() / ("cablecal_plan_" + std::to_string(::getpid()) + ".csv");
+  const testing_support::TempDir tmp;
+  const fs::path path = tmp.Path("plan.csv");
   std::ofstream(path) << PosePlanCsv(plan, "# comment\n");
   const auto back = ReadPosePlanCsv(path.string(), 2);
   ASSERT_EQ(back.size(), plan.size());
@@ -127,7 +129,6 @@ TEST(PosePlan, CsvRoundTrip) {
   } catch (const InputError& e) {
     EXPECT_EQ(std::string(e.what()), path.string() + ":3: column 'pose': duplicate pose id 1");
   }
-  fs::remove(path);
 }
 
 }  // namespace
