@@ -523,6 +523,19 @@ TEST_F(Cli, InterruptedReproduceWritesNothingInAnyPhase) {
   }
 }
 
+TEST_F(Cli, OutOfMemoryIsExitTwoNamingTheSize) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "AddressSanitizer reserves terabytes of address space: no ulimit -v under it";
+#endif
+  // A 2.1 million point grid (about 1.3 GB of points) in a process limited to 400 MB.
+  const RunResult r = RunCablecal("env sh -c 'ulimit -v 400000; exec " + std::string(CABLECAL_BINARY) +
+                                  " workspace --step 0.001 --out " + Path("ws.csv") + "'");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("out of memory (an allocation of "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(" GB failed)"), std::string::npos) << r.output;
+  EXPECT_TRUE(DirIsEmpty());
+}
+
 TEST_F(Cli, MonteCarloBadFlagsExitTwo) {
   for (const std::string& args : std::vector<std::string>{"montecarlo --poses 4:10 --trials 5 --out " + Path("m"),
                                                           "montecarlo --poses 6:10 --trials 0 --out " + Path("m"),
