@@ -14,6 +14,7 @@
 #include "common/atomic_output.h"
 #include "common/error.h"
 #include "common/format.h"
+#include "common/yaml_writer.h"
 #include "common/version.h"
 #include "montecarlo/montecarlo.h"
 #ifdef CABLECAL_WITH_MPI
@@ -50,35 +51,41 @@ const std::vector<std::string> kStudyFigures = {"sigma_vs_n.png", "distributions
 
 std::string RunYaml(const Robot& robot, const MonteCarloOptions& o, const std::string& poses_text,
                     const MonteCarloResult& r, const Context& ctx, int threads) {
-  std::string designs;
-  for (PoseSetDesign d : o.designs) designs += (designs.empty() ? "" : ", ") + std::string(ToString(d));
+  using YAML::Key;
+  using YAML::Value;
   int failures = 0;
   long trials = 0;
   for (const MonteCarloCell& c : r.cells) {
     failures += c.failures();
     trials += static_cast<long>(c.trials.size());
   }
-  std::string s;
-  s += "cablecal: {version: " + std::string(Version()) + ", commit: " + GitCommit() + "}\n";
-  s += "command: " + YamlQuoted(ctx.command_line) + "\n";
-  s += "robot: {name: " + YamlQuoted(robot.name) + ", source: " + YamlQuoted(robot.source) + "}\n";
-  s += "poses: " + YamlQuoted(poses_text) + "\n";
-  s += "designs: [" + designs + "]\n";
-  s += "trials: " + std::to_string(o.trials) + "\n";
-  s += "estimator: " + std::string(ToString(o.estimator)) + "\n";
-  s += "gauge: " + std::string(ToString(o.gauge)) + "\n";
-  s += "sensors: " + std::string(ToString(o.sensors)) + "\n";
-  s += "geometry_sigma_m: " + FormatDouble(o.geometry_sigma_m) + "\n";
-  s += "design_starts: " + std::to_string(o.design_starts) + "\n";
-  s += "seed: " + std::to_string(o.seed) + "\n";
-  s += "blas: " + LoadedLibraryPath("libblas.so") + "\n";
-  s += "lapack: " + LoadedLibraryPath("liblapack.so") + "\n";
-  s += "processes: " + std::to_string(ctx.processes.count) + "\n";
-  s += "threads: " + std::to_string(threads) + "  # per process\n";
-  s += "trials_run: " + std::to_string(trials) + "\n";
-  s += "failed_trials: " + std::to_string(failures) + "\n";
-  s += "wall_time_s: " + FormatDouble(std::round(r.wall_time_s * 1000.0) / 1000.0) + "\n";
-  return s;
+  YAML::Emitter y;
+  y << YAML::BeginMap;
+  y << Key << "cablecal" << Value << YAML::Flow << YAML::BeginMap << Key << "version" << Value << YamlString{Version()}
+    << Key << "commit" << Value << YamlString{GitCommit()} << YAML::EndMap;
+  y << Key << "command" << Value << YamlString{ctx.command_line};
+  y << Key << "robot" << Value << YAML::Flow << YAML::BeginMap << Key << "name" << Value << YamlString{robot.name}
+    << Key << "source" << Value << YamlString{robot.source} << YAML::EndMap;
+  y << Key << "poses" << Value << YamlString{poses_text};
+  y << Key << "designs" << Value << YAML::Flow << YAML::BeginSeq;
+  for (PoseSetDesign d : o.designs) y << ToString(d);
+  y << YAML::EndSeq;
+  y << Key << "trials" << Value << o.trials;
+  y << Key << "estimator" << Value << ToString(o.estimator);
+  y << Key << "gauge" << Value << ToString(o.gauge);
+  y << Key << "sensors" << Value << ToString(o.sensors);
+  y << Key << "geometry_sigma_m" << Value << YamlNumber{o.geometry_sigma_m};
+  y << Key << "design_starts" << Value << o.design_starts;
+  y << Key << "seed" << Value << o.seed;
+  y << Key << "blas" << Value << YamlString{LoadedLibraryPath("libblas.so")};
+  y << Key << "lapack" << Value << YamlString{LoadedLibraryPath("liblapack.so")};
+  y << Key << "processes" << Value << ctx.processes.count;
+  y << Key << "threads" << Value << threads << YAML::Comment("per process");
+  y << Key << "trials_run" << Value << trials;
+  y << Key << "failed_trials" << Value << failures;
+  y << Key << "wall_time_s" << Value << YamlNumber{std::round(r.wall_time_s * 1000.0) / 1000.0};
+  y << YAML::EndMap;
+  return YamlText(y);
 }
 
 // Writes the data files of one study into `folder` under `prefix` (staged; the caller commits).

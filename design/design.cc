@@ -13,6 +13,7 @@
 
 #include "common/error.h"
 #include "common/format.h"
+#include "common/yaml_writer.h"
 #include "common/random.h"
 #include "common/version.h"
 #include "design/ipopt_nlp.h"
@@ -368,59 +369,80 @@ DesignPrior LoadDesignPrior(const Robot& nominal, const std::string& path) {
 }
 
 std::string DesignSummaryYaml(const DesignResult& r, const DesignOptions& options, const std::string& command_line) {
-  auto criteria = [](const CriteriaValues& v) {
-    return "{condition_number: " + FormatDouble(v.condition_number) +
-           ", d_log_det_information: " + FormatDouble(v.d_log_det_information) +
-           ", a_trace_covariance_m2: " + FormatDouble(v.a_trace_covariance_m2) +
-           ", e_min_eigenvalue: " + FormatDouble(v.e_min_eigenvalue) + "}";
+  using YAML::BeginMap;
+  using YAML::EndMap;
+  using YAML::Flow;
+  using YAML::Key;
+  using YAML::Value;
+  YAML::Emitter o;
+  const auto criteria = [&o](const CriteriaValues& v) {
+    o << Flow << BeginMap << Key << "condition_number" << Value << YamlNumber{v.condition_number} << Key
+      << "d_log_det_information" << Value << YamlNumber{v.d_log_det_information} << Key << "a_trace_covariance_m2"
+      << Value << YamlNumber{v.a_trace_covariance_m2} << Key << "e_min_eigenvalue" << Value
+      << YamlNumber{v.e_min_eigenvalue} << EndMap;
   };
-  std::ostringstream o;
-  o << "# cablecal design summary (README, \"Experiment design\"). Criteria of the returned set are\n"
-    << "# recomputed from its verified poses. S: information of a1z a2x a2z l10 l20 (1/m^2).\n";
-  o << "cablecal: {version: " << Version() << ", commit: " << GitCommit() << "}\n";
-  o << "command: " << YamlQuoted(command_line) << "\n";
-  o << "poses: " << options.poses << "\n";
-  o << "criterion: " << ToString(options.criterion) << "\n";
-  o << "seed: " << options.seed << "\n";
-  o << "min_spacing_m: " << FormatDouble(options.min_spacing_m) << "\n";
-  o << "criteria: " << criteria(r.criteria) << "\n";
+  o << YAML::Comment(
+           "cablecal design summary (README, \"Experiment design\"). Criteria of the returned set are\n"
+           "recomputed from its verified poses. S: information of a1z a2x a2z l10 l20 (1/m^2).")
+    << BeginMap;
+  o << Key << "cablecal" << Value << Flow << BeginMap << Key << "version" << Value << YamlString{Version()} << Key
+    << "commit" << Value << YamlString{GitCommit()} << EndMap;
+  o << Key << "command" << Value << YamlString{command_line};
+  o << Key << "poses" << Value << options.poses;
+  o << Key << "criterion" << Value << ToString(options.criterion);
+  o << Key << "seed" << Value << options.seed;
+  o << Key << "min_spacing_m" << Value << YamlNumber{options.min_spacing_m};
+  o << Key << "criteria" << Value;
+  criteria(r.criteria);
   if (options.random_sets > 0) {
-    o << "random_sets: {count: " << options.random_sets << ", median: " << criteria(r.random_median) << "}\n";
-    o << "condition_number: {optimized: " << FormatDouble(r.criteria.condition_number)
-      << ", random_median: " << FormatDouble(r.random_median.condition_number) << "}\n";
-    o << "improvement_over_random_median:   # factor, > 1 is better (see README)\n";
+    o << Key << "random_sets" << Value << Flow << BeginMap << Key << "count" << Value << options.random_sets << Key
+      << "median" << Value;
+    criteria(r.random_median);
+    o << EndMap;
+    o << Key << "condition_number" << Value << Flow << BeginMap << Key << "optimized" << Value
+      << YamlNumber{r.criteria.condition_number} << Key << "random_median" << Value
+      << YamlNumber{r.random_median.condition_number} << EndMap;
+    o << Key << "improvement_over_random_median" << Value << YAML::Comment("factor, > 1 is better (see README)")
+      << BeginMap;
     for (const Criterion c : {Criterion::kCondition, Criterion::kD, Criterion::kA, Criterion::kE}) {
-      o << "  " << ToString(c) << ": " << FormatDouble(Improvement(c, r.criteria, r.random_median)) << "\n";
+      o << Key << ToString(c) << Value << YamlNumber{Improvement(c, r.criteria, r.random_median)};
     }
+    o << EndMap;
   } else {
-    o << "random_sets: {count: 0}   # no random reference (--random-sets 0)\n";
+    o << Key << "random_sets" << Value << Flow << BeginMap << Key << "count" << Value << 0 << EndMap
+      << YAML::Comment("no random reference (--random-sets 0)");
   }
-  o << "starts: {count: " << options.starts << ", converged: " << r.converged_starts << ", best: " << r.best_start
-    << "}\n";
-  o << "per_start:\n";
-  for (const StartReport& s : r.starts) {
-    o << "  - {start: " << s.start << ", ipopt_status: " << s.ipopt_status << ", iterations: " << s.iterations
-      << ", verified: " << (s.verified ? "true" : "false");
-    if (s.verified) o << ", objective: " << FormatDouble(s.objective);
-    o << ", robust_sigmas_in_nlp: " << FormatDouble(std::round(s.robust_sigmas * 1e6) / 1e6);
-    if (s.converged && !s.verified) o << ", verification_failure: " << YamlQuoted(s.verification_failure);
-    o << "}\n";
+  o << Key << "starts" << Value << Flow << BeginMap << Key << "count" << Value << options.starts << Key << "converged"
+    << Value << r.converged_starts << Key << "best" << Value << r.best_start << EndMap;
+  o << Key << "per_start" << Value << YAML::BeginSeq;
+  for (const StartReport& st : r.starts) {
+    o << Flow << BeginMap << Key << "start" << Value << st.start << Key << "ipopt_status" << Value << st.ipopt_status
+      << Key << "iterations" << Value << st.iterations << Key << "verified" << Value << st.verified;
+    if (st.verified) o << Key << "objective" << Value << YamlNumber{st.objective};
+    o << Key << "robust_sigmas_in_nlp" << Value << YamlNumber{std::round(st.robust_sigmas * 1e6) / 1e6};
+    if (st.converged && !st.verified) o << Key << "verification_failure" << Value << YamlString{st.verification_failure};
+    o << EndMap;
   }
-  o << "robustness: {geometry_sigma_m: " << FormatDouble(options.geometry_sigma_m)
-    << ", robust_sigmas: " << FormatDouble(options.robust_sigmas)
-    << ", scenarios: \"each of a1x a1z a2x a2z l10 l20 moved by +-k sigma alone\"}\n";
-  o << "poses_worst_case_tensions_N:   # linearised over the geometry uncertainty, per cable [min, max]\n";
+  o << YAML::EndSeq;
+  o << Key << "robustness" << Value << Flow << BeginMap << Key << "geometry_sigma_m" << Value
+    << YamlNumber{options.geometry_sigma_m} << Key << "robust_sigmas" << Value << YamlNumber{options.robust_sigmas}
+    << Key << "scenarios" << Value << YamlString{std::string("each of a1x a1z a2x a2z l10 l20 moved by +-k sigma alone")}
+    << EndMap;
+  o << Key << "poses_worst_case_tensions_N" << Value
+    << YAML::Comment("linearised over the geometry uncertainty, per cable [min, max]") << YAML::BeginSeq;
   for (std::size_t j = 0; j < r.poses.size(); ++j) {
     const PlanPose& p = r.poses[j];
-    o << "  - {pose: " << j + 1;
+    o << Flow << BeginMap << Key << "pose" << Value << j + 1;
     for (int i = 0; i < p.tensions_worst_min_N.size(); ++i) {
-      o << ", t" << i + 1 << ": [" << FormatDouble(p.tensions_worst_min_N(i)) << ", "
-        << FormatDouble(p.tensions_worst_max_N(i)) << "]";
+      o << Key << ("t" + std::to_string(i + 1)) << Value << Flow << YAML::BeginSeq
+        << YamlNumber{p.tensions_worst_min_N(i)} << YamlNumber{p.tensions_worst_max_N(i)} << YAML::EndSeq;
     }
-    o << "}\n";
+    o << EndMap;
   }
-  o << "wall_time_s: " << FormatDouble(std::round(r.wall_time_s * 1000.0) / 1000.0) << "\n";
-  return o.str();
+  o << YAML::EndSeq;
+  o << Key << "wall_time_s" << Value << YamlNumber{std::round(r.wall_time_s * 1000.0) / 1000.0};
+  o << EndMap;
+  return YamlText(o);
 }
 
 }  // namespace cablecal

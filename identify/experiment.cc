@@ -6,6 +6,7 @@
 #include "common/csv.h"
 #include "common/error.h"
 #include "common/format.h"
+#include "common/yaml_writer.h"
 #include "model/statics.h"
 
 namespace cablecal {
@@ -173,13 +174,19 @@ void CheckReadingsPlausible(const Robot& robot, const std::vector<Measurement>& 
 
 std::string TruthYaml(const Robot& truth, const std::vector<Measurement>& measurements,
                       const std::vector<Eigen::Vector3d>& true_poses) {
-  std::string out = RobotToYaml(truth);
-  out += "true_poses:   # where the platform settled at each measured pose: x, z (m), theta (rad)\n";
+  YAML::Emitter o;
+  o << YAML::BeginMap;
+  EmitRobotFields(o, truth);
+  o << YAML::Key << "true_poses" << YAML::Value
+    << YAML::Comment("where the platform settled at each measured pose: x, z (m), theta (rad)") << YAML::BeginSeq;
   for (std::size_t j = 0; j < true_poses.size(); ++j) {
-    out += "  - {pose: " + std::to_string(measurements[j].pose_id) + ", x: " + FormatDouble(true_poses[j](0)) +
-           ", z: " + FormatDouble(true_poses[j](1)) + ", theta: " + FormatDouble(true_poses[j](2)) + "}\n";
+    o << YAML::Flow << YAML::BeginMap << YAML::Key << "pose" << YAML::Value << measurements[j].pose_id << YAML::Key
+      << "x" << YAML::Value << YamlNumber{true_poses[j](0)} << YAML::Key << "z" << YAML::Value
+      << YamlNumber{true_poses[j](1)} << YAML::Key << "theta" << YAML::Value << YamlNumber{true_poses[j](2)}
+      << YAML::EndMap;
   }
-  return out;
+  o << YAML::EndSeq << YAML::EndMap;
+  return YamlText(o);
 }
 
 }  // namespace cablecal

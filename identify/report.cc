@@ -3,92 +3,104 @@
 #include <sstream>
 
 #include "common/format.h"
+#include "common/yaml_writer.h"
 #include "common/version.h"
 #include "identify/identify.h"
 
 namespace cablecal {
 namespace {
 
-std::string Num(double v) {
-  if (std::isinf(v)) return v > 0 ? ".inf" : "-.inf";
-  if (std::isnan(v)) return ".nan";
-  return FormatDouble(v);
-}
-
+using YAML::BeginMap;
+using YAML::BeginSeq;
+using YAML::EndMap;
+using YAML::EndSeq;
+using YAML::Flow;
+using YAML::Key;
+using YAML::Value;
 
 }  // namespace
 
 std::string IdentifyResultYaml(const IdentifyResult& r, const std::string& command_line) {
-  std::ostringstream o;
-  o << "# cablecal identification result (README, \"identify\"). SI units: m, rad.\n";
-  o << "cablecal: {version: " << Version() << ", commit: " << GitCommit() << "}\n";
-  o << "command: " << YamlQuoted(command_line) << "\n";
-  o << "status: " << ToString(r.status) << "\n";
-  if (!r.message.empty()) o << "message: " << YamlQuoted(r.message) << "\n";
-  o << "estimator: " << ToString(r.estimator) << "\n";
-  o << "gauge: " << ToString(r.gauge) << "\n";
+  YAML::Emitter o;
+  o << YAML::Comment("cablecal identification result (README, \"identify\"). SI units: m, rad.") << BeginMap;
+  o << Key << "cablecal" << Value << Flow << BeginMap << Key << "version" << Value << YamlString{Version()} << Key
+    << "commit" << Value << YamlString{GitCommit()} << EndMap;
+  o << Key << "command" << Value << YamlString{command_line};
+  o << Key << "status" << Value << ToString(r.status);
+  if (!r.message.empty()) o << Key << "message" << Value << YamlString{r.message};
+  o << Key << "estimator" << Value << ToString(r.estimator);
+  o << Key << "gauge" << Value << ToString(r.gauge);
+  std::string note;
   switch (r.gauge) {
-    case Gauge::kA1x:
-      o << "gauge_note: \"a1x held at its nominal value: the frame's x origin is defined by exit point 1\"\n";
-      break;
-    case Gauge::kPrior:
-      o << "gauge_note: \"laser-tracker prior on every exit point (sensors.tracker.sigma)\"\n";
-      break;
+    case Gauge::kA1x: note = "a1x held at its nominal value: the frame's x origin is defined by exit point 1"; break;
+    case Gauge::kPrior: note = "laser-tracker prior on every exit point (sensors.tracker.sigma)"; break;
     case Gauge::kNone:
-      o << "gauge_note: \"no gauge (the paper's problem): a common shift of every a_ix and x_j is unobservable; "
-           "standard deviations are from the pseudo-inverse and exclude that direction\"\n";
+      note = "no gauge (the paper's problem): a common shift of every a_ix and x_j is unobservable; standard "
+             "deviations are from the pseudo-inverse and exclude that direction";
       break;
   }
-  o << "iterations: " << r.iterations << "\n";
-  o << "final_cost: " << Num(r.final_cost) << "   # half the sum of squared (whitened, for ml) residuals\n";
-  o << "residual_rms: {encoder_m: " << Num(r.rms_encoder_m) << ", laser_m: " << Num(r.rms_laser_m)
-    << ", inclinometer_rad: " << Num(r.rms_inclinometer_rad) << "}\n";
+  o << Key << "gauge_note" << Value << YamlString{note};
+  o << Key << "iterations" << Value << r.iterations;
+  o << Key << "final_cost" << Value << YamlNumber{r.final_cost}
+    << YAML::Comment("half the sum of squared (whitened, for ml) residuals");
+  o << Key << "residual_rms" << Value << Flow << BeginMap << Key << "encoder_m" << Value << YamlNumber{r.rms_encoder_m}
+    << Key << "laser_m" << Value << YamlNumber{r.rms_laser_m} << Key << "inclinometer_rad" << Value
+    << YamlNumber{r.rms_inclinometer_rad} << EndMap;
   if (r.estimator == Estimator::kPaper) {
-    o << "std_note: \"paper estimator: covariance scaled by the residual variance\"\n";
+    o << Key << "std_note" << Value << YamlString{std::string("paper estimator: covariance scaled by the residual variance")};
   }
-  o << "parameters:\n";
+  o << Key << "parameters" << Value << BeginMap;
   for (int k = 0; k < 6; ++k) {
-    o << "  " << kGeometryNames[k] << ": {value: " << Num(r.geometry(k));
-    if (r.has_covariance) o << ", std: " << Num(r.geometry_std(k));
-    if (k == 0 && r.gauge == Gauge::kA1x) o << ", held: true";
-    o << "}\n";
+    o << Key << kGeometryNames[k] << Value << Flow << BeginMap << Key << "value" << Value << YamlNumber{r.geometry(k)};
+    if (r.has_covariance) o << Key << "std" << Value << YamlNumber{r.geometry_std(k)};
+    if (k == 0 && r.gauge == Gauge::kA1x) o << Key << "held" << Value << true;
+    o << EndMap;
   }
+  o << EndMap;
   if (r.has_covariance) {
-    o << "correlation:   # geometric parameters, in the order above\n";
+    o << Key << "correlation" << Value << YAML::Comment("geometric parameters, in the order above") << BeginSeq;
     for (int a = 0; a < 6; ++a) {
-      o << "  - [";
-      for (int b = 0; b < 6; ++b) o << (b ? ", " : "") << Num(r.geometry_correlation(a, b));
-      o << "]\n";
+      o << Flow << BeginSeq;
+      for (int b = 0; b < 6; ++b) o << YamlNumber{r.geometry_correlation(a, b)};
+      o << EndSeq;
     }
+    o << EndSeq;
   }
-  o << "poses:\n";
+  o << Key << "poses" << Value << BeginSeq;
   const bool ml = r.estimator == Estimator::kMaximumLikelihood;
   for (const PoseEstimate& p : r.poses) {
-    o << "  - {pose: " << p.pose_id << ", x: " << Num(p.q(0));
-    if (r.has_covariance) o << ", x_std: " << Num(p.std_dev(0));
-    o << ", z: " << Num(p.q(1));
-    if (r.has_covariance && ml) o << ", z_std: " << Num(p.std_dev(1));
-    o << ", theta: " << Num(p.q(2));
-    if (r.has_covariance && ml) o << ", theta_std: " << Num(p.std_dev(2));
-    o << "}\n";
+    o << Flow << BeginMap << Key << "pose" << Value << p.pose_id << Key << "x" << Value << YamlNumber{p.q(0)};
+    if (r.has_covariance) o << Key << "x_std" << Value << YamlNumber{p.std_dev(0)};
+    o << Key << "z" << Value << YamlNumber{p.q(1)};
+    if (r.has_covariance && ml) o << Key << "z_std" << Value << YamlNumber{p.std_dev(1)};
+    o << Key << "theta" << Value << YamlNumber{p.q(2)};
+    if (r.has_covariance && ml) o << Key << "theta_std" << Value << YamlNumber{p.std_dev(2)};
+    o << EndMap;
   }
+  o << EndSeq;
   const Identifiability& id = r.identifiability;
   if (!id.names.empty()) {
-    o << "identifiability:   # the " << (ml ? "whitened " : "")
-      << "Jacobian at the solution, every pose's own unknowns eliminated (README, \"identify\")\n";
-    o << "  columns: [";
-    for (std::size_t k = 0; k < id.geometry_names.size(); ++k) o << (k ? ", " : "") << id.geometry_names[k];
-    o << "]\n  singular_values: [";
-    for (int k = 0; k < id.singular_values.size(); ++k) o << (k ? ", " : "") << Num(id.singular_values(k));
-    o << "]\n  condition_number: " << Num(id.condition_number) << "\n";
-    o << "  weakest_pose: {pose: " << id.weakest_pose_id
-      << ", singular_value: " << Num(id.weakest_pose_singular_value) << "}\n";
-    o << "  null_directions:";
-    if (id.null_directions.empty()) o << " []";
-    o << "\n";
-    for (const std::string& d : id.null_directions) o << "    - " << YamlQuoted(d) << "\n";
+    o << Key << "identifiability" << Value
+      << YAML::Comment(std::string("the ") + (ml ? "whitened " : "") +
+                       "Jacobian at the solution, every pose's own unknowns eliminated (README, \"identify\")")
+      << BeginMap;
+    o << Key << "columns" << Value << Flow << BeginSeq;
+    for (const std::string& name : id.geometry_names) o << name;
+    o << EndSeq;
+    o << Key << "singular_values" << Value << Flow << BeginSeq;
+    for (int k = 0; k < id.singular_values.size(); ++k) o << YamlNumber{id.singular_values(k)};
+    o << EndSeq;
+    o << Key << "condition_number" << Value << YamlNumber{id.condition_number};
+    o << Key << "weakest_pose" << Value << Flow << BeginMap << Key << "pose" << Value << id.weakest_pose_id << Key
+      << "singular_value" << Value << YamlNumber{id.weakest_pose_singular_value} << EndMap;
+    o << Key << "null_directions" << Value;
+    if (id.null_directions.empty()) o << Flow;
+    o << BeginSeq;
+    for (const std::string& d : id.null_directions) o << YamlString{d};
+    o << EndSeq << EndMap;
   }
-  return o.str();
+  o << EndMap;
+  return YamlText(o);
 }
 
 }  // namespace cablecal

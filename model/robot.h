@@ -11,6 +11,10 @@
 #include <string>
 #include <vector>
 
+namespace YAML {
+class Emitter;
+}
+
 namespace cablecal {
 
 // The side of its pulley a cable arrives on. kLeft: the cable runs up the post on the
@@ -93,5 +97,7 @@ const std::string& BuiltinRobotYaml();
 // Serialises a robot back to YAML in the file format (used for calibrated robots and
 // truth files); LoadRobotFromString(RobotToYaml(r)) reproduces r.
 std::string RobotToYaml(const Robot& robot);
+// The same fields into an open block map of `out` (a truth file adds its own after them).
+void EmitRobotFields(YAML::Emitter& out, const Robot& robot);
 
 }  // namespace cablecal

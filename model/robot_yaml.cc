@@ -12,6 +12,7 @@
 
 #include "common/error.h"
 #include "common/format.h"
+#include "common/yaml_writer.h"
 #include "model/robot.h"
 #include "model/statics.h"
 
@@ -260,12 +261,14 @@ Robot Parse(const YAML::Node& root, const Reader& rd) {
 
 }  // namespace
 
-// Degrees for the file: the radians divided back, to 12 significant digits so that a value
-// typed as 60 is written as 60 and not 59.99999999999999.
-static std::string Degrees(double rad) {
+// Degrees for the file: the radians divided back, rounded to 12 significant digits so that a
+// value typed as 60 is written as 60 and not 59.99999999999999.
+static double Degrees(double rad) {
   char buffer[32];
   std::snprintf(buffer, sizeof(buffer), "%.12g", rad / kDegToRad);
-  return buffer;
+  double degrees = 0.0;
+  CABLECAL_CHECK(ParseFiniteDouble(buffer, &degrees), "a finite angle formats and parses back");
+  return degrees;
 }
 
 Robot LoadRobotFromString(const std::string& yaml_text, const std::string& source) {
@@ -328,41 +331,64 @@ const Robot& BuiltinRobot() {
   return robot;
 }
 
-std::string RobotToYaml(const Robot& robot) {
-  auto v2 = [](const Eigen::Vector2d& v) {
-    return "[" + FormatDouble(v.x()) + ", " + FormatDouble(v.y()) + "]";
+void EmitRobotFields(YAML::Emitter& o, const Robot& robot) {
+  const auto v2 = [&o](const Eigen::Vector2d& v) {
+    o << YAML::Flow << YAML::BeginSeq << YamlNumber{v.x()} << YamlNumber{v.y()} << YAML::EndSeq;
   };
-  std::ostringstream o;
-  o << "name: " << YamlQuoted(robot.name) << "\n";
-  o << "gravity: " << FormatDouble(robot.gravity_mps2) << "\n";
-  o << "frame: {width: " << FormatDouble(robot.frame_width_m)
-    << ", height: " << FormatDouble(robot.frame_height_m) << "}\n";
-  o << "platform:\n  mass: " << FormatDouble(robot.platform_mass_kg) << "\n  com: " << v2(robot.p_P_com_m)
-    << "\n  anchors: [";
-  for (int i = 0; i < robot.num_cables(); ++i) {
-    o << (i ? ", " : "") << v2(robot.cables[i].p_P_anchor_m);
-  }
-  o << "]\ncables:\n";
+  o << YAML::Key << "name" << YAML::Value << YamlString{robot.name};
+  o << YAML::Key << "gravity" << YAML::Value << YamlNumber{robot.gravity_mps2};
+  o << YAML::Key << "frame" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "width" << YAML::Value
+    << YamlNumber{robot.frame_width_m} << YAML::Key << "height" << YAML::Value << YamlNumber{robot.frame_height_m}
+    << YAML::EndMap;
+  o << YAML::Key << "platform" << YAML::Value << YAML::BeginMap;
+  o << YAML::Key << "mass" << YAML::Value << YamlNumber{robot.platform_mass_kg};
+  o << YAML::Key << "com" << YAML::Value;
+  v2(robot.p_P_com_m);
+  o << YAML::Key << "anchors" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+  for (const Cable& c : robot.cables) v2(c.p_P_anchor_m);
+  o << YAML::EndSeq << YAML::EndMap;
+  o << YAML::Key << "cables" << YAML::Value << YAML::BeginSeq;
   for (const Cable& c : robot.cables) {
-    o << "  - {exit: " << v2(c.p_F_exit_m) << ", pulley_radius: " << FormatDouble(c.pulley_radius_m)
-      << ", side: " << (c.side == PulleySide::kLeft ? "left" : "right");
-    if (c.initial_length_m) o << ", initial_length: " << FormatDouble(*c.initial_length_m);
-    o << "}\n";
+    o << YAML::Flow << YAML::BeginMap << YAML::Key << "exit" << YAML::Value;
+    v2(c.p_F_exit_m);
+    o << YAML::Key << "pulley_radius" << YAML::Value << YamlNumber{c.pulley_radius_m};
+    o << YAML::Key << "side" << YAML::Value << (c.side == PulleySide::kLeft ? "left" : "right");
+    if (c.initial_length_m) o << YAML::Key << "initial_length" << YAML::Value << YamlNumber{*c.initial_length_m};
+    o << YAML::EndMap;
   }
-  o << "tension: {min: " << FormatDouble(robot.tension_min_N) << ", max: " << FormatDouble(robot.tension_max_N)
-    << "}\n";
-  o << "limits: {theta_max_deg: " << Degrees(robot.theta_max_rad)
-    << ", laser_range: " << FormatDouble(robot.laser_range_m) << ", margin: " << FormatDouble(robot.margin_m)
-    << "}\n";
-  o << "home: " << v2(robot.p_F_home_m) << "\n";
+  o << YAML::EndSeq;
+  o << YAML::Key << "tension" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "min" << YAML::Value
+    << YamlNumber{robot.tension_min_N} << YAML::Key << "max" << YAML::Value << YamlNumber{robot.tension_max_N}
+    << YAML::EndMap;
+  o << YAML::Key << "limits" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "theta_max_deg"
+    << YAML::Value << YamlNumber{Degrees(robot.theta_max_rad)} << YAML::Key << "laser_range" << YAML::Value
+    << YamlNumber{robot.laser_range_m} << YAML::Key << "margin" << YAML::Value << YamlNumber{robot.margin_m}
+    << YAML::EndMap;
+  o << YAML::Key << "home" << YAML::Value;
+  v2(robot.p_F_home_m);
   const SensorNoise& s = robot.sensors;
-  o << "sensors:\n  laser: {accuracy: " << FormatDouble(s.laser_accuracy_m)
-    << ", repeatability: " << FormatDouble(s.laser_repeatability_m) << "}\n"
-    << "  inclinometer: {accuracy_deg: " << Degrees(s.inclinometer_accuracy_rad)
-    << ", repeatability_deg: " << Degrees(s.inclinometer_repeatability_rad) << "}\n"
-    << "  encoder: {sigma: " << FormatDouble(s.encoder_sigma_m) << "}\n";
-  if (s.tracker_sigma_m) o << "  tracker: {sigma: " << FormatDouble(*s.tracker_sigma_m) << "}\n";
-  return o.str();
+  o << YAML::Key << "sensors" << YAML::Value << YAML::BeginMap;
+  o << YAML::Key << "laser" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "accuracy" << YAML::Value
+    << YamlNumber{s.laser_accuracy_m} << YAML::Key << "repeatability" << YAML::Value
+    << YamlNumber{s.laser_repeatability_m} << YAML::EndMap;
+  o << YAML::Key << "inclinometer" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "accuracy_deg"
+    << YAML::Value << YamlNumber{Degrees(s.inclinometer_accuracy_rad)} << YAML::Key << "repeatability_deg"
+    << YAML::Value << YamlNumber{Degrees(s.inclinometer_repeatability_rad)} << YAML::EndMap;
+  o << YAML::Key << "encoder" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "sigma" << YAML::Value
+    << YamlNumber{s.encoder_sigma_m} << YAML::EndMap;
+  if (s.tracker_sigma_m) {
+    o << YAML::Key << "tracker" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "sigma" << YAML::Value
+      << YamlNumber{*s.tracker_sigma_m} << YAML::EndMap;
+  }
+  o << YAML::EndMap;
+}
+
+std::string RobotToYaml(const Robot& robot) {
+  YAML::Emitter o;
+  o << YAML::BeginMap;
+  EmitRobotFields(o, robot);
+  o << YAML::EndMap;
+  return YamlText(o);
 }
 
 }  // namespace cablecal

@@ -536,6 +536,67 @@ TEST_F(Cli, OutOfMemoryIsExitTwoNamingTheSize) {
   EXPECT_TRUE(DirIsEmpty());
 }
 
+// Every YAML cablecal writes reads back in PyYAML (the YAML 1.1 reader most labs script with):
+// a hostile robot name and output path come back as the same strings, numbers such as 5e-05
+// as floats, and the calibrated robot loads in cablecal again.
+TEST_F(Cli, EveryYamlOutputReadsBackInPyYaml) {
+  const std::string name = "evil: \\\"quoted\\\" # not a comment\\nsecond line, true";
+  WriteRobot("robot.yaml", "name: wang2022", "name: \"" + name + "\"");
+  const std::string dir = Path("out dir 'q'");
+  fs::create_directories(dir);
+  const std::string robot = "--robot " + Path("robot.yaml");
+  const auto run = [](const std::string& args) {
+    const RunResult r = RunCablecal(args);
+    EXPECT_EQ(r.exit_code, 0) << args << "\n" << r.output;
+  };
+  const std::string q = "\"" + dir + "/";  // every path quoted for the shell
+  run("sample " + robot + " --poses 8 --out " + q + "plan.csv\"");
+  run("simulate " + robot + " --plan " + q + "plan.csv\" --geometry-sigma 0.002 --out " + q + "meas.csv\" --truth-out " +
+      q + "truth.yaml\"");
+  run("identify " + robot + " --measurements " + q + "meas.csv\" --out " + q + "result.yaml\" --calibrated-robot " + q +
+      "calibrated.yaml\"");
+  run("design " + robot + " --poses 6 --starts 1 --random-sets 3 --out " + q + "d.csv\" --summary " + q + "d.yaml\"");
+  run("montecarlo " + robot + " --poses 6 --trials 3 --designs random --no-plot --out " + q + "mc\"");
+  run("workspace --step 0.5 --robot " + q + "calibrated.yaml\" --out " + q + "ws.csv\"");
+  std::ofstream(Path("check.py")) << R"PY(
+import shlex, sys, yaml
+d = sys.argv[1]
+name = "evil: \"quoted\" # not a comment\nsecond line, true"
+def load(f):
+    with open(d + "/" + f) as fh:
+        return yaml.safe_load(fh)
+def number(v, what):
+    assert isinstance(v, (int, float)) and not isinstance(v, bool), (what, repr(v))
+for f in ("truth.yaml", "calibrated.yaml"):
+    r = load(f)
+    assert r["name"] == name, (f, r["name"])
+    number(r["sensors"]["encoder"]["sigma"], f + " encoder sigma")
+    number(r["sensors"]["tracker"]["sigma"], f + " tracker sigma")
+    number(r["cables"][0]["initial_length"], f + " initial length")
+res = load("result.yaml")
+assert res["status"] == "converged"
+assert d + "/result.yaml" in shlex.split(res["command"]), res["command"]
+assert isinstance(res["cablecal"]["version"], str)
+for k, p in res["parameters"].items():
+    number(p["value"], k); number(p["std"], k)
+for p in res["poses"]:
+    number(p["x_std"], "x_std"); number(p["theta_std"], "theta_std")
+number(res["identifiability"]["condition_number"], "condition number")
+assert res["identifiability"]["null_directions"] == []
+s = load("d.yaml")
+number(s["criteria"]["a_trace_covariance_m2"], "a criterion")
+number(s["robustness"]["geometry_sigma_m"], "geometry sigma")
+assert d + "/d.yaml" in shlex.split(s["command"]), s["command"]
+run = load("mc/run.yaml")
+assert run["robot"]["name"] == name, run["robot"]["name"]
+number(run["geometry_sigma_m"], "mc geometry sigma")
+print("ok")
+)PY";
+  const RunResult check = RunCablecal("env /usr/bin/python3 " + Path("check.py") + " \"" + dir + "\"");
+  EXPECT_EQ(check.exit_code, 0) << check.output;
+  EXPECT_NE(check.output.find("ok"), std::string::npos) << check.output;
+}
+
 TEST_F(Cli, MonteCarloBadFlagsExitTwo) {
   for (const std::string& args : std::vector<std::string>{"montecarlo --poses 4:10 --trials 5 --out " + Path("m"),
                                                           "montecarlo --poses 6:10 --trials 0 --out " + Path("m"),
