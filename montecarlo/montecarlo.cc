@@ -43,6 +43,12 @@ std::vector<PoseSetDesign> ParseDesigns(const std::string& text) {
     else throw InputError("--designs", "", "unknown design '" + item + "' (random, optimized, condition, d, a, e)");
     for (PoseSetDesign seen : out) {
       if (seen == d) throw InputError("--designs", "", "'" + item + "' given twice");
+      // "optimized" is the default criterion's set: A-optimal. Both would be the same cells twice.
+      const auto is = [&](PoseSetDesign x, PoseSetDesign y) { return seen == x && d == y; };
+      if (is(PoseSetDesign::kOptimized, PoseSetDesign::kA) || is(PoseSetDesign::kA, PoseSetDesign::kOptimized)) {
+        throw InputError("--designs", "", "'optimized' and 'a' are the same design (A-optimal, the default criterion): "
+                                          "give one of them");
+      }
     }
     out.push_back(d);
   }

@@ -178,6 +178,8 @@ TEST(MonteCarlo, ParsesPoseRangesAndDesigns) {
   EXPECT_EQ(ParseDesigns("random,e").size(), 2u);
   EXPECT_EQ(ParseDesigns("condition"), (std::vector<PoseSetDesign>{PoseSetDesign::kCondition}));
   EXPECT_THROW(ParseDesigns("random,random"), InputError);
+  EXPECT_THROW(ParseDesigns("optimized,a"), InputError);  // the same A-optimal cells twice
+  EXPECT_THROW(ParseDesigns("a,random,optimized"), InputError);
   EXPECT_THROW(ParseDesigns("best"), InputError);
 }
 
