@@ -1,6 +1,7 @@
 #include "common/csv.h"
 
 #include <fstream>
+#include <vector>
 
 #include "common/error.h"
 #include "common/format.h"
@@ -67,6 +68,26 @@ void ForEachCsvRow(std::istream& in, const std::string& path, const std::vector<
   ForEachCsvRow(in, path, expected_header, {}, on_row);
 }
 
+namespace {
+
+// std::getline bounded by kMaxCsvLineBytes. False at the end of the input.
+bool ReadLine(std::istream& in, std::string& line, const std::string& path, int line_no) {
+  static thread_local std::vector<char> buffer(kMaxCsvLineBytes + 2);
+  in.getline(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+  const std::streamsize count = in.gcount();
+  if (count == 0 && in.eof()) return false;
+  if (in.fail() && !in.eof()) {  // the buffer filled before a newline
+    throw InputError(path + ":" + std::to_string(line_no), "",
+                     "a line longer than " + std::to_string(kMaxCsvLineBytes) + " bytes: is this a CSV file?");
+  }
+  // gcount counts the newline when one was extracted (not at the end of the input).
+  line.assign(buffer.data(), static_cast<std::size_t>(count - (in.eof() ? 0 : 1)));
+  in.clear(in.rdstate() & std::ios::eofbit);  // a last line without newline sets failbit too
+  return true;
+}
+
+}  // namespace
+
 void ForEachCsvRow(std::istream& in, const std::string& path, const std::vector<std::string>& expected_header,
                    const std::vector<std::string>& optional_trailing, const std::function<void(const CsvRow&)>& on_row) {
   std::vector<std::string> full_header = expected_header;
@@ -79,7 +100,7 @@ void ForEachCsvRow(std::istream& in, const std::string& path, const std::vector<
   CsvRow row;
   row.path = &path;
   row.header = &found_header;
-  while (std::getline(in, line)) {
+  while (ReadLine(in, line, path, line_no + 1)) {
     ++line_no;
     if (line_no == 1 && line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);  // UTF-8 BOM
     const std::string trimmed = Trim(line);

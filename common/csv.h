@@ -27,7 +27,8 @@ struct CsvRow {
 // Reads `path`; the first non-comment line must equal `expected_header` (cells compared
 // after trimming). Calls `on_row` for every data row, which has exactly as many cells as
 // the header. Throws InputError for a missing file, a wrong header, a wrong cell count or
-// a file with no data rows.
+// a file with no data rows, and for a line longer than kMaxCsvLineBytes (a file that is not
+// a CSV, or /dev/zero, is refused there instead of read into memory).
 void ForEachCsvRow(const std::string& path, const std::vector<std::string>& expected_header,
                    const std::function<void(const CsvRow&)>& on_row);
 // The same from a stream; `name` stands for the file in messages.
@@ -37,6 +38,8 @@ void ForEachCsvRow(std::istream& in, const std::string& name, const std::vector<
 // (all of them): rows then have that many cells, and row.header is the header found.
 void ForEachCsvRow(std::istream& in, const std::string& name, const std::vector<std::string>& expected_header,
                    const std::vector<std::string>& optional_trailing, const std::function<void(const CsvRow&)>& on_row);
+
+constexpr std::size_t kMaxCsvLineBytes = 1 << 16;
 
 std::string JoinCsv(const std::vector<std::string>& cells);
 

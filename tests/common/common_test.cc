@@ -164,6 +164,21 @@ TEST(Csv, ErrorsNameFileLineAndColumn) {
   EXPECT_EQ(message("pose,x\n0,2\n"), path + ":2: column 'pose': must be a positive integer (got '0')");
   EXPECT_EQ(message(""), path + ": is empty: no header line 'pose,x'");
   EXPECT_EQ(message("pose,x\n"), path + ": has a header but no data rows");
+  EXPECT_EQ(message("pose,x\n1,2\n" + std::string(kMaxCsvLineBytes + 5, '#') + "\n3,4\n"),
+            path + ":3: a line longer than " + std::to_string(kMaxCsvLineBytes) + " bytes: is this a CSV file?");
+  EXPECT_EQ(message("pose,x\n1,2\n2,3"), "");  // a last line without its newline is a row
+  // A line of exactly the limit is still read.
+  EXPECT_EQ(message("pose,x\n#" + std::string(kMaxCsvLineBytes - 1, ' ') + "\n1,2\n"), "");
+}
+
+TEST(Csv, AnEndlessInputWithoutNewlinesIsRefusedAtTheLineLimit) {
+  try {
+    ForEachCsvRow("/dev/zero", {"pose", "x"}, [](const CsvRow&) {});
+    FAIL() << "/dev/zero read as a CSV";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), "/dev/zero:1: a line longer than " + std::to_string(kMaxCsvLineBytes) +
+                                         " bytes: is this a CSV file?");
+  }
 }
 
 }  // namespace
