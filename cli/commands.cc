@@ -113,8 +113,8 @@ int RunSimulate(const Context& ctx, const SimulateOptions& options) {
                     {{"--out", options.out_path}, {"--truth-out", options.truth_out_path}});
   const Robot nominal = LoadRobotOption(options.robot_path);
   // A pose where the true robot settles outside its own workspace (beyond a tension limit,
-  // the inclinometer range or the margin) would stop a lab's experiment: exit 3, as the
-  // Monte Carlo counts such a trial as failed.
+  // the inclinometer range or the margin) would stop a lab's experiment: exit 2 naming the
+  // plan's pose (the Monte Carlo counts such a trial as failed).
   const SimulationOptions sim{ParseNoisySensors(options.sensors), !options.no_encoder_noise, true};
   if (!options.truth_path.empty() && options.geometry_sigma_m >= 0.0) {
     throw InputError("--truth", "", "give either --truth or --geometry-sigma, not both");
@@ -131,7 +131,13 @@ int RunSimulate(const Context& ctx, const SimulateOptions& options) {
   } else if (options.geometry_sigma_m > 0.0) {
     truth = PerturbGeometry(nominal, options.geometry_sigma_m, geometry_rng);
   }
-  const SimulatedExperiment experiment = SimulateExperiment(nominal, truth, plan, sim, noise_rng);
+  SimulatedExperiment experiment;
+  try {
+    experiment = SimulateExperiment(nominal, truth, plan, sim, noise_rng);
+  } catch (const SolverFailure& e) {
+    // Not a solver's fault: this plan does not suit this true robot. The plan's pose is named.
+    throw InputError(options.plan_path, "", std::string(e.what()) + ": the plan cannot be run on this true robot");
+  }
   AtomicOutput output;
   output.WriteText(options.out_path, MeasurementsCsv(experiment.measurements, ProvenanceComment(ctx.command_line)));
   if (!options.truth_out_path.empty()) {

@@ -24,11 +24,29 @@ bool BuiltWithMpi() {
 #endif
 }
 
+#ifdef CABLECAL_WITH_MPI
+namespace {
+
+// Whether an MPI launcher started this process (mpirun/mpiexec of Open MPI or MPICH, srun).
+// Without one, MPI is not initialised at all: Open MPI's singleton start-up spawns a helper
+// daemon and costs about half a second on every command, for a run of one process.
+bool StartedByMpiLauncher() {
+  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK", "PMI_SIZE", "SLURM_STEP_ID"}) {
+    if (std::getenv(name)) return true;
+  }
+  return false;
+}
+
+}  // namespace
+#endif
+
 ProcessSession::ProcessSession(int* argc, char*** argv) {
 #ifdef CABLECAL_WITH_MPI
+  if (!StartedByMpiLauncher()) return;
   // Only the main thread calls MPI; OpenMP threads never do.
   int provided = 0;
   MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided);
+  mpi_initialized_ = true;
   const MpiWorld world = WorldOf();
   processes_ = {world.rank, world.size};
 #else
@@ -39,7 +57,7 @@ ProcessSession::ProcessSession(int* argc, char*** argv) {
 
 ProcessSession::~ProcessSession() {
 #ifdef CABLECAL_WITH_MPI
-  PMPI_Finalize();  // not MPI_Finalize, which MUMPS's stand-in would answer (WorldOf, montecarlo/mpi.cc)
+  if (mpi_initialized_) PMPI_Finalize();  // not MPI_Finalize, which MUMPS's stand-in would answer (WorldOf, montecarlo/mpi.cc)
 #endif
 }
 
@@ -89,7 +107,9 @@ void RunAgreed(const Processes& processes, const std::function<void()>& step) {
 
 void AbortJob(int exit_code) {
 #ifdef CABLECAL_WITH_MPI
-  MPI_Abort(MPI_COMM_WORLD, exit_code);
+  int initialized = 0;
+  PMPI_Initialized(&initialized);
+  if (initialized) MPI_Abort(MPI_COMM_WORLD, exit_code);
 #endif
   std::exit(exit_code);
 }

@@ -28,6 +28,7 @@ class ProcessSession {
 
  private:
   Processes processes_;
+  bool mpi_initialized_ = false;
 };
 
 // The exit code of the exception being handled (README, "Exit codes"); prints its message

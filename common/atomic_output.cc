@@ -36,8 +36,23 @@ fs::path Resolved(const std::string& path) {
   return ec ? fs::absolute(path).lexically_normal() : p;
 }
 
+// /dev, /proc and /sys hold devices and kernel files, as named or once links are followed
+// (/dev/stdout is a link into /proc): never a place for cablecal's regular files.
+bool IsSystemPath(const fs::path& p) {
+  const std::string s = p.string();
+  for (const char* root : {"/dev", "/proc", "/sys"}) {
+    const std::size_t n = std::strlen(root);
+    if (s.compare(0, n, root) == 0 && (s.size() == n || s[n] == '/')) return true;
+  }
+  return false;
+}
+
 void CheckWritable(const std::string& final_path) {
   if (final_path.empty()) throw InputError("", "output path", "is empty");
+  if (IsSystemPath(fs::absolute(final_path).lexically_normal()) || IsSystemPath(Resolved(final_path))) {
+    throw InputError(final_path, "", "cannot write: a device or system path (/dev, /proc, /sys); cablecal writes "
+                                     "regular files only, renamed into place when complete");
+  }
   const fs::path parent = fs::path(final_path).parent_path();
   if (!parent.empty() && !fs::is_directory(parent)) {
     throw InputError(final_path, "", "cannot write: folder '" + parent.string() + "' does not exist");
@@ -78,8 +93,12 @@ std::string AtomicOutput::Add(const std::string& final_path) {
       throw InputError(final_path, "", "cannot write: the same command already writes this file");
     }
   }
+  // A symbolic link is written through: its target is replaced, the link kept.
+  std::error_code ec;
+  const std::string target = fs::is_symlink(fs::symlink_status(final_path, ec)) ? Resolved(final_path).string()
+                                                                                  : final_path;
   // The pid keeps concurrent runs writing the same path from clobbering each other's temporary.
-  Entry e{final_path, final_path + ".tmp." + std::to_string(::getpid())};
+  Entry e{target, target + ".tmp." + std::to_string(::getpid())};
   entries_.push_back(e);
   return e.temp_path;
 }
@@ -95,7 +114,7 @@ std::string AtomicOutput::WriteText(const std::string& final_path, const std::st
 
 void AtomicOutput::Drop(const std::string& final_path) {
   for (auto it = entries_.begin(); it != entries_.end(); ++it) {
-    if (it->final_path == final_path) {
+    if (Resolved(it->final_path) == Resolved(final_path)) {
       std::remove(it->temp_path.c_str());
       entries_.erase(it);
       return;
@@ -181,11 +200,18 @@ OutputFolder::OutputFolder(const std::string& flag, const std::string& dir, std:
   if (fs::exists(dir_, ec) && !fs::is_directory(dir_, ec)) {
     throw InputError(flag_, "", "'" + dir_ + "' exists and is not a folder");
   }
-  fs::path existing = fs::absolute(dir_).lexically_normal();
-  while (!existing.empty() && !fs::exists(existing, ec)) existing = existing.parent_path();
-  if (!fs::is_directory(existing, ec)) {
-    throw InputError(flag_, "", "cannot create the folder '" + dir_ + "': '" + existing.string() + "' is not a folder");
+  if (IsSystemPath(fs::absolute(dir_).lexically_normal()) || IsSystemPath(Resolved(dir_))) {
+    throw InputError(flag_, "", "cannot write into '" + dir_ + "': a device or system path (/dev, /proc, /sys)");
   }
+  // The folder may be new, its parent must exist (as for every output file): a mistyped path
+  // is refused, not created.
+  fs::path parent = fs::absolute(dir_).lexically_normal();
+  if (parent.filename().empty()) parent = parent.parent_path();  // a trailing separator
+  parent = parent.parent_path();
+  if (!fs::is_directory(parent, ec)) {
+    throw InputError(flag_, "", "cannot write into '" + dir_ + "': folder '" + parent.string() + "' does not exist");
+  }
+  const fs::path existing = fs::exists(dir_, ec) ? fs::path(dir_) : parent;
   if (::access(existing.c_str(), W_OK | X_OK) != 0) {
     throw InputError(flag_, "", "cannot write into '" + existing.string() + "': " + std::strerror(errno));
   }

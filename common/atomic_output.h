@@ -17,7 +17,9 @@ struct PathArgument {
 
 // Checks a command's files before any work is done: every output's folder exists; no output
 // is an existing folder or a non-regular file (a device such as /dev/null or /dev/stdout, a
-// pipe: cablecal writes regular files only, by renaming a finished temporary into place); no
+// pipe, anything under /dev, /proc or /sys: cablecal writes regular files only, by renaming a
+// finished temporary into place; an output that is a symbolic link to a regular file is
+// written through, the link kept); no
 // two outputs share a path and no output is one of the inputs (paths compared after resolving
 // the folders and symbolic links). Throws InputError naming the flags otherwise.
 void CheckCommandPaths(const std::vector<PathArgument>& inputs, const std::vector<PathArgument>& outputs);
@@ -68,9 +70,9 @@ class OutputFolder {
  public:
   // `owned`: every top-level name the command may write into `dir` (also those it does not
   // write this time, such as figures, so that a previous run's do not stay beside the new
-  // set). Checks that `dir` is a folder or can be created (throws InputError naming `flag`
-  // otherwise); creates it, and the staging folder, when the first file is written, and
-  // removes the folders it created if the run ends without a commit.
+  // set). Checks that `dir` is a folder, or that its parent is (throws InputError naming
+  // `flag` otherwise: a mistyped path is refused, not created); creates `dir` and the staging
+  // folder when the first file is written, and removes them if the run ends without a commit.
   OutputFolder(const std::string& flag, const std::string& dir, std::vector<std::string> owned);
   OutputFolder(const OutputFolder&) = delete;
   OutputFolder& operator=(const OutputFolder&) = delete;

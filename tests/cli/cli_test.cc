@@ -168,12 +168,12 @@ TEST_F(Cli, IdentifyBadMeasurementsExitTwoAndWriteNothing) {
 }
 
 // A random plan has poses near the workspace limits: a true robot 5 mm off nominal settles
-// beyond one of them, which would stop a lab's experiment (exit 3, the pose and reason named).
+// beyond one of them, which would stop a lab's experiment (exit 2, the plan's pose and reason named).
 TEST_F(Cli, SimulateRefusesAPoseTheTrueRobotSettlesOutsideItsWorkspace) {
   ASSERT_EQ(RunCablecal("sample --poses 10 --seed 8 --out " + Path("plan.csv")).exit_code, 0);
   const RunResult r = RunCablecal("simulate --plan " + Path("plan.csv") + " --geometry-sigma 0.005 --out " +
                                   Path("m.csv") + " --truth-out " + Path("t.yaml"));
-  EXPECT_EQ(r.exit_code, 3) << r.output;
+  EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("the true robot settles outside its workspace ("), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(Path("m.csv")));
   EXPECT_FALSE(fs::exists(Path("t.yaml")));
@@ -257,8 +257,15 @@ TEST_F(Cli, CollidingOutputsInputsAndDevicesAreRefusedBeforeAnyWork) {
        "--truth-out: writes the same file as --out"},
       {"design --poses 6 --out " + Path("d.csv") + " --summary " + Path("d.csv"), "--summary: writes the same file as --out"},
       {"workspace --out " + Path("w.csv") + " --plot " + Path("w.csv"), "--plot: writes the same file as --out"},
-      {"workspace --out /dev/null", "/dev/null: cannot write: not a regular file"},
-      {"sample --poses 5 --out /dev/stdout", "cannot write: not a regular file"},
+      {"workspace --out /dev/null", "/dev/null: cannot write: a device or system path"},
+      {"workspace --out /dev/full", "/dev/full: cannot write: a device or system path"},
+      {"sample --poses 5 --out /dev/stdout", "cannot write: a device or system path"},
+      // Even when /dev/stdout leads to a regular file, it is not replaced by one.
+      {"env sh -c '" + std::string(CABLECAL_BINARY) + " sample --poses 5 --out /dev/stdout > " + Path("so.txt") + "'",
+       ""},
+      {"montecarlo --poses 6 --trials 2 --out " + Path("missing/mc"), "--out: cannot write into '"},
+      {"montecarlo --poses 6 --trials 2 --out " + Path("p.csv"), "exists and is not a folder"},
+      {"montecarlo --poses 6 --trials 2 --out /proc/mc", "a device or system path"},
   };
   for (const auto& c : cases) {
     const RunResult r = RunCablecal(c.args);
@@ -266,7 +273,15 @@ TEST_F(Cli, CollidingOutputsInputsAndDevicesAreRefusedBeforeAnyWork) {
     EXPECT_NE(r.output.find(c.message), std::string::npos) << c.args << "\n" << r.output;
   }
   EXPECT_EQ(Read("p.csv"), plan);
-  for (const char* f : {"m.csv", "d.csv", "w.csv"}) EXPECT_FALSE(fs::exists(Path(f))) << f;
+  for (const char* f : {"m.csv", "d.csv", "w.csv", "missing"}) EXPECT_FALSE(fs::exists(Path(f))) << f;
+  EXPECT_TRUE(fs::is_symlink("/dev/stdout"));
+  EXPECT_EQ(Read("so.txt"), "");
+  // A link to a regular file is written through: the target replaced, the link kept.
+  std::ofstream(Path("target.csv")) << "old";
+  fs::create_symlink(Path("target.csv"), Path("link.csv"));
+  ASSERT_EQ(RunCablecal("sample --poses 5 --out " + Path("link.csv")).exit_code, 0);
+  EXPECT_TRUE(fs::is_symlink(Path("link.csv")));
+  EXPECT_NE(Read("target.csv").find("pose,x,z,theta"), std::string::npos);
 }
 
 // Readings no sensor can give, and single bad readings among good ones (issue "Trust
