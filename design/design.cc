@@ -13,6 +13,7 @@
 
 #include "common/error.h"
 #include "common/format.h"
+#include "common/parallel.h"
 #include "common/yaml_writer.h"
 #include "common/random.h"
 #include "common/version.h"
@@ -209,14 +210,13 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
   // Feasible random starts, each from its own stream (seed, start index).
   std::vector<std::vector<PlanPose>> starts(K);
   std::vector<std::string> start_errors(K);
-#pragma omp parallel for schedule(dynamic, 1)
-  for (int k = 0; k < K; ++k) {
+  ParallelFor(K, 1, [&](long k) {
     try {
       starts[k] = SampleFeasiblePoses(robot, n, StreamSeed(options.seed, {kStartStream, static_cast<std::uint64_t>(k)}));
-    } catch (const std::exception& e) {
+    } catch (const SolverFailure& e) {
       start_errors[k] = e.what();
     }
-  }
+  });
   for (int k = 0; k < K; ++k) {
     if (!start_errors[k].empty()) throw SolverFailure("cannot draw a feasible start: " + start_errors[k]);
   }
@@ -230,8 +230,7 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
   std::vector<std::vector<PlanPose>> verified(K);
   std::vector<std::string> failures(K);
   std::vector<double> widest(K, 1.0);
-#pragma omp parallel for schedule(dynamic, 1)
-  for (int k = 0; k < K; ++k) {
+  ParallelFor(K, 1, [&](long k) {
     std::vector<double> widening(n, 1.0);
     std::vector<PlanPose> from = starts[k];
     for (int round = 0; round <= kRobustRounds; ++round) {
@@ -239,8 +238,17 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
       internal::StartOutcome outcome;
       // MUMPS, Ipopt's linear solver in Debian, is not thread-safe (coin-or/Ipopt#733), so the
       // solves themselves take turns; sampling, verification and the reference sets run in parallel.
+      // An exception must not leave the critical section (its lock would stay taken).
+      std::exception_ptr solve_error;
 #pragma omp critical(cablecal_ipopt)
-      outcome = internal::SolveDesignNlp(robot, options, from, &widening);
+      {
+        try {
+          outcome = internal::SolveDesignNlp(robot, options, from, &widening);
+        } catch (...) {
+          solve_error = std::current_exception();
+        }
+      }
+      if (solve_error) std::rethrow_exception(solve_error);
       outcomes[k].iterations += outcome.iterations;
       outcomes[k].status = outcome.status;
       outcomes[k].converged = outcome.converged;
@@ -257,7 +265,7 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
       }
       from = verified[k];  // warm start: Ipopt's poses with their tensions
     }
-  }
+  });
 
   if (options.interrupted && options.interrupted->load()) throw Interrupted();
   DesignResult result;
@@ -302,11 +310,10 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
     return result;
   }
   std::vector<CriteriaValues> random(R);
-#pragma omp parallel for schedule(dynamic, 1)
-  for (int r = 0; r < R; ++r) {
+  ParallelFor(R, 1, [&](long r) {
     const auto set = SampleFeasiblePoses(robot, n, StreamSeed(options.seed, {kRandomSetStream, static_cast<std::uint64_t>(r)}));
     random[r] = EvaluateCriteria(robot, PosesOf(set), prior);
-  }
+  });
   std::vector<double> c, d, a, e;
   for (const CriteriaValues& v : random) {
     c.push_back(v.condition_number);

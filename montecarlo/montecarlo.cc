@@ -245,11 +245,22 @@ ShareResult RunShare(const Robot& nominal, const MonteCarloOptions& o, const Des
       }
       out.outcomes[k] = RunTrial(nominal, o, n, d, static_cast<int>(items[k] % o.trials),
                                  it == designed.end() ? nullptr : &it->second);
-    } catch (const std::exception& e) {
+    } catch (...) {
       // Not a failed trial (those are caught in RunTrial) but something that makes the
       // whole share suspect, such as running out of memory: stop and report it.
+      const std::exception_ptr error = std::current_exception();
+      std::string what = "unknown exception";
+      try {
+        std::rethrow_exception(error);
+      } catch (const std::exception& e) {
+        what = e.what();
+      } catch (...) {
+      }
 #pragma omp critical(cablecal_share_failure)
-      if (out.failure.empty()) out.failure = e.what();
+      if (out.failure.empty()) {
+        out.failure = what;
+        out.error = error;
+      }
       stop = true;
       continue;
     }
@@ -277,6 +288,7 @@ MonteCarloResult RunMonteCarlo(const Robot& nominal, const MonteCarloOptions& o)
   }
   std::vector<ShareResult> shares(1);
   shares[0] = RunShare(nominal, o, designed, StudyShare{0, 1});
+  if (shares[0].error) std::rethrow_exception(shares[0].error);  // out of memory: exit 2, as anywhere
   if (!shares[0].failure.empty()) throw std::runtime_error(shares[0].failure);
   if (shares[0].interrupted) {
     result.interrupted = true;

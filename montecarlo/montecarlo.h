@@ -13,6 +13,7 @@
 // Depends on design/ (optimized pose sets), identify/, workspace/, model/.
 #pragma once
 
+#include <exception>
 #include <atomic>
 #include <cstdint>
 #include <functional>
@@ -117,6 +118,7 @@ struct ShareResult {
   std::vector<TrialOutcome> outcomes;  // one per owned item, in increasing item order
   bool interrupted = false;
   std::string failure;  // why this share could not finish (not a failed trial); then no outcomes
+  std::exception_ptr error;  // the exception behind `failure`, rethrown by a run of one process
 };
 // Runs the share's trials with OpenMP; `designed` holds at least the sets of its cells.
 // An unexpected exception in a trial stops the share and is returned in `failure`.

@@ -5,6 +5,7 @@
 #include <set>
 #include <sstream>
 
+#include "common/parallel.h"
 #include "common/csv.h"
 #include "common/error.h"
 #include "common/format.h"
@@ -20,20 +21,19 @@ WorkspaceGrid ComputeWorkspaceGrid(const Robot& robot, double step_m) {
   // Guard against a step so small the grid would not fit in memory.
   const double nx_d = std::floor(robot.frame_width_m / step_m + 1e-9) + 1;
   const double nz_d = std::floor(robot.frame_height_m / step_m + 1e-9) + 1;
-  if (nx_d * nz_d > 2e7) {
-    throw InputError("--step", "", FormatDouble(step_m) + " m makes a grid of more than 2e7 points");
+  if (nx_d * nz_d > kMaxGridPoints) {
+    throw InputError("--step", "", FormatDouble(step_m) + " m makes a grid of more than 2,000,000 points (the limit: about 30 s, 0.5 GB and a 175 MB CSV; a coarser step)");
   }
   const int nx = static_cast<int>(nx_d), nz = static_cast<int>(nz_d);
   WorkspaceGrid grid;
   grid.step_m = step_m;
   grid.points.resize(static_cast<std::size_t>(nx) * nz);
-#pragma omp parallel for schedule(dynamic, 16)
-  for (int k = 0; k < nx * nz; ++k) {
+  ParallelFor(static_cast<long>(nx) * nz, 16, [&](long k) {
     WorkspacePoint& p = grid.points[k];
     p.x_m = (k % nx) * step_m;
     p.z_m = (k / nx) * step_m;
     p.evaluation = EvaluatePose(robot, p.x_m, p.z_m);
-  }
+  });
   for (const WorkspacePoint& p : grid.points) grid.num_feasible += p.evaluation.feasible();
   return grid;
 }

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <set>
 
+#include "common/parallel.h"
 #include "tests/support/temp_dir.h"
 #include "common/atomic_output.h"
 #include "common/csv.h"
@@ -179,6 +180,25 @@ TEST(Csv, AnEndlessInputWithoutNewlinesIsRefusedAtTheLineLimit) {
     EXPECT_EQ(std::string(e.what()), "/dev/zero:1: a line longer than " + std::to_string(kMaxCsvLineBytes) +
                                          " bytes: is this a CSV file?");
   }
+}
+
+
+// An exception inside the parallel loop reaches the caller (not std::terminate), and the
+// loop stops taking new iterations.
+TEST(ParallelFor, AnExceptionInTheLoopIsRethrownAfterIt) {
+  std::atomic<long> ran{0};
+  EXPECT_THROW(ParallelFor(100000, 1,
+                           [&](long k) {
+                             ++ran;
+                             if (k == 10) throw std::bad_alloc();
+                           }),
+               std::bad_alloc);
+  EXPECT_LT(ran.load(), 100000);
+  long sum = 0;
+  std::vector<long> seen(1000, 0);
+  ParallelFor(1000, 7, [&](long k) { seen[k] = k; });
+  for (long v : seen) sum += v;
+  EXPECT_EQ(sum, 999 * 1000 / 2);
 }
 
 }  // namespace

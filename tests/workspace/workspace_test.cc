@@ -56,6 +56,8 @@ TEST(WorkspaceGrid, BadStepIsInputError) {
   EXPECT_THROW(ComputeWorkspaceGrid(BuiltinRobot(), 0.0), InputError);
   EXPECT_THROW(ComputeWorkspaceGrid(BuiltinRobot(), -0.1), InputError);
   EXPECT_THROW(ComputeWorkspaceGrid(BuiltinRobot(), 1e-6), InputError);
+  // The 5.5 GB, 185 s grid (2.0e7 points) is refused before any allocation.
+  EXPECT_THROW(ComputeWorkspaceGrid(BuiltinRobot(), 0.000855), InputError);
 }
 
 TEST(Sampler, SeededReproducibleAndFeasible) {
