@@ -50,6 +50,9 @@ struct IdentifyOptions {
 
 // A reading whose whitened residual exceeds this many sigma refuses the fit (poor_fit).
 constexpr double kOutlierSigmas = 4.5;
+// Up to this many such readings (or 5 % of them) are named as the cause even when the estimate
+// they drag is also implausible; more point to wrong units or another robot.
+constexpr std::size_t kFewOutliers = 8;
 
 enum class IdentifyStatus {
   kConverged,

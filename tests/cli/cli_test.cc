@@ -324,6 +324,9 @@ TEST_F(Cli, ImpossibleAndOutlyingReadingsAreRefusedByName) {
       {7, 4, [](double t) { return t + 0.3; }, "pose 7: "},
       {7, 3, [](double z) { return z + 0.05; }, "pose 7: laser"},
       {12, 1, [](double dl) { return dl + 0.03; }, "pose 12: "},
+      // The inclinometer reading of 0 instead of -1.0 rad: the fit absorbs it (no
+      // residual stands out) and lands off the frame; refused, with a bad reading named as a cause.
+      {2, 4, [](double) { return 0.0; }, "A single wrong reading can do this too"},
   };
   for (const auto& c : cases) {
     edit(c.pose, c.col, c.f);
@@ -332,6 +335,47 @@ TEST_F(Cli, ImpossibleAndOutlyingReadingsAreRefusedByName) {
     EXPECT_NE(r.output.find(c.message), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(Path("r.yaml")));
   }
+}
+
+// One bad laser reading among 200 poses: the global RMS hardly moves (the 22-sigma
+// shift of a2x went through), the per-reading test names the pose.
+TEST_F(Cli, OneBadReadingAmongTwoHundredPosesIsNamed) {
+  ASSERT_EQ(RunCablecal("sample --poses 200 --seed 4 --out " + Path("plan.csv")).exit_code, 0);
+  ASSERT_EQ(RunCablecal("simulate --plan " + Path("plan.csv") + " --seed 6 --out " + Path("m.csv")).exit_code, 0);
+  std::istringstream in(Read("m.csv"));
+  std::string line, out;
+  while (std::getline(in, line)) {
+    if (line.rfind("117,", 0) == 0) {
+      const std::size_t z_end = line.rfind(','), z_start = line.rfind(',', z_end - 1) + 1;
+      line = line.substr(0, z_start) + cablecal::FormatDouble(std::stod(line.substr(z_start, z_end - z_start)) + 0.5) +
+             line.substr(z_end);
+    }
+    out += line + "\n";
+  }
+  std::ofstream(Path("bad.csv")) << out;
+  const RunResult r = RunCablecal("identify --measurements " + Path("bad.csv") + " --out " + Path("r.yaml"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("pose 117: "), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(Path("r.yaml")));
+  EXPECT_EQ(RunCablecal("identify --measurements " + Path("m.csv") + " --out " + Path("r.yaml")).exit_code, 0);
+}
+
+// Every count flag has a documented cap: beyond it, exit 2 naming the flag, before any work.
+TEST_F(Cli, CountFlagsBeyondTheirCapsAreRefused) {
+  for (const std::string& args : std::vector<std::string>{
+           "sample --poses 1000000000 --out " + Path("p.csv"),
+           "design --poses 6 --starts 2000000000 --out " + Path("p.csv"),
+           "design --poses 6 --random-sets 2000000000 --out " + Path("p.csv"),
+           "montecarlo --poses 6 --designs optimized --design-starts 2000000000 --out " + Path("mc"),
+           "montecarlo --poses 6 --trials 2000000000 --out " + Path("mc"),
+           "montecarlo --poses 6:50 --trials 100000000 --out " + Path("mc"),
+           "montecarlo --poses 6 --trials 5 --geometry-sigma 1e300 --out " + Path("mc"),
+           "workspace --step 0.000855 --out " + Path("w.csv")}) {
+    const RunResult r = RunCablecal(args);
+    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
+    EXPECT_NE(r.output.find("--"), std::string::npos) << args << "\n" << r.output;
+  }
+  EXPECT_TRUE(DirIsEmpty());
 }
 
 // A plan must be one of the robot's: poses off its equilibrium, beyond the inclinometer, or
