@@ -67,6 +67,11 @@ std::string TryPlot(AtomicOutput& output, const std::string& figure_path, const 
     return "";
   } catch (const FigureFailure& e) {
     output.Drop(figure_path);
+    // A figure left from an earlier run would sit beside the new data as if it showed them.
+    std::error_code ec;
+    if (std::filesystem::remove(figure_path, ec)) {
+      return std::string(e.what()) + "; the earlier " + figure_path + " was removed (it showed another run)";
+    }
     return e.what();
   }
 }

@@ -81,8 +81,9 @@ int RunReproduce(const Context& ctx, const ReproduceOptions& options);
 // FigureFailure (exit 5) if the script fails.
 void RunPlotScript(const std::string& script, const std::vector<std::string>& args);
 
-// Runs RunPlotScript; if it fails, drops `figure_path` from `output` and returns the message
-// (the caller commits the rest, then throws FigureFailure: results are never lost for a figure).
+// Runs RunPlotScript; if it fails, drops `figure_path` from `output`, removes an earlier file
+// there (it would show another run beside the new data) and returns the message (the caller
+// commits the rest, then throws FigureFailure: results are never lost for a figure).
 std::string TryPlot(AtomicOutput& output, const std::string& figure_path, const std::string& script,
                     const std::vector<std::string>& args);
 

@@ -1,7 +1,7 @@
 // cablecal: plan, identify and predict the calibration of cable-driven parallel robots.
 // Parses the command line (CLI11) and maps every failure to a documented exit code:
 // 0 success, 1 internal error, 2 bad input (file, flag, value), 3 solver failure, 4 a
-// process of an MPI run failed, 130 interrupted.
+// process of an MPI run failed, 5 a figure failed (results written), 130 interrupted.
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
@@ -12,11 +12,30 @@
 #include "cli/commands.h"
 #include "cli/processes.h"
 #include "common/error.h"
+#include "common/format.h"
 #include "common/version.h"
 
 namespace {
 
 using cablecal::cli::Context;
+
+// CLI11's own number checks print their limits as 310-digit numbers ("not in range 0.000000
+// to 1797...") and call 0 out of range 0..; these say what is wanted.
+CLI::Validator NumberAbove(double lowest, bool inclusive) {
+  const std::string wanted = std::string(inclusive ? ">= " : "> ") + cablecal::FormatDouble(lowest);
+  return CLI::Validator(
+      [=](std::string& text) -> std::string {
+        double v = 0.0;
+        if (!cablecal::ParseFiniteDouble(text, &v) || !(inclusive ? v >= lowest : v > lowest)) {
+          return "must be a number " + wanted + " (got '" + text + "')";
+        }
+        return "";
+      },
+      "NUMBER " + wanted);
+}
+const CLI::Validator kPositive = NumberAbove(0.0, false);
+const CLI::Validator kNonNegative = NumberAbove(0.0, true);
+constexpr int kMaxThreads = 1024;
 
 void AddRobotOption(CLI::App* app, std::string* path) {
   app->add_option("--robot", *path, "robot YAML file (default: the built-in wang2022 robot)")
@@ -43,7 +62,7 @@ int main(int argc, char** argv) {
   cablecal::cli::WorkspaceOptions ws;
   CLI::App* ws_cmd = app.add_subcommand("workspace", "grid the feasible cable-tension workspace to CSV (and PNG)");
   AddRobotOption(ws_cmd, &ws.robot_path);
-  ws_cmd->add_option("--step", ws.step_m, "grid spacing in m")->capture_default_str()->check(CLI::PositiveNumber);
+  ws_cmd->add_option("--step", ws.step_m, "grid spacing in m")->capture_default_str()->check(kPositive);
   ws_cmd->add_option("--out", ws.out_path, "workspace CSV (x,z,theta,t1,t2,feasible,reason)")->required();
   ws_cmd->add_option("--plot", ws.plot_path, "PNG of the feasible region, tensions and exit points");
 
@@ -60,7 +79,7 @@ int main(int argc, char** argv) {
   sim_cmd->add_option("--truth", sim.truth_path, "true robot file (default: the nominal robot)")->check(CLI::ExistingFile);
   sim_cmd->add_option("--geometry-sigma", sim.geometry_sigma_m,
                       "perturb nominal exit points and initial lengths by N(0, S^2), S in m")
-      ->check(CLI::NonNegativeNumber);
+      ->check(kNonNegative);
   sim_cmd->add_option("--plan", sim.plan_path, "pose plan CSV")->required()->check(CLI::ExistingFile);
   sim_cmd->add_option("--seed", sim.seed, "random seed")->capture_default_str();
   sim_cmd->add_option("--sensors", sim.sensors, "noisy sensors: both|laser|inclinometer|none")
@@ -82,7 +101,7 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"a1x", "prior", "none"}));
   id_cmd->add_option("--max-iterations", ident.max_iterations, "Levenberg-Marquardt iteration limit")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(kPositive);
   id_cmd->add_option("--out", ident.out_path, "result YAML")->required();
   id_cmd->add_option("--calibrated-robot", ident.calibrated_robot_path, "robot file with the identified geometry");
 
@@ -99,7 +118,7 @@ int main(int argc, char** argv) {
   des_cmd->add_option("--seed", des.seed, "random seed")->capture_default_str();
   des_cmd->add_option("--min-spacing", des.min_spacing_m, "minimum distance between poses, m")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(kNonNegative);
   des_cmd->add_option("--random-sets", des.random_sets, "random sets for the reference median (0: none)")
       ->capture_default_str()
       ->check(CLI::Range(0, 100000));
@@ -130,11 +149,12 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"both", "laser", "inclinometer", "none"}));
   mc_cmd->add_option("--geometry-sigma", mc.geometry_sigma_m, "true geometry's deviation from nominal, m")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(kNonNegative);
   mc_cmd->add_option("--design-starts", mc.design_starts, "Ipopt starts per designed set")
       ->capture_default_str()
       ->check(CLI::Range(1, 1000));
-  mc_cmd->add_option("--threads", mc.threads, "OpenMP threads (default: all cores)")->check(CLI::PositiveNumber);
+  mc_cmd->add_option("--threads", mc.threads, "OpenMP threads (default: all cores)")
+      ->check(CLI::Range(1, kMaxThreads));
   mc_cmd->add_option("--seed", mc.seed, "random seed")->capture_default_str();
   mc_cmd->add_flag("!--no-plot", mc.plot, "skip the figures");
   mc_cmd->add_option("--out", mc.out_dir, "output folder")->required();
@@ -143,7 +163,8 @@ int main(int argc, char** argv) {
   CLI::App* rep_cmd = app.add_subcommand("reproduce", "run the paper's study on the built-in robot into results/");
   AddRobotOption(rep_cmd, &rep.robot_path);
   rep_cmd->add_option("--trials", rep.trials, "trials per cell")->capture_default_str()->check(CLI::Range(1, 100000000));
-  rep_cmd->add_option("--threads", rep.threads, "OpenMP threads (default: all cores)")->check(CLI::PositiveNumber);
+  rep_cmd->add_option("--threads", rep.threads, "OpenMP threads (default: all cores)")
+      ->check(CLI::Range(1, kMaxThreads));
   rep_cmd->add_option("--seed", rep.seed, "random seed")->capture_default_str();
   rep_cmd->add_option("--out", rep.out_dir, "output folder")->capture_default_str();
 

@@ -553,9 +553,12 @@ TEST_F(Cli, KilledRunNeverLeavesAMixedSetAndTheNextRunCleansUp) {
 
 TEST_F(Cli, AFailedFigureKeepsTheResultsAndExitsFive) {
   const std::string env = "env CABLECAL_PYTHON=/bin/false " + std::string(CABLECAL_BINARY);
+  std::ofstream(Path("ws.png")) << "an earlier run's figure";
+  std::ofstream(Path("p.png")) << "an earlier run's figure";
   RunResult r = RunCablecal(env + " workspace --step 0.2 --out " + Path("ws.csv") + " --plot " + Path("ws.png"));
   EXPECT_EQ(r.exit_code, 5) << r.output;
   EXPECT_NE(r.output.find("the figure could not be made"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("was removed (it showed another run)"), std::string::npos) << r.output;
   EXPECT_TRUE(fs::exists(Path("ws.csv")));
   EXPECT_FALSE(fs::exists(Path("ws.png")));
   r = RunCablecal(env + " design --poses 6 --starts 1 --random-sets 0 --out " + Path("p.csv") + " --plot " +
@@ -642,6 +645,11 @@ for p in res["poses"]:
     number(p["x_std"], "x_std"); number(p["theta_std"], "theta_std")
 number(res["identifiability"]["condition_number"], "condition number")
 assert res["identifiability"]["null_directions"] == []
+cal = load("calibrated.yaml")
+names = ["a1x", "a1z", "a2x", "a2z"]
+for i, c in enumerate(cal["cables"]):
+    assert c["exit"] == [res["parameters"][names[2 * i]]["value"], res["parameters"][names[2 * i + 1]]["value"]], c
+    assert c["initial_length"] == res["parameters"]["l%d0" % (i + 1)]["value"], c
 s = load("d.yaml")
 number(s["criteria"]["a_trace_covariance_m2"], "a criterion")
 number(s["robustness"]["geometry_sigma_m"], "geometry sigma")

@@ -163,5 +163,27 @@ TEST(EdgeCases, ReadingsPastASensorRangeByItsNoiseOnlyAreAccepted) {
   EXPECT_THROW(check(z_top + 5.5 * z_sigma, 0.0), InputError);
 }
 
+// The global fit test: every sensor 30 times noisier than the robot file says makes every
+// residual too large (no single one stands out), which is poor_fit naming the factor.
+TEST(EdgeCases, ResidualsFarAboveTheSensorsNoiseArePoorFit) {
+  const Robot& robot = BuiltinRobot();
+  const auto plan = SampleFeasiblePoses(robot, 30, 12);
+  Rng rng(3);
+  SimulatedExperiment exp = SimulateExperiment(robot, robot, plan, SimulationOptions{}, rng);
+  const SensorNoise& s = robot.sensors;
+  for (Measurement& m : exp.measurements) {
+    for (int i = 0; i < m.dl_m.size(); ++i) m.dl_m(i) += rng.Normal(0.0, 30.0 * s.encoder_sigma_m);
+    m.z_m += rng.Normal(0.0, 30.0 * s.laser_sigma_m());
+    m.theta_rad += rng.Normal(0.0, 30.0 * s.inclinometer_sigma_rad());
+  }
+  const IdentifyResult r = Identify(robot, exp.measurements, IdentifyOptions{});
+  EXPECT_EQ(r.status, IdentifyStatus::kPoorFit) << r.message;
+  EXPECT_NE(r.message.find("times the sensors' noise"), std::string::npos) << r.message;
+  // The same data with the noise the file states are a fit.
+  Rng clean_rng(3);
+  const SimulatedExperiment clean = SimulateExperiment(robot, robot, plan, SimulationOptions{}, clean_rng);
+  EXPECT_EQ(Identify(robot, clean.measurements, IdentifyOptions{}).status, IdentifyStatus::kConverged);
+}
+
 }  // namespace
 }  // namespace cablecal
