@@ -94,9 +94,8 @@ int RunWorkspace(const Context& ctx, const WorkspaceOptions& options) {
     figure_error = TryPlot(output, options.plot_path, "plot_workspace.py", args);
   }
   output.Commit();
-  std::printf("workspace of %s: %d of %zu grid points feasible (step %s m), area ~ %s m^2\n", robot.name.c_str(),
-              grid.num_feasible, grid.points.size(), FormatDouble(options.step_m).c_str(),
-              FormatDouble(grid.feasible_area_m2()).c_str());
+  std::printf("workspace of %s: %d of %zu grid points feasible (step %s m), area ~ %.4g m^2\n", robot.name.c_str(),
+              grid.num_feasible, grid.points.size(), FormatDouble(options.step_m).c_str(), grid.feasible_area_m2());
   if (!figure_error.empty()) throw FigureFailure(figure_error + "; " + options.out_path + " was written");
   return kExitOk;
 }

@@ -154,8 +154,18 @@ void CheckReadingsPlausible(const Robot& robot, const std::vector<Measurement>& 
   const double theta_slack = kNoiseSigmas * robot.sensors.inclinometer_sigma_rad();
   const double z_min = -z_slack, z_max = std::min(robot.laser_range_m, robot.frame_height_m) + z_slack;
   const double theta_max = robot.theta_max_rad + theta_slack;
+  // No cable can change its length by more than the frame's diagonal.
+  const double dl_max = std::hypot(robot.frame_width_m, robot.frame_height_m);
   for (const Measurement& m : measurements) {
     const std::string where = m.where.empty() ? source + ": pose " + std::to_string(m.pose_id) : m.where;
+    for (int i = 0; i < m.dl_m.size(); ++i) {
+      if (!(std::abs(m.dl_m(i)) <= dl_max)) {
+        throw InputError(where, "column 'dl" + std::to_string(i + 1) + "'",
+                         FormatDouble(m.dl_m(i)) + " m is more than the frame's diagonal (" + FormatDouble(dl_max) +
+                             " m): no cable of " + robot.name + " changes its length that much (millimetres? "
+                             "lengths are in m)");
+      }
+    }
     if (!(m.z_m >= z_min && m.z_m <= z_max)) {
       throw InputError(where, "column 'z'",
                        FormatDouble(m.z_m) + " m is outside what the laser can read here, [" + FormatDouble(z_min) +

@@ -73,8 +73,9 @@ std::vector<Measurement> ReadMeasurementsCsv(const std::string& path, int num_ca
 std::vector<Measurement> ReadMeasurementsCsv(std::istream& in, const std::string& name, int num_cables);
 constexpr int kMaxMeasuredPoses = 100000;
 
-// Readings no sensor of `robot` can give: a laser height below 0, above the laser range or
-// above the frame, an inclinometer angle beyond its range, each limit widened by 5 sigma of
+// Readings no sensor of `robot` can give: an encoder length change longer than the frame's
+// diagonal, a laser height below 0, above the laser range or above the frame, an
+// inclinometer angle beyond its range, the last two limits widened by 5 sigma of
 // that sensor's noise (a pose at the edge of a range reads a little past it). Throws
 // InputError naming the file, line and column (or the pose), the value and the limit;
 // "units?" where it fits.

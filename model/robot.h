@@ -27,6 +27,11 @@ inline double SideSign(PulleySide side) { return side == PulleySide::kLeft ? 1.0
 // The most cables a robot file may declare (the loader enforces it; fixed-size scratch
 // arrays in the model rely on it).
 constexpr int kMaxCables = 8;
+// Upper bounds of the robot file's sizes (README, "Robot file"): far beyond any robot this
+// tool is for, so that a unit slip (981 for 9.81, a frame in mm) is refused by name.
+constexpr double kMaxGravity_mps2 = 100.0;
+constexpr double kMaxFrameSide_m = 100.0;
+constexpr double kMaxPlatformMass_kg = 10000.0;
 
 struct Cable {
   Eigen::Vector2d p_F_exit_m;        // exit point A_i: the pulley's outermost point at centre height

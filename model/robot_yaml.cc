@@ -78,6 +78,13 @@ class Reader {
   void Positive(const YAML::Node& node, const std::string& key, double v) const {
     if (!(v > 0.0)) Fail(node, key, "must be > 0 (got " + FormatDouble(v) + ")");
   }
+  // A bound far beyond any robot this tool is for: a value past it is a typo or a unit slip
+  // (981 for 9.81, a frame in mm), and would overflow the statics silently.
+  void AtMost(const YAML::Node& node, const std::string& key, double v, double most, const std::string& unit) const {
+    if (!(v <= most)) {
+      Fail(node, key, "must be at most " + FormatDouble(most) + " " + unit + " (got " + FormatDouble(v) + "): units?");
+    }
+  }
   void NonNegative(const YAML::Node& node, const std::string& key, double v) const {
     if (!(v >= 0.0)) Fail(node, key, "must be >= 0 (got " + FormatDouble(v) + ")");
   }
@@ -102,18 +109,22 @@ Robot Parse(const YAML::Node& root, const Reader& rd) {
   if (robot.name.empty()) rd.Fail(root["name"], "name", "must not be empty");
   robot.gravity_mps2 = rd.Number(root, "", "gravity");
   rd.Positive(root["gravity"], "gravity", robot.gravity_mps2);
+  rd.AtMost(root["gravity"], "gravity", robot.gravity_mps2, kMaxGravity_mps2, "m/s^2");
 
   const YAML::Node frame = root["frame"];
   rd.ExpectMap(frame, "frame", {"width", "height"}, {});
   robot.frame_width_m = rd.Number(frame, "frame", "width");
   rd.Positive(frame["width"], "frame.width", robot.frame_width_m);
+  rd.AtMost(frame["width"], "frame.width", robot.frame_width_m, kMaxFrameSide_m, "m");
   robot.frame_height_m = rd.Number(frame, "frame", "height");
   rd.Positive(frame["height"], "frame.height", robot.frame_height_m);
+  rd.AtMost(frame["height"], "frame.height", robot.frame_height_m, kMaxFrameSide_m, "m");
 
   const YAML::Node platform = root["platform"];
   rd.ExpectMap(platform, "platform", {"mass", "com", "anchors"}, {});
   robot.platform_mass_kg = rd.Number(platform, "platform", "mass");
   rd.Positive(platform["mass"], "platform.mass", robot.platform_mass_kg);
+  rd.AtMost(platform["mass"], "platform.mass", robot.platform_mass_kg, kMaxPlatformMass_kg, "kg");
   robot.p_P_com_m = rd.Vector2(platform["com"], "platform.com");
   const YAML::Node anchors = platform["anchors"];
   if (!anchors.IsSequence()) rd.Fail(anchors, "platform.anchors", "must be a list of [x, z] points");

@@ -19,6 +19,13 @@ WorkspaceGrid ComputeWorkspaceGrid(const Robot& robot, double step_m) {
     throw InputError("--step", "", "must be a positive number of metres (got " + FormatDouble(step_m) + ")");
   }
   // Guard against a step so small the grid would not fit in memory.
+  // Fewer than 5 points a side says nothing about the workspace (one point, "area 0", was exit 0).
+  if (!(step_m <= 0.25 * std::min(robot.frame_width_m, robot.frame_height_m))) {
+    throw InputError("--step", "", FormatDouble(step_m) + " m leaves fewer than 5 grid points along a side of the " +
+                                       FormatDouble(robot.frame_width_m) + " x " + FormatDouble(robot.frame_height_m) +
+                                       " m frame (at most " +
+                                       FormatDouble(0.25 * std::min(robot.frame_width_m, robot.frame_height_m)) + " m)");
+  }
   const double nx_d = std::floor(robot.frame_width_m / step_m + 1e-9) + 1;
   const double nz_d = std::floor(robot.frame_height_m / step_m + 1e-9) + 1;
   if (nx_d * nz_d > kMaxGridPoints) {
@@ -130,9 +137,22 @@ void CheckPlanMatchesRobot(const Robot& robot, const std::vector<PlanPose>& plan
   for (std::size_t j = 0; j < plan.size(); ++j) {
     const PlanPose& p = plan[j];
     const std::string where = source + ": pose " + std::to_string(j + 1);
+    // The reference point inside the frame first: a pose outside it is named by its own column
+    // rather than by the cable lengths that follow from it.
+    if (!(p.q(0) >= 0.0 && p.q(0) <= robot.frame_width_m)) {
+      throw InputError(where, "column 'x'", FormatDouble(p.q(0)) + " m is outside the frame [0, " +
+                                                FormatDouble(robot.frame_width_m) + "] m of " + robot.name +
+                                                ": a plan for another robot?");
+    }
+    if (!(p.q(1) >= 0.0 && p.q(1) <= robot.frame_height_m)) {
+      throw InputError(where, "column 'z'", FormatDouble(p.q(1)) + " m is outside the frame [0, " +
+                                                FormatDouble(robot.frame_height_m) + "] m of " + robot.name +
+                                                ": a plan for another robot?");
+    }
     if (!(std::abs(p.q(2)) <= robot.theta_max_rad)) {
       throw InputError(where, "column 'theta'", FormatDouble(p.q(2)) + " rad is beyond the inclinometer range of +-" +
-                                                    FormatDouble(robot.theta_max_rad) + " rad");
+                                                    FormatDouble(robot.theta_max_rad) + " rad" +
+                                                    (std::abs(p.q(2)) > M_PI ? " (degrees? theta is in radians)" : ""));
     }
     const Eigen::VectorXd l = CableLengths(robot, p.q);
     for (int i = 0; i < robot.num_cables(); ++i) {

@@ -397,6 +397,21 @@ TEST_F(Cli, SimulateRefusesPlansThatAreNotTheRobots) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("theta.csv: pose 1: column 'theta': 100 rad is beyond the inclinometer range"),
             std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("(degrees? theta is in radians)"), std::string::npos) << r.output;
+  // z beyond the frame is named by its column, not by the cable lengths that follow from it.
+  {
+    const std::size_t row_end = plan.find('\n', row);
+    std::vector<std::string> cells;
+    std::stringstream cells_in(plan.substr(row, row_end - row));
+    for (std::string cell; std::getline(cells_in, cell, ',');) cells.push_back(cell);
+    cells[2] = "5";
+    std::string line = cells[0];
+    for (std::size_t k = 1; k < cells.size(); ++k) line += "," + cells[k];
+    std::ofstream(Path("z.csv")) << plan.substr(0, row) + line + plan.substr(row_end);
+    r = RunCablecal("simulate --plan " + Path("z.csv") + " --out " + Path("m.csv"));
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_NE(r.output.find("z.csv: pose 1: column 'z': 5 m is outside the frame"), std::string::npos) << r.output;
+  }
   bad = plan;
   bad.replace(theta_start, theta_end - theta_start, "0.01");
   std::ofstream(Path("offeq.csv")) << bad;

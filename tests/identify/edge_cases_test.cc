@@ -161,6 +161,16 @@ TEST(EdgeCases, ReadingsPastASensorRangeByItsNoiseOnlyAreAccepted) {
   EXPECT_THROW(check(1.0, robot.theta_max_rad + 5.5 * theta_sigma), InputError);
   EXPECT_THROW(check(-5.5 * z_sigma, 0.0), InputError);
   EXPECT_THROW(check(z_top + 5.5 * z_sigma, 0.0), InputError);
+  // Encoder length changes in millimetres: more than the frame's diagonal.
+  m.dl_m << 1349.0, -12.0;
+  try {
+    check(1.0, 0.0);
+    FAIL() << "a length change of 1349 m accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("column 'dl1': 1349 m is more than the frame's diagonal"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("millimetres?"), std::string::npos) << e.what();
+  }
 }
 
 // The global fit test: every sensor 30 times noisier than the robot file says makes every

@@ -119,6 +119,10 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"SecondDocument", "  tracker: {sigma: 0.0005}", "  tracker: {sigma: 0.0005}\n---\nname: other",
                 "a second YAML document"},
         BadCase{"BothSidesLeft", "side: right", "side: left", "cables\\[1\\]\\.side: both cables are on their pulleys' left side"},
+        BadCase{"FrameInMillimetres", "{width: 5.209, height: 2.8}", "{width: 5209, height: 2800}",
+                "frame\\.width: must be at most 100 m \\(got 5209\\): units\\?"},
+        BadCase{"HugeMass", "  mass: 2.2 ", "  mass: 1e308 ", "platform\\.mass: must be at most 10000 kg"},
+        BadCase{"GravityInCentimetres", "gravity: 9.81", "gravity: 981", "gravity: must be at most 100 m/s\\^2"},
         BadCase{"InvalidYaml", "frame: {width: 5.209, height: 2.8}", "frame: {width: 5.209, height: [2.8}",
                 "not valid YAML"}),
     [](const ::testing::TestParamInfo<BadCase>& info) { return std::string(info.param.name); });

@@ -58,6 +58,9 @@ TEST(WorkspaceGrid, BadStepIsInputError) {
   EXPECT_THROW(ComputeWorkspaceGrid(BuiltinRobot(), 1e-6), InputError);
   // The 5.5 GB, 185 s grid (2.0e7 points) is refused before any allocation.
   EXPECT_THROW(ComputeWorkspaceGrid(BuiltinRobot(), 0.000855), InputError);
+  // A step that leaves fewer than 5 points along the 2.8 m side.
+  EXPECT_THROW(ComputeWorkspaceGrid(BuiltinRobot(), 0.71), InputError);
+  EXPECT_NO_THROW(ComputeWorkspaceGrid(BuiltinRobot(), 0.7));
 }
 
 TEST(Sampler, SeededReproducibleAndFeasible) {
