@@ -9,6 +9,7 @@
 
 #include "common/error.h"
 #include "model/robot.h"
+#include "tests/support/temp_dir.h"
 
 namespace cablecal {
 namespace {
@@ -114,6 +115,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"RadiusInMillimetres", "pulley_radius: 0.025, side: left", "pulley_radius: 25, side: left",
                 "cables\\[0\\]\\.pulley_radius: 25 m is more than a quarter of the frame"},
         BadCase{"DuplicateKey", "gravity: 9.81", "gravity: 9.81\ngravity: 1.62", "gravity: given twice \\(first at line"},
+        BadCase{"DuplicateCables", "cables:", "cables: []\ncables:", "cables: given twice \\(first at line"},
         BadCase{"DuplicateNestedKey", "{width: 5.209, height: 2.8}", "{width: 5.209, height: 2.8, width: 3}",
                 "frame\\.width: given twice"},
         BadCase{"SecondDocument", "  tracker: {sigma: 0.0005}", "  tracker: {sigma: 0.0005}\n---\nname: other",
@@ -155,7 +157,8 @@ TEST(RobotFile, MissingAndEmptyFiles) {
       EXPECT_NE(std::string(e.what()).find("is not a regular file"), std::string::npos) << e.what();
     }
   }
-  const std::string big = ::testing::TempDir() + "cablecal_big_robot.yaml";
+  const testing_support::TempDir tmp;
+  const std::string big = tmp.Path("big_robot.yaml");
   std::ofstream(big) << BuiltinRobotYaml() << std::string(kMaxRobotFileBytes, '#') << "\n";
   try {
     LoadRobotFile(big);
@@ -163,7 +166,6 @@ TEST(RobotFile, MissingAndEmptyFiles) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("is larger than 1024 KiB"), std::string::npos) << e.what();
   }
-  std::remove(big.c_str());
 }
 
 TEST(RobotFile, LineNumberPointsAtTheOffendingKey) {

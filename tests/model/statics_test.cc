@@ -161,6 +161,33 @@ TEST(ForwardModel, LongLengthsHangBelowTheFloorAndShortOnesDoNotConverge) {
   EXPECT_EQ(SolveForwardGeometricoStatic(robot, L).status, ForwardStatus::kNotConverged);
 }
 
+// The forward model's other answers: lengths only a pushing cable could hold (the platform
+// beyond the right post: both cables pull up and to the left) are slack; an equilibrium that
+// is a potential-energy maximum (a centre of mass high above the anchors) is never returned
+// as converged: from that guess the model reports it unstable and goes on to the stable
+// solution the platform falls to.
+TEST(ForwardModel, ReportsSlackAndUnstableSolutions) {
+  const Robot& robot = BuiltinRobot();
+  const Eigen::Vector3d beyond(robot.frame_width_m + 1.0, 1.5, 0.0);
+  const ForwardResult slack = SolveForwardGeometricoStatic(robot, CableLengths(robot, beyond), &beyond);
+  EXPECT_EQ(slack.status, ForwardStatus::kSlack) << ToString(slack.status);
+  EXPECT_STREQ(ToString(ForwardStatus::kSlack), "slack_cable");
+
+  Robot high = robot;
+  high.p_P_com_m = Eigen::Vector2d(0.0, 3.0);
+  const Eigen::Vector3d level(high.frame_width_m / 2, 0.5, 0.0);
+  ASSERT_LT(ReducedStiffness(high, level,
+                             WrenchMatrix<double>(high, level).topRows<2>().lu().solve(
+                                 -GravityWrench<double>(high, level).head<2>())),
+            0.0);  // the guess is an unstable equilibrium
+  const ForwardResult fell = SolveForwardGeometricoStatic(high, CableLengths(high, level), &level);
+  ASSERT_EQ(fell.status, ForwardStatus::kConverged) << ToString(fell.status);
+  EXPECT_TRUE(fell.equilibrium.stable);
+  EXPECT_GT(fell.equilibrium.reduced_stiffness, 0.0);
+  EXPECT_GT((fell.equilibrium.q - level).norm(), 0.1);
+  EXPECT_STREQ(ToString(ForwardStatus::kUnstable), "unstable");
+}
+
 TEST(Feasibility, ReasonsAreReported) {
   const Robot& robot = BuiltinRobot();
   EXPECT_EQ(EvaluatePose(robot, -1.0, 1.0).feasibility, Feasibility::kOutsideFrame);
