@@ -679,6 +679,18 @@ print("ok")
   EXPECT_NE(check.output.find("ok"), std::string::npos) << check.output;
 }
 
+// A newline in an output path ends up in the CSV's provenance comment: escaped there, so the
+// file still reads back (it once started a data line).
+TEST_F(Cli, ANewlineInAPathKeepsTheCsvReadable) {
+  std::ofstream(Path("run.sh")) << "p=\"$(printf '%s\\n%s' '" << Path("new") << "' 'line.csv')\"\n"
+                                << CABLECAL_BINARY << " sample --poses 6 --out \"$p\" || exit 10\n"
+                                << "head -3 \"$p\" | grep -c '^# command: ' || exit 11\n"
+                                << CABLECAL_BINARY << " simulate --plan \"$p\" --out " << Path("m.csv") << "\n";
+  const RunResult r = RunCablecal("env sh " + Path("run.sh"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(fs::exists(Path("m.csv")));
+}
+
 TEST_F(Cli, MonteCarloBadFlagsExitTwo) {
   for (const std::string& args : std::vector<std::string>{"montecarlo --poses 4:10 --trials 5 --out " + Path("m"),
                                                           "montecarlo --poses 6:10 --trials 0 --out " + Path("m"),
