@@ -62,8 +62,11 @@ std::vector<int> ParsePoseCounts(const std::string& text) {
   std::string item;
   while (std::getline(ss, item, ':')) {
     double v = 0.0;
-    if (!ParseFiniteDouble(item, &v) || v != std::floor(v) || v < 1 || v > 1000) {
+    if (!ParseFiniteDouble(item, &v) || v != std::floor(v) || v < 1) {
       throw InputError("--poses", "", "expected first:last[:step] with whole numbers (got '" + text + "')");
+    }
+    if (v > 1000) {
+      throw InputError("--poses", "", "at most 1000 poses per set (got '" + item + "' in '" + text + "')");
     }
     parts.push_back(static_cast<int>(v));
   }

@@ -178,7 +178,13 @@ TEST(MonteCarlo, ParsesPoseRangesAndDesigns) {
   EXPECT_EQ(ParseDesigns("random,e").size(), 2u);
   EXPECT_EQ(ParseDesigns("condition"), (std::vector<PoseSetDesign>{PoseSetDesign::kCondition}));
   EXPECT_THROW(ParseDesigns("random,random"), InputError);
-  EXPECT_THROW(ParseDesigns("optimized,a"), InputError);  // the same A-optimal cells twice
+  EXPECT_THROW(ParseDesigns("optimized,a"), InputError);
+  try {
+    ParsePoseCounts("6:1000000");
+    FAIL() << "a million poses accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("at most 1000 poses per set"), std::string::npos) << e.what();
+  }  // the same A-optimal cells twice
   EXPECT_THROW(ParseDesigns("a,random,optimized"), InputError);
   EXPECT_THROW(ParseDesigns("best"), InputError);
 }
