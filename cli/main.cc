@@ -36,6 +36,15 @@ CLI::Validator NumberAbove(double lowest, bool inclusive) {
 const CLI::Validator kPositive = NumberAbove(0.0, false);
 const CLI::Validator kNonNegative = NumberAbove(0.0, true);
 constexpr int kMaxThreads = 1024;
+// Seeds are unsigned 64-bit integers; CLI11 would wrap "-1" to 18446744073709551615.
+const CLI::Validator kSeed(
+    [](std::string& text) -> std::string {
+      if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos || text.size() > 20) {
+        return "must be a whole number from 0 to 18446744073709551615 (got '" + text + "')";
+      }
+      return "";
+    },
+    "SEED");
 
 void AddRobotOption(CLI::App* app, std::string* path) {
   app->add_option("--robot", *path, "robot YAML file (default: the built-in wang2022 robot)")
@@ -70,7 +79,7 @@ int main(int argc, char** argv) {
   CLI::App* sample_cmd = app.add_subcommand("sample", "draw random feasible poses as a pose plan CSV");
   AddRobotOption(sample_cmd, &sample.robot_path);
   sample_cmd->add_option("--poses", sample.poses, "number of poses")->required()->check(CLI::Range(1, 100000));
-  sample_cmd->add_option("--seed", sample.seed, "random seed")->capture_default_str();
+  sample_cmd->add_option("--seed", sample.seed, "random seed")->capture_default_str()->check(kSeed);
   sample_cmd->add_option("--out", sample.out_path, "pose plan CSV")->required();
 
   cablecal::cli::SimulateOptions sim;
@@ -81,7 +90,7 @@ int main(int argc, char** argv) {
                       "perturb nominal exit points and initial lengths by N(0, S^2), S in m")
       ->check(kNonNegative);
   sim_cmd->add_option("--plan", sim.plan_path, "pose plan CSV")->required()->check(CLI::ExistingFile);
-  sim_cmd->add_option("--seed", sim.seed, "random seed")->capture_default_str();
+  sim_cmd->add_option("--seed", sim.seed, "random seed")->capture_default_str()->check(kSeed);
   sim_cmd->add_option("--sensors", sim.sensors, "noisy sensors: both|laser|inclinometer|none")
       ->capture_default_str()
       ->check(CLI::IsMember({"both", "laser", "inclinometer", "none"}));
@@ -115,7 +124,7 @@ int main(int argc, char** argv) {
   des_cmd->add_option("--starts", des.starts, "random feasible starts (best kept)")
       ->capture_default_str()
       ->check(CLI::Range(1, 1000));
-  des_cmd->add_option("--seed", des.seed, "random seed")->capture_default_str();
+  des_cmd->add_option("--seed", des.seed, "random seed")->capture_default_str()->check(kSeed);
   des_cmd->add_option("--min-spacing", des.min_spacing_m, "minimum distance between poses, m")
       ->capture_default_str()
       ->check(kNonNegative);
@@ -155,7 +164,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 1000));
   mc_cmd->add_option("--threads", mc.threads, "OpenMP threads (default: all cores)")
       ->check(CLI::Range(1, kMaxThreads));
-  mc_cmd->add_option("--seed", mc.seed, "random seed")->capture_default_str();
+  mc_cmd->add_option("--seed", mc.seed, "random seed")->capture_default_str()->check(kSeed);
   mc_cmd->add_flag("!--no-plot", mc.plot, "skip the figures");
   mc_cmd->add_option("--out", mc.out_dir, "output folder")->required();
 
@@ -165,7 +174,7 @@ int main(int argc, char** argv) {
   rep_cmd->add_option("--trials", rep.trials, "trials per cell")->capture_default_str()->check(CLI::Range(1, 100000000));
   rep_cmd->add_option("--threads", rep.threads, "OpenMP threads (default: all cores)")
       ->check(CLI::Range(1, kMaxThreads));
-  rep_cmd->add_option("--seed", rep.seed, "random seed")->capture_default_str();
+  rep_cmd->add_option("--seed", rep.seed, "random seed")->capture_default_str()->check(kSeed);
   rep_cmd->add_option("--out", rep.out_dir, "output folder")->capture_default_str();
 
   // Every rank parses the same arguments; only rank 0 prints what parsing says.

@@ -370,11 +370,18 @@ TEST_F(Cli, CountFlagsBeyondTheirCapsAreRefused) {
            "montecarlo --poses 6 --trials 2000000000 --out " + Path("mc"),
            "montecarlo --poses 6:50 --trials 100000000 --out " + Path("mc"),
            "montecarlo --poses 6 --trials 5 --geometry-sigma 1e300 --out " + Path("mc"),
-           "workspace --step 0.000855 --out " + Path("w.csv")}) {
+           "workspace --step 0.000855 --out " + Path("w.csv"),
+           "montecarlo --poses 6 --trials 5 --threads 100000 --out " + Path("mc"),
+           "sample --poses 5 --seed -1 --out " + Path("p.csv")}) {
     const RunResult r = RunCablecal(args);
     EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
     EXPECT_NE(r.output.find("--"), std::string::npos) << args << "\n" << r.output;
   }
+  // Messages say what is wanted, not CLI11's 310-digit range.
+  const RunResult step = RunCablecal("workspace --step 0 --out " + Path("w.csv"));
+  EXPECT_NE(step.output.find("--step: must be a number > 0 (got '0')"), std::string::npos) << step.output;
+  const RunResult seed = RunCablecal("sample --poses 5 --seed -1 --out " + Path("p.csv"));
+  EXPECT_NE(seed.output.find("--seed: must be a whole number from 0"), std::string::npos) << seed.output;
   EXPECT_TRUE(DirIsEmpty());
 }
 
