@@ -43,7 +43,10 @@ class Reader {
       const auto [it, fresh] = seen_line.emplace(name, kv.first.Mark().line + 1);
       if (!fresh) Fail(kv.first, Join(key, name), "given twice (first at line " + std::to_string(it->second) + ")");
       if (!required.count(name) && !optional.count(name)) {
-        Fail(kv.first, Join(key, name), "unknown key (misspelt?)");
+        // Quoted at most 40 characters long: a file that is not a robot file at all (a
+        // password file given by mistake) is not echoed into the message.
+        const std::string shown = name.size() > 40 ? name.substr(0, 40) + "..." : name;
+        Fail(kv.first, Join(key, shown), "unknown key (misspelt?)");
       }
     }
     for (const std::string& name : required) {

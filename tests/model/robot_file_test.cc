@@ -125,6 +125,9 @@ INSTANTIATE_TEST_SUITE_P(
                 "frame\\.width: must be at most 100 m \\(got 5209\\): units\\?"},
         BadCase{"HugeMass", "  mass: 2.2 ", "  mass: 1e308 ", "platform\\.mass: must be at most 10000 kg"},
         BadCase{"GravityInCentimetres", "gravity: 9.81", "gravity: 981", "gravity: must be at most 100 m/s\\^2"},
+        BadCase{"LongUnknownKeyIsShortened", "gravity: 9.81",
+                "gravity: 9.81\nroot:x:0:0:root:/root:/bin/bash_and_more_that_is_not_a_key: 1",
+                "root:x:0:0:root:/root:/bin/bash_and_more\\.\\.\\.: unknown key"},
         BadCase{"InvalidYaml", "frame: {width: 5.209, height: 2.8}", "frame: {width: 5.209, height: [2.8}",
                 "not valid YAML"}),
     [](const ::testing::TestParamInfo<BadCase>& info) { return std::string(info.param.name); });
