@@ -1,8 +1,13 @@
 #include "cli/commands.h"
-#include "cli/sigint.h"
 
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
+
+#include <cerrno>
+#include <csignal>
+#include "cli/sigint.h"
+
 
 #include <cstdio>
 #include <cstdlib>
@@ -53,10 +58,30 @@ void RunPlotScript(const std::string& script, const std::vector<std::string>& ar
   std::vector<std::string> argv = {python, scripts_dir + "/" + script};
   argv.insert(argv.end(), args.begin(), args.end());
   const std::string command = CommandLine(argv);
-  const int status = std::system(command.c_str());
-  if (status != 0) {
-    throw FigureFailure("the figure could not be made: the plotting script failed (exit status " +
-                        std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : status) + "): " + command);
+  // fork and exec, not std::system: system() ignores SIGINT in cablecal while the script runs,
+  // so a Ctrl-C then reached only the script and looked like a failed figure (exit 5, results
+  // written) instead of an interruption (exit 130, nothing written).
+  std::vector<char*> c_argv;
+  for (std::string& a : argv) c_argv.push_back(a.data());
+  c_argv.push_back(nullptr);
+  const pid_t parent = ::getpid();
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    // The script dies with cablecal: a killed run leaves no orphan writing figures.
+    ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+    if (::getppid() != parent) ::_exit(127);
+    ::execvp(c_argv[0], c_argv.data());
+    ::_exit(127);
+  }
+  if (pid < 0) throw FigureFailure(std::string("the figure could not be made: cannot start ") + argv[0]);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0) {
+    if (errno != EINTR) throw FigureFailure("the figure could not be made: lost the plotting script: " + command);
+  }
+  if (!(WIFEXITED(status) && WEXITSTATUS(status) == 0)) {
+    const std::string how = WIFEXITED(status) ? "exit status " + std::to_string(WEXITSTATUS(status))
+                                              : "signal " + std::to_string(WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+    throw FigureFailure("the figure could not be made: the plotting script failed (" + how + "): " + command);
   }
 }
 

@@ -108,7 +108,8 @@ std::string TryPlotStudy(const OutputFolder& folder, const std::vector<std::stri
   } catch (const FigureFailure& e) {
     for (const std::string& f : figures) std::filesystem::remove(folder.Path(f));
     if (SigintFlag()) throw Interrupted();  // Ctrl-C reaches the script too
-    return e.what();
+    // The commit replaces the earlier figures too: none is left beside data it does not show.
+    return std::string(e.what()) + "; the earlier run's figures in the folder were removed";
   }
   if (SigintFlag()) throw Interrupted();
   return "";
@@ -158,7 +159,9 @@ int RunMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptions& opt
   // The folder is checked (and created) before any work; results go into it as one set.
   std::unique_ptr<OutputFolder> folder;
   RunAgreed(ctx.processes, [&] {
-    if (ctx.processes.root()) folder = std::make_unique<OutputFolder>("--out", options.out_dir, kStudyFiles);
+    if (!ctx.processes.root()) return;
+    folder = std::make_unique<OutputFolder>("--out", options.out_dir, kStudyFiles);
+    folder->RefuseInputs({{"--robot", options.robot_path}});
   });
   const SigintScope sigint;  // until the commit: Ctrl-C while plotting writes nothing either
   const MonteCarloResult r = RunStudy(ctx, robot, o, "montecarlo");
@@ -184,8 +187,9 @@ int RunReproduce(const Context& ctx, const ReproduceOptions& options) {
   std::unique_ptr<OutputFolder> folder;
   RunAgreed(ctx.processes, [&] {
     robot = LoadRobotOption(options.robot_path);
-    if (ctx.processes.root()) folder = std::make_unique<OutputFolder>("--out", options.out_dir,
-                                                                      std::vector<std::string>{"study", "ablation"});
+    if (!ctx.processes.root()) return;
+    folder = std::make_unique<OutputFolder>("--out", options.out_dir, std::vector<std::string>{"study/", "ablation/"});
+    folder->RefuseInputs({{"--robot", options.robot_path}});
   });
   // One scope over every phase: Ctrl-C between two studies is seen at the next check, and
   // nothing is written (the set is committed only at the end).

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "common/error.h"
+#include "common/format.h"
 
 namespace cablecal::cli {
 
@@ -67,10 +68,12 @@ int ReportCurrentError(const Processes& processes) {
   const std::string who =
       processes.count > 1 ? " (rank " + std::to_string(processes.rank) + " of " + std::to_string(processes.count) + ")"
                           : "";
+  // Messages quote file contents and names: escaped, so that they cannot drive the terminal.
+  const std::string message = PrintableText(error.message);
   if (error.exit_code == kExitInterrupted) {
-    std::fprintf(stderr, "\ncablecal%s: %s\n", who.c_str(), error.message.c_str());
+    std::fprintf(stderr, "\ncablecal%s: %s\n", who.c_str(), message.c_str());
   } else {
-    std::fprintf(stderr, "cablecal%s: %s: %s\n", who.c_str(), error.label, error.message.c_str());
+    std::fprintf(stderr, "cablecal%s: %s: %s\n", who.c_str(), error.label, message.c_str());
   }
   return error.exit_code;
 }

@@ -58,6 +58,10 @@ void CheckWritable(const std::string& final_path) {
     throw InputError(final_path, "", "cannot write: folder '" + parent.string() + "' does not exist");
   }
   std::error_code ec;
+  if (fs::is_symlink(fs::symlink_status(final_path, ec)) && !fs::exists(final_path, ec)) {
+    throw InputError(final_path, "", "cannot write: a symbolic link to nothing (give the path it should lead to, or "
+                                     "remove the link)");
+  }
   const fs::file_status st = fs::status(final_path, ec);
   if (fs::is_directory(st)) throw InputError(final_path, "", "cannot write: it is a folder");
   if (fs::exists(st) && !fs::is_regular_file(st)) {
@@ -72,7 +76,11 @@ void CheckCommandPaths(const std::vector<PathArgument>& inputs, const std::vecto
   std::vector<std::pair<fs::path, std::string>> seen;  // resolved output path, its flag
   for (const PathArgument& out : outputs) {
     if (out.path.empty()) continue;
-    CheckWritable(out.path);
+    try {
+      CheckWritable(out.path);
+    } catch (const InputError& e) {
+      throw InputError(out.flag, "", e.what());
+    }
     const fs::path p = Resolved(out.path);
     for (const auto& [other, flag] : seen) {
       if (other == p) throw InputError(out.flag, "", "writes the same file as " + flag + " ('" + out.path + "')");
@@ -86,8 +94,33 @@ void CheckCommandPaths(const std::vector<PathArgument>& inputs, const std::vecto
   }
 }
 
+namespace {
+
+// Temporaries of `final_path` ("<name>.tmp.<pid>", "<name>.<what>.tmp.<pid>") that a killed run
+// left: their process no longer exists.
+void RemoveStaleTemporaries(const fs::path& final_path) {
+  const fs::path folder = final_path.parent_path().empty() ? fs::path(".") : final_path.parent_path();
+  const std::string prefix = final_path.filename().string() + ".";
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(folder, ec)) {
+    const std::string name = entry.path().filename().string();
+    const std::size_t tmp = name.rfind(".tmp.");
+    if (name.rfind(prefix, 0) != 0 || tmp == std::string::npos || tmp + 5 >= name.size()) continue;
+    const std::string digits = name.substr(tmp + 5);
+    if (digits.find_first_not_of("0123456789") != std::string::npos || digits.size() > 9) continue;
+    const long pid = std::atol(digits.c_str());
+    if (pid > 0 && pid != ::getpid() && ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) {
+      std::error_code ignored;
+      fs::remove(entry.path(), ignored);
+    }
+  }
+}
+
+}  // namespace
+
 std::string AtomicOutput::Add(const std::string& final_path) {
   CheckWritable(final_path);
+  RemoveStaleTemporaries(final_path);
   for (const Entry& e : entries_) {
     if (Resolved(e.final_path) == Resolved(final_path)) {
       throw InputError(final_path, "", "cannot write: the same command already writes this file");
@@ -197,6 +230,10 @@ OutputFolder::OutputFolder(const std::string& flag, const std::string& dir, std:
   // fails or is killed before that leaves nothing at all.
   std::error_code ec;
   if (dir_.empty()) throw InputError(flag_, "", "is empty");
+  if (fs::is_symlink(fs::symlink_status(dir_, ec)) && !fs::exists(dir_, ec)) {
+    throw InputError(flag_, "", "'" + dir_ + "' is a symbolic link to nothing (give the folder it should lead to, or "
+                                "remove the link)");
+  }
   if (fs::exists(dir_, ec) && !fs::is_directory(dir_, ec)) {
     throw InputError(flag_, "", "'" + dir_ + "' exists and is not a folder");
   }
@@ -211,9 +248,37 @@ OutputFolder::OutputFolder(const std::string& flag, const std::string& dir, std:
   if (!fs::is_directory(parent, ec)) {
     throw InputError(flag_, "", "cannot write into '" + dir_ + "': folder '" + parent.string() + "' does not exist");
   }
+  // An owned name that holds something of another kind (a folder where cablecal writes a file)
+  // is not a previous run's: it would be deleted at the commit.
+  for (const std::string& name : owned_) {
+    const bool folder = !name.empty() && name.back() == '/';
+    const fs::path p = fs::path(dir_) / (folder ? name.substr(0, name.size() - 1) : name);
+    const fs::file_status st = fs::symlink_status(p, ec);
+    if (fs::exists(st) && (folder ? !fs::is_directory(st) : !fs::is_regular_file(st))) {
+      throw InputError(flag_, "", "'" + p.string() + "' is not a " + (folder ? "folder" : "file") +
+                                      " of an earlier run: cablecal would replace it (move it away first)");
+    }
+  }
+  for (std::string& name : owned_) {
+    if (!name.empty() && name.back() == '/') name.pop_back();
+  }
   const fs::path existing = fs::exists(dir_, ec) ? fs::path(dir_) : parent;
   if (::access(existing.c_str(), W_OK | X_OK) != 0) {
     throw InputError(flag_, "", "cannot write into '" + existing.string() + "': " + std::strerror(errno));
+  }
+}
+
+void OutputFolder::RefuseInputs(const std::vector<PathArgument>& inputs) const {
+  for (const PathArgument& in : inputs) {
+    if (in.path.empty()) continue;
+    const std::string input = Resolved(in.path).string();
+    for (const std::string& name : owned_) {
+      const std::string owned = Resolved((fs::path(dir_) / name).string()).string();
+      if (input == owned || input.rfind(owned + "/", 0) == 0) {
+        throw InputError(in.flag, "", "'" + in.path + "' is where " + flag_ + " writes its " + name +
+                                          ": it would be overwritten (move it out of '" + dir_ + "')");
+      }
+    }
   }
 }
 

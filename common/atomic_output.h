@@ -70,13 +70,18 @@ class OutputFolder {
  public:
   // `owned`: every top-level name the command may write into `dir` (also those it does not
   // write this time, such as figures, so that a previous run's do not stay beside the new
-  // set). Checks that `dir` is a folder, or that its parent is (throws InputError naming
+  // set); a trailing '/' marks a folder. An owned name that exists as the other kind (a
+  // folder where a file goes) is refused: it is not an earlier run's. Checks that `dir` is a folder, or that its parent is (throws InputError naming
   // `flag` otherwise: a mistyped path is refused, not created); creates `dir` and the staging
   // folder when the first file is written, and removes them if the run ends without a commit.
   OutputFolder(const std::string& flag, const std::string& dir, std::vector<std::string> owned);
   OutputFolder(const OutputFolder&) = delete;
   OutputFolder& operator=(const OutputFolder&) = delete;
   ~OutputFolder();
+
+  // Refuses (InputError naming the input's flag) an input that is one of the owned names in
+  // `dir`, or inside an owned subfolder: the commit would replace it.
+  void RefuseInputs(const std::vector<PathArgument>& inputs) const;
 
   // Where to write `relative` (an owned name, or a path under an owned subfolder) before the
   // commit; its parent folders are created.

@@ -13,6 +13,10 @@ std::string FormatDouble(double value);
 // or message (": ", quotes, newlines) reads back as the same string.
 std::string YamlQuoted(const std::string& text);
 
+// `text` with control characters escaped (\n, \r, \t, \xNN), for a terminal or a one-line
+// heading: a file's bytes quoted in a message must not clear the screen or break a line.
+std::string PrintableText(const std::string& text);
+
 // Parses a whole string as a finite double; returns false on anything else
 // (empty, trailing characters, nan, inf, out of range such as 1e400). Independent of the
 // process's C locale.

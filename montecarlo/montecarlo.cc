@@ -396,7 +396,7 @@ std::string SummaryCsv(const MonteCarloResult& r) {
 
 std::string SummaryMarkdown(const MonteCarloResult& r, const std::string& title) {
   std::ostringstream o;
-  o << "# " << title << "\n\n";
+  o << "# " << PrintableText(title) << "\n\n";  // a robot name with a newline must not end the heading
   o << "Standard deviation of the identification error (identified - true) in mm, per pose count n\n"
        "and pose-set design; `x4` is the 4th pose's x, `x_all` every pose's x pooled. `failed` counts\n"
        "trials that failed, by cause: design (no verified pose set), sampling, simulation (the true robot cannot\n"

@@ -698,6 +698,69 @@ TEST_F(Cli, ANewlineInAPathKeepsTheCsvReadable) {
   EXPECT_TRUE(fs::exists(Path("m.csv")));
 }
 
+// What a second hostile pass found: inputs inside the output folder, links to nothing, a
+// user's folder named like an output, temporaries of killed runs, terminal escapes in messages.
+TEST_F(Cli, OutputFoldersProtectWhatIsNotTheirs) {
+  fs::create_directories(Path("mc"));
+  fs::copy_file(std::string(CABLECAL_SOURCE_DIR) + "/robots/wang2022.yaml", Path("mc/run.yaml"));
+  const std::string robot = Read("mc/run.yaml");
+  RunResult r = RunCablecal(StudyCommand(Path("mc"), 1) + " --robot " + Path("mc/run.yaml"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--robot: '" + Path("mc/run.yaml") + "' is where --out writes its run.yaml"),
+            std::string::npos) << r.output;
+  EXPECT_EQ(Read("mc/run.yaml"), robot);
+
+  fs::create_symlink(Path("nowhere"), Path("dangling"));
+  r = RunCablecal(StudyCommand(Path("dangling"), 1));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("is a symbolic link to nothing"), std::string::npos) << r.output;
+  r = RunCablecal("sample --poses 5 --out " + Path("dangling"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--out: "), std::string::npos) << r.output;  // the flag is named
+  EXPECT_TRUE(fs::is_symlink(Path("dangling")));
+
+  fs::create_directories(Path("own/errors.csv"));
+  std::ofstream(Path("own/errors.csv/data.txt")) << "precious";
+  r = RunCablecal(StudyCommand(Path("own"), 1));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("is not a file of an earlier run"), std::string::npos) << r.output;
+  EXPECT_EQ(Read("own/errors.csv/data.txt"), "precious");
+
+  // Temporaries a killed run left (its process no longer exists) are removed by the next run.
+  std::ofstream(Path("ws.csv.tmp.999999")) << "half";
+  std::ofstream(Path("ws.png.workspace.tmp.999999")) << "half";
+  ASSERT_EQ(RunCablecal("workspace --step 0.2 --out " + Path("ws.csv")).exit_code, 0);
+  EXPECT_FALSE(fs::exists(Path("ws.csv.tmp.999999")));
+
+  std::ofstream(Path("esc.csv")) << "pose,dl1\x1b[2J,dl2,z,theta\n1,0,0,1,0\n";
+  r = RunCablecal("identify --measurements " + Path("esc.csv") + " --out " + Path("r.yaml"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_EQ(r.output.find('\x1b'), std::string::npos) << "a raw escape reached the terminal";
+  EXPECT_NE(r.output.find("\\x1b[2J"), std::string::npos) << r.output;
+}
+
+// Ctrl-C while the figures are made (a slow plotting script here) is an interruption: exit
+// 130 and the folder's earlier set untouched, not a failed figure with the new data written.
+// And a killed run takes its plotting script with it.
+TEST_F(Cli, CtrlCWhilePlottingWritesNothingAndAKillLeavesNoScript) {
+  std::ofstream(Path("slow.sh")) << "#!/bin/sh\nsleep 4\ntouch " << Path("script_finished") << "\n";
+  fs::permissions(Path("slow.sh"), fs::perms::owner_all);
+  const std::string slow_python = "CABLECAL_PYTHON=" + Path("slow.sh");
+  ASSERT_EQ(RunCablecal(StudyCommand(Path("mc"), 1)).exit_code, 0);
+  const auto before = StudyFiles(Path("mc"));
+  std::string slow_study = StudyCommand(Path("mc"), 2);
+  slow_study.replace(slow_study.find(" --no-plot"), 10, "");
+  const RunResult r = RunCablecal("env " + slow_python + " timeout --preserve-status -s INT 2 " +
+                                  std::string(CABLECAL_BINARY) + " " + slow_study);
+  EXPECT_EQ(r.exit_code, 130) << r.output;
+  EXPECT_NE(r.output.find("interrupted: no output written"), std::string::npos) << r.output;
+  EXPECT_TRUE(StudyFiles(Path("mc")) == before);
+  const RunResult killed = RunCablecal("env " + slow_python + " sh -c '" + std::string(CABLECAL_BINARY) + " " +
+                                       slow_study + " & sleep 2; kill -KILL $!; sleep 4; test ! -e " +
+                                       Path("script_finished") + "'");
+  EXPECT_EQ(killed.exit_code, 0) << "the plotting script outlived the killed run\n" << killed.output;
+}
+
 TEST_F(Cli, MonteCarloBadFlagsExitTwo) {
   for (const std::string& args : std::vector<std::string>{"montecarlo --poses 4:10 --trials 5 --out " + Path("m"),
                                                           "montecarlo --poses 6:10 --trials 0 --out " + Path("m"),
