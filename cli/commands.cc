@@ -119,7 +119,7 @@ int RunWorkspace(const Context& ctx, const WorkspaceOptions& options) {
     figure_error = TryPlot(output, options.plot_path, "plot_workspace.py", args);
   }
   output.Commit();
-  std::printf("workspace of %s: %d of %zu grid points feasible (step %s m), area ~ %.4g m^2\n", robot.name.c_str(),
+  std::printf("workspace of %s: %d of %zu grid points feasible (step %s m), area ~ %.4g m^2\n", PrintableText(robot.name).c_str(),
               grid.num_feasible, grid.points.size(), FormatDouble(options.step_m).c_str(), grid.feasible_area_m2());
   if (!figure_error.empty()) throw FigureFailure(figure_error + "; " + options.out_path + " was written");
   return kExitOk;
@@ -132,7 +132,7 @@ int RunSample(const Context& ctx, const SampleOptions& options) {
   AtomicOutput output;
   output.WriteText(options.out_path, PosePlanCsv(plan, ProvenanceComment(ctx.command_line)));
   output.Commit();
-  std::printf("wrote %zu random feasible poses of %s (seed %llu) to %s\n", plan.size(), robot.name.c_str(),
+  std::printf("wrote %zu random feasible poses of %s (seed %llu) to %s\n", plan.size(), PrintableText(robot.name).c_str(),
               options.seed, options.out_path.c_str());
   return kExitOk;
 }
@@ -207,7 +207,7 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   }
   output.Commit();
   std::printf("identified %s from %zu poses (%s, gauge %s): %d iterations, residual rms encoder %s m, laser %s m\n",
-              nominal.name.c_str(), measurements.size(), ToString(id.estimator), ToString(id.gauge), result.iterations,
+              PrintableText(nominal.name).c_str(), measurements.size(), ToString(id.estimator), ToString(id.gauge), result.iterations,
               FormatDouble(result.rms_encoder_m).c_str(), FormatDouble(result.rms_laser_m).c_str());
   for (int k = 0; k < 6; ++k) {
     std::printf("  %s = %.6f m", kGeometryNames[k], result.geometry(k));

@@ -632,9 +632,12 @@ TEST_F(Cli, EveryYamlOutputReadsBackInPyYaml) {
   const auto run = [](const std::string& args) {
     const RunResult r = RunCablecal(args);
     EXPECT_EQ(r.exit_code, 0) << args << "\n" << r.output;
+    return r;
   };
   const std::string q = "\"" + dir + "/";  // every path quoted for the shell
-  run("sample " + robot + " --poses 8 --out " + q + "plan.csv\"");
+  // The name's newline is escaped on the terminal too.
+  EXPECT_NE(run("sample " + robot + " --poses 8 --out " + q + "plan.csv\"").output.find("comment\\nsecond line"),
+            std::string::npos);
   run("simulate " + robot + " --plan " + q + "plan.csv\" --geometry-sigma 0.002 --out " + q + "meas.csv\" --truth-out " +
       q + "truth.yaml\"");
   run("identify " + robot + " --measurements " + q + "meas.csv\" --out " + q + "result.yaml\" --calibrated-robot " + q +
