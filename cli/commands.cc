@@ -5,16 +5,14 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cmath>
 #include <csignal>
-#include "cli/sigint.h"
-
-
 #include <cstdio>
 #include <cstdlib>
-#include <cmath>
 #include <filesystem>
 #include <fstream>
 
+#include "cli/sigint.h"
 #include "common/atomic_output.h"
 #include "common/error.h"
 #include "common/format.h"
@@ -78,6 +76,9 @@ void RunPlotScript(const std::string& script, const std::vector<std::string>& ar
   while (::waitpid(pid, &status, 0) < 0) {
     if (errno != EINTR) throw FigureFailure("the figure could not be made: lost the plotting script: " + command);
   }
+  // Ctrl-C reaches the script too (one process group): the script's failure, or its figures,
+  // are then an interruption, not a failed figure (SigintFlag is set only inside a SigintScope).
+  if (SigintFlag()) throw Interrupted();
   if (!(WIFEXITED(status) && WEXITSTATUS(status) == 0)) {
     const std::string how = WIFEXITED(status) ? "exit status " + std::to_string(WEXITSTATUS(status))
                                               : "signal " + std::to_string(WIFSIGNALED(status) ? WTERMSIG(status) : 0);
@@ -246,12 +247,16 @@ int RunDesign(const Context& ctx, const DesignCommandOptions& options) {
     output.WriteText(options.summary_path, DesignSummaryYaml(result, design, ctx.command_line));
   }
   if (!options.plot_path.empty()) {
-    // The background grid is an input of the plot only: written beside it, removed after.
-    const std::string temp_ws = options.plot_path + ".workspace.tmp." + std::to_string(::getpid());
+    // The background grid is an input of the plot only: written beside it, removed after,
+    // however the plotting ends.
+    struct RemovedWhenDone {
+      std::string path;
+      ~RemovedWhenDone() { std::remove(path.c_str()); }
+    } const background{options.plot_path + ".workspace.tmp." + std::to_string(::getpid())};
     std::vector<std::string> args = {temp_plan, output.Add(options.plot_path)};
     const WorkspaceGrid grid = ComputeWorkspaceGrid(robot, 0.05);
-    std::ofstream(temp_ws) << WorkspaceCsv(robot, grid, "");
-    args.push_back("--workspace=" + temp_ws);
+    std::ofstream(background.path) << WorkspaceCsv(robot, grid, "");
+    args.push_back("--workspace=" + background.path);
     // plot_plan.py pairs the i-th --exit with the i-th --anchor.
     for (const std::string& a : FrameArgs(robot)) args.push_back(a);
     for (const Cable& c : robot.cables) args.push_back(PointArg("anchor", c.p_P_anchor_m));
@@ -262,8 +267,6 @@ int RunDesign(const Context& ctx, const DesignCommandOptions& options) {
     }
     args.push_back("--title=" + title);
     figure_error = TryPlot(output, options.plot_path, "plot_plan.py", args);
-    std::remove(temp_ws.c_str());
-    if (SigintFlag()) throw Interrupted();  // Ctrl-C reaches the script too; it is not a figure failure
   }
   output.Commit();
   std::printf("designed %zu poses (criterion %s, best of %d starts, %d converged): %s", result.poses.size(),

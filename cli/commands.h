@@ -78,7 +78,7 @@ struct ReproduceOptions {
 int RunReproduce(const Context& ctx, const ReproduceOptions& options);
 
 // Runs a plotting script of scripts/ with the python that has matplotlib. Throws
-// FigureFailure (exit 5) if the script fails.
+// FigureFailure (exit 5) if the script fails, Interrupted if Ctrl-C came while it ran.
 void RunPlotScript(const std::string& script, const std::vector<std::string>& args);
 
 // Runs RunPlotScript; if it fails, drops `figure_path` from `output`, removes an earlier file

@@ -38,18 +38,58 @@ fs::path Resolved(const std::string& path) {
 
 // /dev, /proc and /sys hold devices and kernel files, as named or once links are followed
 // (/dev/stdout is a link into /proc): never a place for cablecal's regular files.
-bool IsSystemPath(const fs::path& p) {
-  const std::string s = p.string();
-  for (const char* root : {"/dev", "/proc", "/sys"}) {
-    const std::size_t n = std::strlen(root);
-    if (s.compare(0, n, root) == 0 && (s.size() == n || s[n] == '/')) return true;
+bool IsSystemPath(const std::string& path) {
+  for (const fs::path& p : {fs::absolute(path).lexically_normal(), Resolved(path)}) {
+    const std::string s = p.string();
+    for (const char* root : {"/dev", "/proc", "/sys"}) {
+      const std::size_t n = std::strlen(root);
+      if (s.compare(0, n, root) == 0 && (s.size() == n || s[n] == '/')) return true;
+    }
   }
   return false;
 }
 
+bool IsLinkToNothing(const std::string& path) {
+  std::error_code ec;
+  return fs::is_symlink(fs::symlink_status(path, ec)) && !fs::exists(path, ec);
+}
+
+// Whether `pid_digits` names a process that no longer exists: what a killed run left behind
+// (its temporaries, its staging folder) can then be removed.
+bool LeftByGoneProcess(const std::string& pid_digits) {
+  if (pid_digits.empty() || pid_digits.size() > 9 || pid_digits.find_first_not_of("0123456789") != std::string::npos) {
+    return false;
+  }
+  const long pid = std::atol(pid_digits.c_str());
+  return pid > 0 && pid != ::getpid() && ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH;
+}
+
+// An exclusive lock on a folder (flock), held until the returned descriptor is closed, also
+// if the process dies: concurrent runs' commits into the folder take turns.
+int LockFolder(const std::string& folder) {
+  const int fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0 || ::flock(fd, LOCK_EX) != 0) {
+    const int error = errno;
+    if (fd >= 0) ::close(fd);
+    throw InputError(folder, "", std::string("cannot lock the folder: ") + std::strerror(error));
+  }
+  return fd;
+}
+
+// Closes the descriptors of LockFolder when a commit ends, however it ends.
+struct FolderLocks {
+  std::vector<int> fds;
+  FolderLocks() = default;
+  FolderLocks(const FolderLocks&) = delete;
+  FolderLocks& operator=(const FolderLocks&) = delete;
+  ~FolderLocks() {
+    for (int fd : fds) ::close(fd);
+  }
+};
+
 void CheckWritable(const std::string& final_path) {
   if (final_path.empty()) throw InputError("", "output path", "is empty");
-  if (IsSystemPath(fs::absolute(final_path).lexically_normal()) || IsSystemPath(Resolved(final_path))) {
+  if (IsSystemPath(final_path)) {
     throw InputError(final_path, "", "cannot write: a device or system path (/dev, /proc, /sys); cablecal writes "
                                      "regular files only, renamed into place when complete");
   }
@@ -58,7 +98,7 @@ void CheckWritable(const std::string& final_path) {
     throw InputError(final_path, "", "cannot write: folder '" + parent.string() + "' does not exist");
   }
   std::error_code ec;
-  if (fs::is_symlink(fs::symlink_status(final_path, ec)) && !fs::exists(final_path, ec)) {
+  if (IsLinkToNothing(final_path)) {
     throw InputError(final_path, "", "cannot write: a symbolic link to nothing (give the path it should lead to, or "
                                      "remove the link)");
   }
@@ -105,11 +145,8 @@ void RemoveStaleTemporaries(const fs::path& final_path) {
   for (const auto& entry : fs::directory_iterator(folder, ec)) {
     const std::string name = entry.path().filename().string();
     const std::size_t tmp = name.rfind(".tmp.");
-    if (name.rfind(prefix, 0) != 0 || tmp == std::string::npos || tmp + 5 >= name.size()) continue;
-    const std::string digits = name.substr(tmp + 5);
-    if (digits.find_first_not_of("0123456789") != std::string::npos || digits.size() > 9) continue;
-    const long pid = std::atol(digits.c_str());
-    if (pid > 0 && pid != ::getpid() && ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) {
+    if (name.rfind(prefix, 0) != 0 || tmp == std::string::npos) continue;
+    if (LeftByGoneProcess(name.substr(tmp + 5))) {
       std::error_code ignored;
       fs::remove(entry.path(), ignored);
     }
@@ -164,21 +201,8 @@ void AtomicOutput::Commit() {
     if (std::find(folders.begin(), folders.end(), parent) == folders.end()) folders.push_back(parent);
   }
   std::sort(folders.begin(), folders.end());
-  std::vector<int> locks;
-  struct Closer {
-    std::vector<int>& fds;
-    ~Closer() {
-      for (int fd : fds) ::close(fd);
-    }
-  } closer{locks};
-  for (const std::string& folder : folders) {
-    const int fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-    if (fd < 0 || ::flock(fd, LOCK_EX) != 0) {
-      if (fd >= 0) ::close(fd);
-      throw InputError(folder, "", std::string("cannot lock the folder: ") + std::strerror(errno));
-    }
-    locks.push_back(fd);
-  }
+  FolderLocks locks;
+  for (const std::string& folder : folders) locks.fds.push_back(LockFolder(folder));
   for (const Entry& e : entries_) {
     if (std::rename(e.temp_path.c_str(), e.final_path.c_str()) != 0) {
       throw InputError(e.final_path, "", std::string("cannot rename into place: ") +
@@ -212,9 +236,7 @@ void RemoveStaleFolders(const fs::path& dir) {
   for (const auto& entry : fs::directory_iterator(dir, ec)) {
     const std::string name = entry.path().filename().string();
     for (const char* prefix : {kStagePrefix, kOldPrefix}) {
-      if (name.rfind(prefix, 0) != 0) continue;
-      const long pid = std::atol(name.c_str() + std::strlen(prefix));
-      if (pid > 0 && pid != ::getpid() && ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) {
+      if (name.rfind(prefix, 0) == 0 && LeftByGoneProcess(name.substr(std::strlen(prefix)))) {
         std::error_code ignored;
         fs::remove_all(entry.path(), ignored);
       }
@@ -230,14 +252,14 @@ OutputFolder::OutputFolder(const std::string& flag, const std::string& dir, std:
   // fails or is killed before that leaves nothing at all.
   std::error_code ec;
   if (dir_.empty()) throw InputError(flag_, "", "is empty");
-  if (fs::is_symlink(fs::symlink_status(dir_, ec)) && !fs::exists(dir_, ec)) {
+  if (IsLinkToNothing(dir_)) {
     throw InputError(flag_, "", "'" + dir_ + "' is a symbolic link to nothing (give the folder it should lead to, or "
                                 "remove the link)");
   }
   if (fs::exists(dir_, ec) && !fs::is_directory(dir_, ec)) {
     throw InputError(flag_, "", "'" + dir_ + "' exists and is not a folder");
   }
-  if (IsSystemPath(fs::absolute(dir_).lexically_normal()) || IsSystemPath(Resolved(dir_))) {
+  if (IsSystemPath(dir_)) {
     throw InputError(flag_, "", "cannot write into '" + dir_ + "': a device or system path (/dev, /proc, /sys)");
   }
   // The folder may be new, its parent must exist (as for every output file): a mistyped path
@@ -250,17 +272,15 @@ OutputFolder::OutputFolder(const std::string& flag, const std::string& dir, std:
   }
   // An owned name that holds something of another kind (a folder where cablecal writes a file)
   // is not a previous run's: it would be deleted at the commit.
-  for (const std::string& name : owned_) {
+  for (std::string& name : owned_) {
     const bool folder = !name.empty() && name.back() == '/';
-    const fs::path p = fs::path(dir_) / (folder ? name.substr(0, name.size() - 1) : name);
+    if (folder) name.pop_back();
+    const fs::path p = fs::path(dir_) / name;
     const fs::file_status st = fs::symlink_status(p, ec);
     if (fs::exists(st) && (folder ? !fs::is_directory(st) : !fs::is_regular_file(st))) {
       throw InputError(flag_, "", "'" + p.string() + "' is not a " + (folder ? "folder" : "file") +
                                       " of an earlier run: cablecal would replace it (move it away first)");
     }
-  }
-  for (std::string& name : owned_) {
-    if (!name.empty() && name.back() == '/') name.pop_back();
   }
   const fs::path existing = fs::exists(dir_, ec) ? fs::path(dir_) : parent;
   if (::access(existing.c_str(), W_OK | X_OK) != 0) {
@@ -334,17 +354,8 @@ void OutputFolder::WriteText(const std::string& relative, const std::string& con
 
 void OutputFolder::Commit() {
   EnsureStaging();  // a set with no file still replaces the previous one
-  // The lock serialises commits into this folder by concurrent runs; it is released when the
-  // descriptor closes, also if the process dies.
-  const int fd = ::open(dir_.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (fd < 0) throw InputError(flag_, "", "cannot open the folder '" + dir_ + "': " + std::strerror(errno));
-  struct Closer {
-    int fd;
-    ~Closer() { ::close(fd); }
-  } closer{fd};
-  if (::flock(fd, LOCK_EX) != 0) {
-    throw InputError(flag_, "", "cannot lock the folder '" + dir_ + "': " + std::strerror(errno));
-  }
+  FolderLocks lock;
+  lock.fds.push_back(LockFolder(dir_));
   const fs::path dir(dir_), aside = dir / (kOldPrefix + std::to_string(::getpid()));
   std::error_code ec;
   for (const auto& entry : fs::directory_iterator(staging_)) {

@@ -71,9 +71,10 @@ class OutputFolder {
   // `owned`: every top-level name the command may write into `dir` (also those it does not
   // write this time, such as figures, so that a previous run's do not stay beside the new
   // set); a trailing '/' marks a folder. An owned name that exists as the other kind (a
-  // folder where a file goes) is refused: it is not an earlier run's. Checks that `dir` is a folder, or that its parent is (throws InputError naming
-  // `flag` otherwise: a mistyped path is refused, not created); creates `dir` and the staging
-  // folder when the first file is written, and removes them if the run ends without a commit.
+  // folder where a file goes) is refused: it is not an earlier run's. Checks that `dir` is a
+  // folder, or that its parent is (throws InputError naming `flag` otherwise: a mistyped path
+  // is refused, not created); creates `dir` and the staging folder when the first file is
+  // written, and removes them if the run ends without a commit.
   OutputFolder(const std::string& flag, const std::string& dir, std::vector<std::string> owned);
   OutputFolder(const OutputFolder&) = delete;
   OutputFolder& operator=(const OutputFolder&) = delete;

@@ -1,7 +1,5 @@
 #include "common/format.h"
 
-#include <yaml-cpp/yaml.h>
-
 #include <algorithm>
 #include <cerrno>
 #include <charconv>
@@ -22,12 +20,6 @@ std::string FormatDouble(double value) {
   const std::size_t e = text.find('e');
   if (e != std::string::npos && text.find('.') == std::string::npos) text.insert(e, ".0");
   return text;
-}
-
-std::string YamlQuoted(const std::string& text) {
-  YAML::Emitter out;
-  out << YAML::DoubleQuoted << text;
-  return out.c_str();
 }
 
 std::string PrintableText(const std::string& text) {

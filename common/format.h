@@ -9,10 +9,6 @@ namespace cablecal {
 // With a '.' before any exponent ("1.0e-05"), so that YAML 1.1 readers see a float.
 std::string FormatDouble(double value);
 
-// A string as a double-quoted YAML scalar, escaped by yaml-cpp's emitter: any robot name, path
-// or message (": ", quotes, newlines) reads back as the same string.
-std::string YamlQuoted(const std::string& text);
-
 // `text` with control characters escaped (\n, \r, \t, \xNN), for a terminal or a one-line
 // heading: a file's bytes quoted in a message must not clear the screen or break a line.
 std::string PrintableText(const std::string& text);

@@ -251,18 +251,11 @@ ShareResult RunShare(const Robot& nominal, const MonteCarloOptions& o, const Des
     } catch (...) {
       // Not a failed trial (those are caught in RunTrial) but something that makes the
       // whole share suspect, such as running out of memory: stop and report it.
-      const std::exception_ptr error = std::current_exception();
-      std::string what = "unknown exception";
-      try {
-        std::rethrow_exception(error);
-      } catch (const std::exception& e) {
-        what = e.what();
-      } catch (...) {
-      }
 #pragma omp critical(cablecal_share_failure)
-      if (out.failure.empty()) {
-        out.failure = what;
-        out.error = error;
+      if (!out.error) {
+        out.error = std::current_exception();
+        const std::string what = OutcomeOf(out.error).message;  // the message main() would print
+        out.failure = what.empty() ? "unknown exception" : what;
       }
       stop = true;
       continue;

@@ -18,14 +18,14 @@ WorkspaceGrid ComputeWorkspaceGrid(const Robot& robot, double step_m) {
   if (!(step_m > 0.0) || !std::isfinite(step_m)) {
     throw InputError("--step", "", "must be a positive number of metres (got " + FormatDouble(step_m) + ")");
   }
-  // Guard against a step so small the grid would not fit in memory.
   // Fewer than 5 points a side says nothing about the workspace (one point, "area 0", was exit 0).
-  if (!(step_m <= 0.25 * std::min(robot.frame_width_m, robot.frame_height_m))) {
+  const double coarsest_step_m = 0.25 * std::min(robot.frame_width_m, robot.frame_height_m);
+  if (!(step_m <= coarsest_step_m)) {
     throw InputError("--step", "", FormatDouble(step_m) + " m leaves fewer than 5 grid points along a side of the " +
                                        FormatDouble(robot.frame_width_m) + " x " + FormatDouble(robot.frame_height_m) +
-                                       " m frame (at most " +
-                                       FormatDouble(0.25 * std::min(robot.frame_width_m, robot.frame_height_m)) + " m)");
+                                       " m frame (at most " + FormatDouble(coarsest_step_m) + " m)");
   }
+  // Guard against a step so small the grid would not fit in memory.
   const double nx_d = std::floor(robot.frame_width_m / step_m + 1e-9) + 1;
   const double nz_d = std::floor(robot.frame_height_m / step_m + 1e-9) + 1;
   if (nx_d * nz_d > kMaxGridPoints) {
