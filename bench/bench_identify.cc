@@ -1,8 +1,12 @@
 // Wall time of one identification (see bench/README.md for the figures and the command).
 // "Solve" is what the Monte Carlo runs (no covariance, no SVD report); "Full" is what
-// `cablecal identify` runs.
+// `cablecal identify` runs. The *Cables benchmarks take the 3- and 4-cable robot files
+// (robots/planar3_suspended.yaml, robots/planar4_fully_constrained.yaml) at n = 50.
 #include <benchmark/benchmark.h>
 
+#include <string>
+
+#include "common/error.h"
 #include "identify/experiment.h"
 #include "identify/identify.h"
 #include "workspace/workspace.h"
@@ -19,20 +23,63 @@ std::vector<Measurement> NoisyExperiment(int n) {
   return SimulateExperiment(nominal, truth, plan, SimulationOptions{}, noise).measurements;
 }
 
-void Run(benchmark::State& state, Estimator estimator, bool full) {
-  const int n = static_cast<int>(state.range(0));
-  const std::vector<Measurement> measurements = NoisyExperiment(n);
+// robots/<name>, found from this file's path (the source tree's bench/ folder).
+Robot RobotFile(const std::string& name) {
+  const std::string here = __FILE__;
+  return LoadRobotFile(here.substr(0, here.rfind("/bench/")) + "/robots/" + name);
+}
+
+const Robot& ManyCableRobot(int m) {
+  static const Robot planar3 = RobotFile("planar3_suspended.yaml");
+  static const Robot planar4 = RobotFile("planar4_fully_constrained.yaml");
+  return m == 3 ? planar3 : planar4;
+}
+
+// n poses of the m-cable robot's sampler that a true robot 1 mm off nominal holds (these small
+// platforms turn by tenths of a radian for 1 cm of geometry error, so that a larger one would
+// leave many poses slack), simulated with the sensors' noise.
+std::vector<Measurement> ManyCableExperiment(int m, int n) {
+  const Robot& nominal = ManyCableRobot(m);
+  Rng geometry(1);
+  const Robot truth = PerturbGeometry(nominal, 0.001, geometry);
+  std::vector<PlanPose> plan;
+  for (const PlanPose& p : SampleFeasiblePoses(nominal, 2 * n, 1000 + n)) {
+    Rng rng(0);
+    try {
+      SimulateExperiment(nominal, truth, {p}, SimulationOptions{}, rng);
+      plan.push_back(p);
+    } catch (const SolverFailure&) {
+      // not holdable by this true robot
+    }
+    if (static_cast<int>(plan.size()) == n) break;
+  }
+  Rng noise(2);
+  return SimulateExperiment(nominal, truth, plan, SimulationOptions{}, noise).measurements;
+}
+
+void Run(benchmark::State& state, const Robot& nominal, const std::vector<Measurement>& measurements,
+         Estimator estimator, bool full) {
   IdentifyOptions options;
   options.estimator = estimator;
   options.compute_covariance = full;
   options.compute_identifiability = full;
   int iterations = 0;
   for (auto _ : state) {
-    const IdentifyResult r = Identify(BuiltinRobot(), measurements, options);
+    const IdentifyResult r = Identify(nominal, measurements, options);
     if (!r.converged()) state.SkipWithError("identification did not converge");
     iterations = r.iterations;
   }
   state.counters["lm_iterations"] = iterations;
+  state.counters["poses"] = static_cast<double>(measurements.size());
+}
+
+void Run(benchmark::State& state, Estimator estimator, bool full) {
+  Run(state, BuiltinRobot(), NoisyExperiment(static_cast<int>(state.range(0))), estimator, full);
+}
+
+void RunCables(benchmark::State& state, Estimator estimator, bool full) {
+  const int m = static_cast<int>(state.range(0));
+  Run(state, ManyCableRobot(m), ManyCableExperiment(m, 50), estimator, full);
 }
 
 void BM_IdentifySolveMl(benchmark::State& s) { Run(s, Estimator::kMaximumLikelihood, false); }
@@ -41,6 +88,14 @@ void BM_IdentifyFullMl(benchmark::State& s) { Run(s, Estimator::kMaximumLikeliho
 BENCHMARK(BM_IdentifySolveMl)->Arg(6)->Arg(20)->Arg(50)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_IdentifySolvePaper)->Arg(6)->Arg(20)->Arg(50)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_IdentifyFullMl)->Arg(50)->Unit(benchmark::kMicrosecond);
+
+// Argument: the cable count (3: planar3_suspended, 4: planar4_fully_constrained), 50 poses.
+void BM_IdentifySolveMlCables(benchmark::State& s) { RunCables(s, Estimator::kMaximumLikelihood, false); }
+void BM_IdentifySolvePaperCables(benchmark::State& s) { RunCables(s, Estimator::kPaper, false); }
+void BM_IdentifyFullMlCables(benchmark::State& s) { RunCables(s, Estimator::kMaximumLikelihood, true); }
+BENCHMARK(BM_IdentifySolveMlCables)->Arg(3)->Arg(4)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_IdentifySolvePaperCables)->Arg(3)->Arg(4)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_IdentifyFullMlCables)->Arg(3)->Arg(4)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 

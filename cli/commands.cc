@@ -210,8 +210,9 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   std::printf("identified %s from %zu poses (%s, gauge %s): %d iterations, residual rms encoder %s m, laser %s m\n",
               PrintableText(nominal.name).c_str(), measurements.size(), ToString(id.estimator), ToString(id.gauge), result.iterations,
               FormatDouble(result.rms_encoder_m).c_str(), FormatDouble(result.rms_laser_m).c_str());
-  for (int k = 0; k < 6; ++k) {
-    std::printf("  %s = %.6f m", kGeometryNames[k], result.geometry(k));
+  const std::vector<std::string> names = GeometryNames(nominal.num_cables());
+  for (std::size_t k = 0; k < names.size(); ++k) {
+    std::printf("  %s = %.6f m", names[k].c_str(), result.geometry(k));
     if (result.has_covariance) std::printf("  (std %.3g mm)", 1e3 * result.geometry_std(k));
     std::printf("\n");
   }

@@ -21,6 +21,7 @@
 #include "design/objective.h"
 #include "design/robust.h"
 #include "identify/experiment.h"
+#include "model/cable.h"
 #include "model/statics.h"
 
 namespace cablecal {
@@ -68,12 +69,26 @@ namespace {
 // Stream ids under the user's seed: starts and the random reference sets never share draws.
 constexpr std::uint64_t kStartStream = 1;
 constexpr std::uint64_t kRandomSetStream = 2;
+constexpr std::uint64_t kRobustProbeStream = 3;  // EmptyRobustWorkspaceHint
 // Re-verification of Ipopt's poses with the model.
 constexpr double kEquilibriumTol_N = 1e-8;
 constexpr double kSameRootTol_rad = 1e-6;  // the model's equilibrium is Ipopt's, not another root
 // Widening of a pose's linearised robustness rows when it fails the scenario check.
 constexpr double kRobustEscalation = 1.3;
 constexpr int kRobustRounds = 4;
+// Feasible poses drawn per start pose for robots with 3 or more cables (RobustStart).
+constexpr int kStartPool = 10;
+// Random feasible poses probed for the hint when no start gives verified poses.
+constexpr int kRobustProbes = 200;
+
+// "a1z a2x a2z l10 l20": the names of geometric parameters from..3m - 1 (identify/experiment.h's
+// order), space-separated.
+std::string GeometryNameList(int m, int from) {
+  const std::vector<std::string> names = GeometryNames(m);
+  std::string list;
+  for (std::size_t k = from; k < names.size(); ++k) list += (list.empty() ? "" : " ") + names[k];
+  return list;
+}
 
 double Median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
@@ -87,15 +102,27 @@ std::vector<Eigen::Vector3d> PosesOf(const std::vector<PlanPose>& plan) {
   return q;
 }
 
-// Re-solves every pose's equilibrium at Ipopt's (x, z) with the model and checks it: the same
-// root, a residual below tolerance, every workspace bound held exactly, the spacing kept.
-// Returns "" when all hold, else the first failure.
+// Re-evaluates every pose of Ipopt's with the model and checks it. m = 2: the equilibrium
+// re-solved at Ipopt's (x, z) must be the same root, with a residual below tolerance. m >= 3:
+// the full pose is evaluated as it stands (EvaluatePose(robot, q)); its tension distribution
+// (unique for m = 3; for m >= 4 the minimum-norm one within bounds, which may differ from the
+// tensions Ipopt found) must balance gravity to the same tolerance and is what the plan
+// lists. Then every workspace bound held exactly, and the spacing kept. Returns "" when all
+// hold, else the first failure.
 std::string VerifyPoses(const Robot& robot, const DesignOptions& options, const std::vector<Eigen::Vector3d>& ipopt_poses,
                         const Eigen::VectorXd& l0, std::vector<PlanPose>* verified) {
   verified->clear();
   for (std::size_t j = 0; j < ipopt_poses.size(); ++j) {
     const Eigen::Vector3d& q = ipopt_poses[j];
     const std::string pose = "pose " + std::to_string(j + 1) + ": ";
+    if (robot.theta_is_free()) {
+      const PoseEvaluation e = EvaluatePose(robot, q);
+      if (!e.has_equilibrium) return pose + "no tension distribution holds Ipopt's pose (" + ToString(e.feasibility) + ")";
+      if (!(e.equilibrium.residual_N < kEquilibriumTol_N)) return pose + "equilibrium residual too large";
+      if (!e.feasible()) return pose + ToString(e.feasibility);
+      verified->push_back(MakePlanPose(robot, e.equilibrium, l0));
+      continue;
+    }
     const EquilibriumResult eq = SolveEquilibrium(robot, q(0), q(1));
     if (eq.status != EquilibriumStatus::kFound) return pose + "no stable equilibrium at Ipopt's position";
     if (std::abs(eq.equilibrium.q(2) - q(2)) > kSameRootTol_rad) return pose + "Ipopt's theta is not the model's equilibrium";
@@ -116,45 +143,55 @@ std::string VerifyPoses(const Robot& robot, const DesignOptions& options, const 
 }
 
 // The robustness the NLP enforced to first order (robust.h), checked with the full model: for
-// each geometry parameter moved by +-k sigma alone (12 true robots), the commanded lengths of
-// every pose must be held -- the forward model converges to a taut, stable equilibrium near
-// the commanded pose that passes every workspace test of the true robot. Fills each pose's
-// linearised worst-case tensions. Returns "" when all hold, else the first failure.
-// `failing`, if given, receives every pose that fails some scenario.
+// each geometry parameter moved by +-k sigma alone (6m true robots), the commanded lengths of
+// every pose must be held -- the forward model converges to a taut equilibrium (stable, for
+// m = 2) near the commanded pose that passes every workspace test of the true robot (for
+// m >= 4: the least-squares pose of the lengths, where the true robot's tension distribution,
+// minimum-norm within bounds, must exist). Fills each pose's worst-case tensions: for m <= 3 the
+// linearised worst case over the ellipsoid, t -+ k sigma |dt/dg|; for m >= 4, where the
+// tensions are the controller's choice, the range of the model's distribution over the nominal
+// and the scenario robots (it contains the plan's tensions, and lies within bounds whenever the
+// check passes). Returns "" when all hold, else the first failure. `failing`, if given,
+// receives every pose that fails some scenario.
 std::string VerifyRobustness(const Robot& robot, const DesignOptions& options, std::vector<PlanPose>* plan,
                              std::vector<bool>* failing = nullptr) {
   const double k_sigma = options.robust_sigmas * options.geometry_sigma_m;
   const std::vector<Eigen::Vector2d> points = internal::FramePoints(robot);
   const int m = robot.num_cables();
+  const bool linearised_tensions = m <= 3;
   for (std::size_t j = 0; j < plan->size(); ++j) {
     PlanPose& pose = (*plan)[j];
-    Eigen::Matrix<double, 5, 1> y;
+    Eigen::VectorXd y(internal::PoseVariables(m));
     y << pose.q, pose.tensions_N;
     internal::PoseRobustness at;
     if (!internal::RobustQuantities(robot, points, y, &at)) {
-      return "pose " + std::to_string(j + 1) + ": the equilibrium is singular (a fold of the statics)";
+      return "pose " + std::to_string(j + 1) + (robot.theta_is_free()
+                                                    ? ": a singular configuration (the cable lengths do not fix the pose)"
+                                                    : ": the equilibrium is singular (a fold of the statics)");
     }
-    pose.tensions_worst_min_N.resize(m);
-    pose.tensions_worst_max_N.resize(m);
-    for (int i = 0; i < m; ++i) {
-      pose.tensions_worst_min_N(i) = at.value[i] - k_sigma * at.spread[i];
-      pose.tensions_worst_max_N(i) = at.value[i] + k_sigma * at.spread[i];
+    pose.tensions_worst_min_N = pose.tensions_N;
+    pose.tensions_worst_max_N = pose.tensions_N;
+    if (linearised_tensions) {
+      for (int i = 0; i < m; ++i) {
+        pose.tensions_worst_min_N(i) = at.value[i] - k_sigma * at.spread[i];
+        pose.tensions_worst_max_N(i) = at.value[i] + k_sigma * at.spread[i];
+      }
     }
   }
   if (k_sigma == 0.0) return "";
   if (failing) failing->assign(plan->size(), false);
   std::string first;
   const GeometryVector nominal = GeometryOf(robot);
-  for (int k = 0; k < GeometryVector::RowsAtCompileTime; ++k) {
+  const std::vector<std::string> names = GeometryNames(m);
+  for (int k = 0; k < nominal.size(); ++k) {
     for (const double sign : {-1.0, 1.0}) {
       GeometryVector g = nominal;
       g(k) += sign * k_sigma;
       const Robot truth = WithGeometry(robot, g);
-      const std::string scenario = std::string(kGeometryNames[k]) + (sign > 0 ? " +" : " -") +
-                                   FormatDouble(options.robust_sigmas) + " sigma";
+      const std::string scenario = names[k] + (sign > 0 ? " +" : " -") + FormatDouble(options.robust_sigmas) + " sigma";
       for (std::size_t j = 0; j < plan->size(); ++j) {
         if (failing && (*failing)[j]) continue;
-        const PlanPose& pose = (*plan)[j];
+        PlanPose& pose = (*plan)[j];
         const Eigen::VectorXd lengths = pose.length_change_m + g.tail(m);
         const ForwardResult f = SolveForwardGeometricoStatic(truth, lengths, &pose.q);
         const std::string where = "pose " + std::to_string(j + 1) + " on a true robot with " + scenario + ": ";
@@ -167,7 +204,13 @@ std::string VerifyRobustness(const Robot& robot, const DesignOptions& options, s
           const Feasibility feas = CheckFeasibility(truth, f.equilibrium.q, f.equilibrium.tensions_N);
           if (feas != Feasibility::kFeasible) why = ToString(feas);
         }
-        if (why.empty()) continue;
+        if (why.empty()) {
+          if (!linearised_tensions) {
+            pose.tensions_worst_min_N = pose.tensions_worst_min_N.cwiseMin(f.equilibrium.tensions_N);
+            pose.tensions_worst_max_N = pose.tensions_worst_max_N.cwiseMax(f.equilibrium.tensions_N);
+          }
+          continue;
+        }
         if (first.empty()) first = where + why;
         if (!failing) return first;
         (*failing)[j] = true;
@@ -177,14 +220,102 @@ std::string VerifyRobustness(const Robot& robot, const DesignOptions& options, s
   return first;
 }
 
+// How far pose p breaks the NLP's linearised robustness rows (robust.h) at half-width k_sigma:
+// the largest excess of c -+ k sigma |dc/dg| over c's bounds, relative to each bound's scale
+// (tensions in weights, the rest in m or rad); <= 0 where every row holds, +inf at a singular
+// pose. For m >= 4, p's tensions first become the vector nearest the middle of the tension
+// range that balances it, if within bounds (the rows on the tensions then have their largest
+// margins), else they stay the model's distribution.
+double RobustViolation(const Robot& robot, double k_sigma, const std::vector<Eigen::Vector2d>& points,
+                       const std::vector<internal::PoseQuantity>& quantities, PlanPose* p) {
+  const int m = robot.num_cables();
+  if (m >= 4) {
+    // Nearest to the middle c among W t + w_g = 0: t = c - W^+ (W c + w_g).
+    const Eigen::VectorXd middle = Eigen::VectorXd::Constant(m, 0.5 * (robot.tension_min_N + robot.tension_max_N));
+    const Eigen::MatrixXd W = WrenchMatrix<double>(robot, Pose<double>(p->q));
+    const Eigen::Vector3d imbalance = W * middle + GravityWrench<double>(robot, Pose<double>(p->q));
+    const Eigen::VectorXd t = middle - W.transpose() * (W * W.transpose()).ldlt().solve(imbalance);
+    if (t.allFinite() && t.minCoeff() >= robot.tension_min_N && t.maxCoeff() <= robot.tension_max_N) p->tensions_N = t;
+  }
+  Eigen::VectorXd y(internal::PoseVariables(m));
+  y << p->q, p->tensions_N;
+  internal::PoseRobustness at;
+  if (!internal::RobustQuantities(robot, points, y, &at)) return std::numeric_limits<double>::infinity();
+  const double weight_N = robot.platform_mass_kg * robot.gravity_mps2;
+  double violation = -std::numeric_limits<double>::infinity();
+  for (std::size_t c = 0; c < quantities.size(); ++c) {
+    const double scale = static_cast<int>(c) < m ? weight_N : 1.0;
+    const double below = quantities[c].lo - (at.value[c] - k_sigma * at.spread[c]);
+    const double above = at.value[c] + k_sigma * at.spread[c] - quantities[c].hi;
+    violation = std::max(violation, std::max(below, above) / scale);
+  }
+  return violation;
+}
+
+// A start for a robot with m >= 3 cables. With rigid cables the lengths fix the pose, so a
+// centimetre of geometry error moves and turns the platform far more than with 2 cables, and
+// the robust part of the feasible workspace (where the NLP's rows hold) is often a small part
+// of it: Ipopt started from uniform feasible poses then mostly ends infeasible. So each of the
+// n start poses is the one, of kStartPool feasible poses drawn in turn from the start's stream,
+// whose rows are violated least (RobustViolation; ties in draw order): the poses stay
+// independent draws, spread over the robust part where it is not too small, instead of
+// clustering where the rows hold best. Without robustness it is the sampler's first n.
+std::vector<PlanPose> RobustStart(const Robot& robot, const DesignOptions& options, int n, std::uint64_t stream) {
+  const double k_sigma = options.robust_sigmas * options.geometry_sigma_m;
+  if (k_sigma == 0.0) return SampleFeasiblePoses(robot, n, stream);
+  std::vector<PlanPose> pool = SampleFeasiblePoses(robot, kStartPool * n, stream);
+  const std::vector<Eigen::Vector2d> points = internal::FramePoints(robot);
+  const std::vector<internal::PoseQuantity> quantities = internal::PoseQuantities(robot);
+  std::vector<double> violation(pool.size());
+  for (std::size_t j = 0; j < pool.size(); ++j) violation[j] = RobustViolation(robot, k_sigma, points, quantities, &pool[j]);
+  std::vector<PlanPose> start;
+  for (int j = 0; j < n; ++j) {
+    const auto first = violation.begin() + static_cast<long>(j) * kStartPool;
+    start.push_back(pool[std::min_element(first, first + kStartPool) - violation.begin()]);
+  }
+  return start;
+}
+
+// When no start gives verified poses with robustness on: whether the robust workspace looks
+// empty, i.e. none of kRobustProbes random feasible poses keeps every linearised robustness
+// row. Returns the hint for the message, or "".
+std::string EmptyRobustWorkspaceHint(const Robot& robot, const DesignOptions& options) {
+  const double k_sigma = options.robust_sigmas * options.geometry_sigma_m;
+  if (k_sigma == 0.0) return "";
+  std::vector<PlanPose> probes;
+  try {
+    probes = SampleFeasiblePoses(robot, kRobustProbes, StreamSeed(options.seed, {kRobustProbeStream}));
+  } catch (const SolverFailure&) {
+    return "";
+  }
+  const std::vector<Eigen::Vector2d> points = internal::FramePoints(robot);
+  const std::vector<internal::PoseQuantity> quantities = internal::PoseQuantities(robot);
+  for (PlanPose& p : probes) {
+    if (RobustViolation(robot, k_sigma, points, quantities, &p) <= 0.0) return "";
+  }
+  return ". None of " + std::to_string(kRobustProbes) + " random feasible poses of " + robot.name +
+         " stays within every bound, to first order, for true exit points and initial lengths within " +
+         FormatDouble(options.robust_sigmas) + " x " + FormatDouble(options.geometry_sigma_m) +
+         " m of nominal: its robust workspace looks empty (README, \"Experiment design\"); a smaller "
+         "--geometry-sigma (a better-known geometry) or --robust-sigmas may leave room";
+}
+
 }  // namespace
+
+int MinDesignPoses(int num_cables) {
+  const int m = num_cables;
+  return (3 * m - 1 + (m - 2)) / (m - 1);  // ceil((3m - 1) / (m - 1))
+}
 
 DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
   const int n = options.poses;
-  if (n < 5) {
-    throw InputError("--poses", "", "at least 5 poses are needed to identify the 5 gauge-fixed geometric parameters "
-                                    "and the per-pose unknowns (got " + std::to_string(n) + ")");
+  const int m = robot.num_cables();
+  if (n < MinDesignPoses(m)) {
+    throw InputError("--poses", "", "at least " + std::to_string(MinDesignPoses(m)) + " poses are needed to identify the " +
+                                        std::to_string(3 * m - 1) +
+                                        " gauge-fixed geometric parameters and the per-pose unknowns (got " +
+                                        std::to_string(n) + ")");
   }
   if (n > 500) throw InputError("--poses", "", "at most 500 poses (got " + std::to_string(n) + ")");
   if (options.starts < 1) throw InputError("--starts", "", "must be at least 1");
@@ -203,6 +334,10 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
     throw InputError("--prior", "", "the condition-number criterion cannot count an earlier identification's "
                                     "information: use --criterion a, d or e");
   }
+  if (options.prior_information) {
+    CABLECAL_CHECK(options.prior_information->rows() == 3 * m - 1 && options.prior_information->cols() == 3 * m - 1,
+                   "the prior information is (3m - 1) x (3m - 1) for the robot's m cables");
+  }
   const PriorInformation* prior = options.prior_information ? &*options.prior_information : nullptr;
   const Eigen::VectorXd l0 = InitialLengths(robot);
   const int K = options.starts;
@@ -212,7 +347,8 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
   std::vector<std::string> start_errors(K);
   ParallelFor(K, 1, [&](long k) {
     try {
-      starts[k] = SampleFeasiblePoses(robot, n, StreamSeed(options.seed, {kStartStream, static_cast<std::uint64_t>(k)}));
+      const std::uint64_t stream = StreamSeed(options.seed, {kStartStream, static_cast<std::uint64_t>(k)});
+      starts[k] = robot.theta_is_free() ? RobustStart(robot, options, n, stream) : SampleFeasiblePoses(robot, n, stream);
     } catch (const SolverFailure& e) {
       start_errors[k] = e.what();
     }
@@ -264,11 +400,16 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
         widest[k] = std::max(widest[k], widening[j]);
       }
       from = verified[k];  // warm start: Ipopt's poses with their tensions
+      if (m >= 4) {
+        // The plan lists the model's distribution; Ipopt continues from its own (certified) one.
+        for (int j = 0; j < n; ++j) from[j].tensions_N = outcome.tensions_N[j];
+      }
     }
   });
 
   if (options.interrupted && options.interrupted->load()) throw Interrupted();
   DesignResult result;
+  result.num_cables = m;
   double best = std::numeric_limits<double>::infinity();
   for (int k = 0; k < K; ++k) {
     StartReport report;
@@ -298,7 +439,8 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
       statuses += (statuses.empty() ? "" : ", ") + r.ipopt_status +
                   (r.converged && !r.verified ? " (re-verification failed: " + r.verification_failure + ")" : "");
     }
-    throw SolverFailure("none of the " + std::to_string(K) + " starts gave verified poses: " + statuses);
+    throw SolverFailure("none of the " + std::to_string(K) + " starts gave verified poses: " + statuses +
+                        EmptyRobustWorkspaceHint(robot, options));
   }
   result.poses = verified[result.best_start];
   result.criteria = EvaluateCriteria(robot, PosesOf(result.poses), prior);
@@ -321,7 +463,7 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
     a.push_back(v.a_trace_covariance_m2);
     e.push_back(v.e_min_eigenvalue);
   }
-  result.random_median = {Median(c), Median(d), Median(a), Median(e)};
+  result.random_median = {Median(c), Median(d), Median(a), Median(e), 3 * m - 1};
   result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;
 }
@@ -341,10 +483,20 @@ DesignPrior LoadDesignPrior(const Robot& nominal, const std::string& path) {
   if (root["status"].as<std::string>("") != "converged") {
     throw InputError(path, "status", "the identification did not converge: it cannot be a prior");
   }
-  GeometryVector g, sd;
-  for (int k = 0; k < 6; ++k) {
-    const YAML::Node p = root["parameters"][kGeometryNames[k]];
-    const std::string key = std::string("parameters.") + kGeometryNames[k];
+  const int m = nominal.num_cables();
+  const int np = 3 * m;  // a1x a1z .. amx amz l10 .. lm0
+  if (!root["parameters"].IsMap() || static_cast<int>(root["parameters"].size()) != np) {
+    throw InputError(path, "parameters", "needs the " + std::to_string(np) + " geometric parameters of " + nominal.name +
+                                             "'s " + std::to_string(m) + " cables (" + GeometryNameList(m, 0) +
+                                             "): a result for another robot?");
+  }
+  const std::vector<std::string> names = GeometryNames(m);
+  GeometryVector g(np);
+  Eigen::VectorXd sd(np);
+  for (int k = 0; k < np; ++k) {
+    const std::string& name = names[k];
+    const YAML::Node p = root["parameters"][name];
+    const std::string key = "parameters." + name;
     if (!p || !p["value"]) throw InputError(path, key, "missing");
     g(k) = p["value"].as<double>(NAN);
     sd(k) = p["std"] ? p["std"].as<double>(NAN) : (k == 0 ? 0.0 : NAN);
@@ -353,21 +505,23 @@ DesignPrior LoadDesignPrior(const Robot& nominal, const std::string& path) {
       throw InputError(path, key + ".std", "needs a positive standard deviation (identify computes it by default)");
     }
   }
+  const std::string matrix = "needs the " + std::to_string(np) + " x " + std::to_string(np) + " matrix";
   const YAML::Node corr = root["correlation"];
-  if (!corr || !corr.IsSequence() || corr.size() != 6) throw InputError(path, "correlation", "needs the 6 x 6 matrix");
-  Eigen::Matrix<double, 6, 6> C;
-  for (int a = 0; a < 6; ++a) {
-    if (!corr[a].IsSequence() || corr[a].size() != 6) throw InputError(path, "correlation", "needs the 6 x 6 matrix");
-    for (int b = 0; b < 6; ++b) C(a, b) = corr[a][b].as<double>(NAN);
+  if (!corr || !corr.IsSequence() || static_cast<int>(corr.size()) != np) throw InputError(path, "correlation", matrix);
+  Eigen::MatrixXd C(np, np);
+  for (int a = 0; a < np; ++a) {
+    if (!corr[a].IsSequence() || static_cast<int>(corr[a].size()) != np) throw InputError(path, "correlation", matrix);
+    for (int b = 0; b < np; ++b) C(a, b) = corr[a][b].as<double>(NAN);
   }
-  // Covariance of a1z a2x a2z l10 l20 (a1x is the gauge or a tracked exit point).
-  PriorInformation cov;
-  for (int a = 0; a < 5; ++a) {
-    for (int b = 0; b < 5; ++b) cov(a, b) = C(a + 1, b + 1) * sd(a + 1) * sd(b + 1);
+  // Covariance of every parameter but a1x (the gauge or a tracked exit point).
+  const int nr = np - 1;
+  Eigen::MatrixXd cov(nr, nr);
+  for (int a = 0; a < nr; ++a) {
+    for (int b = 0; b < nr; ++b) cov(a, b) = C(a + 1, b + 1) * sd(a + 1) * sd(b + 1);
   }
-  Eigen::SelfAdjointEigenSolver<PriorInformation> eig(0.5 * (cov + cov.transpose()));
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(0.5 * (cov + cov.transpose()));
   if (!cov.allFinite() || !(eig.eigenvalues()(0) > 0.0)) {
-    throw InputError(path, "correlation", "the covariance of a1z a2x a2z l10 l20 is not positive definite");
+    throw InputError(path, "correlation", "the covariance of " + GeometryNameList(m, 1) + " is not positive definite");
   }
   DesignPrior prior;
   prior.robot = WithGeometry(nominal, g);
@@ -376,6 +530,7 @@ DesignPrior LoadDesignPrior(const Robot& nominal, const std::string& path) {
 }
 
 std::string DesignSummaryYaml(const DesignResult& r, const DesignOptions& options, const std::string& command_line) {
+  const int m = r.num_cables;
   using YAML::BeginMap;
   using YAML::EndMap;
   using YAML::Flow;
@@ -390,7 +545,7 @@ std::string DesignSummaryYaml(const DesignResult& r, const DesignOptions& option
   };
   o << YAML::Comment(
            "cablecal design summary (README, \"Experiment design\"). Criteria of the returned set are\n"
-           "recomputed from its verified poses. S: information of a1z a2x a2z l10 l20 (1/m^2).")
+           "recomputed from its verified poses. S: information of " + GeometryNameList(m, 1) + " (1/m^2).")
     << BeginMap;
   o << Key << "cablecal" << Value << Flow << BeginMap << Key << "version" << Value << YamlString{Version()} << Key
     << "commit" << Value << YamlString{GitCommit()} << EndMap;
@@ -433,7 +588,7 @@ std::string DesignSummaryYaml(const DesignResult& r, const DesignOptions& option
   o << YAML::EndSeq;
   o << Key << "robustness" << Value << Flow << BeginMap << Key << "geometry_sigma_m" << Value
     << YamlNumber{options.geometry_sigma_m} << Key << "robust_sigmas" << Value << YamlNumber{options.robust_sigmas}
-    << Key << "scenarios" << Value << YamlString{std::string("each of a1x a1z a2x a2z l10 l20 moved by +-k sigma alone")}
+    << Key << "scenarios" << Value << YamlString{"each of " + GeometryNameList(m, 0) + " moved by +-k sigma alone"}
     << EndMap;
   o << Key << "poses_worst_case_tensions_N" << Value
     << YAML::Comment("linearised over the geometry uncertainty, per cable [min, max]") << YAML::BeginSeq;

@@ -5,11 +5,12 @@
 // Criteria (README, "Experiment design"):
 //   condition  the condition number of the gauge-fixed length Jacobian: residuals
 //              r_ij = l_i(pose_j; a_i) - (dl_ij + l_i0) in m (the paper's Eq. 6 without
-//              squares) by the unknowns a1z a2x a2z l10 l20 x1..xn, at the nominal robot,
-//              unscaled. Minimised as log(kappa): the same optimum, a better-scaled function.
-//   d, a, e    D-, A-, E-optimality of the information S of the geometric parameters
+//              squares) by the unknowns a1z a2x a2z .. amz l10 .. lm0 x1..xn, at the nominal
+//              robot, unscaled. Minimised as log(kappa): the same optimum, a better-scaled function.
+//   d, a, e    D-, A-, E-optimality of the information S of the 3m - 1 geometric parameters
 //              (a1x held) once every pose's own unknowns (x, z, theta) are eliminated,
 //              with the maximum-likelihood estimator's sensor sigmas.
+// Every pose's decision variables are (x, z, theta, t1..tm), for any m = 2..8 cables.
 // Depends on identify/ (the Jacobian rows), workspace/ (sampler, pose plans), model/.
 #pragma once
 
@@ -34,28 +35,31 @@ struct CriteriaValues {
   double d_log_det_information = 0.0;  // log det S, S in 1/m^2 (higher is better)
   double a_trace_covariance_m2 = 0.0;  // trace S^-1 (lower is better)
   double e_min_eigenvalue = 0.0;       // smallest eigenvalue of S, 1/m^2 (higher is better)
+  int information_size = 0;            // S is square of this size, 3m - 1 (set by EvaluateCriteria)
 };
 
-// Information of a1z a2x a2z l10 l20 (1/m^2) already gathered by an earlier identification.
-using PriorInformation = Eigen::Matrix<double, 5, 5>;
+// Information of the 3m - 1 gauge-fixed geometric parameters a1z a2x a2z ... amz l10 ... lm0
+// (1/m^2, square of that size) already gathered by an earlier identification.
+using PriorInformation = Eigen::MatrixXd;
 
-// Poses as (x, z, theta) equilibria; fewer than 5 poses cannot identify the geometry (the
-// criteria are then infinite or zero, as appropriate). With `prior`, D, A and E count it too.
+// Poses as (x, z, theta) equilibria; fewer than MinDesignPoses(m) poses cannot identify the
+// geometry (the criteria are then infinite or zero, as appropriate). With `prior`, D, A and E count it too.
 CriteriaValues EvaluateCriteria(const Robot& robot, const std::vector<Eigen::Vector3d>& poses,
                                 const PriorInformation* prior = nullptr);
 
 // Calibrating in rounds (design --prior): an identification's result.yaml (status converged,
 // with standard deviations) as the nominal robot for the next round -- `robot` with the
-// estimated exit points and initial lengths -- and the information of a1z a2x a2z l10 l20,
-// the inverse of their estimated covariance. InputError naming the file and key otherwise.
+// estimated exit points and initial lengths -- and the information of every geometric
+// parameter but a1x (a1z a2x a2z .. l10 .. lm0), the inverse of their estimated covariance.
+// InputError naming the file and key otherwise (also for a result with another cable count).
 struct DesignPrior {
   Robot robot;
-  PriorInformation information = PriorInformation::Zero();
+  PriorInformation information;  // (3m - 1) x (3m - 1)
 };
 DesignPrior LoadDesignPrior(const Robot& nominal, const std::string& result_yaml_path);
 
 // How much better `set` is than `reference` on criterion c, as a factor (> 1: better):
-// kappa_ref / kappa; (det S / det S_ref)^(1/5) (per-eigenvalue geometric mean);
+// kappa_ref / kappa; (det S / det S_ref)^(1/(3m - 1)) (per-eigenvalue geometric mean);
 // trace_ref / trace; lambda_min / lambda_min_ref.
 double Improvement(Criterion c, const CriteriaValues& set, const CriteriaValues& reference);
 
@@ -85,8 +89,10 @@ struct DesignOptions {
   const std::atomic<bool>* interrupted = nullptr;
   // Information already gathered (design --prior), counted by the D, A and E criteria.
   std::optional<PriorInformation> prior_information;
-  // Testing aids: run Ipopt's derivative checker and keep its journal in this file.
+  // Testing aids: run Ipopt's derivative checker (forward differences with this relative
+  // perturbation) and keep its journal in this file.
   bool derivative_test = false;
+  double derivative_test_perturbation = 1e-6;
   std::string ipopt_journal_path;
 };
 
@@ -103,7 +109,9 @@ struct StartReport {
 };
 
 struct DesignResult {
-  std::vector<PlanPose> poses;     // verified equilibria of the best start
+  int num_cables = 0;              // the robot's m
+  std::vector<PlanPose> poses;     // verified equilibria of the best start; for m >= 4 with the
+                                   // model's tension distribution (robust.h)
   CriteriaValues criteria;         // recomputed from `poses`, not copied from Ipopt
   CriteriaValues random_median;    // per criterion, over options.random_sets random sets
   int best_start = -1;
@@ -111,6 +119,11 @@ struct DesignResult {
   std::vector<StartReport> starts;
   double wall_time_s = 0.0;
 };
+
+// The fewest poses that can identify a robot with m cables: each pose adds m encoder, a laser
+// and an inclinometer reading against its own 3 unknowns, m - 1 equations net, for the 3m - 1
+// gauge-fixed geometric parameters: ceil((3m - 1) / (m - 1)) (5 for m = 2, 4 for m = 3..8).
+int MinDesignPoses(int num_cables);
 
 // Throws InputError for bad options (too few poses, spacing that cannot fit) and
 // SolverFailure when no start converges to verified poses.

@@ -16,7 +16,9 @@ namespace {
 using Ipopt::Index;
 using Ipopt::Number;
 
-// Variables: per pose j, [x, z, theta, t1, t2] at 5 j.
+// Variables: per pose j, [x, z, theta, t1..tm] at V j, V = 3 + m (for every m theta is a variable:
+// with m = 2 the equilibrium rows tie it to (x, z), with m >= 3 it is free within the band the
+// tension bounds leave).
 // Constraints: per pose j, 3 equilibrium rows (W t + w_g = 0), then one row per bound of every
 // pose quantity (robust.h): c - k sigma |dc/dg| >= lo and c + k sigma |dc/dg| <= hi, with
 // sigma = --geometry-sigma (0: the nominal bounds); then one row per pair of poses for the
@@ -26,7 +28,7 @@ class DesignNlp : public Ipopt::TNLP {
   DesignNlp(const Robot& robot, const DesignOptions& options, const std::vector<PlanPose>& start, double power,
             const std::vector<double>* widening)
       : robot_(robot), options_(options), start_(start), n_(static_cast<int>(start.size())), power_(power),
-        points_(FramePoints(robot)), quantities_(PoseQuantities(robot)),
+        V(PoseVariables(robot.num_cables())), points_(FramePoints(robot)), quantities_(PoseQuantities(robot)),
         k_sigma_m_(options.robust_sigmas * options.geometry_sigma_m),
         widening_(widening ? *widening : std::vector<double>(start.size(), 1.0)) {
     for (int k = 0; k < static_cast<int>(quantities_.size()); ++k) {
@@ -41,9 +43,9 @@ class DesignNlp : public Ipopt::TNLP {
   }
 
   bool get_nlp_info(Index& n, Index& m, Index& nnz_jac_g, Index& nnz_h_lag, IndexStyleEnum& index_style) override {
-    n = 5 * n_;
+    n = V * n_;
     m = R * n_ + NumPairs();
-    nnz_jac_g = n_ * R * 5 + NumPairs() * 4;
+    nnz_jac_g = n_ * R * V + NumPairs() * 4;
     nnz_h_lag = 0;  // limited-memory Hessian
     index_style = C_STYLE;
     return true;
@@ -55,15 +57,15 @@ class DesignNlp : public Ipopt::TNLP {
     const double x_hi = robot_.frame_width_m - robot_.margin_m - kBoundMargin_m;
     const double z_hi = std::min(robot_.frame_height_m - robot_.margin_m, robot_.laser_range_m) - kBoundMargin_m;
     for (int j = 0; j < n_; ++j) {
-      x_l[5 * j] = lo;
-      x_u[5 * j] = x_hi;
-      x_l[5 * j + 1] = lo;
-      x_u[5 * j + 1] = z_hi;
-      x_l[5 * j + 2] = -robot_.theta_max_rad + kBoundMargin_rad;
-      x_u[5 * j + 2] = robot_.theta_max_rad - kBoundMargin_rad;
-      for (int i = 0; i < 2; ++i) {
-        x_l[5 * j + 3 + i] = robot_.tension_min_N + kBoundMargin_N;
-        x_u[5 * j + 3 + i] = robot_.tension_max_N - kBoundMargin_N;
+      x_l[V * j] = lo;
+      x_u[V * j] = x_hi;
+      x_l[V * j + 1] = lo;
+      x_u[V * j + 1] = z_hi;
+      x_l[V * j + 2] = -robot_.theta_max_rad + kBoundMargin_rad;
+      x_u[V * j + 2] = robot_.theta_max_rad - kBoundMargin_rad;
+      for (int i = 0; i < robot_.num_cables(); ++i) {
+        x_l[V * j + 3 + i] = robot_.tension_min_N + kBoundMargin_N;
+        x_u[V * j + 3 + i] = robot_.tension_max_N - kBoundMargin_N;
       }
       for (int r = 0; r < 3; ++r) g_l[R * j + r] = g_u[R * j + r] = 0.0;
       for (int r = 0; r < static_cast<int>(rows_.size()); ++r) {
@@ -93,8 +95,8 @@ class DesignNlp : public Ipopt::TNLP {
                           Number*) override {
     if (!init_x || init_z || init_lambda) return false;
     for (int j = 0; j < n_; ++j) {
-      for (int k = 0; k < 3; ++k) x[5 * j + k] = start_[j].q(k);
-      for (int i = 0; i < 2; ++i) x[5 * j + 3 + i] = start_[j].tensions_N(i);
+      for (int k = 0; k < 3; ++k) x[V * j + k] = start_[j].q(k);
+      for (int i = 0; i < robot_.num_cables(); ++i) x[V * j + 3 + i] = start_[j].tensions_N(i);
     }
     (void)n;
     return true;
@@ -110,19 +112,19 @@ class DesignNlp : public Ipopt::TNLP {
     if (!std::isfinite(Objective(x, &g))) return false;
     std::fill(grad_f, grad_f + n, 0.0);
     for (int j = 0; j < n_; ++j) {
-      for (int k = 0; k < 3; ++k) grad_f[5 * j + k] = g(3 * j + k);
+      for (int k = 0; k < 3; ++k) grad_f[V * j + k] = g(3 * j + k);
     }
     return true;
   }
 
   bool eval_g(Index, const Number* x, bool, Index, Number* g) override {
     for (int j = 0; j < n_; ++j) {
-      if (!PoseRows(x + 5 * j, k_sigma_m_ * widening_[j], g + R * j, nullptr)) return false;
+      if (!PoseRows(x + V * j, k_sigma_m_ * widening_[j], g + R * j, nullptr)) return false;
     }
     int k = 0;
     for (int a = 0; a < n_; ++a) {
       for (int b = a + 1; b < n_ && NumPairs() > 0; ++b, ++k) {
-        const double dx = x[5 * a] - x[5 * b], dz = x[5 * a + 1] - x[5 * b + 1];
+        const double dx = x[V * a] - x[V * b], dz = x[V * a + 1] - x[V * b + 1];
         g[R * n_ + k] = dx * dx + dz * dz;
       }
     }
@@ -134,16 +136,16 @@ class DesignNlp : public Ipopt::TNLP {
     if (values == nullptr) {
       for (int j = 0; j < n_; ++j) {
         for (int r = 0; r < R; ++r) {
-          for (int c = 0; c < 5; ++c, ++e) {
+          for (int c = 0; c < V; ++c, ++e) {
             iRow[e] = R * j + r;
-            jCol[e] = 5 * j + c;
+            jCol[e] = V * j + c;
           }
         }
       }
       int k = 0;
       for (int a = 0; a < n_; ++a) {
         for (int b = a + 1; b < n_ && NumPairs() > 0; ++b, ++k) {
-          const int cols[4] = {5 * a, 5 * a + 1, 5 * b, 5 * b + 1};
+          const int cols[4] = {V * a, V * a + 1, V * b, V * b + 1};
           for (int c : cols) {
             iRow[e] = R * n_ + k;
             jCol[e++] = c;
@@ -154,12 +156,12 @@ class DesignNlp : public Ipopt::TNLP {
     }
     std::vector<double> unused(R);
     for (int j = 0; j < n_; ++j) {
-      if (!PoseRows(x + 5 * j, k_sigma_m_ * widening_[j], unused.data(), values + e)) return false;
-      e += R * 5;
+      if (!PoseRows(x + V * j, k_sigma_m_ * widening_[j], unused.data(), values + e)) return false;
+      e += R * V;
     }
     for (int a = 0; a < n_; ++a) {
       for (int b = a + 1; b < n_ && NumPairs() > 0; ++b) {
-        const double dx = x[5 * a] - x[5 * b], dz = x[5 * a + 1] - x[5 * b + 1];
+        const double dx = x[V * a] - x[V * b], dz = x[V * a + 1] - x[V * b + 1];
         values[e++] = 2 * dx;
         values[e++] = 2 * dz;
         values[e++] = -2 * dx;
@@ -176,7 +178,7 @@ class DesignNlp : public Ipopt::TNLP {
     const double weight_N = robot_.platform_mass_kg * robot_.gravity_mps2;
     obj_scaling = 1.0;
     use_x_scaling = true;
-    for (Index k = 0; k < n; ++k) x_scaling[k] = (k % 5 >= 3) ? 1.0 / weight_N : 1.0;
+    for (Index k = 0; k < n; ++k) x_scaling[k] = (k % V >= 3) ? 1.0 / weight_N : 1.0;
     use_g_scaling = true;
     for (Index k = 0; k < m; ++k) g_scaling[k] = 1.0;
     for (int j = 0; j < n_; ++j) {
@@ -201,11 +203,11 @@ class DesignNlp : public Ipopt::TNLP {
     poses_.clear();
     tensions_.clear();
     for (int j = 0; j < n_; ++j) {
-      poses_.emplace_back(x[5 * j], x[5 * j + 1], x[5 * j + 2]);
-      tensions_.emplace_back(x[5 * j + 3], x[5 * j + 4]);
+      poses_.emplace_back(x[V * j], x[V * j + 1], x[V * j + 2]);
+      tensions_.push_back(Eigen::Map<const Eigen::VectorXd>(x + V * j + 3, robot_.num_cables()));
     }
   }
-  const std::vector<Eigen::Vector2d>& tensions() const { return tensions_; }
+  const std::vector<Eigen::VectorXd>& tensions() const { return tensions_; }
 
   Ipopt::SolverReturn final_status() const { return final_status_; }
   const std::vector<Eigen::Vector3d>& poses() const { return poses_; }
@@ -217,25 +219,25 @@ class DesignNlp : public Ipopt::TNLP {
   };
   int NumPairs() const { return options_.min_spacing_m > 0.0 ? n_ * (n_ - 1) / 2 : 0; }
 
-  // Pose j's R constraint rows from its 5 variables at x5 into g; if `jac` is given, also
-  // their R x 5 Jacobian block, row by row. The equilibrium rows and the quantities' values
+  // Pose j's R constraint rows from its V variables at xj into g; if `jac` is given, also
+  // their R x V Jacobian block, row by row. The equilibrium rows and the quantities' values
   // are differentiated exactly (the Jets of RobustQuantities); the spreads by central
   // differences (robust.h).
-  bool PoseRows(const Number* x5, double k_sigma_m, Number* g, Number* jac) const {
-    const Eigen::Matrix<double, 5, 1> y = Eigen::Map<const Eigen::Matrix<double, 5, 1>>(x5);
+  bool PoseRows(const Number* xj, double k_sigma_m, Number* g, Number* jac) const {
+    const Eigen::VectorXd y = Eigen::Map<const Eigen::VectorXd>(xj, V);
     PoseRobustness at;
     if (!RobustQuantities(robot_, points_, y, &at, jac != nullptr)) return false;
     for (int r = 0; r < 3; ++r) {
       g[r] = at.equilibrium_N(r);
       if (jac) {
-        for (int c = 0; c < 5; ++c) jac[5 * r + c] = at.dequilibrium_dy(r, c);
+        for (int c = 0; c < V; ++c) jac[V * r + c] = at.dequilibrium_dy(r, c);
       }
     }
     for (int r = 0; r < static_cast<int>(rows_.size()); ++r) {
       const int k = rows_[r].quantity;
       g[3 + r] = at.value[k] + rows_[r].sign * k_sigma_m * at.spread[k];
       if (jac) {
-        for (int c = 0; c < 5; ++c) jac[5 * (3 + r) + c] = at.dvalue_dy(k, c);
+        for (int c = 0; c < V; ++c) jac[V * (3 + r) + c] = at.dvalue_dy(k, c);
       }
     }
     for (int r = 0; r < R; ++r) {
@@ -244,9 +246,9 @@ class DesignNlp : public Ipopt::TNLP {
     if (jac && k_sigma_m > 0.0) {
       // d spread / dy by central differences; steps of ~cbrt(eps) of each variable's scale.
       const double weight_N = robot_.platform_mass_kg * robot_.gravity_mps2;
-      for (int c = 0; c < 5; ++c) {
+      for (int c = 0; c < V; ++c) {
         const double h = 6e-6 * (c >= 3 ? weight_N : 1.0);
-        Eigen::Matrix<double, 5, 1> yp = y, ym = y;
+        Eigen::VectorXd yp = y, ym = y;
         yp(c) += h;
         ym(c) -= h;
         PoseRobustness plus, minus;
@@ -255,7 +257,7 @@ class DesignNlp : public Ipopt::TNLP {
         }
         for (int r = 0; r < static_cast<int>(rows_.size()); ++r) {
           const int k = rows_[r].quantity;
-          jac[5 * (3 + r) + c] += rows_[r].sign * k_sigma_m * (plus.spread[k] - minus.spread[k]) / (2.0 * h);
+          jac[V * (3 + r) + c] += rows_[r].sign * k_sigma_m * (plus.spread[k] - minus.spread[k]) / (2.0 * h);
         }
       }
     }
@@ -264,7 +266,7 @@ class DesignNlp : public Ipopt::TNLP {
 
   double Objective(const Number* x, Eigen::VectorXd* gradient) const {
     std::vector<Eigen::Vector3d> q(n_);
-    for (int j = 0; j < n_; ++j) q[j] = Eigen::Vector3d(x[5 * j], x[5 * j + 1], x[5 * j + 2]);
+    for (int j = 0; j < n_; ++j) q[j] = Eigen::Vector3d(x[V * j], x[V * j + 1], x[V * j + 2]);
     return DesignObjective(robot_, options_.criterion, q, gradient, power_,
                            options_.prior_information ? &*options_.prior_information : nullptr);
   }
@@ -274,6 +276,7 @@ class DesignNlp : public Ipopt::TNLP {
   const std::vector<PlanPose>& start_;
   const int n_;
   const double power_;  // surrogate sharpness; 0: the default
+  const int V;          // variables per pose: x, z, theta, one tension per cable
   const std::vector<Eigen::Vector2d> points_;
   const std::vector<PoseQuantity> quantities_;
   const double k_sigma_m_;  // k sigma: the half-width of the linearised worst case
@@ -282,7 +285,7 @@ class DesignNlp : public Ipopt::TNLP {
   int R = 0;  // constraint rows per pose: 3 equilibrium, then rows_
   Ipopt::SolverReturn final_status_ = Ipopt::INTERNAL_ERROR;
   std::vector<Eigen::Vector3d> poses_;
-  std::vector<Eigen::Vector2d> tensions_;
+  std::vector<Eigen::VectorXd> tensions_;
 };
 
 const char* StatusName(Ipopt::ApplicationReturnStatus s) {
@@ -344,7 +347,9 @@ StartOutcome RunIpopt(const Robot& robot, const DesignOptions& options, const st
     // The criteria come from eigenvalues of matrices with condition numbers up to ~1e5, so
     // they carry absolute noise near 1e-12; Ipopt's default 1e-8 perturbation would turn it
     // into 1e-4 of finite-difference error. 1e-6 keeps truncation and noise both small.
-    app->Options()->SetNumericValue("derivative_test_perturbation", 1e-6);
+    // The robustness rows' second derivatives can be large near the workspace boundary, where
+    // a smaller perturbation (DesignOptions) keeps the checker's own truncation error down.
+    app->Options()->SetNumericValue("derivative_test_perturbation", options.derivative_test_perturbation);
     app->Options()->SetIntegerValue("max_iter", 0);
   }
   if (!options.ipopt_journal_path.empty()) {

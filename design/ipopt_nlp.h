@@ -19,8 +19,8 @@ struct StartOutcome {
   std::string status;
   int iterations = 0;
   bool converged = false;
-  std::vector<Eigen::Vector3d> poses;  // Ipopt's (x, z, theta)
-  std::vector<Eigen::Vector2d> tensions_N;
+  std::vector<Eigen::Vector3d> poses;       // Ipopt's (x, z, theta)
+  std::vector<Eigen::VectorXd> tensions_N;  // Ipopt's tensions, one per cable
 };
 
 // One Ipopt solve from `start` (equilibria with their tensions). `widening`, if given, holds

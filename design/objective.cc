@@ -5,18 +5,43 @@
 #include <Eigen/Dense>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
+#include "common/error.h"
 #include "identify/jacobian.h"
+#include "identify/nested_jet.h"
 
 namespace cablecal {
 namespace internal {
 namespace {
 
-using Jet3 = ceres::Jet<double, 3>;
+// The pose's own coordinates as Jets (identify/nested_jet.h): the rows of identify/jacobian.h
+// then carry their exact derivatives with respect to x, z, theta.
+using PoseJet = nested_jet::InnerJet<3>;
 
-Pose<Jet3> Seeded(const Eigen::Vector3d& q) { return Pose<Jet3>(Jet3(q(0), 0), Jet3(q(1), 1), Jet3(q(2), 2)); }
+Pose<PoseJet> Seeded(const Eigen::Vector3d& q) {
+  return Pose<PoseJet>(PoseJet(q(0), 0), PoseJet(q(1), 1), PoseJet(q(2), 2));
+}
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// The criteria are written once on the cable count M (compile-time sizes, as the
+// identification's); this calls f with M = robot.num_cables() as a std::integral_constant.
+template <typename F>
+double WithCableCount(const Robot& robot, F&& f) {
+  static_assert(kMinCables == 2 && kMaxCables == 8, "one instantiation per cable count below");
+  switch (robot.num_cables()) {
+    case 2: return f(std::integral_constant<int, 2>{});
+    case 3: return f(std::integral_constant<int, 3>{});
+    case 4: return f(std::integral_constant<int, 4>{});
+    case 5: return f(std::integral_constant<int, 5>{});
+    case 6: return f(std::integral_constant<int, 6>{});
+    case 7: return f(std::integral_constant<int, 7>{});
+    case 8: return f(std::integral_constant<int, 8>{});
+  }
+  CABLECAL_CHECK(false, "the robot loader keeps 2 to 8 cables");
+  return kInf;
+}
 
 // log-sum-exp of p * log(mu_k): log sum mu_k^p without overflow.
 double LogSumPow(const Eigen::VectorXd& log_mu, double p) {
@@ -30,25 +55,39 @@ double LogSumPow(const Eigen::VectorXd& log_mu, double p) {
 // the eigenvalues of J'J. With d the number of columns, kappa <= kappa_p <= d^(1/p) kappa,
 // hence the surrogate's minimiser has kappa within d^(1/p) of the optimum (README).
 // The gradient follows from d mu_k = 2 sigma_k u_k' dJ v_k, exact for a spectral function.
+// J: per pose the M length rows, columns a1z .. lM0 (3M - 1, a1x held) and every pose's x.
+template <int M>
 double ConditionObjective(const Robot& robot, const std::vector<Eigen::Vector3d>& poses, Eigen::VectorXd* gradient,
                           double p) {
+  constexpr int G = 3 * M - 1;  // geometry columns
+  constexpr int kX = 3 * M;     // the x column of identify/jacobian.h's rows
   const int n = static_cast<int>(poses.size());
-  if (2 * n < 5 + n) return kInf;
-  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(2 * n, 5 + n);
-  std::vector<LengthRows<Jet3>> rows(n);
+  if (M * n < G + n) return kInf;
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(M * n, G + n);
+  // With a gradient the rows carry their pose derivatives (nested Jets); without, plain
+  // doubles: the same values, to the last bit, at a fraction of the cost.
+  std::vector<LengthRows<M, PoseJet>> rows(gradient ? n : 0);
   for (int j = 0; j < n; ++j) {
-    rows[j] = LengthResidualRows<Jet3>(robot, Seeded(poses[j]));
-    for (int i = 0; i < 2; ++i) {
-      for (int c = 0; c < 5; ++c) J(2 * j + i, c) = rows[j](i, 1 + c).a;
-      J(2 * j + i, 5 + j) = rows[j](i, 6).a;
+    LengthRows<M, double> values;
+    if (gradient) {
+      rows[j] = LengthResidualRows<M, PoseJet>(robot, Seeded(poses[j]));
+      for (int i = 0; i < M; ++i) {
+        for (int c = 0; c < kRowColumns<M>; ++c) values(i, c) = rows[j](i, c).a;
+      }
+    } else {
+      values = LengthResidualRows<M, double>(robot, poses[j]);
+    }
+    for (int i = 0; i < M; ++i) {
+      for (int c = 0; c < G; ++c) J(M * j + i, c) = values(i, 1 + c);
+      J(M * j + i, G + j) = values(i, kX);
     }
   }
-  // Singular values and vectors through the eigen-decomposition of J'J (d x d, d = 5 + n),
+  // Singular values and vectors through the eigen-decomposition of J'J (d x d, d = G + n),
   // several times faster than an SVD of J; the smallest sigma keeps a relative accuracy of
   // about eps * kappa^2, 1e-10 for kappa up to 1e3.
-  const Eigen::MatrixXd M = J.transpose() * J;
-  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(M, gradient ? Eigen::ComputeEigenvectors : Eigen::EigenvaluesOnly);
-  const int d = static_cast<int>(M.rows());
+  const Eigen::MatrixXd Mt = J.transpose() * J;
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(Mt, gradient ? Eigen::ComputeEigenvectors : Eigen::EigenvaluesOnly);
+  const int d = static_cast<int>(Mt.rows());
   // Descending order, as an SVD would give.
   const Eigen::VectorXd s = eig.eigenvalues().reverse().cwiseMax(0.0).cwiseSqrt();
   if (!(s(d - 1) > 0.0)) return kInf;
@@ -69,11 +108,11 @@ double ConditionObjective(const Robot& robot, const std::vector<Eigen::Vector3d>
         double total = 0.0;
         for (int m = 0; m < d; ++m) {
           if (w(m) == 0.0) continue;
-          double d_sigma = 0.0;  // u_m' dJ v_m over pose j's two rows
-          for (int i = 0; i < 2; ++i) {
-            double row_v = rows[j](i, 6).v(k) * V(5 + j, m);
-            for (int c = 0; c < 5; ++c) row_v += rows[j](i, 1 + c).v(k) * V(c, m);
-            d_sigma += U(2 * j + i, m) * row_v;
+          double d_sigma = 0.0;  // u_m' dJ v_m over pose j's M rows
+          for (int i = 0; i < M; ++i) {
+            double row_v = rows[j](i, kX).v(k) * V(G + j, m);
+            for (int c = 0; c < G; ++c) row_v += rows[j](i, 1 + c).v(k) * V(c, m);
+            d_sigma += U(M * j + i, m) * row_v;
           }
           total += w(m) * d_sigma / s(m);  // d mu / mu / 2 = d sigma / sigma
         }
@@ -84,28 +123,40 @@ double ConditionObjective(const Robot& robot, const std::vector<Eigen::Vector3d>
   return (lse_plus + lse_minus) / (2.0 * p);
 }
 
-// D, A, E objectives of S = sum_j S_j(q_j) and their gradients through dS_j/dq_j.
+// D, A, E objectives of S = sum_j S_j(q_j) (3M - 1 square) and their gradients through dS_j/dq_j.
+template <int M>
 double InformationObjective(const Robot& robot, Criterion criterion, const std::vector<Eigen::Vector3d>& poses,
                             Eigen::VectorXd* gradient, double e_power, const PriorInformation* prior) {
+  constexpr int G = 3 * M - 1;
+  using Information = Eigen::Matrix<double, G, G>;
   const int n = static_cast<int>(poses.size());
-  std::vector<Eigen::Matrix<Jet3, 5, 5>> parts(n);
+  std::vector<Eigen::Matrix<PoseJet, G, G>> parts(gradient ? n : 0);  // as in ConditionObjective
   // A calibration in rounds: the earlier identification's information adds to the new poses'.
-  Eigen::Matrix<double, 5, 5> S = prior ? *prior : PriorInformation::Zero();
+  CABLECAL_CHECK(!prior || (prior->rows() == G && prior->cols() == G),
+                 "the prior information covers the 3m - 1 gauge-fixed geometric parameters");
+  Information S = prior ? Information(*prior) : Information::Zero();
   for (int j = 0; j < n; ++j) {
-    parts[j] = ReducedInformation<Jet3>(MlResidualRows<Jet3>(robot, Seeded(poses[j])));
-    for (int a = 0; a < 5; ++a) {
-      for (int b = 0; b < 5; ++b) S(a, b) += parts[j](a, b).a;
+    if (gradient) {
+      parts[j] = ReducedInformation<M, PoseJet>(MlResidualRows<M, PoseJet>(robot, Seeded(poses[j])));
+      for (int a = 0; a < G; ++a) {
+        for (int b = 0; b < G; ++b) S(a, b) += parts[j](a, b).a;
+      }
+    } else {
+      const Information part = ReducedInformation<M, double>(MlResidualRows<M, double>(robot, poses[j]));
+      for (int a = 0; a < G; ++a) {
+        for (int b = 0; b < G; ++b) S(a, b) += part(a, b);
+      }
     }
   }
   S = 0.5 * (S + S.transpose());
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 5, 5>> eig(S);
+  Eigen::SelfAdjointEigenSolver<Information> eig(S);
   const double lambda_min = eig.eigenvalues()(0);
   if (!(lambda_min > 0.0) || !std::isfinite(lambda_min)) return kInf;
   // dF = sum_ab Gbar_ab dS_ab with Gbar = d objective / dS.
-  Eigen::Matrix<double, 5, 5> Gbar;
+  Information Gbar;
   double value = 0.0;
-  const Eigen::Matrix<double, 5, 5> S_inv = eig.eigenvectors() * eig.eigenvalues().cwiseInverse().asDiagonal() *
-                                            eig.eigenvectors().transpose();
+  const Information S_inv = eig.eigenvectors() * eig.eigenvalues().cwiseInverse().asDiagonal() *
+                            eig.eigenvectors().transpose();
   switch (criterion) {
     case Criterion::kD:
       value = -eig.eigenvalues().array().log().sum();
@@ -119,9 +170,9 @@ double InformationObjective(const Robot& robot, Criterion criterion, const std::
     }
     case Criterion::kE: {
       // -log lambda_min is not differentiable where the smallest eigenvalues coincide; the
-      // surrogate (log sum lambda^-p) / p lies within log(5) / p of it (same argument as
+      // surrogate (log sum lambda^-p) / p lies within log(3M - 1) / p of it (same argument as
       // for the condition number). p <= 0 asks for the exact value.
-      const Eigen::Matrix<double, 5, 1> log_l = eig.eigenvalues().array().log();
+      const Eigen::Matrix<double, G, 1> log_l = eig.eigenvalues().array().log();
       if (e_power <= 0.0) {
         value = -log_l(0);
         Gbar.setZero();
@@ -130,8 +181,8 @@ double InformationObjective(const Robot& robot, Criterion criterion, const std::
       const double lse = LogSumPow(log_l, -e_power);
       value = lse / e_power;
       Gbar.setZero();
-      for (int k = 0; k < 5; ++k) {
-        const Eigen::Matrix<double, 5, 1> v = eig.eigenvectors().col(k);
+      for (int k = 0; k < G; ++k) {
+        const Eigen::Matrix<double, G, 1> v = eig.eigenvectors().col(k);
         const double weight = std::exp(-e_power * log_l(k) - lse) / eig.eigenvalues()(k);
         Gbar -= weight * (v * v.transpose());
       }
@@ -145,8 +196,8 @@ double InformationObjective(const Robot& robot, Criterion criterion, const std::
     for (int j = 0; j < n; ++j) {
       for (int k = 0; k < 3; ++k) {
         double d = 0.0;
-        for (int a = 0; a < 5; ++a) {
-          for (int b = 0; b < 5; ++b) d += Gbar(a, b) * parts[j](a, b).v(k);
+        for (int a = 0; a < G; ++a) {
+          for (int b = 0; b < G; ++b) d += Gbar(a, b) * parts[j](a, b).v(k);
         }
         (*gradient)(3 * j + k) = d;
       }
@@ -159,16 +210,22 @@ double InformationObjective(const Robot& robot, Criterion criterion, const std::
 
 double DesignObjective(const Robot& robot, Criterion criterion, const std::vector<Eigen::Vector3d>& poses,
                        Eigen::VectorXd* gradient, double power, const PriorInformation* prior) {
-  if (criterion == Criterion::kCondition) {
-    return ConditionObjective(robot, poses, gradient, power > 0.0 ? power : kConditionPower);
-  }
-  return InformationObjective(robot, criterion, poses, gradient, power > 0.0 ? power : kEigenvaluePower, prior);
+  return WithCableCount(robot, [&](auto cables) {
+    constexpr int M = decltype(cables)::value;
+    if (criterion == Criterion::kCondition) {
+      return ConditionObjective<M>(robot, poses, gradient, power > 0.0 ? power : kConditionPower);
+    }
+    return InformationObjective<M>(robot, criterion, poses, gradient, power > 0.0 ? power : kEigenvaluePower, prior);
+  });
 }
 
 double ExactObjective(const Robot& robot, Criterion criterion, const std::vector<Eigen::Vector3d>& poses,
                       const PriorInformation* prior) {
-  if (criterion == Criterion::kCondition) return ConditionObjective(robot, poses, nullptr, 0.0);
-  return InformationObjective(robot, criterion, poses, nullptr, 0.0, prior);
+  return WithCableCount(robot, [&](auto cables) {
+    constexpr int M = decltype(cables)::value;
+    if (criterion == Criterion::kCondition) return ConditionObjective<M>(robot, poses, nullptr, 0.0);
+    return InformationObjective<M>(robot, criterion, poses, nullptr, 0.0, prior);
+  });
 }
 
 }  // namespace internal
@@ -180,13 +237,20 @@ CriteriaValues EvaluateCriteria(const Robot& robot, const std::vector<Eigen::Vec
   v.d_log_det_information = -internal::ExactObjective(robot, Criterion::kD, poses, prior);
   v.a_trace_covariance_m2 = std::exp(internal::ExactObjective(robot, Criterion::kA, poses, prior));
   v.e_min_eigenvalue = std::exp(-internal::ExactObjective(robot, Criterion::kE, poses, prior));
+  v.information_size = 3 * robot.num_cables() - 1;
   return v;
 }
 
 double Improvement(Criterion c, const CriteriaValues& set, const CriteriaValues& reference) {
   switch (c) {
     case Criterion::kCondition: return reference.condition_number / set.condition_number;
-    case Criterion::kD: return std::exp((set.d_log_det_information - reference.d_log_det_information) / 5.0);
+    case Criterion::kD: {
+      // The geometric mean per eigenvalue of S: (det S / det S_ref)^(1 / (3m - 1)).
+      const int size = set.information_size > 0 ? set.information_size : reference.information_size;
+      CABLECAL_CHECK(size > 0 && (reference.information_size == 0 || reference.information_size == size),
+                     "criteria of the same robot, from EvaluateCriteria");
+      return std::exp((set.d_log_det_information - reference.d_log_det_information) / size);
+    }
     case Criterion::kA: return reference.a_trace_covariance_m2 / set.a_trace_covariance_m2;
     case Criterion::kE: return set.e_min_eigenvalue / reference.e_min_eigenvalue;
   }

@@ -1,5 +1,7 @@
 // Internal to design/: the criteria's minimised objectives and their exact gradients with
-// respect to every pose's (x, z, theta), through single-level Jets of identify/jacobian.h.
+// respect to every pose's (x, z, theta), for any cable count m. The Jacobian rows are
+// identify/jacobian.h's, automatic derivatives of the identification's own residuals; their
+// derivatives with respect to the pose come from the same evaluation with nested Jets.
 #pragma once
 
 #include <Eigen/Core>
@@ -10,8 +12,8 @@
 namespace cablecal::internal {
 
 // Sharpness of the smooth surrogates (objective.cc): the minimiser of the condition-number
-// surrogate has kappa within d^(1/p) of the optimum, d = 5 + n columns (n = 50: 1.13);
-// the E surrogate is within 5^(1/p) of lambda_min (1.05).
+// surrogate has kappa within d^(1/p) of the optimum, d = 3m - 1 + n columns (m = 2, n = 50:
+// 1.13); the E surrogate is within (3m - 1)^(1/p) of lambda_min (m = 2: 1.05, m = 8: 1.11).
 constexpr double kConditionPower = 32.0;
 constexpr double kEigenvaluePower = 32.0;
 

@@ -42,26 +42,35 @@ std::vector<PoseQuantity> PoseQuantities(const Robot& robot) {
   return q;
 }
 
-bool RobustQuantities(const Robot& robot, const std::vector<Eigen::Vector2d>& points,
-                      const Eigen::Matrix<double, kPoseVariables, 1>& y, PoseRobustness* out, bool with_derivatives) {
-  constexpr int N = kPoseVariables + kGeometryParameters;
+namespace {
+
+// RobustQuantities for M cables: Jets sized at compile time for (y, g), 3 + M + 3M entries
+// (M = 2: 11, as before the cable count became general). `flatten` inlines the Jet arithmetic
+// into each instance: with seven instances in this file GCC's inliner otherwise runs out of
+// its unit-growth budget and calls it out of line, which made M = 2 a third slower.
+template <int M>
+__attribute__((flatten)) bool RobustQuantitiesM(const Robot& robot, const std::vector<Eigen::Vector2d>& points, const Eigen::VectorXd& y_in,
+                       PoseRobustness* out, bool with_derivatives) {
+  constexpr int P = 3 + M;  // pose variables x, z, theta, t1..tM
+  constexpr int G = 3 * M;  // geometry a1x a1z .. aMx aMz l10 .. lM0
+  constexpr int N = P + G;
   using U = ceres::Jet<double, N>;
-  const int m = robot.num_cables();
-  CABLECAL_CHECK(m == 2, "the robust design is implemented for 2 cables");
-  Eigen::Matrix<U, kPoseVariables, 1> yu;
-  for (int k = 0; k < kPoseVariables; ++k) yu(k) = U(y(k), k);
+  const int m = M;
+  const Eigen::Matrix<double, P, 1> y = y_in;
+  Eigen::Matrix<U, P, 1> yu;
+  for (int k = 0; k < P; ++k) yu(k) = U(y(k), k);
   Vec2<U> exits[kMaxCables];
   U l0[kMaxCables];
   for (int i = 0; i < m; ++i) {
-    for (int c = 0; c < 2; ++c) exits[i](c) = U(robot.cables[i].p_F_exit_m(c), kPoseVariables + 2 * i + c);
-    l0[i] = U(0.0, kPoseVariables + 2 * m + i);  // only its derivative matters: dl_i is fixed
+    for (int c = 0; c < 2; ++c) exits[i](c) = U(robot.cables[i].p_F_exit_m(c), P + 2 * i + c);
+    l0[i] = U(0.0, P + 2 * m + i);  // only its derivative matters: dl_i is fixed
   }
-  const Pose<U> q = yu.head<3>();
+  const Pose<U> q = yu.template head<3>();
   const Eigen::Matrix<U, 2, 2> rot = Rotation(q(2));
   const Vec2<U> p(q(0), q(1));
 
   // R(y, g) = [l_i(q; a_i) - l_i0 - dl_i; W(q; a) t + w_g(q)] and the quantities c(y, g).
-  Eigen::Matrix<U, kPoseVariables, 1> R;
+  Eigen::Matrix<U, P, 1> R;
   std::vector<U> c;
   for (int i = 0; i < m; ++i) c.push_back(yu(3 + i));  // t_i
   c.push_back(q(2));                                    // theta
@@ -70,41 +79,79 @@ bool RobustQuantities(const Robot& robot, const std::vector<Eigen::Vector2d>& po
   for (int i = 0; i < m; ++i) {
     const Cable& cable = robot.cables[i];
     const Vec2<U> anchor = p + rot * cable.p_P_anchor_m.cast<U>();
-    const CableState<U> s = CableGeometry<U>(exits[i], U(cable.pulley_radius_m), SideSign(cable.side), anchor);
+    const CableState<U> s = CableGeometry<U>(exits[i], U(cable.pulley_radius_m), SignsOf(cable), anchor);
     R(i) = s.length_m - l0[i];
     t(i) = yu(3 + i);
     c.push_back(s.centre_distance_m - U(cable.pulley_radius_m));  // clearance of anchor i from its pulley
   }
-  R.tail<3>() = WrenchMatrix<U>(robot, q, exits) * t + GravityWrench<U>(robot, q);
+  R.template tail<3>() = WrenchMatrix<U>(robot, q, exits) * t + GravityWrench<U>(robot, q);
   for (const Eigen::Vector2d& b : points) {
     const Vec2<U> point = p + rot * b.cast<U>();
     c.push_back(point.x());
     c.push_back(point.y());
   }
 
-  Eigen::Matrix<double, kPoseVariables, kPoseVariables> A;
-  Eigen::Matrix<double, kPoseVariables, kGeometryParameters> B;
-  for (int r = 0; r < kPoseVariables; ++r) {
-    A.row(r) = R(r).v.head<kPoseVariables>().transpose();
-    B.row(r) = R(r).v.tail<kGeometryParameters>().transpose();
+  Eigen::Matrix<double, P, P> A;
+  Eigen::Matrix<double, P, G> B;
+  for (int r = 0; r < P; ++r) {
+    A.row(r) = R(r).v.template head<P>().transpose();
+    B.row(r) = R(r).v.template tail<G>().transpose();
   }
   for (int r = 0; r < 3; ++r) out->equilibrium_N(r) = R(m + r).a;
-  if (with_derivatives) out->dequilibrium_dy = A.bottomRows<3>();
-  Eigen::FullPivLU<Eigen::Matrix<double, kPoseVariables, kPoseVariables>> lu(A);
-  if (!lu.isInvertible()) return false;
-  const Eigen::Matrix<double, kPoseVariables, kGeometryParameters> dy_dg = -lu.solve(B);
+  if (with_derivatives) out->dequilibrium_dy = A.template bottomRows<3>();
+  Eigen::Matrix<double, P, G> dy_dg;
+  if constexpr (M <= 3) {
+    // Square: the implicit function theorem.
+    Eigen::FullPivLU<Eigen::Matrix<double, P, P>> lu(A);
+    if (!lu.isInvertible()) return false;
+    dy_dg = -lu.solve(B);
+  } else {
+    // Least-squares pose of the commanded lengths, then the least tension change that restores
+    // the equilibrium there (header).
+    const Eigen::Matrix<double, M, 3> J = A.template topLeftCorner<M, 3>();  // dl/dq
+    const Eigen::Matrix<double, 3, 3> K = A.template bottomLeftCorner<3, 3>();  // d(W t + w_g)/dq
+    const Eigen::Matrix<double, 3, M> W = A.template bottomRightCorner<3, M>();  // d(W t + w_g)/dt
+    Eigen::FullPivLU<Eigen::Matrix3d> normal(J.transpose() * J);
+    Eigen::FullPivLU<Eigen::Matrix3d> wwt(W * W.transpose());
+    if (!normal.isInvertible() || !wwt.isInvertible()) return false;
+    const Eigen::Matrix<double, 3, G> dq_dg = -normal.solve(J.transpose() * B.template topRows<M>());
+    const Eigen::Matrix<double, 3, G> imbalance = K * dq_dg + B.template bottomRows<3>();
+    dy_dg.template topRows<3>() = dq_dg;
+    dy_dg.template bottomRows<M>() = -W.transpose() * wwt.solve(imbalance);
+  }
   out->value.resize(c.size());
   out->spread.resize(c.size());
-  if (with_derivatives) out->dvalue_dy.resize(static_cast<Eigen::Index>(c.size()), kPoseVariables);
+  if (with_derivatives) out->dvalue_dy.resize(static_cast<Eigen::Index>(c.size()), P);
   for (std::size_t k = 0; k < c.size(); ++k) {
-    const Eigen::Matrix<double, 1, kGeometryParameters> dc_dg =
-        c[k].v.head<kPoseVariables>().transpose() * dy_dg + c[k].v.tail<kGeometryParameters>().transpose();
+    const Eigen::Matrix<double, 1, G> dc_dg =
+        c[k].v.template head<P>().transpose() * dy_dg + c[k].v.template tail<G>().transpose();
     out->value[k] = c[k].a;
     out->spread[k] = dc_dg.norm();
-    if (with_derivatives) out->dvalue_dy.row(static_cast<Eigen::Index>(k)) = c[k].v.head<kPoseVariables>().transpose();
+    if (with_derivatives) out->dvalue_dy.row(static_cast<Eigen::Index>(k)) = c[k].v.template head<P>().transpose();
     if (!std::isfinite(out->spread[k]) || !std::isfinite(out->value[k])) return false;
   }
   return true;
+}
+
+}  // namespace
+
+bool RobustQuantities(const Robot& robot, const std::vector<Eigen::Vector2d>& points, const Eigen::VectorXd& y,
+                      PoseRobustness* out, bool with_derivatives) {
+  const int m = robot.num_cables();
+  CABLECAL_CHECK(y.size() == PoseVariables(m), "y holds x, z, theta and one tension per cable");
+  // One instance per cable count the loader accepts (kMinCables..kMaxCables).
+  static_assert(kMinCables == 2 && kMaxCables == 8, "RobustQuantities dispatches on m = 2..8");
+  switch (m) {
+    case 2: return RobustQuantitiesM<2>(robot, points, y, out, with_derivatives);
+    case 3: return RobustQuantitiesM<3>(robot, points, y, out, with_derivatives);
+    case 4: return RobustQuantitiesM<4>(robot, points, y, out, with_derivatives);
+    case 5: return RobustQuantitiesM<5>(robot, points, y, out, with_derivatives);
+    case 6: return RobustQuantitiesM<6>(robot, points, y, out, with_derivatives);
+    case 7: return RobustQuantitiesM<7>(robot, points, y, out, with_derivatives);
+    case 8: return RobustQuantitiesM<8>(robot, points, y, out, with_derivatives);
+  }
+  CABLECAL_CHECK(false, "the cable count is between kMinCables and kMaxCables");
+  return false;
 }
 
 }  // namespace cablecal::internal

@@ -11,28 +11,45 @@
 
 namespace cablecal {
 
-const char* const kGeometryNames[6] = {"a1x", "a1z", "a2x", "a2z", "l10", "l20"};
+std::vector<std::string> GeometryNames(int num_cables) {
+  std::vector<std::string> names;
+  for (int i = 1; i <= num_cables; ++i) {
+    names.push_back("a" + std::to_string(i) + "x");
+    names.push_back("a" + std::to_string(i) + "z");
+  }
+  for (int i = 1; i <= num_cables; ++i) names.push_back("l" + std::to_string(i) + "0");
+  return names;
+}
 
 GeometryVector GeometryOf(const Robot& robot) {
-  CABLECAL_CHECK(robot.num_cables() == 2, "identification is implemented for 2 cables");
+  const int m = robot.num_cables();
   const Eigen::VectorXd l0 = InitialLengths(robot);
-  GeometryVector g;
-  g << robot.cables[0].p_F_exit_m, robot.cables[1].p_F_exit_m, l0(0), l0(1);
+  GeometryVector g(GeometrySize(m));
+  for (int i = 0; i < m; ++i) {
+    g.segment<2>(ExitIndex(i, 0)) = robot.cables[i].p_F_exit_m;
+    g(InitialLengthIndex(m, i)) = l0(i);
+  }
   return g;
 }
 
 Robot WithGeometry(const Robot& robot, const GeometryVector& geometry) {
+  const int m = robot.num_cables();
+  CABLECAL_CHECK(geometry.size() == GeometrySize(m), "a geometry vector has 3 entries per cable");
   Robot r = robot;
-  for (int i = 0; i < 2; ++i) {
-    r.cables[i].p_F_exit_m = geometry.segment<2>(2 * i);
-    r.cables[i].initial_length_m = geometry(4 + i);
+  for (int i = 0; i < m; ++i) {
+    r.cables[i].p_F_exit_m = geometry.segment<2>(ExitIndex(i, 0));
+    r.cables[i].initial_length_m = geometry(InitialLengthIndex(m, i));
   }
   return r;
 }
 
-Robot PerturbGeometry(const Robot& nominal, double sigma_m, Rng& rng) {
+Robot PerturbGeometry(const Robot& nominal, double sigma_m, double exit_sigma_m, Rng& rng) {
   GeometryVector g = GeometryOf(nominal);
-  for (int k = 0; k < 6; ++k) g(k) += rng.Normal(0.0, sigma_m);
+  const int size = static_cast<int>(g.size());
+  GeometryVector draw(size);
+  for (int k = 0; k < size; ++k) draw(k) = rng.Normal();  // all first: the stream stays aligned
+  const int exits = 2 * nominal.num_cables();
+  for (int k = 1; k < size; ++k) g(k) += (k < exits ? exit_sigma_m : sigma_m) * draw(k);  // k = 0: a1x, held
   return WithGeometry(nominal, g);
 }
 
@@ -68,8 +85,14 @@ SimulatedExperiment SimulateExperiment(const Robot& nominal, const Robot& truth,
     // The commanded (nominal) pose is a good start: the true one is millimetres away.
     const ForwardResult fwd = SolveForwardGeometricoStatic(truth, lengths_true, &p.q);
     if (fwd.status != ForwardStatus::kConverged) {
+      std::string why = ToString(fwd.status);
+      if (fwd.status == ForwardStatus::kOtherAssembly) {
+        why += ": only another assembly of the robot has these lengths, far from the commanded pose";
+      } else if (fwd.status == ForwardStatus::kSlack) {
+        why += ": a cable would go slack";
+      }
       throw SolverFailure("pose " + std::to_string(j + 1) + ": the true robot cannot hold the commanded lengths (" +
-                          ToString(fwd.status) + ")");
+                          why + ")");
     }
     if (options.require_feasible) {
       const Feasibility f = CheckFeasibility(truth, fwd.equilibrium.q, fwd.equilibrium.tensions_N);
@@ -80,7 +103,9 @@ SimulatedExperiment SimulateExperiment(const Robot& nominal, const Robot& truth,
     }
     Measurement m;
     m.pose_id = static_cast<int>(j + 1);
-    m.dl_m = p.length_change_m;
+    // m >= 4: the lengths the cables have at the least-squares pose (experiment.h).
+    m.dl_m = truth.num_cables() >= 4 ? Eigen::VectorXd(CableLengths(truth, fwd.equilibrium.q) - l0_true)
+                                     : p.length_change_m;
     // Draw order is fixed (encoders, laser accuracy, repeatability, inclinometer accuracy,
     // repeatability) and every draw is made whether or not it is used, so that switching
     // a sensor's noise off leaves the other sensors' noise unchanged.

@@ -5,6 +5,14 @@
 // computed with the nominal robot; the true robot's cables then have lengths
 // l_i0(true) + dl_ij and the platform settles where the true geometry puts it (forward
 // geometrico-static model). Sensors read that pose with the paper's noise.
+// With m >= 4 cables the commanded lengths over-determine the pose and, on a true geometry
+// that differs from the nominal one, are not all consistent: rigid cables cannot all have
+// them. The forward model returns the least-squares pose; the encoders then read the length
+// changes the cables actually have there, l_i(true, q) - l_i0(true), not the commanded ones
+// (a real controller's cables would stretch or slacken by the difference, which is what its
+// encoders, on the motor side, would not see; the model has rigid cables). For m <= 3 the two
+// are the same up to the forward model's tolerance and the commanded changes are read, as
+// always.
 #pragma once
 
 #include <Eigen/Core>
@@ -28,15 +36,35 @@ struct Measurement {
   double theta_rad = 0.0;
 };
 
-// The geometric parameters the identification estimates, in this order:
-// a1x a1z a2x a2z l10 l20 (exit points in F, initial lengths), m.
-using GeometryVector = Eigen::Matrix<double, 6, 1>;
-extern const char* const kGeometryNames[6];
+// The geometric parameters the identification estimates, 3m of them for m cables, in this
+// order: the exit points a1x a1z ... amx amz (in F), then the initial lengths l10 ... lm0, m.
+// GeometryVector is dynamic: the cable count lives in the robot alone (the identification's
+// cost functors take it as a compile-time M, dispatched once per call).
+using GeometryVector = Eigen::VectorXd;
+inline int GeometrySize(int num_cables) { return 3 * num_cables; }
+inline int ExitIndex(int cable, int axis) { return 2 * cable + axis; }  // axis 0: x, 1: z
+inline int InitialLengthIndex(int num_cables, int cable) { return 2 * num_cables + cable; }
+// "a1x", "a1z", ..., "l10", ...: the names of the geometry vector's entries, in its order.
+std::vector<std::string> GeometryNames(int num_cables);
 GeometryVector GeometryOf(const Robot& robot);              // initial lengths from InitialLengths
 Robot WithGeometry(const Robot& robot, const GeometryVector& geometry);  // sets exits and initial_length
 
-// Nominal exit points and initial lengths each perturbed by N(0, sigma^2).
-Robot PerturbGeometry(const Robot& nominal, double sigma_m, Rng& rng);
+// The one geometry perturbation (simulate --geometry-sigma, the Monte Carlo's true robots,
+// README "Identification"): a true robot drawn around the nominal one.
+//  - a1x is never perturbed. It fixes the x origin of F: no encoder, laser or inclinometer
+//    reading sees a common shift of every a_ix and x_j (the identification's gauge), so a
+//    true robot with a1x moved is the same robot as one with every other x moved back.
+//    Holding it makes "identified - true" mean the same thing under every gauge.
+//  - Every other exit coordinate gets N(0, exit_sigma_m^2) and every initial length
+//    N(0, sigma_m^2), independently (exit_sigma_m: the Monte Carlo's gauge `prior` draws the
+//    exit points with the laser tracker's sigma, the error that prior assumes).
+//  - 3m standard normals are drawn first, one per entry in the geometry vector's order (a1x's
+//    draw made and discarded), then scaled: the random stream after the call does not depend
+//    on the sigmas, and m = 2 draws exactly what the Monte Carlo always drew.
+Robot PerturbGeometry(const Robot& nominal, double sigma_m, double exit_sigma_m, Rng& rng);
+inline Robot PerturbGeometry(const Robot& nominal, double sigma_m, Rng& rng) {
+  return PerturbGeometry(nominal, sigma_m, sigma_m, rng);
+}
 
 // Which sensors get noise (the paper's Section 4.2 ablation switches laser/inclinometer).
 enum class NoisySensors { kBoth, kLaser, kInclinometer, kNone };
@@ -58,12 +86,13 @@ struct SimulatedExperiment {
 };
 
 // Throws SolverFailure naming the pose if the true robot cannot hold a commanded pose
-// (forward model not converged, slack cable, unstable).
+// (forward model not converged, slack cable, unstable, or the lengths met only by another
+// assembly of the robot, far from the commanded pose).
 SimulatedExperiment SimulateExperiment(const Robot& nominal, const Robot& truth,
                                        const std::vector<PlanPose>& plan, const SimulationOptions& options,
                                        Rng& rng);
 
-// Measurement CSV: header pose,dl1,dl2,z,theta (m, m, m, rad).
+// Measurement CSV: header pose,dl1..dlm,z,theta (m, m, m, rad).
 std::string MeasurementsCsv(const std::vector<Measurement>& measurements, const std::string& provenance);
 // Throws InputError naming file, line and column (wrong header or count, non-finite number,
 // duplicate or non-positive pose id).

@@ -1,6 +1,6 @@
 // identify: estimates the robot's real geometry (exit points a_i, initial lengths l_i0) and
-// the unmeasured pose coordinates from encoder, laser and inclinometer readings, with
-// uncertainties (Ceres: Levenberg-Marquardt, Schur elimination of the per-pose blocks,
+// the unmeasured pose coordinates from encoder, laser and inclinometer readings, for a robot
+// of any cable count (2 to 8), with uncertainties (Ceres: Levenberg-Marquardt, Schur elimination of the per-pose blocks,
 // autodiff through model/cable.h; covariance and identifiability through the same block
 // structure, identify/schur.h, so the cost is linear in the number of poses).
 //   experiment.h  simulated or measured readings, measurement CSV
@@ -95,10 +95,10 @@ struct IdentifyResult {
   // Residual RMS per sensor in physical units (m, m, rad): encoder length residuals, laser
   // z_j - z_meas, inclinometer theta_j - theta_meas (zero for `paper`, which fixes them).
   double rms_encoder_m = 0.0, rms_laser_m = 0.0, rms_inclinometer_rad = 0.0;
-  GeometryVector geometry = GeometryVector::Zero();
+  GeometryVector geometry;  // 3m entries, GeometryNames(m) order (identify/experiment.h)
   bool has_covariance = false;
-  GeometryVector geometry_std = GeometryVector::Zero();
-  Eigen::Matrix<double, 6, 6> geometry_correlation = Eigen::Matrix<double, 6, 6>::Identity();
+  GeometryVector geometry_std;           // 3m entries, 0 for a held a1x (all 0 without covariance)
+  Eigen::MatrixXd geometry_correlation;  // 3m x 3m, the same order (identity without covariance)
   std::vector<PoseEstimate> poses;
   Identifiability identifiability;
   bool converged() const { return status == IdentifyStatus::kConverged; }

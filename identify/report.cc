@@ -49,9 +49,11 @@ std::string IdentifyResultYaml(const IdentifyResult& r, const std::string& comma
   if (r.estimator == Estimator::kPaper) {
     o << Key << "std_note" << Value << YamlString{std::string("paper estimator: covariance scaled by the residual variance")};
   }
+  const int geometry_size = static_cast<int>(r.geometry.size());
+  const std::vector<std::string> names = GeometryNames(geometry_size / 3);
   o << Key << "parameters" << Value << BeginMap;
-  for (int k = 0; k < 6; ++k) {
-    o << Key << kGeometryNames[k] << Value << Flow << BeginMap << Key << "value" << Value << YamlNumber{r.geometry(k)};
+  for (int k = 0; k < geometry_size; ++k) {
+    o << Key << names[k] << Value << Flow << BeginMap << Key << "value" << Value << YamlNumber{r.geometry(k)};
     if (r.has_covariance) o << Key << "std" << Value << YamlNumber{r.geometry_std(k)};
     if (k == 0 && r.gauge == Gauge::kA1x) o << Key << "held" << Value << true;
     o << EndMap;
@@ -59,9 +61,9 @@ std::string IdentifyResultYaml(const IdentifyResult& r, const std::string& comma
   o << EndMap;
   if (r.has_covariance) {
     o << Key << "correlation" << Value << YAML::Comment("geometric parameters, in the order above") << BeginSeq;
-    for (int a = 0; a < 6; ++a) {
+    for (int a = 0; a < geometry_size; ++a) {
       o << Flow << BeginSeq;
-      for (int b = 0; b < 6; ++b) o << YamlNumber{r.geometry_correlation(a, b)};
+      for (int b = 0; b < geometry_size; ++b) o << YamlNumber{r.geometry_correlation(a, b)};
       o << EndSeq;
     }
     o << EndSeq;

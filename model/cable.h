@@ -17,6 +17,11 @@
 // wrong by 2 psi (an anchor straight below the pulley must give phi = pi, Eq. 2 gives 0).
 // tests/model/cable_test.cc checks the closed form against a numerical tangency construction.
 //
+// A cable that wraps *under* its pulley (wrap: under, pulleys below the platform) is the
+// mirror image in z of one that wraps over: the same construction in the pulley frame
+// mirrored in z as well (z' = w_i (z - C_z), w_i = +1 over, -1 under), so that
+// psi = atan2(w_i m_z, s_i m_x) and T_i = C_i + (s_i r cos alpha, w_i r sin alpha).
+//
 // Valid while |m_i| > r (the anchor is outside the pulley) and 0 <= phi_i <= 3 pi / 2 (the
 // cable touches the pulley and leaves it before passing under it); CableGeometryValid says
 // whether a configuration is.
@@ -70,6 +75,15 @@ struct CableState {
   Vec2<T> u_F_cable;      // unit vector from B_i toward T_i: direction of the cable's pull
 };
 
+// The pulley's two signs, the axes of its mirrored frame: s_i (side: the pulley centre is at
+// exit + s_i (r, 0)) and w_i (wrap: +1 over, -1 under).
+struct PulleySigns {
+  double side = 1.0;
+  double wrap = 1.0;
+};
+
+inline PulleySigns SignsOf(const Cable& cable) { return {SideSign(cable.side), WrapSign(cable.wrap)}; }
+
 namespace internal {
 
 template <typename T>
@@ -81,18 +95,19 @@ struct Wrap {
 };
 
 template <typename T>
-Wrap<T> ComputeWrap(const Vec2<T>& p_F_exit_m, const T& r, double side_sign, const Vec2<T>& p_F_anchor_m) {
+Wrap<T> ComputeWrap(const Vec2<T>& p_F_exit_m, const T& r, PulleySigns signs, const Vec2<T>& p_F_anchor_m) {
   using std::atan2;
   using std::sqrt;
   Wrap<T> w;
-  w.p_F_centre = Vec2<T>(p_F_exit_m.x() + side_sign * r, p_F_exit_m.y());
+  w.p_F_centre = Vec2<T>(p_F_exit_m.x() + signs.side * r, p_F_exit_m.y());
   w.m = p_F_anchor_m - w.p_F_centre;
   w.segment_length_m = sqrt(w.m.squaredNorm() - r * r);
-  // psi + delta in one atan2 (angle of the product of (s m_x, m_z) and (r, segment)): a
+  // psi + delta in one atan2 (angle of the product of (s m_x, w m_z) and (r, segment)): a
   // third fewer transcendental calls in the identification's inner loop. It wraps only
   // where phi would leave [0, 3 pi / 2], which CableGeometryValid rejects.
-  const T mx = side_sign * w.m.x();
-  w.alpha_rad = atan2(w.m.y() * r + mx * w.segment_length_m, mx * r - w.m.y() * w.segment_length_m);
+  const T mx = signs.side * w.m.x();
+  const T mz = signs.wrap * w.m.y();
+  w.alpha_rad = atan2(mz * r + mx * w.segment_length_m, mx * r - mz * w.segment_length_m);
   return w;
 }
 
@@ -100,26 +115,26 @@ Wrap<T> ComputeWrap(const Vec2<T>& p_F_exit_m, const T& r, double side_sign, con
 
 // Length from exit point to anchor only (what the identification needs).
 template <typename T>
-T CableLength(const Vec2<T>& p_F_exit_m, const T& pulley_radius_m, double side_sign, const Vec2<T>& p_F_anchor_m) {
-  const internal::Wrap<T> w = internal::ComputeWrap<T>(p_F_exit_m, pulley_radius_m, side_sign, p_F_anchor_m);
+T CableLength(const Vec2<T>& p_F_exit_m, const T& pulley_radius_m, PulleySigns signs, const Vec2<T>& p_F_anchor_m) {
+  const internal::Wrap<T> w = internal::ComputeWrap<T>(p_F_exit_m, pulley_radius_m, signs, p_F_anchor_m);
   return pulley_radius_m * (T(M_PI) - w.alpha_rad) + w.segment_length_m;
 }
 
 template <typename T>
 CableState<T> CableGeometry(const Vec2<T>& p_F_exit_m, const T& pulley_radius_m,
-                            double side_sign, const Vec2<T>& p_F_anchor_m) {
+                            PulleySigns signs, const Vec2<T>& p_F_anchor_m) {
   using std::cos;
   using std::sin;
   using std::sqrt;
   const T& r = pulley_radius_m;
-  const internal::Wrap<T> w = internal::ComputeWrap<T>(p_F_exit_m, r, side_sign, p_F_anchor_m);
+  const internal::Wrap<T> w = internal::ComputeWrap<T>(p_F_exit_m, r, signs, p_F_anchor_m);
   CableState<T> s;
   s.centre_distance_m = sqrt(w.m.squaredNorm());
   s.segment_length_m = w.segment_length_m;
   s.wrap_angle_rad = T(M_PI) - w.alpha_rad;
   s.length_m = r * s.wrap_angle_rad + s.segment_length_m;
-  s.p_F_tangent_m = Vec2<T>(w.p_F_centre.x() + side_sign * r * cos(w.alpha_rad),
-                            w.p_F_centre.y() + r * sin(w.alpha_rad));
+  s.p_F_tangent_m = Vec2<T>(w.p_F_centre.x() + signs.side * r * cos(w.alpha_rad),
+                            w.p_F_centre.y() + signs.wrap * r * sin(w.alpha_rad));
   s.u_F_cable = (s.p_F_tangent_m - p_F_anchor_m) / s.segment_length_m;
   return s;
 }
@@ -127,8 +142,7 @@ CableState<T> CableGeometry(const Vec2<T>& p_F_exit_m, const T& pulley_radius_m,
 // The cable's state at platform pose q, for the robot's nominal exit point.
 template <typename T>
 CableState<T> CableAtPose(const Cable& cable, const Pose<T>& q) {
-  return CableGeometry<T>(cable.p_F_exit_m.cast<T>(), T(cable.pulley_radius_m),
-                          SideSign(cable.side),
+  return CableGeometry<T>(cable.p_F_exit_m.cast<T>(), T(cable.pulley_radius_m), SignsOf(cable),
                           PlatformPointInF<T>(q, cable.p_P_anchor_m.cast<T>()));
 }
 
@@ -150,7 +164,7 @@ Eigen::Matrix<T, 3, Eigen::Dynamic> WrenchMatrix(const Robot& robot, const Pose<
     const Cable& c = robot.cables[i];
     const Vec2<T> r_F_anchor = R * c.p_P_anchor_m.cast<T>();
     const Vec2<T> p_F_anchor = Vec2<T>(q(0), q(1)) + r_F_anchor;
-    const CableState<T> s = CableGeometry<T>(p_F_exits_m[i], T(c.pulley_radius_m), SideSign(c.side), p_F_anchor);
+    const CableState<T> s = CableGeometry<T>(p_F_exits_m[i], T(c.pulley_radius_m), SignsOf(c), p_F_anchor);
     W(0, i) = s.u_F_cable.x();
     W(1, i) = s.u_F_cable.y();
     W(2, i) = Cross2<T>(r_F_anchor, s.u_F_cable);

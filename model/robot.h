@@ -24,8 +24,18 @@ enum class PulleySide { kLeft, kRight };
 // +1 for kLeft, -1 for kRight: the pulley centre is at exit + SideSign * (r, 0).
 inline double SideSign(PulleySide side) { return side == PulleySide::kLeft ? 1.0 : -1.0; }
 
-// The most cables a robot file may declare (the loader enforces it; fixed-size scratch
-// arrays in the model rely on it).
+// How a cable wraps its pulley. kOver: it runs up the post and over the top of the pulley
+// toward the platform (a pulley above the platform); kUnder is the mirror image in z: down
+// the post and under the bottom (a pulley below the platform, fully constrained robots).
+enum class PulleyWrap { kOver, kUnder };
+
+// +1 for kOver, -1 for kUnder: the z axis of the mirrored pulley frame (model/cable.h).
+inline double WrapSign(PulleyWrap wrap) { return wrap == PulleyWrap::kOver ? 1.0 : -1.0; }
+
+// The cable count lives in Robot::cables alone; every stage sizes its vectors and matrices
+// from num_cables() (README, "Any number of cables"). These bound it: the loader enforces
+// them, and fixed-capacity scratch arrays in the model rely on the upper one.
+constexpr int kMinCables = 2;
 constexpr int kMaxCables = 8;
 // Upper bounds of the robot file's sizes (README, "Robot file"): far beyond any robot this
 // tool is for, so that a unit slip (981 for 9.81, a frame in mm) is refused by name.
@@ -37,6 +47,7 @@ struct Cable {
   Eigen::Vector2d p_F_exit_m;        // exit point A_i: the pulley's outermost point at centre height
   double pulley_radius_m = 0.0;
   PulleySide side = PulleySide::kLeft;
+  PulleyWrap wrap = PulleyWrap::kOver;
   Eigen::Vector2d p_P_anchor_m;      // anchor b_i on the platform, platform frame
   std::optional<double> initial_length_m;  // overrides the length at the home pose
 };
@@ -74,10 +85,16 @@ struct Robot {
   double theta_max_rad = 0.0;  // inclinometer range
   double laser_range_m = 0.0;  // largest measurable platform height z
   double margin_m = 0.0;       // platform points keep this distance from the frame
-  Eigen::Vector2d p_F_home_m = Eigen::Vector2d::Zero();  // home (x, z); theta from equilibrium
+  Eigen::Vector2d p_F_home_m = Eigen::Vector2d::Zero();  // home (x, z)
+  // Home orientation for m >= 3 (the file's home_theta_deg). With 2 cables the equilibrium
+  // decides theta and this stays 0.
+  double home_theta_rad = 0.0;
   SensorNoise sensors;
 
   int num_cables() const { return static_cast<int>(cables.size()); }
+  // With 2 cables the statics fix theta at a position (x, z); with 3 or more the lengths fix
+  // the whole pose and theta is free within the band where the tensions stay within bounds.
+  bool theta_is_free() const { return num_cables() >= 3; }
 };
 
 // Parses and validates a robot file. Throws InputError naming file, line and key on any

@@ -106,7 +106,7 @@ Robot Parse(const YAML::Node& root, const Reader& rd) {
   Robot robot;
   robot.source = rd.source();
   rd.ExpectMap(root, "", {"name", "gravity", "frame", "platform", "cables", "tension", "limits", "home", "sensors"},
-               {"true_poses"});
+               {"true_poses", "home_theta_deg"});
 
   robot.name = rd.String(root["name"], "name");
   if (robot.name.empty()) rd.Fail(root["name"], "name", "must not be empty");
@@ -134,9 +134,9 @@ Robot Parse(const YAML::Node& root, const Reader& rd) {
 
   const YAML::Node cables = root["cables"];
   if (!cables.IsSequence()) rd.Fail(cables, "cables", "must be a list of cables");
-  if (cables.size() != 2) {
-    rd.Fail(cables, "cables", "cablecal supports exactly 2 cables for now (got " +
-                                  std::to_string(cables.size()) + ")");
+  if (cables.size() < static_cast<std::size_t>(kMinCables) || cables.size() > static_cast<std::size_t>(kMaxCables)) {
+    rd.Fail(cables, "cables", "must list " + std::to_string(kMinCables) + " to " + std::to_string(kMaxCables) +
+                                  " cables (got " + std::to_string(cables.size()) + ")");
   }
   if (anchors.size() != cables.size()) {
     rd.Fail(anchors, "platform.anchors", "needs one anchor per cable (" + std::to_string(cables.size()) +
@@ -145,19 +145,32 @@ Robot Parse(const YAML::Node& root, const Reader& rd) {
   for (std::size_t i = 0; i < cables.size(); ++i) {
     const std::string key = "cables[" + std::to_string(i) + "]";
     const YAML::Node c = cables[i];
-    rd.ExpectMap(c, key, {"exit", "pulley_radius", "side"}, {"initial_length"});
+    rd.ExpectMap(c, key, {"exit", "pulley_radius", "side"}, {"initial_length", "wrap"});
     Cable cable;
+    if (c["wrap"]) {
+      const std::string wrap = rd.String(c["wrap"], key + ".wrap");
+      if (wrap == "over") {
+        cable.wrap = PulleyWrap::kOver;
+      } else if (wrap == "under") {
+        cable.wrap = PulleyWrap::kUnder;
+      } else {
+        rd.Fail(c["wrap"], key + ".wrap", "must be 'over' or 'under' (got '" + wrap + "')");
+      }
+    }
     cable.p_F_exit_m = rd.Vector2(c["exit"], key + ".exit");
     // The exit point is on the frame: a point well outside it (a typo, or mm for m) would make
-    // a robot the workspace and the design still accept.
+    // a robot the workspace and the design still accept. A pulley the cable wraps over hangs
+    // above the floor (z > 0); one it wraps under may sit on the floor's edge of the frame.
     constexpr double kOnFrameTol_m = kExitOffFrameTolerance_m;
+    const bool under = cable.wrap == PulleyWrap::kUnder;
+    const bool z_low_ok = under ? cable.p_F_exit_m.y() >= -kOnFrameTol_m : cable.p_F_exit_m.y() > 0.0;
     if (!(cable.p_F_exit_m.x() >= -kOnFrameTol_m && cable.p_F_exit_m.x() <= robot.frame_width_m + kOnFrameTol_m &&
-          cable.p_F_exit_m.y() > 0.0 && cable.p_F_exit_m.y() <= robot.frame_height_m + kOnFrameTol_m)) {
+          z_low_ok && cable.p_F_exit_m.y() <= robot.frame_height_m + kOnFrameTol_m)) {
       rd.Fail(c["exit"], key + ".exit",
               "(" + FormatDouble(cable.p_F_exit_m.x()) + ", " + FormatDouble(cable.p_F_exit_m.y()) +
-                  ") m is outside the frame [0, " + FormatDouble(robot.frame_width_m) + "] x (0, " +
-                  FormatDouble(robot.frame_height_m) + "] m by more than " + FormatDouble(kOnFrameTol_m) +
-                  " m: exit points are on the frame");
+                  ") m is outside the frame [0, " + FormatDouble(robot.frame_width_m) + "] x " +
+                  (under ? "[0, " : "(0, ") + FormatDouble(robot.frame_height_m) + "] m by more than " +
+                  FormatDouble(kOnFrameTol_m) + " m: exit points are on the frame");
     }
     cable.pulley_radius_m = rd.Number(c, key, "pulley_radius");
     rd.Positive(c["pulley_radius"], key + ".pulley_radius", cable.pulley_radius_m);
@@ -264,11 +277,40 @@ Robot Parse(const YAML::Node& root, const Reader& rd) {
   s.inclinometer_repeatability_rad = inc_rep_deg * kDegToRad;
 
   robot.p_F_home_m = rd.Vector2(root["home"], "home");
-  const PoseEvaluation home = EvaluatePose(robot, robot.p_F_home_m.x(), robot.p_F_home_m.y());
+  double home_theta_deg = 0.0;  // as typed, for messages
+  if (root["home_theta_deg"]) {
+    if (!robot.theta_is_free()) {
+      rd.Fail(root["home_theta_deg"], "home_theta_deg",
+              "is for robots with 3 or more cables: with 2 cables the equilibrium decides theta at home");
+    }
+    const double theta_deg = rd.Number(root, "", "home_theta_deg");
+    if (!(std::abs(theta_deg) <= theta_max_deg)) {
+      rd.Fail(root["home_theta_deg"], "home_theta_deg",
+              FormatDouble(theta_deg) + " degrees is beyond limits.theta_max_deg (" + FormatDouble(theta_max_deg) +
+                  ")");
+    }
+    robot.home_theta_rad = theta_deg * kDegToRad;
+    home_theta_deg = theta_deg;
+  }
+  const PoseEvaluation home = EvaluateHome(robot);
   if (!home.feasible()) {
-    rd.Fail(root["home"], "home",
-            "(" + FormatDouble(robot.p_F_home_m.x()) + ", " + FormatDouble(robot.p_F_home_m.y()) +
-                ") m is not in the feasible workspace: " + ToString(home.feasibility));
+    const std::string pose = "(" + FormatDouble(robot.p_F_home_m.x()) + ", " + FormatDouble(robot.p_F_home_m.y()) +
+                             ") m" +
+                             (robot.theta_is_free() ? " at theta " + FormatDouble(home_theta_deg) + " degrees (home_theta_deg)"
+                                                    : "");
+    std::string hint;
+    if (robot.theta_is_free() && home.feasibility != Feasibility::kOutsideFrame &&
+        home.feasibility != Feasibility::kLaserRange) {
+      // The orientations that are feasible at this (x, z): what to type, in whole scan steps.
+      const ThetaScan scan = ScanTheta(robot, robot.p_F_home_m.x(), robot.p_F_home_m.y());
+      const auto degrees = [](double rad) { return 0.5 * std::round(rad / kThetaScanStep_rad); };
+      hint = scan.feasible_count > 0
+                 ? "; feasible home_theta_deg at this (x, z): " + FormatDouble(degrees(scan.theta_min_rad)) + " to " +
+                       FormatDouble(degrees(scan.theta_max_rad)) + " (0.5-degree scan)"
+                 : "; no orientation is feasible at this (x, z) (0.5-degree scan): move home";
+    }
+    const YAML::Node at = robot.theta_is_free() && root["home_theta_deg"] ? root["home_theta_deg"] : root["home"];
+    rd.Fail(at, "home", pose + " is not in the feasible workspace: " + ToString(home.feasibility) + hint);
   }
   return robot;
 }
@@ -367,6 +409,7 @@ void EmitRobotFields(YAML::Emitter& o, const Robot& robot) {
     v2(c.p_F_exit_m);
     o << YAML::Key << "pulley_radius" << YAML::Value << YamlNumber{c.pulley_radius_m};
     o << YAML::Key << "side" << YAML::Value << (c.side == PulleySide::kLeft ? "left" : "right");
+    if (c.wrap == PulleyWrap::kUnder) o << YAML::Key << "wrap" << YAML::Value << "under";
     if (c.initial_length_m) o << YAML::Key << "initial_length" << YAML::Value << YamlNumber{*c.initial_length_m};
     o << YAML::EndMap;
   }
@@ -380,6 +423,9 @@ void EmitRobotFields(YAML::Emitter& o, const Robot& robot) {
     << YAML::EndMap;
   o << YAML::Key << "home" << YAML::Value;
   v2(robot.p_F_home_m);
+  if (robot.theta_is_free()) {
+    o << YAML::Key << "home_theta_deg" << YAML::Value << YamlNumber{Degrees(robot.home_theta_rad)};
+  }
   const SensorNoise& s = robot.sensors;
   o << YAML::Key << "sensors" << YAML::Value << YAML::BeginMap;
   o << YAML::Key << "laser" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "accuracy" << YAML::Value

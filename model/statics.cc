@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "common/error.h"
 #include "model/cable.h"
@@ -54,6 +55,18 @@ MomentBalance EvaluateMomentBalance(const Robot& robot, double x_m, double z_m, 
 
 double ResidualNorm(const Robot& robot, const Eigen::Vector3d& q, const Eigen::VectorXd& t) {
   return EquilibriumResidual<double>(robot, q, t).norm();
+}
+
+// m >= 3: pose q held by tensions t (a tension distribution with every t_i > 0). No reduced
+// stiffness: the lengths leave no motion; taut cables hold the pose (Equilibrium's comment).
+Equilibrium HeldPose(const Robot& robot, const Eigen::Vector3d& q, const Eigen::VectorXd& tensions_N) {
+  Equilibrium eq;
+  eq.q = q;
+  eq.tensions_N = tensions_N;
+  eq.residual_N = ResidualNorm(robot, q, tensions_N);
+  eq.reduced_stiffness = std::numeric_limits<double>::quiet_NaN();
+  eq.stable = true;
+  return eq;
 }
 
 }  // namespace
@@ -222,6 +235,7 @@ const char* ToString(ForwardStatus s) {
     case ForwardStatus::kNotConverged: return "not_converged";
     case ForwardStatus::kSlack: return "slack_cable";
     case ForwardStatus::kUnstable: return "unstable";
+    case ForwardStatus::kOtherAssembly: return "other_assembly";
   }
   return "unknown";
 }
@@ -284,6 +298,79 @@ PoseEvaluation EvaluatePose(const Robot& robot, double x_m, double z_m) {
   return e;
 }
 
+PoseEvaluation EvaluatePose(const Robot& robot, const Eigen::Vector3d& q) {
+  CABLECAL_CHECK(robot.theta_is_free(), "a full pose is evaluated for 3 or more cables; 2 cables fix theta");
+  PoseEvaluation e;
+  e.equilibrium.q = q;
+  if (!InsideFrame(robot, q.head<2>())) {
+    e.feasibility = Feasibility::kOutsideFrame;
+    return e;
+  }
+  if (q(1) > robot.laser_range_m) {
+    e.feasibility = Feasibility::kLaserRange;
+    return e;
+  }
+  for (const Cable& c : robot.cables) {
+    if (!CableGeometryValid(CableAtPose<double>(c, q), c.pulley_radius_m)) {
+      e.feasibility = Feasibility::kCableGeometry;
+      return e;
+    }
+  }
+  const TensionDistribution t = DistributeTensions(robot, q);
+  if (t.feasibility == Feasibility::kNoEquilibrium) {
+    e.feasibility = Feasibility::kNoEquilibrium;
+    return e;
+  }
+  e.has_equilibrium = true;
+  e.equilibrium = HeldPose(robot, q, t.tensions_N);
+  e.feasibility = CheckFeasibility(robot, q, t.tensions_N);
+  return e;
+}
+
+ThetaScan ScanTheta(const Robot& robot, double x_m, double z_m) {
+  CABLECAL_CHECK(robot.theta_is_free(), "theta is scanned for 3 or more cables");
+  const int half = static_cast<int>(std::floor(robot.theta_max_rad / kThetaScanStep_rad + 1e-9));
+  std::vector<PoseEvaluation> evaluations;
+  evaluations.reserve(2 * half + 1);
+  for (int k = -half; k <= half; ++k) {
+    evaluations.push_back(EvaluatePose(robot, Eigen::Vector3d(x_m, z_m, k * kThetaScanStep_rad)));
+  }
+  ThetaScan scan;
+  // The longest run of consecutive feasible samples; its middle sample is reported.
+  int best_start = -1, best_length = 0;
+  for (int k = 0; k < static_cast<int>(evaluations.size());) {
+    if (!evaluations[k].feasible()) {
+      ++k;
+      continue;
+    }
+    int end = k;
+    while (end < static_cast<int>(evaluations.size()) && evaluations[end].feasible()) ++end;
+    scan.feasible_count += end - k;
+    if (std::isnan(scan.theta_min_rad)) scan.theta_min_rad = (k - half) * kThetaScanStep_rad;
+    scan.theta_max_rad = (end - 1 - half) * kThetaScanStep_rad;
+    if (end - k > best_length) {
+      best_length = end - k;
+      best_start = k;
+    }
+    k = end;
+  }
+  if (best_start >= 0) {
+    scan.evaluation = evaluations[best_start + best_length / 2];
+    return scan;
+  }
+  // Nothing feasible: the reason most orientations give (the first in scan order on a tie).
+  int counts[16] = {0};
+  for (const PoseEvaluation& e : evaluations) ++counts[static_cast<int>(e.feasibility)];
+  int best = 0;
+  for (std::size_t k = 1; k < evaluations.size(); ++k) {
+    if (counts[static_cast<int>(evaluations[k].feasibility)] > counts[static_cast<int>(evaluations[best].feasibility)]) {
+      best = static_cast<int>(k);
+    }
+  }
+  scan.evaluation = evaluations[best];
+  return scan;
+}
+
 InversePose InverseModel(const Robot& robot, double x_m, double z_m) {
   InversePose inv;
   inv.evaluation = EvaluatePose(robot, x_m, z_m);
@@ -293,6 +380,21 @@ InversePose InverseModel(const Robot& robot, double x_m, double z_m) {
   return inv;
 }
 
+PoseEvaluation EvaluateHome(const Robot& robot) {
+  return robot.theta_is_free()
+             ? EvaluatePose(robot, Eigen::Vector3d(robot.p_F_home_m.x(), robot.p_F_home_m.y(), robot.home_theta_rad))
+             : EvaluatePose(robot, robot.p_F_home_m.x(), robot.p_F_home_m.y());
+}
+
+PoseEvaluation HomeEvaluation(const Robot& robot) {
+  const PoseEvaluation home = EvaluateHome(robot);
+  if (!home.feasible()) {
+    throw InputError(robot.source, "home",
+                     std::string("the home pose is not in the feasible workspace (") + ToString(home.feasibility) + ")");
+  }
+  return home;
+}
+
 Eigen::VectorXd InitialLengths(const Robot& robot) {
   Eigen::VectorXd l0(robot.num_cables());
   bool all_given = true;
@@ -300,15 +402,7 @@ Eigen::VectorXd InitialLengths(const Robot& robot) {
     all_given = all_given && robot.cables[i].initial_length_m.has_value();
   }
   Eigen::VectorXd home_lengths;
-  if (!all_given) {
-    const InversePose home = InverseModel(robot, robot.p_F_home_m.x(), robot.p_F_home_m.y());
-    if (!home.evaluation.feasible()) {
-      throw InputError(robot.source, "home",
-                       std::string("the home pose is not in the feasible workspace (") +
-                           ToString(home.evaluation.feasibility) + ")");
-    }
-    home_lengths = home.lengths_m;
-  }
+  if (!all_given) home_lengths = CableLengths(robot, HomeEvaluation(robot).equilibrium.q);
   for (int i = 0; i < robot.num_cables(); ++i) {
     l0(i) = robot.cables[i].initial_length_m.value_or(all_given ? 0.0 : home_lengths(i));
   }
@@ -422,12 +516,100 @@ ForwardResult ForwardNewton(const Robot& robot, const Eigen::VectorXd& lengths_m
   return result;
 }
 
+
+// m >= 3: Gauss-Newton on l(q) = L from one start (dl/dq = -W', model/cable.h).
+ForwardResult GaussNewtonLengths(const Robot& robot, const Eigen::VectorXd& lengths_m, const Eigen::Vector3d& start) {
+  constexpr int kMaxIterations = 60;
+  constexpr double kStepTol = 1e-13;  // m and rad: at the least-squares minimum to rounding
+  ForwardResult result;
+  Eigen::Vector3d q = start;
+  auto residual = [&](const Eigen::Vector3d& at, Eigen::VectorXd* r) {
+    *r = CableLengths(robot, at) - lengths_m;
+    return r->allFinite();
+  };
+  Eigen::VectorXd r;
+  if (!residual(q, &r)) return result;
+  for (int it = 0; it < kMaxIterations; ++it) {
+    result.iterations = it + 1;
+    const Eigen::MatrixXd J = -WrenchMatrix<double>(robot, Pose<double>(q)).transpose();
+    const Eigen::Vector3d step = J.colPivHouseholderQr().solve(-r);
+    if (!step.allFinite()) break;
+    double lambda = 1.0;
+    Eigen::Vector3d q_new;
+    Eigen::VectorXd r_new;
+    bool descent = false;
+    for (int ls = 0; ls < 30; ++ls) {
+      q_new = q + lambda * step;
+      if (residual(q_new, &r_new) && r_new.squaredNorm() <= r.squaredNorm()) {
+        descent = true;
+        break;
+      }
+      lambda *= 0.5;
+    }
+    if (!descent) {
+      // No decrease along a Gauss-Newton step: at the minimum to rounding if the step is tiny.
+      if (step.cwiseAbs().maxCoeff() < 1e3 * kStepTol) result.status = ForwardStatus::kConverged;
+      break;
+    }
+    q = q_new;
+    r = r_new;
+    if ((lambda * step).cwiseAbs().maxCoeff() < kStepTol || r.cwiseAbs().maxCoeff() < 1e-13) {
+      result.status = ForwardStatus::kConverged;
+      break;
+    }
+  }
+  // A cold start can converge a turn away: the same pose, reported in (-pi, pi].
+  q(2) = std::remainder(q(2), 2.0 * M_PI);
+  result.equilibrium.q = q;
+  result.length_residual_m = r.cwiseAbs().maxCoeff();
+  return result;
+}
+
+// m >= 3: the pose the lengths fix, then the tensions that hold it there.
+ForwardResult ForwardKinematics(const Robot& robot, const Eigen::VectorXd& lengths_m, const Eigen::Vector3d* guess) {
+  const auto other_assembly = [&](const Eigen::Vector3d& q) {
+    for (const Cable& c : robot.cables) {
+      if (!CableGeometryValid(CableAtPose<double>(c, q), c.pulley_radius_m)) return true;
+    }
+    if (!(q(0) >= 0.0 && q(0) <= robot.frame_width_m && q(1) >= 0.0 && q(1) <= robot.frame_height_m)) return true;
+    return guess && ((q.head<2>() - guess->head<2>()).norm() > kOtherAssemblyDistance_m ||
+                     std::abs(q(2) - (*guess)(2)) > kOtherAssemblyAngle_rad);
+  };
+  std::vector<Eigen::Vector3d> starts;
+  if (guess) {
+    starts.push_back(*guess);
+  } else {
+    starts.emplace_back(robot.p_F_home_m.x(), robot.p_F_home_m.y(), robot.home_theta_rad);
+    for (const double theta_deg : {0.0, 25.0, -25.0, 50.0, -50.0}) {
+      Eigen::Vector3d start;
+      if (CircleIntersectionGuess(robot, lengths_m, theta_deg * kDegToRad, &start)) starts.push_back(start);
+    }
+  }
+  ForwardResult last;
+  for (const Eigen::Vector3d& start : starts) {
+    last = GaussNewtonLengths(robot, lengths_m, start);
+    if (last.status != ForwardStatus::kConverged) continue;
+    if (other_assembly(last.equilibrium.q)) {
+      last.status = ForwardStatus::kOtherAssembly;
+      continue;
+    }
+    const TensionDistribution t = DistributeTensions(robot, last.equilibrium.q);
+    if (t.feasibility == Feasibility::kNoEquilibrium) {
+      last.status = ForwardStatus::kSlack;
+      continue;
+    }
+    last.equilibrium = HeldPose(robot, last.equilibrium.q, t.tensions_N);
+    return last;
+  }
+  return last;
+}
+
 }  // namespace
 
 ForwardResult SolveForwardGeometricoStatic(const Robot& robot, const Eigen::VectorXd& lengths_m,
                                            const Eigen::Vector3d* guess) {
-  CABLECAL_CHECK(robot.num_cables() == 2, "the forward model is implemented for 2 cables");
-  CABLECAL_CHECK(lengths_m.size() == 2, "one length per cable");
+  CABLECAL_CHECK(lengths_m.size() == robot.num_cables(), "one length per cable");
+  if (robot.theta_is_free()) return ForwardKinematics(robot, lengths_m, guess);
   ForwardResult last;
   if (guess) {
     last = ForwardNewton(robot, lengths_m, *guess);

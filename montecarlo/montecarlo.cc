@@ -98,16 +98,10 @@ int MonteCarloCell::failures(const std::string& cause) const {
 }
 
 Robot TrueGeometryForTrial(const Robot& nominal, double sigma_m, Gauge gauge, Rng& rng) {
-  GeometryVector g = GeometryOf(nominal);
-  GeometryVector draw;
-  for (int k = 0; k < 6; ++k) draw(k) = rng.Normal();  // always six draws: streams stay aligned
-  for (int k = 0; k < 6; ++k) {
-    double sigma = sigma_m;
-    if (gauge == Gauge::kA1x && k == 0) sigma = 0.0;
-    if (gauge == Gauge::kPrior && k < 4 && nominal.sensors.tracker_sigma_m) sigma = *nominal.sensors.tracker_sigma_m;
-    g(k) += sigma * draw(k);
-  }
-  return WithGeometry(nominal, g);
+  // The one rule (identify/experiment.h PerturbGeometry): a1x held, 3m draws whatever the sigmas.
+  const double exit_sigma_m =
+      gauge == Gauge::kPrior && nominal.sensors.tracker_sigma_m ? *nominal.sensors.tracker_sigma_m : sigma_m;
+  return PerturbGeometry(nominal, sigma_m, exit_sigma_m, rng);
 }
 
 namespace {
@@ -145,7 +139,7 @@ TrialOutcome RunTrial(const Robot& nominal, const MonteCarloOptions& o, int n, P
       return out;
     }
     const GeometryVector g_true = GeometryOf(truth);
-    for (int k = 0; k < 6; ++k) out.errors_m.push_back(r.geometry(k) - g_true(k));  // paper, Eq. (9)
+    for (int k = 0; k < g_true.size(); ++k) out.errors_m.push_back(r.geometry(k) - g_true(k));  // paper, Eq. (9)
     for (int j = 0; j < n; ++j) out.errors_m.push_back(r.poses[j].q(0) - sim.true_poses[j](0));
     out.ok = true;
   } catch (const SolverFailure& e) {
@@ -171,10 +165,13 @@ void ValidateOptions(const MonteCarloOptions& o, const Robot* nominal) {
   if (nominal && o.gauge == Gauge::kPrior && !nominal->sensors.tracker_sigma_m) {
     throw InputError(nominal->source, "sensors.tracker.sigma", "is needed for --gauge prior");
   }
-  // Every successful trial keeps 6 + n errors (8 bytes each): refuse a study that would not
+  // Every successful trial keeps 3m + n errors (8 bytes each): refuse a study that would not
   // fit in memory before starting it, naming the size.
+  const int geometry_count = 3 * (nominal ? nominal->num_cables() : 2);
   double bytes = 0.0;
-  for (const int n : o.pose_counts) bytes += 8.0 * (6 + n) * o.trials * static_cast<double>(o.designs.size());
+  for (const int n : o.pose_counts) {
+    bytes += 8.0 * (geometry_count + n) * o.trials * static_cast<double>(o.designs.size());
+  }
   if (bytes > kMaxStudyBytes) {
     char buffer[160];
     std::snprintf(buffer, sizeof(buffer), "the study would keep %.3g GB of errors (at most %.3g GB): fewer trials or "
@@ -291,23 +288,31 @@ MonteCarloResult RunMonteCarlo(const Robot& nominal, const MonteCarloOptions& o)
     return result;
   }
   result = AssembleShares(o, std::move(shares));
+  result.num_cables = nominal.num_cables();
   result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;
 }
 
-std::vector<std::string> SummaryParameters() { return {"a1x", "a1z", "a2x", "a2z", "l10", "l20", "x4", "x_all"}; }
+std::vector<std::string> SummaryParameters(int num_cables) {
+  std::vector<std::string> names = GeometryNames(num_cables);
+  names.push_back("x4");
+  names.push_back("x_all");
+  return names;
+}
 
-ErrorStats Summarise(const MonteCarloCell& cell, const std::string& parameter) {
+ErrorStats Summarise(const MonteCarloCell& cell, int num_cables, const std::string& parameter) {
+  const std::vector<std::string> geometry = GeometryNames(num_cables);
+  const int g = static_cast<int>(geometry.size());
   std::vector<double> e;
   for (const TrialOutcome& t : cell.trials) {
     if (!t.ok) continue;
     if (parameter == "x_all") {
-      e.insert(e.end(), t.errors_m.begin() + 6, t.errors_m.end());
+      e.insert(e.end(), t.errors_m.begin() + g, t.errors_m.end());
     } else if (parameter == "x4") {
-      if (cell.n >= 4) e.push_back(t.errors_m[6 + 3]);
+      if (cell.n >= 4) e.push_back(t.errors_m[g + 3]);
     } else {
-      for (int k = 0; k < 6; ++k) {
-        if (parameter == kGeometryNames[k]) e.push_back(t.errors_m[k]);
+      for (int k = 0; k < g; ++k) {
+        if (parameter == geometry[k]) e.push_back(t.errors_m[k]);
       }
     }
   }
@@ -333,13 +338,15 @@ ErrorStats Summarise(const MonteCarloCell& cell, const std::string& parameter) {
 
 std::string ErrorsCsv(const MonteCarloResult& r) {
   std::string out = "n,design,trial,parameter,error\n";
+  const std::vector<std::string> geometry = GeometryNames(r.num_cables);
+  const std::size_t g = geometry.size();
   for (const MonteCarloCell& c : r.cells) {
     for (std::size_t t = 0; t < c.trials.size(); ++t) {
       const TrialOutcome& tr = c.trials[t];
       if (!tr.ok) continue;
       const std::string prefix = std::to_string(c.n) + "," + ToString(c.design) + "," + std::to_string(t + 1) + ",";
       for (std::size_t k = 0; k < tr.errors_m.size(); ++k) {
-        const std::string name = k < 6 ? kGeometryNames[k] : "x" + std::to_string(k - 5);
+        const std::string name = k < g ? geometry[k] : "x" + std::to_string(k - g + 1);
         out += prefix + name + "," + FormatDouble(tr.errors_m[k]) + "\n";
       }
     }
@@ -373,8 +380,8 @@ std::string SummaryCsv(const MonteCarloResult& r) {
   for (const std::string& cause : FailureCauses()) out += ",failed_" + cause;
   out += "\n";
   for (const MonteCarloCell& c : r.cells) {
-    for (const std::string& p : SummaryParameters()) {
-      const ErrorStats s = Summarise(c, p);
+    for (const std::string& p : SummaryParameters(r.num_cables)) {
+      const ErrorStats s = Summarise(c, r.num_cables, p);
       // No successful trial: no statistic (empty cells), never a zero; one trial: no std.
       auto stat = [&](double v, int needed) { return s.count >= needed ? FormatDouble(v) : std::string(); };
       out += std::to_string(c.n) + "," + ToString(c.design) + "," + p + "," + stat(s.mean, 1) + "," + stat(s.std, 2) +
@@ -396,16 +403,16 @@ std::string SummaryMarkdown(const MonteCarloResult& r, const std::string& title)
        "hold a commanded pose within its limits), identification. Failed trials have no error to count, so the\n"
        "statistics are over the successful ones: compare designs on both columns.\n\n";
   o << "| n | design |";
-  for (const std::string& p : SummaryParameters()) o << " " << p << " |";
+  for (const std::string& p : SummaryParameters(r.num_cables)) o << " " << p << " |";
   o << " within ±5 mm | failed |\n|---|---|";
-  for (std::size_t k = 0; k < SummaryParameters().size() + 2; ++k) o << "---|";
+  for (std::size_t k = 0; k < SummaryParameters(r.num_cables).size() + 2; ++k) o << "---|";
   o << "\n";
   char buf[32];
   for (const MonteCarloCell& c : r.cells) {
     o << "| " << c.n << " | " << ToString(c.design) << " |";
     int within = 0, count = 0;
-    for (const std::string& p : SummaryParameters()) {
-      const ErrorStats s = Summarise(c, p);
+    for (const std::string& p : SummaryParameters(r.num_cables)) {
+      const ErrorStats s = Summarise(c, r.num_cables, p);
       if (s.count > 1) {
         std::snprintf(buf, sizeof(buf), " %.3f |", 1e3 * s.std);
         o << buf;
@@ -417,7 +424,7 @@ std::string SummaryMarkdown(const MonteCarloResult& r, const std::string& title)
         count += s.count;
       }
     }
-    const ErrorStats xs = Summarise(c, "x_all");
+    const ErrorStats xs = Summarise(c, r.num_cables, "x_all");
     within += static_cast<int>(std::lround(xs.share_within_5mm * xs.count));
     count += xs.count;
     std::snprintf(buf, sizeof(buf), " %.1f %% |", count ? 100.0 * within / count : 0.0);

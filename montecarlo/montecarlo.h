@@ -56,7 +56,7 @@ struct MonteCarloOptions {
 struct TrialOutcome {
   bool ok = false;
   std::string failure;  // "<cause>: why", cause one of FailureCauses()
-  std::vector<double> errors_m;    // identified - true: a1x a1z a2x a2z l10 l20 x1..xn
+  std::vector<double> errors_m;    // identified - true: the 3m geometric parameters (a1x a1z ... l10 ...), x1..xn
 };
 
 struct MonteCarloCell {
@@ -74,6 +74,7 @@ struct MonteCarloCell {
 const std::vector<std::string>& FailureCauses();
 
 struct MonteCarloResult {
+  int num_cables = 2;                 // of the robot studied: names the geometric errors
   std::vector<MonteCarloCell> cells;  // n-major, then designs in the order given
   bool interrupted = false;
   double wall_time_s = 0.0;
@@ -83,6 +84,7 @@ struct MonteCarloResult {
 MonteCarloResult RunMonteCarlo(const Robot& nominal, const MonteCarloOptions& options);
 // The InputErrors of RunMonteCarlo; with `nominal`, also what the options need of the robot
 // (a tracker sigma for --gauge prior).
+// The memory bound counts 3m geometric errors per trial (m = 2 without `nominal`).
 void ValidateOptions(const MonteCarloOptions& options, const Robot* nominal = nullptr);
 constexpr double kMaxStudyBytes = 4e9;  // the errors a study keeps in memory, at most
 
@@ -139,20 +141,20 @@ std::vector<TrialOutcome> DecodeOutcomes(const std::string& bytes);
 std::string EncodePoses(const std::vector<PlanPose>& poses);
 std::vector<PlanPose> DecodePoses(const std::string& bytes);
 
-// The true geometry of one trial: nominal with every parameter perturbed by N(0, sigma^2),
-// except what the gauge defines: a1x under `a1x` (the frame's origin is exit point 1), and
-// under `prior` the exit points by the tracker's sigma (what the prior assumes).
+// The true geometry of one trial: PerturbGeometry's one rule (identify/experiment.h): every
+// parameter but a1x (which fixes F's x origin, under every gauge) perturbed by N(0, sigma^2),
+// the exit points by the tracker's sigma under `prior` (what the prior assumes).
 Robot TrueGeometryForTrial(const Robot& nominal, double sigma_m, Gauge gauge, Rng& rng);
 
-// Parameter names of the summary: the geometric ones, x4 (the 4th pose's x, as the paper's
-// figures) and x_all (every pose's x pooled).
-std::vector<std::string> SummaryParameters();
+// Parameter names of the summary: the geometric ones (3 per cable), x4 (the 4th pose's x, as
+// the paper's figures) and x_all (every pose's x pooled).
+std::vector<std::string> SummaryParameters(int num_cables);
 
 struct ErrorStats {
   int count = 0;
   double mean = 0, std = 0, rms = 0, max_abs = 0, share_within_5mm = 0;
 };
-ErrorStats Summarise(const MonteCarloCell& cell, const std::string& parameter);
+ErrorStats Summarise(const MonteCarloCell& cell, int num_cables, const std::string& parameter);
 
 std::string ErrorsCsv(const MonteCarloResult& r);   // n,design,trial,parameter,error
 std::string SummaryCsv(const MonteCarloResult& r);

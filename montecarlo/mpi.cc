@@ -242,6 +242,7 @@ MonteCarloResult RunMonteCarloMpi(const Robot& nominal, const MonteCarloOptions&
   if (interrupted) Verdict(world, Status{kExitInterrupted, "", ""});
   Verdict(world, Status{});
   MonteCarloResult result = AssembleShares(o, std::move(shares));
+  result.num_cables = nominal.num_cables();
   result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;
 }

@@ -11,6 +11,7 @@ import argparse
 import collections
 import csv
 import os
+import re
 import sys
 
 import matplotlib
@@ -51,9 +52,18 @@ DESIGN_STYLE = {
 }
 
 
+def geometry_names(names):
+    """The geometric parameters among `names` in the study's order: a1x a1z ... amz, l10 ... lm0."""
+    seen = [p for p in dict.fromkeys(names) if re.fullmatch(r"a[0-9]+[xz]|l[0-9]+0", p)]
+    return sorted(seen, key=lambda p: (p[0] == "l", int(p[1:-1]), p[-1]))
+
+
 def sigma_vs_n(summary, out):
-    params = ["a1z", "a2x", "a2z", "l10", "l20", "x4"]
-    fig, axes = plt.subplots(2, 3, figsize=(13, 7), sharex=True)
+    # Every geometric parameter but the gauge's a1x (always 0 under gauge a1x), then x4; three
+    # panels a row (2 x 3 for two cables).
+    params = [p for p in geometry_names(r["parameter"] for r in summary) if p != "a1x"] + ["x4"]
+    rows_of_panels = (len(params) + 2) // 3
+    fig, axes = plt.subplots(rows_of_panels, 3, figsize=(13, 3.5 * rows_of_panels), sharex=True, squeeze=False)
     order = list(DESIGN_STYLE)
     designs = sorted({r["design"] for r in summary}, key=lambda d: order.index(d) if d in order else len(order))
     for ax, p in zip(axes.flat, params):
@@ -70,6 +80,8 @@ def sigma_vs_n(summary, out):
         ax.set_yscale("log")
         ax.set_ylabel("sigma (mm, log scale)")
         ax.grid(alpha=0.3)
+    for ax in axes.flat[len(params):]:
+        ax.set_visible(False)
     for ax in axes[-1]:
         ax.set_xlabel("number of poses n")
     axes.flat[0].legend(fontsize=8)
@@ -103,12 +115,14 @@ def one_calibration(first_trial, out):
         return
     key = max((k for k in first_trial if k[1] == "random"), default=None) or max(first_trial)
     row = first_trial[key]
-    names = [p for p in ["a1x", "a1z", "a2x", "a2z", "l10", "l20"] if p in row]
+    names = geometry_names(row)
+    geometry_count = len(names)
     names += sorted((p for p in row if p.startswith("x")), key=lambda s: int(s[1:]))
     values = [row[p] for p in names]
     within = 100.0 * np.mean(np.abs(values) <= 5.0)
     fig, ax = plt.subplots(figsize=(13, 4))
-    ax.bar(range(len(names)), values, color=["tab:red"] * 6 + ["tab:blue"] * (len(names) - 6))
+    ax.bar(range(len(names)), values,
+           color=["tab:red"] * geometry_count + ["tab:blue"] * (len(names) - geometry_count))
     ax.axhline(5, color="0.5", ls="--", lw=0.8)
     ax.axhline(-5, color="0.5", ls="--", lw=0.8)
     ax.set_xticks(range(len(names)))

@@ -57,6 +57,7 @@ def main():
                    aspect="equal", interpolation="nearest")
     fig.colorbar(im, ax=ax, label="largest cable tension (N)", shrink=0.8)
     styles = ["-", "--", ":", "-."]
+    style_names = ["solid", "dashed", "dotted", "dash-dot"]
     for k, c in enumerate(tension_cols):
         if np.isfinite(t[c]).sum() > 4:
             cs = ax.contour(xs, zs, t[c], levels=8, colors="white", linestyles=styles[k % 4], linewidths=0.8)
@@ -68,8 +69,16 @@ def main():
     if args.home:
         ax.plot(*args.home, "w*", ms=12, mec="black", label="home")
     area = feas.sum() * step * step
-    ax.set_title(f"{args.title}: {feas.sum()} feasible grid points, area ~ {area:.2f} m$^2$ "
-                 f"(tension contours: solid t1, dashed t2)", fontsize=10)
+    # Line styles repeat after four cables; with 3 or more cables each point shows the pose at
+    # the middle of its feasible theta band (the CSV's theta_min, theta_max columns).
+    contours = ", ".join(f"{style_names[k % 4]} {c}" for k, c in enumerate(tension_cols))
+    band = " at mid theta band" if "theta_min" in rows[0] else ""
+    if len(tension_cols) == 2 and not band:
+        ax.set_title(f"{args.title}: {feas.sum()} feasible grid points, area ~ {area:.2f} m$^2$ "
+                     f"(tension contours: solid t1, dashed t2)", fontsize=10)
+    else:
+        ax.set_title(f"{args.title}: {feas.sum()} feasible grid points, area ~ {area:.2f} m$^2$\n"
+                     f"(tension contours{band}: {contours})", fontsize=10)
     ax.set_xlabel("x (m)")
     ax.set_ylabel("z (m)")
     ax.set_xlim(-0.2, w + 0.2)

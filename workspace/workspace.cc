@@ -3,6 +3,7 @@
 #include <cmath>
 #include <fstream>
 #include <set>
+#include <vector>
 #include <sstream>
 
 #include "common/parallel.h"
@@ -31,6 +32,11 @@ WorkspaceGrid ComputeWorkspaceGrid(const Robot& robot, double step_m) {
   if (nx_d * nz_d > kMaxGridPoints) {
     throw InputError("--step", "", FormatDouble(step_m) + " m makes a grid of more than 2,000,000 points (the limit: about 30 s, 0.5 GB and a 175 MB CSV; a coarser step)");
   }
+  if (robot.theta_is_free() && nx_d * nz_d > kMaxThetaScanGridPoints) {
+    throw InputError("--step", "", FormatDouble(step_m) + " m makes a grid of more than 40,000 points, each scanned over theta (" +
+                                       std::to_string(robot.num_cables()) +
+                                       " cables; the limit: about a minute on 2 cores; a coarser step)");
+  }
   const int nx = static_cast<int>(nx_d), nz = static_cast<int>(nz_d);
   WorkspaceGrid grid;
   grid.step_m = step_m;
@@ -39,7 +45,14 @@ WorkspaceGrid ComputeWorkspaceGrid(const Robot& robot, double step_m) {
     WorkspacePoint& p = grid.points[k];
     p.x_m = (k % nx) * step_m;
     p.z_m = (k / nx) * step_m;
-    p.evaluation = EvaluatePose(robot, p.x_m, p.z_m);
+    if (robot.theta_is_free()) {
+      ThetaScan scan = ScanTheta(robot, p.x_m, p.z_m);
+      p.evaluation = std::move(scan.evaluation);
+      p.theta_min_rad = scan.theta_min_rad;
+      p.theta_max_rad = scan.theta_max_rad;
+    } else {
+      p.evaluation = EvaluatePose(robot, p.x_m, p.z_m);
+    }
   });
   for (const WorkspacePoint& p : grid.points) grid.num_feasible += p.evaluation.feasible();
   return grid;
@@ -49,7 +62,10 @@ std::string WorkspaceCsv(const Robot& robot, const WorkspaceGrid& grid, const st
   std::string out = provenance;
   out += "x,z,theta";
   for (int i = 1; i <= robot.num_cables(); ++i) out += ",t" + std::to_string(i);
-  out += ",feasible,reason\n";
+  out += ",feasible,reason";
+  const bool band = robot.theta_is_free();
+  if (band) out += ",theta_min,theta_max";
+  out += "\n";
   for (const WorkspacePoint& p : grid.points) {
     out += FormatDouble(p.x_m) + "," + FormatDouble(p.z_m) + ",";
     if (p.evaluation.has_equilibrium) {
@@ -60,7 +76,11 @@ std::string WorkspaceCsv(const Robot& robot, const WorkspaceGrid& grid, const st
     } else {
       for (int i = 0; i < robot.num_cables(); ++i) out += ",";
     }
-    out += std::string(",") + (p.evaluation.feasible() ? "1" : "0") + "," + ToString(p.evaluation.feasibility) + "\n";
+    out += std::string(",") + (p.evaluation.feasible() ? "1" : "0") + "," + ToString(p.evaluation.feasibility);
+    if (band) {
+      out += std::isnan(p.theta_min_rad) ? ",," : "," + FormatDouble(p.theta_min_rad) + "," + FormatDouble(p.theta_max_rad);
+    }
+    out += "\n";
   }
   return out;
 }
@@ -82,7 +102,7 @@ std::vector<PlanPose> SampleFeasiblePoses(const Robot& robot, int n, std::uint64
   const double x_lo = robot.margin_m, x_hi = robot.frame_width_m - robot.margin_m;
   const double z_lo = robot.margin_m,
                z_hi = std::min(robot.frame_height_m - robot.margin_m, robot.laser_range_m);
-  const long max_draws = 10000L + 1000L * n;
+  const long max_draws = (10000L + 1000L * n) * (robot.theta_is_free() ? 10 : 1);
   std::vector<PlanPose> plan;
   long draws = 0;
   while (static_cast<int>(plan.size()) < n) {
@@ -92,7 +112,10 @@ std::vector<PlanPose> SampleFeasiblePoses(const Robot& robot, int n, std::uint64
     }
     const double x = rng.Uniform(x_lo, x_hi);
     const double z = rng.Uniform(z_lo, z_hi);
-    const PoseEvaluation e = EvaluatePose(robot, x, z);
+    const PoseEvaluation e = robot.theta_is_free()
+                                 ? EvaluatePose(robot, Eigen::Vector3d(x, z, rng.Uniform(-robot.theta_max_rad,
+                                                                                         robot.theta_max_rad)))
+                                 : EvaluatePose(robot, x, z);
     if (e.feasible()) plan.push_back(MakePlanPose(robot, e.equilibrium, l0));
   }
   return plan;
@@ -170,7 +193,9 @@ void CheckPlanMatchesRobot(const Robot& robot, const std::vector<PlanPose>& plan
     }
     const double residual_N = EquilibriumResidual<double>(robot, p.q, p.tensions_N).norm();
     if (!(residual_N <= 1e-6 * weight_N)) {
-      throw InputError(where, "columns 'x,z,theta,t1,t2'",
+      std::string columns = "x,z,theta";
+      for (int i = 1; i <= robot.num_cables(); ++i) columns += ",t" + std::to_string(i);
+      throw InputError(where, "columns '" + columns + "'",
                        "not a static equilibrium of " + robot.name + " (force and moment residual " +
                            FormatDouble(residual_N) + " N): the platform would not stay at this pose");
     }

@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <istream>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -19,8 +20,16 @@ namespace cablecal {
 
 struct WorkspacePoint {
   double x_m = 0.0, z_m = 0.0;
+  // m = 2: the equilibrium at (x, z). m >= 3: the pose at the middle of the longest run of
+  // feasible orientations at (x, z) (ScanTheta, model/statics.h), or, where none is feasible, the
+  // evaluation at the orientation whose reason is the most common over the scan.
   PoseEvaluation evaluation;
+  // m >= 3 only: the feasible orientations found at (x, z), [min, max] over the scan (rad);
+  // NaN where none is feasible or m = 2.
+  double theta_min_rad = std::numeric_limits<double>::quiet_NaN();
+  double theta_max_rad = std::numeric_limits<double>::quiet_NaN();
 };
+
 
 struct WorkspaceGrid {
   double step_m = 0.0;
@@ -35,10 +44,15 @@ struct WorkspaceGrid {
 // that makes more than kMaxGridPoints points is an InputError naming --step: 2e6 points take
 // about 30 s and 0.5 GB on 2 cores and write a 175 MB CSV (bench/README.md).
 constexpr double kMaxGridPoints = 2e6;
+// With 3 or more cables every point is a scan of theta (ThetaScan, 120 to 180 full-pose tests):
+// at most kMaxThetaScanGridPoints then (planar4 at step 0.05 m, 2501 points: 0.8 s CPU,
+// bench/README.md; the limit about a minute on 2 cores).
+constexpr double kMaxThetaScanGridPoints = 40000;
 WorkspaceGrid ComputeWorkspaceGrid(const Robot& robot, double step_m);
 
-// Workspace CSV: header x,z,theta,t1,t2,feasible,reason (m, rad, N); theta and tensions
-// empty where no equilibrium exists.
+// Workspace CSV: header x,z,theta,t1..tm,feasible,reason (m, rad, N); theta and tensions
+// empty where no equilibrium exists. m >= 3 adds theta_min,theta_max, the feasible band
+// (empty where none is feasible).
 std::string WorkspaceCsv(const Robot& robot, const WorkspaceGrid& grid, const std::string& provenance);
 
 // One measurement pose of a plan.
@@ -57,9 +71,11 @@ struct PlanPose {
 PlanPose MakePlanPose(const Robot& robot, const Equilibrium& equilibrium,
                       const Eigen::VectorXd& initial_lengths_m);
 
-// n poses drawn uniformly over the feasible (x, z) region by rejection from the frame
-// box; the stream is Rng(seed). Throws InputError if n < 1 and SolverFailure if no
-// feasible pose turns up in 10000 + 1000 n draws (an empty or tiny workspace).
+// n poses drawn uniformly over the feasible region by rejection from the frame box: (x, z)
+// for m = 2 (theta from the equilibrium), (x, z, theta) with theta uniform over the
+// inclinometer range for m >= 3. The stream is Rng(seed). Throws InputError if n < 1 and
+// SolverFailure if no feasible pose turns up in (10000 + 1000 n) draws (m >= 3: ten times
+// that, the orientation being drawn too): an empty or tiny workspace.
 std::vector<PlanPose> SampleFeasiblePoses(const Robot& robot, int n, std::uint64_t seed);
 
 // Pose plan CSV: header pose,x,z,theta,t1,t2,l1,l2,dl1,dl2 (pose numbered from 1), then

@@ -10,7 +10,10 @@
 #include <sstream>
 
 #include "tests/support/temp_dir.h"
+#include <yaml-cpp/yaml.h>
+
 #include "common/error.h"
+#include "common/format.h"
 #include "common/random.h"
 #include "common/version.h"
 #include "design/design.h"
@@ -70,6 +73,165 @@ TEST_P(PerCriterion, IpoptDerivativeCheckerFindsNoError) {
 INSTANTIATE_TEST_SUITE_P(Criteria, PerCriterion,
                          ::testing::Values(Criterion::kCondition, Criterion::kD, Criterion::kA, Criterion::kE),
                          [](const auto& info) { return std::string(ToString(info.param)); });
+
+// The NLP sized from m: Ipopt's derivative checker over every row (equilibrium, robustness
+// rows with their central-difference spread derivatives, spacing) on the 3- and 4-cable robots,
+// where theta and every tension are free variables.
+class ManyCablesNlp : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(ManyCablesNlp, IpoptDerivativeCheckerFindsNoError) {
+  const Robot robot = LoadRobotFile(std::string(CABLECAL_SOURCE_DIR "/robots/") + GetParam());
+  ASSERT_GE(robot.num_cables(), 3);
+  DesignOptions options;
+  options.poses = 6;
+  options.min_spacing_m = 0.1;
+  options.derivative_test = true;
+  // The random start has poses near the edge of the tension workspace, where the spreads'
+  // third derivatives make the checker's own forward differences at 1e-6 err by 1-3e-4
+  // (central differences with Richardson extrapolation agree with the NLP's to 1e-6 there).
+  options.derivative_test_perturbation = 1e-7;
+  const testing_support::TempDir tmp;
+  options.ipopt_journal_path = tmp.Path("ipopt.txt");
+  const internal::StartOutcome out = internal::SolveDesignNlp(robot, options, SampleFeasiblePoses(robot, 6, 5));
+  std::ifstream in(options.ipopt_journal_path);
+  std::stringstream journal;
+  journal << in.rdbuf();
+  EXPECT_NE(journal.str().find("No errors detected by derivative checker"), std::string::npos)
+      << journal.str().substr(0, 4000);
+  // Variables per pose: x, z, theta and one tension per cable.
+  EXPECT_NE(journal.str().find("Total number of variables............................:       " +
+                               std::to_string(6 * (3 + robot.num_cables()))),
+            std::string::npos);
+  ASSERT_EQ(out.tensions_N.size(), 6u);
+  EXPECT_EQ(out.tensions_N[0].size(), robot.num_cables());
+}
+
+INSTANTIATE_TEST_SUITE_P(Robots, ManyCablesNlp,
+                         ::testing::Values("planar3_suspended.yaml", "planar4_fully_constrained.yaml"),
+                         [](const auto& info) { return std::string(info.param).substr(0, 7); });
+
+TEST(Design, FewestPosesFollowTheCableCount) {
+  // n (m - 1) net equations against 3m - 1 gauge-fixed parameters.
+  EXPECT_EQ(MinDesignPoses(2), 5);
+  for (int m = 3; m <= kMaxCables; ++m) {
+    EXPECT_EQ(MinDesignPoses(m), 4) << m;
+    EXPECT_GE(MinDesignPoses(m) * (m - 1), 3 * m - 1);
+    EXPECT_LT((MinDesignPoses(m) - 1) * (m - 1), 3 * m - 1);
+  }
+  const Robot robot = LoadRobotFile(CABLECAL_SOURCE_DIR "/robots/planar3_suspended.yaml");
+  DesignOptions options;
+  options.poses = 3;
+  try {
+    DesignPoses(robot, options);
+    ADD_FAILURE() << "3 poses accepted for 3 cables";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("at least 4 poses"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("the 8 gauge-fixed"), std::string::npos) << e.what();
+  }
+}
+
+// A geometry so uncertain that no pose can stay within bounds for every true robot: the
+// failure says the robust workspace is empty and what to change, whatever the cable count.
+TEST(Design, EmptyRobustWorkspaceIsNamed) {
+  for (const Robot& robot : {BuiltinRobot(), LoadRobotFile(CABLECAL_SOURCE_DIR "/robots/planar3_suspended.yaml")}) {
+    DesignOptions options;
+    options.poses = 6;
+    options.starts = 1;
+    options.random_sets = 0;
+    options.max_iterations = 50;
+    options.geometry_sigma_m = 0.3;
+    try {
+      DesignPoses(robot, options);
+      ADD_FAILURE() << robot.name << ": designed with 3 x 0.3 m of geometry uncertainty";
+    } catch (const SolverFailure& e) {
+      EXPECT_NE(std::string(e.what()).find("robust workspace looks empty"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("--geometry-sigma"), std::string::npos) << e.what();
+    }
+  }
+  // Not said where the robust workspace is not empty (a start that cannot converge in 1 iteration).
+  DesignOptions options;
+  options.poses = 6;
+  options.starts = 1;
+  options.random_sets = 0;
+  options.max_iterations = 1;
+  try {
+    DesignPoses(BuiltinRobot(), options);
+    ADD_FAILURE() << "converged in one iteration";
+  } catch (const SolverFailure& e) {
+    EXPECT_EQ(std::string(e.what()).find("robust workspace"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Design, SummaryNamesEveryGeometricParameter) {
+  DesignResult r;
+  r.num_cables = 4;
+  r.best_start = 0;
+  PlanPose p;
+  p.q = Eigen::Vector3d(1.0, 1.0, 0.0);
+  p.tensions_worst_min_N = Eigen::VectorXd::Constant(4, 5.0);
+  p.tensions_worst_max_N = Eigen::VectorXd::Constant(4, 9.0);
+  r.poses = {p};
+  DesignOptions options;
+  options.poses = 1;
+  options.random_sets = 0;
+  const YAML::Node y = YAML::Load(DesignSummaryYaml(r, options, "test"));
+  EXPECT_EQ(y["robustness"]["scenarios"].as<std::string>(),
+            "each of a1x a1z a2x a2z a3x a3z a4x a4z l10 l20 l30 l40 moved by +-k sigma alone");
+  EXPECT_TRUE(y["poses_worst_case_tensions_N"][0]["t4"].IsSequence());
+  EXPECT_EQ(y["poses_worst_case_tensions_N"][0]["t4"][1].as<double>(), 9.0);
+  const std::string text = DesignSummaryYaml(r, options, "test");
+  EXPECT_NE(text.find("S: information of a1z a2x a2z a3x a3z a4x a4z l10 l20 l30 l40 (1/m^2)"), std::string::npos)
+      << text;
+}
+
+// A prior for a 3-cable robot: 9 parameters, the information of the 8 but a1x is the inverse of
+// their covariance; a result with another cable count is refused by name.
+TEST(DesignPrior, AnyCableCount) {
+  const Robot robot = LoadRobotFile(CABLECAL_SOURCE_DIR "/robots/planar3_suspended.yaml");
+  const std::vector<std::string> names = {"a1x", "a1z", "a2x", "a2z", "a3x", "a3z", "l10", "l20", "l30"};
+  Eigen::VectorXd g(9), sd(9);
+  for (int k = 0; k < 6; ++k) g(k) = robot.cables[k / 2].p_F_exit_m(k % 2) + 0.001 * k;
+  const Eigen::VectorXd l0 = InitialLengths(robot);
+  for (int i = 0; i < 3; ++i) g(6 + i) = l0(i) - 0.002 * i;
+  for (int k = 0; k < 9; ++k) sd(k) = 0.001 * (k + 1);
+  // A correlation with one off-diagonal pair (a2x, l20).
+  Eigen::MatrixXd C = Eigen::MatrixXd::Identity(9, 9);
+  C(2, 7) = C(7, 2) = 0.5;
+  std::ostringstream yaml;
+  yaml << "status: converged\nparameters:\n";
+  for (int k = 0; k < 9; ++k) yaml << "  " << names[k] << ": {value: " << FormatDouble(g(k)) << ", std: " << sd(k) << "}\n";
+  yaml << "correlation:\n";
+  for (int a = 0; a < 9; ++a) {
+    yaml << "  - [";
+    for (int b = 0; b < 9; ++b) yaml << (b ? ", " : "") << C(a, b);
+    yaml << "]\n";
+  }
+  const testing_support::TempDir tmp;
+  tmp.Write("result.yaml", yaml.str());
+  const DesignPrior prior = LoadDesignPrior(robot, tmp.Path("result.yaml"));
+  ASSERT_EQ(prior.information.rows(), 8);
+  ASSERT_EQ(prior.information.cols(), 8);
+  Eigen::MatrixXd cov(8, 8);
+  for (int a = 0; a < 8; ++a) {
+    for (int b = 0; b < 8; ++b) cov(a, b) = C(a + 1, b + 1) * sd(a + 1) * sd(b + 1);
+  }
+  EXPECT_LT((prior.information * cov - Eigen::MatrixXd::Identity(8, 8)).cwiseAbs().maxCoeff(), 1e-9);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(prior.robot.cables[i].p_F_exit_m, Eigen::Vector2d(g(2 * i), g(2 * i + 1)));
+    EXPECT_EQ(prior.robot.cables[i].initial_length_m.value_or(0.0), g(6 + i));
+  }
+  // The 2-cable robot cannot take it, nor the 3-cable robot a 2-cable result.
+  try {
+    LoadDesignPrior(BuiltinRobot(), tmp.Path("result.yaml"));
+    ADD_FAILURE() << "a 3-cable result accepted for 2 cables";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("a1x a1z a2x a2z l10 l20"), std::string::npos) << e.what();
+  }
+  std::string two = "status: converged\nparameters:\n";
+  for (const char* n : {"a1x", "a1z", "a2x", "a2z", "l10", "l20"}) two += std::string("  ") + n + ": {value: 1.0, std: 0.001}\n";
+  tmp.Write("two.yaml", two);
+  EXPECT_THROW(LoadDesignPrior(robot, tmp.Path("two.yaml")), InputError);
+}
 
 TEST(Surrogates, BoundTheExactCriteria) {
   // kappa <= kappa_p <= d^(1/p) kappa and lambda_min >= surrogate >= lambda_min / 5^(1/p).

@@ -23,7 +23,7 @@ TEST(EdgeCases, AnchorInsideThePulleyIsInvalidGeometry) {
   const Eigen::Vector2d A(0.0, 2.8);
   const double r = 0.025;
   for (const Eigen::Vector2d& B : {Eigen::Vector2d(r, 2.8), Eigen::Vector2d(r + 0.5 * r, 2.8), Eigen::Vector2d(2 * r, 2.8)}) {
-    EXPECT_FALSE(CableGeometryValid(CableGeometry<double>(A, r, 1.0, B), r)) << B.transpose();
+    EXPECT_FALSE(CableGeometryValid(CableGeometry<double>(A, r, PulleySigns{1.0, 1.0}, B), r)) << B.transpose();
   }
   // A platform pushed into the pulley (its left anchor on the pulley's centre): no
   // orientation balances it with valid cables.

@@ -1,54 +1,191 @@
-// The design's Jacobian rows (identify/jacobian.h, written from u_i and W) against automatic
-// differentiation of the identification's own residuals (identify/residuals.h).
-#include <ceres/jet.h>
+// One source for the identification Jacobian: the design's rows (identify/jacobian.h, automatic
+// derivatives of identify/residuals.h) against the Jacobian Ceres evaluates for the
+// identification's own cost functor, against the virtual-work form of the rows, and (inside
+// Identify) the reduced information they give against the singular values Identify reports;
+// the rows' pose derivatives (nested Jets) against central differences. Robots with 2 to 8
+// cables: wang2022, the planar3 and planar4 files, and random robots.
+#include <ceres/ceres.h>
 #include <gtest/gtest.h>
 
+#include <Eigen/Dense>
+#include <algorithm>
+#include <string>
+#include <vector>
+
 #include "common/random.h"
+#include "identify/cost_functors.h"
 #include "identify/experiment.h"
+#include "identify/identify.h"
 #include "identify/jacobian.h"
 #include "identify/residuals.h"
+#include "model/statics.h"
+#include "tests/support/random_robot.h"
+#include "workspace/workspace.h"
 
 namespace cablecal {
 namespace {
 
-constexpr double kRowTol = 1e-12;  // same quantity, two exact routes: rounding only
+constexpr double kRowRelTol = 1e-12;  // same derivatives, two exact routes: rounding only
 
-TEST(JacobianRows, MatchAutodiffOfResiduals) {
-  const Robot& robot = BuiltinRobot();
-  const GeometryVector g = GeometryOf(robot);
-  using Jet9 = ceres::Jet<double, 9>;
-  Rng rng(4);
-  for (int k = 0; k < 200; ++k) {
-    const Eigen::Vector3d q(rng.Uniform(0.5, 4.7), rng.Uniform(0.2, 2.4), rng.Uniform(-1.0, 1.0));
-    Jet9 gj[6];
-    for (int c = 0; c < 6; ++c) gj[c] = Jet9(g(c), c);
-    const Pose<Jet9> qj(Jet9(q(0), 6), Jet9(q(1), 7), Jet9(q(2), 8));
-    const auto anchors = AnchorsInF<Jet9>(robot, qj);
-    const LengthRows<double> rows = LengthResidualRows<double>(robot, q);
-    const MlRows<double> ml = MlResidualRows<double>(robot, q);
-    for (int i = 0; i < 2; ++i) {
-      const Jet9 r = LengthResidual<Jet9>(robot.cables[i], i, gj, anchors[i], 0.1);
-      for (int c = 0; c < 6; ++c) {
-        EXPECT_NEAR(rows(i, c), r.v(c), kRowTol) << "cable " << i << " column " << c;
-        EXPECT_NEAR(ml(i, c) * robot.sensors.encoder_sigma_m, r.v(c), kRowTol);
-      }
-      EXPECT_NEAR(rows(i, 6), r.v(6), kRowTol);
-      for (int c = 6; c < 9; ++c) EXPECT_NEAR(ml(i, c) * robot.sensors.encoder_sigma_m, r.v(c), kRowTol);
+// The robots of the tests: wang2022, the two new files, random robots with m = 3..8 cables
+// (suspended for odd m, fully constrained for even m >= 4), and the asymmetric file.
+std::vector<Robot> TestRobots() {
+  std::vector<Robot> robots = {BuiltinRobot(),
+                               LoadRobotFile(CABLECAL_SOURCE_DIR "/robots/planar3_suspended.yaml"),
+                               LoadRobotFile(CABLECAL_SOURCE_DIR "/robots/planar4_fully_constrained.yaml"),
+                               LoadRobotFile(CABLECAL_SOURCE_DIR "/robots/asymmetric.yaml")};
+  Rng rng(314);
+  for (int m = 3; m <= 8; ++m) {
+    robots.push_back(testing::RandomRobotWithCables(rng, "random" + std::to_string(m), m, m % 2 == 0));
+  }
+  return robots;
+}
+
+double MaxAbs(const Eigen::MatrixXd& a) { return a.cwiseAbs().maxCoeff(); }
+
+template <int M>
+void CheckRowsOfRobot(const Robot& robot) {
+  constexpr int kG = 3 * M;
+  const std::vector<PlanPose> plan = SampleFeasiblePoses(robot, 12, 17);
+  GeometryVector g = GeometryOf(robot);
+  const ReadingWeights weights = WeightsOf(robot.sensors);
+  for (const PlanPose& pose : plan) {
+    const Eigen::Vector3d& q = pose.q;
+    // Ceres' Jacobian of the identification's cost functor, at readings of this pose.
+    Measurement m;
+    m.dl_m = pose.length_change_m;
+    m.z_m = q(1) + 0.001;  // the rows do not depend on the readings
+    m.theta_rad = q(2) - 0.002;
+    ceres::AutoDiffCostFunction<internal::MlPoseCost<M>, M + 2, kG, 3> cost(
+        new internal::MlPoseCost<M>{&robot, internal::ReadingsOf<M>(m), weights});
+    const double* parameters[2] = {g.data(), q.data()};
+    Eigen::Matrix<double, M + 2, kG, Eigen::RowMajor> d_geometry;
+    Eigen::Matrix<double, M + 2, 3, Eigen::RowMajor> d_pose;
+    double residual[M + 2];
+    double* jacobians[2] = {d_geometry.data(), d_pose.data()};
+    ASSERT_TRUE(cost.Evaluate(parameters, residual, jacobians)) << robot.name;
+    Eigen::Matrix<double, M + 2, kG + 3> ceres_rows;
+    ceres_rows << d_geometry, d_pose;
+
+    const MlRows<M, double> rows = MlResidualRows<M, double>(robot, q);
+    const double scale = MaxAbs(ceres_rows);
+    EXPECT_LE(MaxAbs(rows - ceres_rows), kRowRelTol * scale) << robot.name << " q = " << q.transpose();
+
+    // The virtual-work form: dl_i/da_i = u_i (the cable's unit vector from anchor to pulley,
+    // W's force rows), dl_i/dl_i0 = -1, dl_i/dq = -W(:, i)'; nothing else.
+    const LengthRows<M, double> length_rows = LengthResidualRows<M, double>(robot, q);
+    const Eigen::Matrix<double, 3, Eigen::Dynamic> W = WrenchMatrix<double>(robot, q);
+    LengthRows<M, double> expected = LengthRows<M, double>::Zero();
+    for (int i = 0; i < M; ++i) {
+      expected(i, 2 * i) = W(0, i);
+      expected(i, 2 * i + 1) = W(1, i);
+      expected(i, 2 * M + i) = -1.0;
+      for (int k = 0; k < 3; ++k) expected(i, kG + k) = -W(k, i);
     }
+    EXPECT_LE(MaxAbs(length_rows - expected), 1e-12 * MaxAbs(expected)) << robot.name << " q = " << q.transpose();
+    EXPECT_LE(MaxAbs(length_rows * weights.inv_sigma_encoder - rows.template topRows<M>()),
+              kRowRelTol * scale)
+        << robot.name;
+
+    // The nested Jets' pose derivatives against central differences of the rows.
+    using PoseJet = nested_jet::InnerJet<3>;
+    const MlRows<M, PoseJet> nested =
+        MlResidualRows<M, PoseJet>(robot, Pose<PoseJet>(PoseJet(q(0), 0), PoseJet(q(1), 1), PoseJet(q(2), 2)));
+    for (int k = 0; k < 3; ++k) {
+      Eigen::Matrix<double, M + 2, kG + 3> value, derivative;
+      for (int r = 0; r < M + 2; ++r) {
+        for (int c = 0; c < kG + 3; ++c) {
+          value(r, c) = nested(r, c).a;
+          derivative(r, c) = nested(r, c).v(k);
+        }
+      }
+      EXPECT_EQ(MaxAbs(value - rows), 0.0) << "the nested evaluation's values are the plain ones";
+      const double h = 1e-5;
+      Eigen::Vector3d qp = q, qm = q;
+      qp(k) += h;
+      qm(k) -= h;
+      const Eigen::Matrix<double, M + 2, kG + 3> difference =
+          (MlResidualRows<M, double>(robot, qp) - MlResidualRows<M, double>(robot, qm)) / (2 * h);
+      // Central differences: truncation h^2 times the third derivatives, rounding eps/h.
+      EXPECT_LE(MaxAbs(derivative - difference), 1e-6 * std::max(1.0, MaxAbs(derivative)))
+          << robot.name << " d/dq" << k;
+    }
+
+    // The reduced information against the dense Schur complement (a1x dropped).
+    constexpr int G = kG - 1;
+    Eigen::Matrix<double, M + 2, G + 3> A;
+    A << rows.template block<M + 2, G>(0, 1), rows.template block<M + 2, 3>(0, kG);
+    const Eigen::Matrix<double, G + 3, G + 3> H = A.transpose() * A;
+    const Eigen::Matrix<double, G, G> S_expected =
+        H.template topLeftCorner<G, G>() - H.template topRightCorner<G, 3>() *
+                                               H.template bottomRightCorner<3, 3>().inverse() *
+                                               H.template bottomLeftCorner<3, G>();
+    const Eigen::Matrix<double, G, G> S = ReducedInformation<M, double>(rows);
+    EXPECT_LE(MaxAbs(S - S_expected), 1e-8 * MaxAbs(S_expected)) << robot.name;
+    // Rank M - 1: the pose's readings beyond its 3 unknowns.
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, G, G>> eig(S);
+    EXPECT_GT(eig.eigenvalues()(G - M + 1), 1e-9 * eig.eigenvalues()(G - 1)) << robot.name;
+    EXPECT_LT(std::abs(eig.eigenvalues()(G - M)), 1e-9 * eig.eigenvalues()(G - 1)) << robot.name;
   }
 }
 
-TEST(JacobianRows, ReducedInformationIsTheSchurComplement) {
-  const Robot& robot = BuiltinRobot();
-  const MlRows<double> rows = MlResidualRows<double>(robot, Eigen::Vector3d(1.7, 1.1, -0.2));
-  // Eliminating the pose unknowns from the full information matrix (a1x dropped).
-  Eigen::Matrix<double, 4, 8> A;
-  A << rows.block<4, 5>(0, 1), rows.block<4, 3>(0, 6);
-  const Eigen::Matrix<double, 8, 8> M = A.transpose() * A;
-  const Eigen::Matrix<double, 5, 5> S_expected =
-      M.topLeftCorner<5, 5>() - M.topRightCorner<5, 3>() * M.bottomRightCorner<3, 3>().inverse() * M.bottomLeftCorner<3, 5>();
-  const Eigen::Matrix<double, 5, 5> S = ReducedInformation<double>(rows);
-  EXPECT_LT((S - S_expected).cwiseAbs().maxCoeff(), 1e-9 * S_expected.cwiseAbs().maxCoeff());
+void CheckRows(const Robot& robot) {
+  switch (robot.num_cables()) {
+    case 2: return CheckRowsOfRobot<2>(robot);
+    case 3: return CheckRowsOfRobot<3>(robot);
+    case 4: return CheckRowsOfRobot<4>(robot);
+    case 5: return CheckRowsOfRobot<5>(robot);
+    case 6: return CheckRowsOfRobot<6>(robot);
+    case 7: return CheckRowsOfRobot<7>(robot);
+    case 8: return CheckRowsOfRobot<8>(robot);
+  }
+  FAIL() << robot.num_cables() << " cables";
+}
+
+TEST(JacobianRows, AreCeresJacobianOfTheCostFunctorForEveryCableCount) {
+  for (const Robot& robot : TestRobots()) {
+    SCOPED_TRACE(robot.name);
+    CheckRows(robot);
+  }
+}
+
+// Inside Identify: with noise-free readings of the nominal robot the estimate is the nominal
+// geometry and the true poses, where the reduced Jacobian Identify builds from Ceres' own
+// Jacobian must give the information the design computes from its rows: its singular values
+// squared are the eigenvalues of sum_j S_j.
+template <int M>
+void CheckInformationOfIdentify(const Robot& robot) {
+  constexpr int G = 3 * M - 1;
+  const std::vector<PlanPose> plan = SampleFeasiblePoses(robot, 10, 23);
+  Rng rng(1);
+  const SimulatedExperiment exp =
+      SimulateExperiment(robot, robot, plan, SimulationOptions{NoisySensors::kNone, false}, rng);
+  const IdentifyResult r = Identify(robot, exp.measurements, IdentifyOptions{});
+  ASSERT_EQ(r.status, IdentifyStatus::kConverged) << robot.name << ": " << r.message;
+  Eigen::Matrix<double, G, G> S = Eigen::Matrix<double, G, G>::Zero();
+  for (const PlanPose& p : plan) S += ReducedInformation<M, double>(MlResidualRows<M, double>(robot, p.q));
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, G, G>> eig(S);
+  const Eigen::VectorXd& sv = r.identifiability.singular_values;
+  ASSERT_EQ(sv.size(), G) << robot.name;
+  for (int k = 0; k < G; ++k) {
+    // Descending singular values against ascending eigenvalues.
+    EXPECT_NEAR(sv(k) * sv(k) / eig.eigenvalues()(G - 1 - k), 1.0, 1e-7) << robot.name << " k = " << k;
+  }
+}
+
+TEST(JacobianRows, GiveTheInformationIdentifyFindsFromCeresJacobian) {
+  for (const Robot& robot : TestRobots()) {
+    SCOPED_TRACE(robot.name);
+    switch (robot.num_cables()) {
+      case 2: CheckInformationOfIdentify<2>(robot); break;
+      case 3: CheckInformationOfIdentify<3>(robot); break;
+      case 4: CheckInformationOfIdentify<4>(robot); break;
+      case 5: CheckInformationOfIdentify<5>(robot); break;
+      case 6: CheckInformationOfIdentify<6>(robot); break;
+      case 7: CheckInformationOfIdentify<7>(robot); break;
+      case 8: CheckInformationOfIdentify<8>(robot); break;
+    }
+  }
 }
 
 }  // namespace

@@ -8,45 +8,15 @@
 #include "common/random.h"
 #include "model/cable.h"
 #include "model/statics.h"
+#include "tests/support/cable_construction.h"
 
 namespace cablecal {
 namespace {
 
+using testing::LengthByConstruction;
+
 constexpr double kLengthTol_m = 1e-12;   // exact geometry; double rounding only
 constexpr double kDerivativeRelTol = 1e-6;
-
-// Independent construction: the tangent point T on the pulley circle is where the straight
-// segment to B is perpendicular to the radius (found by bisection on the angle), on the
-// branch where the cable leaves in its wrap direction; the arc runs from A to T in that
-// direction (left pulley: clockwise from angle pi; right pulley: counter-clockwise from 0).
-double LengthByConstruction(const Eigen::Vector2d& A, double r, PulleySide side, const Eigen::Vector2d& B) {
-  const double s = SideSign(side);
-  const Eigen::Vector2d C(A.x() + s * r, A.y());
-  auto point = [&](double a) { return Eigen::Vector2d(C.x() + r * std::cos(a), C.y() + r * std::sin(a)); };
-  auto wrap_dir = [&](double a) {  // travel direction of the cable on the pulley at angle a
-    return side == PulleySide::kLeft ? Eigen::Vector2d(std::sin(a), -std::cos(a))
-                                     : Eigen::Vector2d(-std::sin(a), std::cos(a));
-  };
-  auto f = [&](double a) { return (B - point(a)).dot(point(a) - C); };
-  const int kSteps = 720;
-  for (int k = 0; k < kSteps; ++k) {
-    double lo = -M_PI + 2 * M_PI * k / kSteps, hi = -M_PI + 2 * M_PI * (k + 1) / kSteps;
-    if ((f(lo) < 0) == (f(hi) < 0)) continue;
-    for (int it = 0; it < 200 && hi - lo > 1e-17; ++it) {
-      const double mid = 0.5 * (lo + hi);
-      ((f(mid) < 0) == (f(lo) < 0) ? lo : hi) = mid;
-    }
-    const double a = 0.5 * (lo + hi);
-    const Eigen::Vector2d T = point(a);
-    if (wrap_dir(a).dot(B - T) <= 0) continue;  // the other tangent
-    const double from = side == PulleySide::kLeft ? M_PI : 0.0;
-    double phi = side == PulleySide::kLeft ? from - a : a - from;
-    phi = std::fmod(phi + 4 * M_PI, 2 * M_PI);
-    return r * phi + (B - T).norm();
-  }
-  ADD_FAILURE() << "no tangent point found";
-  return NAN;
-}
 
 TEST(CableGeometry, MatchesIndependentTangencyConstructionBothSides) {
   const Robot& robot = BuiltinRobot();
@@ -61,7 +31,7 @@ TEST(CableGeometry, MatchesIndependentTangencyConstructionBothSides) {
         const Eigen::Vector2d B(rng.Uniform(0.05, robot.frame_width_m - 0.05), rng.Uniform(0.0, 2.8 + 0.5 * r));
         const Eigen::Vector2d C(A.x() + SideSign(ps) * r, A.y());
         if ((B - C).norm() < 1.5 * r) continue;
-        const CableState<double> s = CableGeometry<double>(A, r, SideSign(ps), B);
+        const CableState<double> s = CableGeometry<double>(A, r, PulleySigns{SideSign(ps), 1.0}, B);
         ASSERT_TRUE(CableGeometryValid(s, r)) << "B = " << B.transpose();
         EXPECT_NEAR(s.length_m, LengthByConstruction(A, r, ps, B), kLengthTol_m)
             << "side " << side << " r " << r << " B = " << B.transpose();
@@ -75,12 +45,41 @@ TEST(CableGeometry, MatchesIndependentTangencyConstructionBothSides) {
   EXPECT_GT(checked, 1500);
 }
 
+// wrap: under (pulleys below the platform): the closed form against the same construction,
+// anchors anywhere above the pulley's bottom, on both sides and for several radii.
+TEST(CableGeometry, UnderWrapMatchesIndependentTangencyConstruction) {
+  Rng rng(11);
+  int checked = 0;
+  for (int side = 0; side < 2; ++side) {
+    for (const double r : {0.025, 0.1, 0.3}) {
+      const Eigen::Vector2d A = side == 0 ? Eigen::Vector2d(0.0, 0.1) : Eigen::Vector2d(4.0, 0.1);
+      const PulleySide ps = side == 0 ? PulleySide::kLeft : PulleySide::kRight;
+      const Eigen::Vector2d C(A.x() + SideSign(ps) * r, A.y());
+      for (int k = 0; k < 300; ++k) {
+        const Eigen::Vector2d B(rng.Uniform(0.05, 3.95), rng.Uniform(0.1 - 0.5 * r, 2.5));
+        if ((B - C).norm() < 1.5 * r) continue;
+        const CableState<double> s = CableGeometry<double>(A, r, PulleySigns{SideSign(ps), -1.0}, B);
+        ASSERT_TRUE(CableGeometryValid(s, r)) << "B = " << B.transpose();
+        EXPECT_NEAR(s.length_m, LengthByConstruction(A, r, ps, B, PulleyWrap::kUnder), kLengthTol_m)
+            << "side " << side << " r " << r << " B = " << B.transpose();
+        EXPECT_NEAR((s.p_F_tangent_m - C).norm(), r, 1e-14);
+        EXPECT_NEAR((B - s.p_F_tangent_m).dot(s.p_F_tangent_m - C), 0.0, 1e-13);
+        // Under the pulley the cable pulls the platform down toward the floor's pulleys when
+        // the anchor is above them.
+        if (B.y() > C.y() + r) EXPECT_LT(s.u_F_cable.y(), 0.0);
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 1500);
+}
+
 TEST(CableGeometry, AnchorStraightBelowPulleyWrapsHalfATurn) {
   // Where the paper's Eq. (2) with its stated gamma gives phi = 0, the construction gives pi.
   const Eigen::Vector2d A(0.0, 2.8);
   const double r = 0.025;
   const Eigen::Vector2d B(2 * r, 1.0);  // straight below the pulley's inner side: leaves horizontally
-  const CableState<double> s = CableGeometry<double>(A, r, 1.0, B);
+  const CableState<double> s = CableGeometry<double>(A, r, PulleySigns{1.0, 1.0}, B);
   EXPECT_NEAR(s.wrap_angle_rad, M_PI, 1e-15);
   EXPECT_NEAR(s.length_m, r * M_PI + 1.8, 1e-14);
 }
@@ -89,7 +88,7 @@ TEST(CableGeometry, AnchorLevelWithPulleyWrapsQuarterTurn) {
   const Eigen::Vector2d A(5.209, 2.8);
   const double r = 0.025;
   const Eigen::Vector2d B(2.0, 2.8 + r);  // level with the top of the right pulley
-  const CableState<double> s = CableGeometry<double>(A, r, -1.0, B);
+  const CableState<double> s = CableGeometry<double>(A, r, PulleySigns{-1.0, 1.0}, B);
   EXPECT_NEAR(s.wrap_angle_rad, M_PI / 2, 1e-14);
   EXPECT_NEAR(s.length_m, r * M_PI / 2 + (5.209 - r - 2.0), 1e-13);
 }
@@ -120,11 +119,11 @@ TEST(CableGeometry, JetDerivativesMatchCentralDifferences) {
       x << (side == 0 ? 0.0 : 5.209) + rng.Uniform(-0.05, 0.05), 2.8 + rng.Uniform(-0.05, 0.05), 0.025,
           rng.Uniform(0.3, 4.9), rng.Uniform(0.1, 2.5);
       auto length = [&](const Eigen::VectorXd& v) {
-        return CableGeometry<double>(v.head<2>(), v(2), s, v.tail<2>()).length_m;
+        return CableGeometry<double>(v.head<2>(), v(2), PulleySigns{s, 1.0}, v.tail<2>()).length_m;
       };
       Eigen::Matrix<Jet5, 5, 1> xj;
       for (int i = 0; i < 5; ++i) xj(i) = Jet5(x(i), i);
-      const Jet5 l = CableGeometry<Jet5>(xj.head<2>(), xj(2), s, xj.tail<2>()).length_m;
+      const Jet5 l = CableGeometry<Jet5>(xj.head<2>(), xj(2), PulleySigns{s, 1.0}, xj.tail<2>()).length_m;
       EXPECT_DOUBLE_EQ(l.a, length(x));
       const Eigen::VectorXd fd = CentralDifference(length, x);
       for (int i = 0; i < 5; ++i) {

@@ -102,9 +102,20 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"NotANumber", "gravity: 9.81", "gravity: .nan", "gravity: must be a finite number"},
         BadCase{"Overflow", "gravity: 9.81", "gravity: 1e400", "gravity: must be a finite number"},
         BadCase{"BadSide", "side: right", "side: up", "cables\\[1\\]\\.side: must be 'left' or 'right'"},
-        BadCase{"ThreeCables", "  - {exit: [5.209, 2.8], pulley_radius: 0.025, side: right}",
+        BadCase{"OneCable", "  - {exit: [5.209, 2.8], pulley_radius: 0.025, side: right}\n", "",
+                "cables: must list 2 to 8 cables \\(got 1\\)"},
+        BadCase{"NineCables", "  - {exit: [5.209, 2.8], pulley_radius: 0.025, side: right}",
+                "  - {exit: [5.209, 2.8], pulley_radius: 0.025, side: right}\n"
+                "  - {exit: [1, 2.8], pulley_radius: 0.025, side: right}\n  - {exit: [2, 2.8], pulley_radius: 0.025, side: right}\n"
+                "  - {exit: [3, 2.8], pulley_radius: 0.025, side: right}\n  - {exit: [4, 2.8], pulley_radius: 0.025, side: right}\n"
+                "  - {exit: [1.5, 2.8], pulley_radius: 0.025, side: left}\n  - {exit: [2.5, 2.8], pulley_radius: 0.025, side: left}\n"
+                "  - {exit: [3.5, 2.8], pulley_radius: 0.025, side: left}",
+                "cables: must list 2 to 8 cables \\(got 9\\)"},
+        BadCase{"ThreeCablesTwoAnchors", "  - {exit: [5.209, 2.8], pulley_radius: 0.025, side: right}",
                 "  - {exit: [5.209, 2.8], pulley_radius: 0.025, side: right}\n  - {exit: [2, 2.8], pulley_radius: 0.025, side: right}",
-                "cables: cablecal supports exactly 2 cables"},
+                "platform\\.anchors: needs one anchor per cable \\(3\\), got 2"},
+        BadCase{"HomeThetaWithTwoCables", "home: [2.6045, 1.4]", "home: [2.6045, 1.4]\nhome_theta_deg: 3",
+                "home_theta_deg: is for robots with 3 or more cables"},
         BadCase{"ShortVector", "com: [0.0, 0.0]", "com: [0.0]", "platform\\.com: must be a list of two numbers"},
         BadCase{"NegativeNoise", "encoder: {sigma: 0.00005}", "encoder: {sigma: -0.00005}",
                 "sensors\\.encoder\\.sigma: must be >= 0"},
@@ -131,6 +142,73 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"InvalidYaml", "frame: {width: 5.209, height: 2.8}", "frame: {width: 5.209, height: [2.8}",
                 "not valid YAML"}),
     [](const ::testing::TestParamInfo<BadCase>& info) { return std::string(info.param.name); });
+
+// The same for robots with more cables, from the 3- and 4-cable files in robots/.
+std::string RobotFileText(const std::string& name) {
+  std::ifstream in(std::string(CABLECAL_SOURCE_DIR) + "/robots/" + name);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+struct ManyCableBadCase {
+  const char* name;
+  const char* file;
+  const char* from;
+  const char* to;
+  const char* expected;
+};
+
+class BadManyCableRobotFile : public ::testing::TestWithParam<ManyCableBadCase> {};
+
+TEST_P(BadManyCableRobotFile, IsRejectedWithKeyAndLine) {
+  const ManyCableBadCase& c = GetParam();
+  const std::string text = RobotFileText(c.file);
+  ASSERT_EQ(LoadError(text), "") << "the unmodified file must load";
+  const std::string message = LoadError(Replace(text, c.from, c.to));
+  EXPECT_TRUE(std::regex_search(message, std::regex(c.expected))) << "message: " << message;
+  EXPECT_TRUE(std::regex_search(message, std::regex("^bad\\.yaml:[0-9]+: "))) << "message: " << message;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Rejections, BadManyCableRobotFile,
+    ::testing::Values(
+        ManyCableBadCase{"AnchorMissing", "planar3_suspended.yaml", "[[-0.15, 0.0], [0.0, 0.06], [0.15, 0.0]]",
+                         "[[-0.15, 0.0], [0.15, 0.0]]", "platform\\.anchors: needs one anchor per cable \\(3\\), got 2"},
+        ManyCableBadCase{"AnchorTooMany", "planar4_fully_constrained.yaml", "[-0.2, -0.1]]", "[-0.2, -0.1], [0, 0]]",
+                         "platform\\.anchors: needs one anchor per cable \\(4\\), got 5"},
+        ManyCableBadCase{"WrapSideways", "planar4_fully_constrained.yaml", "wrap: under}", "wrap: sideways}",
+                         "cables\\[2\\]\\.wrap: must be 'over' or 'under' \\(got 'sideways'\\)"},
+        ManyCableBadCase{"HomeThetaOutsideBand", "planar3_suspended.yaml", "home_theta_deg: 8 ", "home_theta_deg: -20 ",
+                         "home: \\(1\\.5, 1\\) m at theta -20 degrees \\(home_theta_deg\\) is not in the feasible "
+                         "workspace: no_equilibrium; feasible home_theta_deg at this \\(x, z\\): 1 to 16\\.5 \\(0\\.5-degree scan\\)"},
+        ManyCableBadCase{"HomeThetaBeyondInclinometer", "planar4_fully_constrained.yaml", "home_theta_deg: 0",
+                         "home_theta_deg: 40", "home_theta_deg: 40 degrees is beyond limits\\.theta_max_deg \\(30\\)"},
+        ManyCableBadCase{"HomeTensionsTooHigh", "planar4_fully_constrained.yaml", "{min: 5.0, max: 150.0}",
+                         "{min: 5.0, max: 12.0}", "home: .* is not in the feasible workspace: tension_high"},
+        ManyCableBadCase{"UnderExitBelowFloor", "planar4_fully_constrained.yaml", "exit: [3.0, 0.1]", "exit: [3.0, -0.5]",
+                         "cables\\[2\\]\\.exit: \\(3, -0\\.5\\) m is outside the frame \\[0, 3\\] x \\[0, 2\\]"}),
+    [](const ::testing::TestParamInfo<ManyCableBadCase>& info) { return std::string(info.param.name); });
+
+// The new robot files load, and a robot with wrap: under and a home orientation survives the
+// trip through RobotToYaml unchanged.
+TEST(RobotFile, ManyCableFilesLoadAndRoundTrip) {
+  for (const char* name : {"planar3_suspended.yaml", "planar4_fully_constrained.yaml"}) {
+    const Robot r = LoadRobotFromString(RobotFileText(name), name);
+    EXPECT_TRUE(r.theta_is_free());
+    const Robot back = LoadRobotFromString(RobotToYaml(r), "roundtrip");
+    EXPECT_EQ(RobotToYaml(back), RobotToYaml(r));
+    EXPECT_EQ(back.num_cables(), r.num_cables());
+    EXPECT_DOUBLE_EQ(back.home_theta_rad, r.home_theta_rad);
+    for (int i = 0; i < r.num_cables(); ++i) EXPECT_EQ(back.cables[i].wrap, r.cables[i].wrap) << name << " cable " << i;
+  }
+  const Robot p3 = LoadRobotFromString(RobotFileText("planar3_suspended.yaml"), "p3");
+  EXPECT_NEAR(p3.home_theta_rad, 8.0 * M_PI / 180.0, 1e-15);
+  const Robot p4 = LoadRobotFromString(RobotFileText("planar4_fully_constrained.yaml"), "p4");
+  EXPECT_EQ(p4.num_cables(), 4);
+  EXPECT_EQ(p4.cables[2].wrap, PulleyWrap::kUnder);
+  EXPECT_EQ(p4.cables[0].wrap, PulleyWrap::kOver);
+}
 
 // An input on which yaml-cpp 0.7's LoadAll never returns (found by the fuzzer; kept in its
 // corpus): the loader must answer, here with an InputError.

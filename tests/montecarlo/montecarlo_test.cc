@@ -54,14 +54,14 @@ TEST(MonteCarlo, ErrorsShrinkWithMorePosesAndMatchTheNoiseFreeLimit) {
   o.designs = {PoseSetDesign::kRandom};
   o.trials = 60;
   const MonteCarloResult r = RunMonteCarlo(robot, o);
-  EXPECT_GT(Summarise(r.cells[0], "a2x").std, 2.0 * Summarise(r.cells[1], "a2x").std);
+  EXPECT_GT(Summarise(r.cells[0], 2, "a2x").std, 2.0 * Summarise(r.cells[1], 2, "a2x").std);
   // No sensor noise at all: identification errors vanish (encoders keep their 0.05 mm).
   o.sensors = NoisySensors::kNone;
   o.pose_counts = {30};
   const MonteCarloResult quiet = RunMonteCarlo(robot, o);
-  EXPECT_LT(Summarise(quiet.cells[0], "a2x").std, 0.2 * Summarise(r.cells[1], "a2x").std);
+  EXPECT_LT(Summarise(quiet.cells[0], 2, "a2x").std, 0.2 * Summarise(r.cells[1], 2, "a2x").std);
   // Gauge a1x: the true a1x is the nominal one, so its error is exactly zero.
-  EXPECT_EQ(Summarise(r.cells[1], "a1x").max_abs, 0.0);
+  EXPECT_EQ(Summarise(r.cells[1], 2, "a1x").max_abs, 0.0);
 }
 
 TEST(MonteCarlo, FailuresAreCountedNotDropped) {
@@ -83,7 +83,7 @@ TEST(MonteCarlo, FailuresAreCountedNotDropped) {
   }
   EXPECT_EQ(c.failures(), failed);
   EXPECT_GT(failed, 0);
-  EXPECT_EQ(Summarise(c, "a2x").count, o.trials - failed);
+  EXPECT_EQ(Summarise(c, 2, "a2x").count, o.trials - failed);
   // Every failure has exactly one cause, and the summary counts them per cause.
   int by_cause = 0;
   for (const std::string& cause : FailureCauses()) by_cause += c.failures(cause);

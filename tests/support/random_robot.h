@@ -6,12 +6,16 @@
 // the loader rejects (a home pose outside the feasible workspace) are drawn again.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <vector>
 #include <string>
 
 #include "common/error.h"
 #include "common/random.h"
 #include "model/robot.h"
+#include "model/statics.h"
 
 namespace cablecal::testing {
 
@@ -44,6 +48,85 @@ inline Robot RandomValidRobot(Rng& rng, const std::string& name) {
     }
   }
   throw std::runtime_error("no valid random robot in 1000 draws");
+}
+
+// A random robot with m = 2..8 cables. Suspended (fully_constrained false): every cable
+// wraps over a pulley on or near the top beam, the outer two at the frame's corners, the rest
+// anywhere between 20 % and 80 % of the width, anchors spread along the platform's top edge
+// and the centre of mass below them. Fully constrained (m >= 4): about half the cables over
+// pulleys at the top, the rest under pulleys low on the frame (wrap: under), each on the
+// platform edge facing its pulley. The home pose is near the frame's centre at the middle of
+// its feasible theta band (found by scanning), so that the loader accepts it.
+inline Robot RandomRobotWithCables(Rng& rng, const std::string& name, int m, bool fully_constrained) {
+  if (m == 2 && !fully_constrained) return RandomValidRobot(rng, name);
+  for (int attempt = 0; attempt < 1000; ++attempt) {
+    Robot r = BuiltinRobot();
+    r.name = name;
+    r.source = name;
+    r.frame_width_m = rng.Uniform(2.5, 4.5);
+    r.frame_height_m = rng.Uniform(2.0, 3.0);
+    r.platform_mass_kg = rng.Uniform(0.5, 10.0);
+    r.theta_max_rad = 45.0 * M_PI / 180.0;
+    const double W = r.frame_width_m, H = r.frame_height_m;
+    const double half_w = rng.Uniform(0.15, 0.3), half_h = rng.Uniform(0.05, 0.15);
+    const int top = fully_constrained ? (m + 1) / 2 : m;
+    r.cables.assign(m, Cable{});
+    // Exit x positions along a beam: both corners, then the rest inside, sorted left to right.
+    auto beam = [&](int count) {
+      std::vector<double> xs = {0.0, W};
+      while (static_cast<int>(xs.size()) < count) xs.push_back(rng.Uniform(0.2 * W, 0.8 * W));
+      std::sort(xs.begin(), xs.end());
+      return xs;
+    };
+    const std::vector<double> top_x = beam(top);
+    for (int i = 0; i < top; ++i) {
+      Cable& c = r.cables[i];
+      c.p_F_exit_m = Eigen::Vector2d(top_x[i], H - rng.Uniform(0.0, 0.3));
+      c.side = top_x[i] < W / 2 ? PulleySide::kLeft : PulleySide::kRight;
+      c.wrap = PulleyWrap::kOver;
+      const double along = top == 1 ? 0.0 : -half_w + 2.0 * half_w * i / (top - 1);
+      c.p_P_anchor_m = Eigen::Vector2d(along + rng.Uniform(-0.03, 0.03),
+                                       (fully_constrained ? half_h : 0.0) + rng.Uniform(0.0, 0.05));
+    }
+    if (fully_constrained) {
+      const std::vector<double> bottom_x = beam(m - top);
+      for (int k = 0; k < m - top; ++k) {
+        Cable& c = r.cables[top + k];
+        c.p_F_exit_m = Eigen::Vector2d(bottom_x[k], rng.Uniform(0.05, 0.3));
+        c.side = bottom_x[k] < W / 2 ? PulleySide::kLeft : PulleySide::kRight;
+        c.wrap = PulleyWrap::kUnder;
+        const double along = m - top == 1 ? 0.0 : -half_w + 2.0 * half_w * k / (m - top - 1);
+        c.p_P_anchor_m = Eigen::Vector2d(along + rng.Uniform(-0.03, 0.03), -half_h - rng.Uniform(0.0, 0.05));
+      }
+    }
+    for (Cable& c : r.cables) {
+      c.pulley_radius_m = rng.Uniform(0.010, 0.050);
+      c.initial_length_m.reset();
+    }
+    r.p_P_com_m = Eigen::Vector2d(rng.Uniform(-0.05, 0.05), fully_constrained ? rng.Uniform(-0.05, 0.05)
+                                                                              : rng.Uniform(-0.12, -0.02));
+    const double weight_N = r.platform_mass_kg * r.gravity_mps2;
+    r.tension_min_N = weight_N * rng.Uniform(0.02, 0.1);
+    r.tension_max_N = weight_N * rng.Uniform(fully_constrained ? 6.0 : 3.5, fully_constrained ? 10.0 : 6.0);
+    r.p_F_home_m = Eigen::Vector2d(W / 2 + rng.Uniform(-0.2, 0.2), H / 2);
+    // The middle of the feasible theta band at home, on a 0.5-degree scan.
+    double lo = 1e9, hi = -1e9;
+    for (int k = -80; k <= 80; ++k) {
+      const double theta = k * 0.5 * M_PI / 180.0;
+      if (EvaluatePose(r, Eigen::Vector3d(r.p_F_home_m.x(), r.p_F_home_m.y(), theta)).feasible()) {
+        lo = std::min(lo, theta);
+        hi = std::max(hi, theta);
+      }
+    }
+    if (lo > hi) continue;
+    r.home_theta_rad = std::round((0.5 * (lo + hi)) * 180.0 / M_PI) * M_PI / 180.0;
+    try {
+      return LoadRobotFromString(RobotToYaml(r), name);
+    } catch (const InputError&) {
+      // the rounded home angle left the band, or another check: draw again
+    }
+  }
+  throw std::runtime_error("no valid random robot with " + std::to_string(m) + " cables in 1000 draws");
 }
 
 }  // namespace cablecal::testing

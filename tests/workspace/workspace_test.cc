@@ -136,5 +136,65 @@ TEST(PosePlan, CsvRoundTrip) {
   }
 }
 
+// With 3 or more cables the sampler draws the orientation too: every pose is feasible with
+// the model, the plan's lengths and tensions are the model's, and the orientations spread over
+// the feasible band instead of sitting at one angle.
+TEST(ManyCableWorkspace, SamplerDrawsFeasibleOrientations) {
+  for (const char* file : {"planar3_suspended.yaml", "planar4_fully_constrained.yaml"}) {
+    const Robot robot = LoadRobotFile(std::string(CABLECAL_SOURCE_DIR) + "/robots/" + file);
+    const std::vector<PlanPose> plan = SampleFeasiblePoses(robot, 60, 4);
+    ASSERT_EQ(plan.size(), 60u);
+    double theta_lo = 1e9, theta_hi = -1e9;
+    for (const PlanPose& p : plan) {
+      EXPECT_TRUE(EvaluatePose(robot, p.q).feasible()) << file << " " << p.q.transpose();
+      EXPECT_LT(EquilibriumResidual<double>(robot, p.q, p.tensions_N).norm(), 1e-9 * robot.platform_mass_kg * 9.81);
+      theta_lo = std::min(theta_lo, p.q(2));
+      theta_hi = std::max(theta_hi, p.q(2));
+    }
+    EXPECT_GT(theta_hi - theta_lo, 10.0 * M_PI / 180.0) << file;
+    EXPECT_NO_THROW(CheckPlanMatchesRobot(robot, plan, file));
+    // Same seed, same plan.
+    EXPECT_EQ(PosePlanCsv(SampleFeasiblePoses(robot, 60, 4), ""), PosePlanCsv(plan, ""));
+  }
+}
+
+// The grid reports, per (x, z), the band of feasible orientations; the pose it reports lies
+// inside that band and is feasible, and points outside the frame have no band.
+TEST(ManyCableWorkspace, GridReportsTheFeasibleBand) {
+  const Robot robot = LoadRobotFile(std::string(CABLECAL_SOURCE_DIR) + "/robots/planar3_suspended.yaml");
+  const WorkspaceGrid grid = ComputeWorkspaceGrid(robot, 0.1);
+  ASSERT_GT(grid.num_feasible, 20);
+  for (const WorkspacePoint& p : grid.points) {
+    if (!p.evaluation.feasible()) {
+      EXPECT_TRUE(std::isnan(p.theta_min_rad));
+      continue;
+    }
+    EXPECT_LE(p.theta_min_rad, p.evaluation.equilibrium.q(2));
+    EXPECT_GE(p.theta_max_rad, p.evaluation.equilibrium.q(2));
+    EXPECT_TRUE(EvaluatePose(robot, p.evaluation.equilibrium.q).feasible());
+    // Just beyond the band's ends the scan found nothing feasible (a band, not scattered points).
+    // The band's ends are feasible orientations themselves.
+    EXPECT_TRUE(EvaluatePose(robot, Eigen::Vector3d(p.x_m, p.z_m, p.theta_min_rad)).feasible());
+    EXPECT_TRUE(EvaluatePose(robot, Eigen::Vector3d(p.x_m, p.z_m, p.theta_max_rad)).feasible());
+    const Eigen::Vector3d below(p.x_m, p.z_m, p.theta_min_rad - kThetaScanStep_rad);
+    if (std::abs(below(2)) <= robot.theta_max_rad) EXPECT_FALSE(EvaluatePose(robot, below).feasible());
+  }
+  const std::string csv = WorkspaceCsv(robot, grid, "");
+  EXPECT_EQ(csv.substr(0, csv.find('\n')), "x,z,theta,t1,t2,t3,feasible,reason,theta_min,theta_max");
+}
+
+// Every point of a many-cable grid is a theta scan: the cap on the grid is lower, named by --step.
+TEST(ManyCableWorkspace, FineGridIsRefusedNamingTheStep) {
+  const Robot robot = LoadRobotFile(std::string(CABLECAL_SOURCE_DIR) + "/robots/planar3_suspended.yaml");
+  try {
+    ComputeWorkspaceGrid(robot, 0.01);  // 301 x 201 points
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("--step: 0.01 m makes a grid of more than 40,000 points"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_NO_THROW(ComputeWorkspaceGrid(robot, 0.05));  // 61 x 41 points
+}
+
 }  // namespace
 }  // namespace cablecal

@@ -1,0 +1,79 @@
+// The identification's Ceres cost functors: thin wrappers that call the residual functions
+// of identify/residuals.h, one residual block per pose (and one for the tracker prior), sized
+// at compile time by the cable count M. identify.cc builds its problem from them; tests wrap
+// them in ceres::AutoDiffCostFunction to compare Ceres' Jacobian with identify/jacobian.h.
+#pragma once
+
+#include <Eigen/Core>
+#include <cmath>
+
+#include "common/error.h"
+#include "identify/experiment.h"
+#include "identify/residuals.h"
+#include "model/robot.h"
+
+namespace cablecal::internal {
+
+// A trial step of Levenberg-Marquardt can put an anchor inside its pulley, where the cable
+// length is undefined (NaN). Saying so (false) makes Ceres reject the step quietly, exactly
+// as it does for a NaN it finds itself, but without a multi-line warning per block.
+template <typename T, int kCount>
+bool AllFinite(const T* residual) {
+  using std::isfinite;  // ceres::isfinite for Jets, by argument-dependent lookup
+  for (int i = 0; i < kCount; ++i) {
+    if (!isfinite(residual[i])) return false;
+  }
+  return true;
+}
+
+template <int M>
+PoseReadings<M> ReadingsOf(const Measurement& m) {
+  CABLECAL_CHECK(m.dl_m.size() == M, "one encoder reading per cable");
+  PoseReadings<M> r;
+  r.dl_m = m.dl_m;
+  r.z_m = m.z_m;
+  r.theta_rad = m.theta_rad;
+  return r;
+}
+
+// Maximum likelihood, errors in variables: per pose, every cable's length residual and the
+// laser and inclinometer residuals, each whitened by its sensor's sigma (residuals.h).
+template <int M>
+struct MlPoseCost {
+  const Robot* robot;
+  PoseReadings<M> readings;
+  ReadingWeights weights;
+
+  template <typename T>
+  bool operator()(const T* geometry, const T* pose, T* residual) const {
+    MlResiduals<M, T>(*robot, readings, weights, geometry, pose, residual);
+    return AllFinite<T, M>(residual);
+  }
+};
+
+// The paper's estimator: Eq. (6) with z_j and theta_j taken as measured; only x_j unknown.
+template <int M>
+struct PaperPoseCost {
+  const Robot* robot;
+  PoseReadings<M> readings;
+
+  template <typename T>
+  bool operator()(const T* geometry, const T* x, T* residual) const {
+    PaperResiduals<M, T>(*robot, readings, geometry, x, residual);
+    return AllFinite<T, M>(residual);
+  }
+};
+
+// Laser-tracker prior on the exit points (gauge `prior`): a1x a1z ... aMx aMz.
+template <int M>
+struct ExitPointPriorCost {
+  Eigen::Matrix<double, 2 * M, 1> nominal;
+  double inv_sigma;
+  template <typename T>
+  bool operator()(const T* geometry, T* residual) const {
+    for (int k = 0; k < 2 * M; ++k) residual[k] = (geometry[k] - nominal(k)) * inv_sigma;
+    return true;
+  }
+};
+
+}  // namespace cablecal::internal
