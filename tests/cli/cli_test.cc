@@ -869,12 +869,12 @@ TEST_F(Cli, HostileCableCountsAndKeysAreRefused) {
   const std::vector<std::array<std::string, 2>> cases = {
       {replaced(wang, right + "\n", ""), "cables: must list 2 to 8 cables (got 1)"},
       {replaced(wang, right, nine), "cables: must list 2 to 8 cables (got 9)"},
-      {replaced(p3, "[[-0.15, 0.0], [0.0, 0.06], [0.15, 0.0]]", "[[-0.15, 0.0], [0.15, 0.0]]"),
+      {replaced(p3, "[[-0.35, 0.0], [0.0, 0.25], [0.35, 0.0]]", "[[-0.35, 0.0], [0.35, 0.0]]"),
        "platform.anchors: needs one anchor per cable (3), got 2"},
       {replaced(p4, "wrap: under}", "wrap: sideways}"), "cables[2].wrap: must be 'over' or 'under' (got 'sideways')"},
       {replaced(wang, "home: [2.6045, 1.4]", "home: [2.6045, 1.4]\nhome_theta_deg: 2"),
        "home_theta_deg: is for robots with 3 or more cables"},
-      {replaced(p3, "home_theta_deg: 8 ", "home_theta_deg: -25 "), "is not in the feasible workspace: no_equilibrium"},
+      {replaced(p3, "home_theta_deg: 18 ", "home_theta_deg: -25 "), "is not in the feasible workspace: no_equilibrium"},
   };
   for (const auto& [text, expected] : cases) {
     std::ofstream(Path("bad.yaml")) << text;

@@ -227,12 +227,9 @@ int UnholdableOnScenarioRobots(const Robot& robot, const std::vector<PlanPose>& 
 // on the 3- and 4-cable robots returns poses every check holds and beats the random median by 2x.
 class ManyCables : public ::testing::TestWithParam<const char*> {};
 
-// DISABLED: fails on the current robots/planar3_suspended.yaml and planar4_fully_constrained.yaml, whose
-// cable lines nearly meet at the platform centre (no pose holds on every 3 x 1 cm true robot); it
-// passed (9.06x and 13.6x) on better-conditioned files (planar3: anchors (+-0.35, 0), (0, 0.25), com
-// (0, -0.06), cable 2 exit (0.5, 2.0), home_theta_deg 18; planar4: each cable on the far corner).
-// Issue 14 stays open until the files change and this runs.
-TEST_P(ManyCables, DISABLED_TenPosesHoldableAndTwiceBetterThanTheRandomMedian) {
+// The robots' files spread their cable lines (README, "Any number of cables"): with lines that
+// nearly meet at the platform, no pose holds on every 3 x 1 cm true robot and design exits 3.
+TEST_P(ManyCables, TenPosesHoldableAndTwiceBetterThanTheRandomMedian) {
   const Robot robot = RobotFile(GetParam());
   DesignOptions options;
   options.poses = 10;

@@ -173,15 +173,15 @@ TEST_P(BadManyCableRobotFile, IsRejectedWithKeyAndLine) {
 INSTANTIATE_TEST_SUITE_P(
     Rejections, BadManyCableRobotFile,
     ::testing::Values(
-        ManyCableBadCase{"AnchorMissing", "planar3_suspended.yaml", "[[-0.15, 0.0], [0.0, 0.06], [0.15, 0.0]]",
-                         "[[-0.15, 0.0], [0.15, 0.0]]", "platform\\.anchors: needs one anchor per cable \\(3\\), got 2"},
-        ManyCableBadCase{"AnchorTooMany", "planar4_fully_constrained.yaml", "[-0.2, -0.1]]", "[-0.2, -0.1], [0, 0]]",
+        ManyCableBadCase{"AnchorMissing", "planar3_suspended.yaml", "[[-0.35, 0.0], [0.0, 0.25], [0.35, 0.0]]",
+                         "[[-0.35, 0.0], [0.35, 0.0]]", "platform\\.anchors: needs one anchor per cable \\(3\\), got 2"},
+        ManyCableBadCase{"AnchorTooMany", "planar4_fully_constrained.yaml", "[0.2, -0.1]]", "[0.2, -0.1], [0, 0]]",
                          "platform\\.anchors: needs one anchor per cable \\(4\\), got 5"},
         ManyCableBadCase{"WrapSideways", "planar4_fully_constrained.yaml", "wrap: under}", "wrap: sideways}",
                          "cables\\[2\\]\\.wrap: must be 'over' or 'under' \\(got 'sideways'\\)"},
-        ManyCableBadCase{"HomeThetaOutsideBand", "planar3_suspended.yaml", "home_theta_deg: 8 ", "home_theta_deg: -20 ",
+        ManyCableBadCase{"HomeThetaOutsideBand", "planar3_suspended.yaml", "home_theta_deg: 18 ", "home_theta_deg: -20 ",
                          "home: \\(1\\.5, 1\\) m at theta -20 degrees \\(home_theta_deg\\) is not in the feasible "
-                         "workspace: no_equilibrium; feasible home_theta_deg at this \\(x, z\\): 1 to 16\\.5 \\(0\\.5-degree scan\\)"},
+                         "workspace: no_equilibrium; feasible home_theta_deg at this \\(x, z\\): 3\\.5 to 32\\.5 \\(0\\.5-degree scan\\)"},
         ManyCableBadCase{"HomeThetaBeyondInclinometer", "planar4_fully_constrained.yaml", "home_theta_deg: 0",
                          "home_theta_deg: 40", "home_theta_deg: 40 degrees is beyond limits\\.theta_max_deg \\(30\\)"},
         ManyCableBadCase{"HomeTensionsTooHigh", "planar4_fully_constrained.yaml", "{min: 5.0, max: 150.0}",
@@ -203,7 +203,7 @@ TEST(RobotFile, ManyCableFilesLoadAndRoundTrip) {
     for (int i = 0; i < r.num_cables(); ++i) EXPECT_EQ(back.cables[i].wrap, r.cables[i].wrap) << name << " cable " << i;
   }
   const Robot p3 = LoadRobotFromString(RobotFileText("planar3_suspended.yaml"), "p3");
-  EXPECT_NEAR(p3.home_theta_rad, 8.0 * M_PI / 180.0, 1e-15);
+  EXPECT_NEAR(p3.home_theta_rad, 18.0 * M_PI / 180.0, 1e-15);
   const Robot p4 = LoadRobotFromString(RobotFileText("planar4_fully_constrained.yaml"), "p4");
   EXPECT_EQ(p4.num_cables(), 4);
   EXPECT_EQ(p4.cables[2].wrap, PulleyWrap::kUnder);
