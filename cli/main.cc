@@ -72,7 +72,7 @@ int main(int argc, char** argv) {
   CLI::App* ws_cmd = app.add_subcommand("workspace", "grid the feasible cable-tension workspace to CSV (and PNG)");
   AddRobotOption(ws_cmd, &ws.robot_path);
   ws_cmd->add_option("--step", ws.step_m, "grid spacing in m")->capture_default_str()->check(kPositive);
-  ws_cmd->add_option("--out", ws.out_path, "workspace CSV (x,z,theta,t1,t2,feasible,reason)")->required();
+  ws_cmd->add_option("--out", ws.out_path, "workspace CSV (x,z,theta,t1..tm,feasible,reason; theta_min,theta_max with 3 or more cables)")->required();
   ws_cmd->add_option("--plot", ws.plot_path, "PNG of the feasible region, tensions and exit points");
 
   cablecal::cli::SampleOptions sample;
@@ -95,7 +95,7 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::IsMember({"both", "laser", "inclinometer", "none"}));
   sim_cmd->add_flag("--no-encoder-noise", sim.no_encoder_noise, "encoders read the commanded changes exactly");
-  sim_cmd->add_option("--out", sim.out_path, "measurement CSV (pose,dl1,dl2,z,theta)")->required();
+  sim_cmd->add_option("--out", sim.out_path, "measurement CSV (pose,dl1..dlm,z,theta)")->required();
   sim_cmd->add_option("--truth-out", sim.truth_out_path, "true robot and true poses (YAML)");
 
   cablecal::cli::IdentifyCommandOptions ident;

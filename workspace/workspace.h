@@ -78,8 +78,8 @@ PlanPose MakePlanPose(const Robot& robot, const Equilibrium& equilibrium,
 // that, the orientation being drawn too): an empty or tiny workspace.
 std::vector<PlanPose> SampleFeasiblePoses(const Robot& robot, int n, std::uint64_t seed);
 
-// Pose plan CSV: header pose,x,z,theta,t1,t2,l1,l2,dl1,dl2 (pose numbered from 1), then
-// t1_worst_min,t1_worst_max,t2_worst_min,t2_worst_max when the plan carries them.
+// Pose plan CSV: header pose,x,z,theta,t1..tm,l1..lm,dl1..dlm (pose numbered from 1), then
+// t<i>_worst_min,t<i>_worst_max for each cable when the plan carries them.
 std::string PosePlanCsv(const std::vector<PlanPose>& plan, const std::string& provenance);
 
 // Reads a pose plan CSV; '#' lines are comments. Throws InputError naming file, line and

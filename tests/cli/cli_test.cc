@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <regex>
 #include <sstream>
 #include <vector>
 
@@ -829,15 +830,19 @@ TEST_P(ManyCableCli, WorkspaceSampleSimulateIdentify) {
   EXPECT_EQ(r.exit_code, 0) << r.output;
 }
 
-// A small Monte Carlo on each: it runs, and its tables name every cable's parameters.
+// A small Monte Carlo on each, random and designed sets: it runs, its tables name every
+// cable's parameters, and the designed (robust) set is held by every true robot drawn.
 TEST_P(ManyCableCli, MonteCarloRuns) {
   const int m = std::string(GetParam()).find("planar3") == 0 ? 3 : 4;
   const RunResult r = RunCablecal("montecarlo --robot " + RobotPath() +
-                                  " --poses 8:8 --trials 6 --designs random --threads 2 --out " + Path("mc"));
+                                  " --poses 8:8 --trials 6 --designs random,optimized --threads 2 --out " + Path("mc"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const std::string summary = Read("mc/summary.csv");
   EXPECT_NE(summary.find(",l" + std::to_string(m) + "0,"), std::string::npos) << summary;
   EXPECT_NE(summary.find(",a" + std::to_string(m) + "z,"), std::string::npos) << summary;
+  // 8,optimized,l<m>0,mean,std,rms,max_abs,share,failures,...: no failed trial.
+  const std::regex designed_row("\\n8,optimized,l" + std::to_string(m) + "0,([^,]*,){5}0,");
+  EXPECT_TRUE(std::regex_search(summary, designed_row)) << summary;
 }
 
 INSTANTIATE_TEST_SUITE_P(Robots, ManyCableCli,
