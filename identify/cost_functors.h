@@ -38,6 +38,37 @@ PoseReadings<M> ReadingsOf(const Measurement& m) {
 
 // Maximum likelihood, errors in variables: per pose, every cable's length residual and the
 // laser and inclinometer residuals, each whitened by its sensor's sigma (residuals.h).
+// Identify gives Ceres two residual blocks per pose, MlLengthCost (geometry and pose) and
+// MlSensorCost (the pose alone): with 2 cables every row block is then 2 rows by a 3-wide pose
+// block and a 6-wide geometry block, a shape Ceres' Schur eliminator has a compiled
+// specialisation for (<2, 3, 6>); one block of 4 rows takes its generic, dynamic-size path,
+// which was half of every 2-cable solve (bench/README.md).
+template <int M>
+struct MlLengthCost {
+  const Robot* robot;
+  PoseReadings<M> readings;
+  ReadingWeights weights;
+
+  template <typename T>
+  bool operator()(const T* geometry, const T* pose, T* residual) const {
+    MlLengthResiduals<M, T>(*robot, readings, weights, geometry, pose, residual);
+    return AllFinite<T, M>(residual);
+  }
+};
+
+template <int M>
+struct MlSensorCost {
+  PoseReadings<M> readings;
+  ReadingWeights weights;
+
+  template <typename T>
+  bool operator()(const T* pose, T* residual) const {
+    MlSensorResiduals<M, T>(readings, weights, pose, residual);
+    return true;
+  }
+};
+
+// Both parts in one block, as the design's Jacobian rows order them (tests compare the two).
 template <int M>
 struct MlPoseCost {
   const Robot* robot;

@@ -146,9 +146,12 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   for (int j = 0; j < n; ++j) {
     const PoseReadings<M> readings = internal::ReadingsOf<M>(measurements[j]);
     if (ml) {
-      auto* cost = new ceres::AutoDiffCostFunction<internal::MlPoseCost<M>, M + 2, kGeometry, 3>(
-          new internal::MlPoseCost<M>{&nominal, readings, weights});
-      problem.AddResidualBlock(cost, nullptr, geometry, poses[j].data());
+      auto* lengths = new ceres::AutoDiffCostFunction<internal::MlLengthCost<M>, M, kGeometry, 3>(
+          new internal::MlLengthCost<M>{&nominal, readings, weights});
+      problem.AddResidualBlock(lengths, nullptr, geometry, poses[j].data());
+      auto* sensors = new ceres::AutoDiffCostFunction<internal::MlSensorCost<M>, 2, 3>(
+          new internal::MlSensorCost<M>{readings, weights});
+      problem.AddResidualBlock(sensors, nullptr, poses[j].data());
     } else {
       auto* cost = new ceres::AutoDiffCostFunction<internal::PaperPoseCost<M>, M, kGeometry, 1>(
           new internal::PaperPoseCost<M>{&nominal, readings});

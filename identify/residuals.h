@@ -51,13 +51,25 @@ void LengthResiduals(const Robot& robot, const T* geometry, const Pose<T>& q, co
 // The maximum-likelihood estimator's residuals of one pose (errors in variables: x, z and
 // theta all unknown): M length residuals over the encoder's sigma, then the laser's
 // (z - z_meas) and the inclinometer's (theta - theta_meas) over theirs. M + 2 residuals.
+// Identify gives Ceres the two parts as residual blocks of their own (cost_functors.h).
+template <int M, typename T>
+void MlLengthResiduals(const Robot& robot, const PoseReadings<M>& readings, const ReadingWeights& weights,
+                       const T* geometry, const T* pose, T* residual) {
+  LengthResiduals<M, T>(robot, geometry, Pose<T>(pose[0], pose[1], pose[2]), readings.dl_m.data(), residual);
+  for (int i = 0; i < M; ++i) residual[i] = residual[i] * weights.inv_sigma_encoder;
+}
+
+template <int M, typename T>
+void MlSensorResiduals(const PoseReadings<M>& readings, const ReadingWeights& weights, const T* pose, T* residual) {
+  residual[0] = (pose[1] - readings.z_m) * weights.inv_sigma_laser;
+  residual[1] = (pose[2] - readings.theta_rad) * weights.inv_sigma_inclinometer;
+}
+
 template <int M, typename T>
 void MlResiduals(const Robot& robot, const PoseReadings<M>& readings, const ReadingWeights& weights,
                  const T* geometry, const T* pose, T* residual) {
-  LengthResiduals<M, T>(robot, geometry, Pose<T>(pose[0], pose[1], pose[2]), readings.dl_m.data(), residual);
-  for (int i = 0; i < M; ++i) residual[i] = residual[i] * weights.inv_sigma_encoder;
-  residual[M] = (pose[1] - readings.z_m) * weights.inv_sigma_laser;
-  residual[M + 1] = (pose[2] - readings.theta_rad) * weights.inv_sigma_inclinometer;
+  MlLengthResiduals<M, T>(robot, readings, weights, geometry, pose, residual);
+  MlSensorResiduals<M, T>(readings, weights, pose, residual + M);
 }
 
 // The paper's Eq. (6) itself, f_ij = l_model^2 - (dl_ij + l_i0)^2 in m^2, with z_j and theta_j
