@@ -280,7 +280,10 @@ int RunDesign(const Context& ctx, const DesignCommandOptions& options) {
       std::fprintf(stderr,
                    "cablecal: warning: the designed set is no better than the median random set on its criterion: "
                    "the poses that stay holdable for geometry errors of %g x %g m are a small part of the nominal "
-                   "workspace the random sets are drawn from (compare with --geometry-sigma 0)\n",
+                   "workspace the random sets are drawn from (compare with --geometry-sigma 0). If the exit points "
+                   "and initial lengths are known better than that (a tape, a laser tracker), say so with a smaller "
+                   "--geometry-sigma (e.g. 0.005 or 0.001 m); a robot whose cable lines nearly meet at one point "
+                   "of the platform needs it (README, \"Any number of cables\")\n",
                    design.robust_sigmas, design.geometry_sigma_m);
     }
   }

@@ -212,14 +212,25 @@ Robot Parse(const YAML::Node& root, const Reader& rd) {
               "the cable with side: left must leave from the left of the one with side: right");
     }
   }
+  // Anchors: two cables may share one (a common design with 3 or more cables) as long as
+  // the lengths still fix the orientation, which takes two distinct anchor points. With 2
+  // cables that means the two differ; with more, that not all of them are one point.
+  constexpr double kSamePoint_m = 1e-6;
+  const auto same_anchor = [&](std::size_t i, std::size_t j) {
+    return (robot.cables[i].p_P_anchor_m - robot.cables[j].p_P_anchor_m).norm() < kSamePoint_m;
+  };
+  if (robot.cables.size() == 2 && same_anchor(0, 1)) {
+    rd.Fail(anchors[1], "platform.anchors[1]", "coincides with anchors[0]: the platform's orientation would be undetermined");
+  }
+  bool all_one_anchor = true;
+  for (std::size_t j = 1; j < robot.cables.size(); ++j) all_one_anchor = all_one_anchor && same_anchor(0, j);
+  if (robot.cables.size() > 2 && all_one_anchor) {
+    rd.Fail(anchors, "platform.anchors",
+            "all anchors are one point: the platform's orientation would be undetermined (at least two must differ)");
+  }
   for (std::size_t i = 0; i < robot.cables.size(); ++i) {
     for (std::size_t j = i + 1; j < robot.cables.size(); ++j) {
-      if ((robot.cables[i].p_P_anchor_m - robot.cables[j].p_P_anchor_m).norm() < 1e-6) {
-        rd.Fail(anchors[j], "platform.anchors[" + std::to_string(j) + "]",
-                "coincides with anchor " + std::to_string(i) +
-                    ": the platform's orientation would be undetermined");
-      }
-      if ((robot.cables[i].p_F_exit_m - robot.cables[j].p_F_exit_m).norm() < 1e-6) {
+      if ((robot.cables[i].p_F_exit_m - robot.cables[j].p_F_exit_m).norm() < kSamePoint_m) {
         rd.Fail(cables[j]["exit"], "cables[" + std::to_string(j) + "].exit",
                 "coincides with the exit point of cable " + std::to_string(i));
       }

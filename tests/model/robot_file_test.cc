@@ -9,6 +9,7 @@
 
 #include "common/error.h"
 #include "model/robot.h"
+#include "model/statics.h"
 #include "tests/support/temp_dir.h"
 
 namespace cablecal {
@@ -91,7 +92,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"ZeroRadius", "pulley_radius: 0.025, side: left", "pulley_radius: 0, side: left",
                 "cables\\[0\\]\\.pulley_radius: must be > 0"},
         BadCase{"CoincidentAnchors", "[[-0.25, 0.0], [0.25, 0.0]]", "[[0.25, 0.0], [0.25, 0.0]]",
-                "platform\\.anchors\\[1\\]: coincides with anchor 0"},
+                "platform\\.anchors\\[1\\]: coincides with anchors\\[0\\]"},
         BadCase{"TensionMinNotBelowMax", "{min: 1.0, max: 100.0}", "{min: 100.0, max: 100.0}",
                 "tension: min must be < max"},
         BadCase{"HomeOutsideWorkspace", "home: [2.6045, 1.4]", "home: [2.6045, 2.9]",
@@ -177,6 +178,10 @@ INSTANTIATE_TEST_SUITE_P(
                          "[[-0.35, 0.0], [0.35, 0.0]]", "platform\\.anchors: needs one anchor per cable \\(3\\), got 2"},
         ManyCableBadCase{"AnchorTooMany", "planar4_fully_constrained.yaml", "[0.2, -0.1]]", "[0.2, -0.1], [0, 0]]",
                          "platform\\.anchors: needs one anchor per cable \\(4\\), got 5"},
+        ManyCableBadCase{"AllAnchorsOnePoint", "planar4_fully_constrained.yaml",
+                         "[[0.2, 0.1], [-0.2, 0.1], [-0.2, -0.1], [0.2, -0.1]]",
+                         "[[0.2, 0.1], [0.2, 0.1], [0.2, 0.1], [0.2, 0.1]]",
+                         "platform\\.anchors: all anchors are one point"},
         ManyCableBadCase{"WrapSideways", "planar4_fully_constrained.yaml", "wrap: under}", "wrap: sideways}",
                          "cables\\[2\\]\\.wrap: must be 'over' or 'under' \\(got 'sideways'\\)"},
         ManyCableBadCase{"HomeThetaOutsideBand", "planar3_suspended.yaml", "home_theta_deg: 18 ", "home_theta_deg: -20 ",
@@ -208,6 +213,20 @@ TEST(RobotFile, ManyCableFilesLoadAndRoundTrip) {
   EXPECT_EQ(p4.num_cables(), 4);
   EXPECT_EQ(p4.cables[2].wrap, PulleyWrap::kUnder);
   EXPECT_EQ(p4.cables[0].wrap, PulleyWrap::kOver);
+}
+
+// With 3 or more cables two cables may share an anchor (a common design): the file loads, and
+// the shared anchor still has a feasible workspace around home.
+TEST(RobotFile, ManyCablesMayShareAnAnchor) {
+  const std::string p4 = RobotFileText("planar4_fully_constrained.yaml");
+  const std::string from = "[[0.2, 0.1], [-0.2, 0.1], [-0.2, -0.1], [0.2, -0.1]]";
+  ASSERT_NE(p4.find(from), std::string::npos);
+  std::string shared = p4;
+  shared.replace(shared.find(from), from.size(), "[[0.2, 0.0], [-0.2, 0.0], [-0.2, 0.0], [0.2, 0.0]]");
+  EXPECT_EQ(LoadError(shared), "");
+  const Robot r = LoadRobotFromString(shared, "shared.yaml");
+  EXPECT_EQ(r.cables[1].p_P_anchor_m, r.cables[2].p_P_anchor_m);
+  EXPECT_TRUE(EvaluateHome(r).feasible());
 }
 
 // An input on which yaml-cpp 0.7's LoadAll never returns (found by the fuzzer; kept in its
