@@ -1,5 +1,6 @@
 #include "common/csv.h"
 
+#include <algorithm>
 #include <fstream>
 #include <vector>
 
@@ -109,8 +110,22 @@ void ForEachCsvRow(std::istream& in, const std::string& path, const std::vector<
     if (!have_header) {
       if (!optional_trailing.empty() && cells == full_header) found_header = full_header;
       if (cells != found_header) {
+        // Plans and measurement files have one dl<i> column per cable: a file for a robot
+        // with another cable count is the likely cause when the counts differ, so say so.
+        const auto cable_columns = [](const std::vector<std::string>& names) {
+          return std::count_if(names.begin(), names.end(), [](const std::string& c) {
+            return c.size() > 2 && c.compare(0, 2, "dl") == 0 &&
+                   c.find_first_not_of("0123456789", 2) == std::string::npos;
+          });
+        };
+        const auto want = cable_columns(expected_header), got = cable_columns(cells);
+        const std::string hint =
+            want > 0 && got > 0 && want != got
+                ? " (the file has columns for " + std::to_string(got) + " cables, the robot has " +
+                      std::to_string(want) + ": a file for another robot?)"
+                : "";
         throw InputError(path + ":" + std::to_string(line_no), "header",
-                         "expected '" + JoinCsv(expected_header) + "', got '" + trimmed + "'");
+                         "expected '" + JoinCsv(expected_header) + "', got '" + trimmed + "'" + hint);
       }
       have_header = true;
       continue;

@@ -815,6 +815,13 @@ TEST_P(ManyCableCli, WorkspaceSampleSimulateIdentify) {
                   Path("meas.csv") + " --truth-out " + Path("truth.yaml"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(Read("meas.csv").find("pose,dl1,dl2,dl3"), std::string::npos);
+  // The measurements of this robot given to the built-in 2-cable one: the header names why.
+  r = RunCablecal("identify --measurements " + Path("meas.csv") + " --out " + Path("wrong.yaml"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("the file has columns for " + std::to_string(m) + " cables, the robot has 2"),
+            std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(Path("wrong.yaml")));
   r = RunCablecal("identify --robot " + RobotPath() + " --measurements " + Path("meas.csv") + " --out " +
                   Path("result.yaml") + " --calibrated-robot " + Path("cal.yaml"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
