@@ -18,6 +18,7 @@
 #include "common/random.h"
 #include "common/version.h"
 #include "design/ipopt_nlp.h"
+#include "design/solve_process.h"
 #include "design/objective.h"
 #include "design/robust.h"
 #include "identify/experiment.h"
@@ -371,20 +372,29 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
     std::vector<PlanPose> from = starts[k];
     for (int round = 0; round <= kRobustRounds; ++round) {
       if (options.interrupted && options.interrupted->load()) break;
-      internal::StartOutcome outcome;
-      // MUMPS, Ipopt's linear solver in Debian, is not thread-safe (coin-or/Ipopt#733), so the
-      // solves themselves take turns; sampling, verification and the reference sets run in parallel.
-      // An exception must not leave the critical section (its lock would stay taken).
-      std::exception_ptr solve_error;
-#pragma omp critical(cablecal_ipopt)
-      {
-        try {
-          outcome = internal::SolveDesignNlp(robot, options, from, &widening);
-        } catch (...) {
-          solve_error = std::current_exception();
-        }
+      // MUMPS, Ipopt's linear solver in Debian, is not thread-safe (coin-or/Ipopt#733): each
+      // solve runs in a child process of its own, so the starts' solves run at once; where
+      // that is off or no process can be had, the solves take turns in this one.
+      std::optional<internal::StartOutcome> in_child;
+      if (options.solve_in_child_processes) {
+        in_child = internal::SolveDesignNlpInChildProcess(robot, options, from, &widening);
       }
-      if (solve_error) std::rethrow_exception(solve_error);
+      internal::StartOutcome outcome;
+      if (in_child) {
+        outcome = std::move(*in_child);
+      } else {
+        // An exception must not leave the critical section (its lock would stay taken).
+        std::exception_ptr solve_error;
+#pragma omp critical(cablecal_ipopt)
+        {
+          try {
+            outcome = internal::SolveDesignNlp(robot, options, from, &widening);
+          } catch (...) {
+            solve_error = std::current_exception();
+          }
+        }
+        if (solve_error) std::rethrow_exception(solve_error);
+      }
       outcomes[k].iterations += outcome.iterations;
       outcomes[k].status = outcome.status;
       outcomes[k].converged = outcome.converged;

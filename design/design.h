@@ -89,6 +89,11 @@ struct DesignOptions {
   const std::atomic<bool>* interrupted = nullptr;
   // Information already gathered (design --prior), counted by the D, A and E criteria.
   std::optional<PriorInformation> prior_information;
+  // Each start's Ipopt solve in a child process of its own, so that starts solve at once on
+  // several cores (Debian's MUMPS is not thread-safe within a process); the outcome is the
+  // same bit for bit. Off: the solves take turns in this process (an MPI rank, where a fork
+  // is unwelcome).
+  bool solve_in_child_processes = true;
   // Testing aids: run Ipopt's derivative checker (forward differences with this relative
   // perturbation) and keep its journal in this file.
   bool derivative_test = false;

@@ -196,6 +196,7 @@ std::vector<PlanPose> MakeDesignedSet(const Robot& nominal, const MonteCarloOpti
   opt.random_sets = 0;
   opt.geometry_sigma_m = o.geometry_sigma_m;  // the plan must survive the same true robots
   opt.interrupted = o.interrupted;
+  opt.solve_in_child_processes = o.design_in_child_processes;
   try {
     return DesignPoses(nominal, opt).poses;
   } catch (const SolverFailure&) {

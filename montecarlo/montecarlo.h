@@ -48,6 +48,9 @@ struct MonteCarloOptions {
   double geometry_sigma_m = 0.01;
   std::uint64_t seed = 1;
   int design_starts = 2;  // Ipopt starts per designed set (4x as many if none converges)
+  // The designs' Ipopt solves in child processes (DesignOptions::solve_in_child_processes);
+  // off on MPI ranks, where a fork is unwelcome.
+  bool design_in_child_processes = true;
   // Called from one thread now and then with (trials done, trials in all).
   std::function<void(long, long)> progress;
   const std::atomic<bool>* interrupted = nullptr;  // set (e.g. by SIGINT) to stop early

@@ -186,6 +186,9 @@ MonteCarloResult RunMonteCarloMpi(const Robot& nominal, const MonteCarloOptions&
   }
   MonteCarloOptions o = options;
   if (world.rank != 0) o.progress = nullptr;  // rank 0 shows its own share's progress
+  // MPI implementations warn about, or break on, fork() in a rank (Open MPI with some
+  // transports): with several ranks the designs' solves stay in-process (the ranks share them).
+  if (world.size > 1) o.design_in_child_processes = false;
 
   const DesignedSets designed = MakeDesignedSets(nominal, o, world);
 

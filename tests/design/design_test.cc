@@ -317,6 +317,30 @@ TEST(Design, SameSeedSameResultWhateverTheThreadCount) {
   EXPECT_EQ(one.best_start, two.best_start);
 }
 
+// Each start's Ipopt solve in a child process (the default, so that starts solve at once)
+// gives the plan the same solves in this process give, bit for bit: on the asymmetric robot
+// and on the 3-cable one, whose solves carry the tensions and theta too.
+TEST(Design, SolvesInChildProcessesEqualSolvesInProcess) {
+  for (const char* file : {"/robots/asymmetric.yaml", "/robots/planar3_suspended.yaml"}) {
+    const Robot robot = LoadRobotFile(std::string(CABLECAL_SOURCE_DIR) + file);
+    DesignOptions options;
+    options.poses = 7;
+    options.starts = 3;
+    options.random_sets = 0;
+    options.solve_in_child_processes = true;
+    const DesignResult children = DesignPoses(robot, options);
+    options.solve_in_child_processes = false;
+    const DesignResult here = DesignPoses(robot, options);
+    EXPECT_EQ(PosePlanCsv(children.poses, ""), PosePlanCsv(here.poses, "")) << file;
+    ASSERT_EQ(children.starts.size(), here.starts.size());
+    for (std::size_t k = 0; k < here.starts.size(); ++k) {
+      EXPECT_EQ(children.starts[k].iterations, here.starts[k].iterations) << file << " start " << k;
+      EXPECT_EQ(children.starts[k].ipopt_status, here.starts[k].ipopt_status) << file << " start " << k;
+      EXPECT_EQ(children.starts[k].objective, here.starts[k].objective) << file << " start " << k;
+    }
+  }
+}
+
 TEST(Design, SolvesWithTheReferenceBlas) {
   // With ATLAS behind libblas.so.3, the same Ipopt/MUMPS solve ended differently in about
   // one run in six (alignment-dependent kernels), so every executable loads the reference
