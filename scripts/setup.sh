@@ -3,6 +3,7 @@
 # Nothing else is downloaded: every dependency is a Debian package (see README, "Dependencies").
 #   scripts/setup.sh          what the default build needs (scripts/run.sh)
 #   scripts/setup.sh --tests  and what the whole test suite needs (scripts/test.sh)
+#   scripts/setup.sh --bench  and what bench/'s scipy baseline needs (bench/identify_vs_scipy.sh)
 set -euo pipefail
 
 PACKAGES=(
@@ -20,13 +21,17 @@ PACKAGES=(
 )
 case "${1:-}" in
   "") ;;
+  --bench)
+    PACKAGES+=(
+      python3-scipy               # bench/scipy_identify.py, the independent baseline
+    ) ;;
   --tests)
     PACKAGES+=(
       clang libclang-rt-dev       # libFuzzer targets of tests/fuzz
       libopenmpi-dev openmpi-bin  # the CABLECAL_MPI build and its mpirun tests
       locales-all                 # a decimal-comma locale: number parsing must not depend on it
     ) ;;
-  *) echo "cablecal setup: unknown option '$1' (use --tests or nothing)" >&2; exit 2 ;;
+  *) echo "cablecal setup: unknown option '$1' (use --tests, --bench or nothing)" >&2; exit 2 ;;
 esac
 
 missing=()
