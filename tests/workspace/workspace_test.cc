@@ -177,7 +177,9 @@ TEST(ManyCableWorkspace, GridReportsTheFeasibleBand) {
     EXPECT_TRUE(EvaluatePose(robot, Eigen::Vector3d(p.x_m, p.z_m, p.theta_min_rad)).feasible());
     EXPECT_TRUE(EvaluatePose(robot, Eigen::Vector3d(p.x_m, p.z_m, p.theta_max_rad)).feasible());
     const Eigen::Vector3d below(p.x_m, p.z_m, p.theta_min_rad - kThetaScanStep_rad);
-    if (std::abs(below(2)) <= robot.theta_max_rad) EXPECT_FALSE(EvaluatePose(robot, below).feasible());
+    if (std::abs(below(2)) <= robot.theta_max_rad) {
+      EXPECT_FALSE(EvaluatePose(robot, below).feasible());
+    }
   }
   const std::string csv = WorkspaceCsv(robot, grid, "");
   EXPECT_EQ(csv.substr(0, csv.find('\n')), "x,z,theta,t1,t2,t3,feasible,reason,theta_min,theta_max");
