@@ -1,7 +1,8 @@
 // The identification's Ceres cost functors: thin wrappers that call the residual functions
-// of identify/residuals.h, one residual block per pose (and one for the tracker prior), sized
-// at compile time by the cable count M. identify.cc builds its problem from them; tests wrap
-// them in ceres::AutoDiffCostFunction to compare Ceres' Jacobian with identify/jacobian.h.
+// of identify/residuals.h, two residual blocks per pose for ml (one for the paper's
+// estimator) and one for the tracker prior, sized at compile time by the cable count M.
+// identify_cables.h builds its problem from them; tests wrap them in
+// ceres::AutoDiffCostFunction to compare Ceres' Jacobians with identify/jacobian.h.
 #pragma once
 
 #include <Eigen/Core>
@@ -65,20 +66,6 @@ struct MlSensorCost {
   bool operator()(const T* pose, T* residual) const {
     MlSensorResiduals<M, T>(readings, weights, pose, residual);
     return true;
-  }
-};
-
-// Both parts in one block, as the design's Jacobian rows order them (tests compare the two).
-template <int M>
-struct MlPoseCost {
-  const Robot* robot;
-  PoseReadings<M> readings;
-  ReadingWeights weights;
-
-  template <typename T>
-  bool operator()(const T* geometry, const T* pose, T* residual) const {
-    MlResiduals<M, T>(*robot, readings, weights, geometry, pose, residual);
-    return AllFinite<T, M>(residual);
   }
 };
 

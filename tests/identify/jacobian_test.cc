@@ -51,21 +51,27 @@ void CheckRowsOfRobot(const Robot& robot) {
   const ReadingWeights weights = WeightsOf(robot.sensors);
   for (const PlanPose& pose : plan) {
     const Eigen::Vector3d& q = pose.q;
-    // Ceres' Jacobian of the identification's cost functor, at readings of this pose.
+    // Ceres' Jacobians of the identification's two cost functors (the length rows, then the
+    // laser and inclinometer rows, as Identify adds them), at readings of this pose.
     Measurement m;
     m.dl_m = pose.length_change_m;
     m.z_m = q(1) + 0.001;  // the rows do not depend on the readings
     m.theta_rad = q(2) - 0.002;
-    ceres::AutoDiffCostFunction<internal::MlPoseCost<M>, M + 2, kG, 3> cost(
-        new internal::MlPoseCost<M>{&robot, internal::ReadingsOf<M>(m), weights});
+    const PoseReadings<M> readings = internal::ReadingsOf<M>(m);
+    ceres::AutoDiffCostFunction<internal::MlLengthCost<M>, M, kG, 3> lengths(
+        new internal::MlLengthCost<M>{&robot, readings, weights});
+    ceres::AutoDiffCostFunction<internal::MlSensorCost<M>, 2, 3> sensors(new internal::MlSensorCost<M>{readings, weights});
     const double* parameters[2] = {g.data(), q.data()};
-    Eigen::Matrix<double, M + 2, kG, Eigen::RowMajor> d_geometry;
-    Eigen::Matrix<double, M + 2, 3, Eigen::RowMajor> d_pose;
+    Eigen::Matrix<double, M, kG, Eigen::RowMajor> d_geometry;
+    Eigen::Matrix<double, M, 3, Eigen::RowMajor> d_pose;
+    Eigen::Matrix<double, 2, 3, Eigen::RowMajor> d_pose_sensors;
     double residual[M + 2];
     double* jacobians[2] = {d_geometry.data(), d_pose.data()};
-    ASSERT_TRUE(cost.Evaluate(parameters, residual, jacobians)) << robot.name;
+    ASSERT_TRUE(lengths.Evaluate(parameters, residual, jacobians)) << robot.name;
+    double* sensor_jacobian[1] = {d_pose_sensors.data()};
+    ASSERT_TRUE(sensors.Evaluate(parameters + 1, residual + M, sensor_jacobian)) << robot.name;
     Eigen::Matrix<double, M + 2, kG + 3> ceres_rows;
-    ceres_rows << d_geometry, d_pose;
+    ceres_rows << d_geometry, d_pose, Eigen::Matrix<double, 2, kG>::Zero(), d_pose_sensors;
 
     const MlRows<M, double> rows = MlResidualRows<M, double>(robot, q);
     const double scale = MaxAbs(ceres_rows);
