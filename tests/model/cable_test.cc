@@ -66,7 +66,9 @@ TEST(CableGeometry, UnderWrapMatchesIndependentTangencyConstruction) {
         EXPECT_NEAR((B - s.p_F_tangent_m).dot(s.p_F_tangent_m - C), 0.0, 1e-13);
         // Under the pulley the cable pulls the platform down toward the floor's pulleys when
         // the anchor is above them.
-        if (B.y() > C.y() + r) EXPECT_LT(s.u_F_cable.y(), 0.0);
+        if (B.y() > C.y() + r) {
+          EXPECT_LT(s.u_F_cable.y(), 0.0);
+        }
         ++checked;
       }
     }

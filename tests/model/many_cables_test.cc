@@ -120,7 +120,9 @@ TEST(ManyCables, DistributionBalancesWithinBoundsAndNoSampleIsShorter) {
         if (ok) t = d.tensions_N + N * (lambda * rng.Uniform(0.0, 0.05));  // near the optimum too
         if (t.minCoeff() < r.tension_min_N || t.maxCoeff() > r.tension_max_N) continue;
         EXPECT_TRUE(ok) << r.name << ": a sample within bounds where the verdict is " << ToString(d.feasibility);
-        if (ok) EXPECT_GE(t.norm(), d.tensions_N.norm() - 1e-9 * weight_N) << r.name;
+        if (ok) {
+          EXPECT_GE(t.norm(), d.tensions_N.norm() - 1e-9 * weight_N) << r.name;
+        }
       }
     }
   }
