@@ -5,7 +5,6 @@
 #include <Eigen/Dense>
 #include <cmath>
 #include <limits>
-#include <type_traits>
 
 #include "common/error.h"
 #include "identify/jacobian.h"
@@ -25,24 +24,6 @@ Pose<PoseJet> Seeded(const Eigen::Vector3d& q) {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// The criteria are written once on the cable count M (compile-time sizes, as the
-// identification's); this calls f with M = robot.num_cables() as a std::integral_constant.
-template <typename F>
-double WithCableCount(const Robot& robot, F&& f) {
-  static_assert(kMinCables == 2 && kMaxCables == 8, "one instantiation per cable count below");
-  switch (robot.num_cables()) {
-    case 2: return f(std::integral_constant<int, 2>{});
-    case 3: return f(std::integral_constant<int, 3>{});
-    case 4: return f(std::integral_constant<int, 4>{});
-    case 5: return f(std::integral_constant<int, 5>{});
-    case 6: return f(std::integral_constant<int, 6>{});
-    case 7: return f(std::integral_constant<int, 7>{});
-    case 8: return f(std::integral_constant<int, 8>{});
-  }
-  CABLECAL_CHECK(false, "the robot loader keeps 2 to 8 cables");
-  return kInf;
-}
-
 // log-sum-exp of p * log(mu_k): log sum mu_k^p without overflow.
 double LogSumPow(const Eigen::VectorXd& log_mu, double p) {
   const double m = (p * log_mu).maxCoeff();
@@ -55,31 +36,31 @@ double LogSumPow(const Eigen::VectorXd& log_mu, double p) {
 // the eigenvalues of J'J. With d the number of columns, kappa <= kappa_p <= d^(1/p) kappa,
 // hence the surrogate's minimiser has kappa within d^(1/p) of the optimum (README).
 // The gradient follows from d mu_k = 2 sigma_k u_k' dJ v_k, exact for a spectral function.
-// J: per pose the M length rows, columns a1z .. lM0 (3M - 1, a1x held) and every pose's x.
-template <int M>
+// J: per pose the m length rows, columns a1z .. lm0 (3m - 1, a1x held) and every pose's x.
 double ConditionObjective(const Robot& robot, const std::vector<Eigen::Vector3d>& poses, Eigen::VectorXd* gradient,
                           double p) {
-  constexpr int G = 3 * M - 1;  // geometry columns
-  constexpr int kX = 3 * M;     // the x column of identify/jacobian.h's rows
+  const int num_cables = robot.num_cables();
+  const int G = 3 * num_cables - 1;  // geometry columns
+  const int x_column = 3 * num_cables;     // the x column of identify/jacobian.h's rows
   const int n = static_cast<int>(poses.size());
-  if (M * n < G + n) return kInf;
-  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(M * n, G + n);
+  if (num_cables * n < G + n) return kInf;
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(num_cables * n, G + n);
   // With a gradient the rows carry their pose derivatives (nested Jets); without, plain
   // doubles: the same values, to the last bit, at a fraction of the cost.
-  std::vector<LengthRows<M, PoseJet>> rows(gradient ? n : 0);
+  std::vector<Rows<PoseJet>> rows(gradient ? n : 0);
   for (int j = 0; j < n; ++j) {
-    LengthRows<M, double> values;
+    Rows<double> values(num_cables, RowColumns(num_cables));
     if (gradient) {
-      rows[j] = LengthResidualRows<M, PoseJet>(robot, Seeded(poses[j]));
-      for (int i = 0; i < M; ++i) {
-        for (int c = 0; c < kRowColumns<M>; ++c) values(i, c) = rows[j](i, c).a;
+      rows[j] = LengthResidualRows<PoseJet>(robot, Seeded(poses[j]));
+      for (int i = 0; i < num_cables; ++i) {
+        for (int c = 0; c < RowColumns(num_cables); ++c) values(i, c) = rows[j](i, c).a;
       }
     } else {
-      values = LengthResidualRows<M, double>(robot, poses[j]);
+      values = LengthResidualRows<double>(robot, poses[j]);
     }
-    for (int i = 0; i < M; ++i) {
-      for (int c = 0; c < G; ++c) J(M * j + i, c) = values(i, 1 + c);
-      J(M * j + i, G + j) = values(i, kX);
+    for (int i = 0; i < num_cables; ++i) {
+      for (int c = 0; c < G; ++c) J(num_cables * j + i, c) = values(i, 1 + c);
+      J(num_cables * j + i, G + j) = values(i, x_column);
     }
   }
   // Singular values and vectors through the eigen-decomposition of J'J (d x d, d = G + n),
@@ -108,11 +89,11 @@ double ConditionObjective(const Robot& robot, const std::vector<Eigen::Vector3d>
         double total = 0.0;
         for (int m = 0; m < d; ++m) {
           if (w(m) == 0.0) continue;
-          double d_sigma = 0.0;  // u_m' dJ v_m over pose j's M rows
-          for (int i = 0; i < M; ++i) {
-            double row_v = rows[j](i, kX).v(k) * V(G + j, m);
+          double d_sigma = 0.0;  // u_m' dJ v_m over pose j's num_cables rows
+          for (int i = 0; i < num_cables; ++i) {
+            double row_v = rows[j](i, x_column).v(k) * V(G + j, m);
             for (int c = 0; c < G; ++c) row_v += rows[j](i, 1 + c).v(k) * V(c, m);
-            d_sigma += U(M * j + i, m) * row_v;
+            d_sigma += U(num_cables * j + i, m) * row_v;
           }
           total += w(m) * d_sigma / s(m);  // d mu / mu / 2 = d sigma / sigma
         }
@@ -123,26 +104,25 @@ double ConditionObjective(const Robot& robot, const std::vector<Eigen::Vector3d>
   return (lse_plus + lse_minus) / (2.0 * p);
 }
 
-// D, A, E objectives of S = sum_j S_j(q_j) (3M - 1 square) and their gradients through dS_j/dq_j.
-template <int M>
+// D, A, E objectives of S = sum_j S_j(q_j) (3m - 1 square) and their gradients through dS_j/dq_j.
 double InformationObjective(const Robot& robot, Criterion criterion, const std::vector<Eigen::Vector3d>& poses,
                             Eigen::VectorXd* gradient, double e_power, const PriorInformation* prior) {
-  constexpr int G = 3 * M - 1;
-  using Information = Eigen::Matrix<double, G, G>;
+  const int G = 3 * robot.num_cables() - 1;
+  using Information = Eigen::MatrixXd;
   const int n = static_cast<int>(poses.size());
-  std::vector<Eigen::Matrix<PoseJet, G, G>> parts(gradient ? n : 0);  // as in ConditionObjective
+  std::vector<Rows<PoseJet>> parts(gradient ? n : 0);  // as in ConditionObjective
   // A calibration in rounds: the earlier identification's information adds to the new poses'.
   CABLECAL_CHECK(!prior || (prior->rows() == G && prior->cols() == G),
                  "the prior information covers the 3m - 1 gauge-fixed geometric parameters");
-  Information S = prior ? Information(*prior) : Information::Zero();
+  Information S = prior ? Information(*prior) : Information::Zero(G, G);
   for (int j = 0; j < n; ++j) {
     if (gradient) {
-      parts[j] = ReducedInformation<M, PoseJet>(MlResidualRows<M, PoseJet>(robot, Seeded(poses[j])));
+      parts[j] = ReducedInformation<PoseJet>(MlResidualRows<PoseJet>(robot, Seeded(poses[j])));
       for (int a = 0; a < G; ++a) {
         for (int b = 0; b < G; ++b) S(a, b) += parts[j](a, b).a;
       }
     } else {
-      const Information part = ReducedInformation<M, double>(MlResidualRows<M, double>(robot, poses[j]));
+      const Information part = ReducedInformation<double>(MlResidualRows<double>(robot, poses[j]));
       for (int a = 0; a < G; ++a) {
         for (int b = 0; b < G; ++b) S(a, b) += part(a, b);
       }
@@ -170,19 +150,19 @@ double InformationObjective(const Robot& robot, Criterion criterion, const std::
     }
     case Criterion::kE: {
       // -log lambda_min is not differentiable where the smallest eigenvalues coincide; the
-      // surrogate (log sum lambda^-p) / p lies within log(3M - 1) / p of it (same argument as
+      // surrogate (log sum lambda^-p) / p lies within log(3m - 1) / p of it (same argument as
       // for the condition number). p <= 0 asks for the exact value.
-      const Eigen::Matrix<double, G, 1> log_l = eig.eigenvalues().array().log();
+      const Eigen::VectorXd log_l = eig.eigenvalues().array().log();
       if (e_power <= 0.0) {
         value = -log_l(0);
-        Gbar.setZero();
+        Gbar.setZero(G, G);
         break;
       }
       const double lse = LogSumPow(log_l, -e_power);
       value = lse / e_power;
-      Gbar.setZero();
+      Gbar.setZero(G, G);
       for (int k = 0; k < G; ++k) {
-        const Eigen::Matrix<double, G, 1> v = eig.eigenvectors().col(k);
+        const Eigen::VectorXd v = eig.eigenvectors().col(k);
         const double weight = std::exp(-e_power * log_l(k) - lse) / eig.eigenvalues()(k);
         Gbar -= weight * (v * v.transpose());
       }
@@ -210,22 +190,16 @@ double InformationObjective(const Robot& robot, Criterion criterion, const std::
 
 double DesignObjective(const Robot& robot, Criterion criterion, const std::vector<Eigen::Vector3d>& poses,
                        Eigen::VectorXd* gradient, double power, const PriorInformation* prior) {
-  return WithCableCount(robot, [&](auto cables) {
-    constexpr int M = decltype(cables)::value;
-    if (criterion == Criterion::kCondition) {
-      return ConditionObjective<M>(robot, poses, gradient, power > 0.0 ? power : kConditionPower);
-    }
-    return InformationObjective<M>(robot, criterion, poses, gradient, power > 0.0 ? power : kEigenvaluePower, prior);
-  });
+  if (criterion == Criterion::kCondition) {
+    return ConditionObjective(robot, poses, gradient, power > 0.0 ? power : kConditionPower);
+  }
+  return InformationObjective(robot, criterion, poses, gradient, power > 0.0 ? power : kEigenvaluePower, prior);
 }
 
 double ExactObjective(const Robot& robot, Criterion criterion, const std::vector<Eigen::Vector3d>& poses,
                       const PriorInformation* prior) {
-  return WithCableCount(robot, [&](auto cables) {
-    constexpr int M = decltype(cables)::value;
-    if (criterion == Criterion::kCondition) return ConditionObjective<M>(robot, poses, nullptr, 0.0);
-    return InformationObjective<M>(robot, criterion, poses, nullptr, 0.0, prior);
-  });
+  if (criterion == Criterion::kCondition) return ConditionObjective(robot, poses, nullptr, 0.0);
+  return InformationObjective(robot, criterion, poses, nullptr, 0.0, prior);
 }
 
 }  // namespace internal

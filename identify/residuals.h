@@ -30,11 +30,18 @@ inline ReadingWeights WeightsOf(const SensorNoise& s) {
 
 // Length residual of cable i at a pose: r_ij = l_i(B_i; a_i) - (dl_ij + l_i0), in m, with
 // B_i the anchor in F (PlatformPointInF). This is the paper's Eq. (6) without the squares.
+// CableResidual takes the cable's own parameters (exit point a_i, initial length l_i0);
+// LengthResidual picks them out of the geometry vector.
+template <typename T>
+T CableResidual(const Cable& cable, const Vec2<T>& p_F_exit_m, const T& initial_length_m, const Vec2<T>& p_F_anchor_m,
+                double dl_m) {
+  const T length = CableLength<T>(p_F_exit_m, T(cable.pulley_radius_m), SignsOf(cable), p_F_anchor_m);
+  return length - (T(dl_m) + initial_length_m);
+}
 template <int M, typename T>
 T LengthResidual(const Cable& cable, int cable_index, const T* geometry, const Vec2<T>& p_F_anchor_m, double dl_m) {
   const Vec2<T> p_F_exit(geometry[2 * cable_index], geometry[2 * cable_index + 1]);
-  const T length = CableLength<T>(p_F_exit, T(cable.pulley_radius_m), SignsOf(cable), p_F_anchor_m);
-  return length - (T(dl_m) + geometry[2 * M + cable_index]);
+  return CableResidual<T>(cable, p_F_exit, geometry[2 * M + cable_index], p_F_anchor_m, dl_m);
 }
 
 // Every cable's length residual at pose q = (x, z, theta), the rotation computed once.

@@ -70,18 +70,20 @@ void CheckRowsOfRobot(const Robot& robot) {
     ASSERT_TRUE(lengths.Evaluate(parameters, residual, jacobians)) << robot.name;
     double* sensor_jacobian[1] = {d_pose_sensors.data()};
     ASSERT_TRUE(sensors.Evaluate(parameters + 1, residual + M, sensor_jacobian)) << robot.name;
-    Eigen::Matrix<double, M + 2, kG + 3> ceres_rows;
-    ceres_rows << d_geometry, d_pose, Eigen::Matrix<double, 2, kG>::Zero(), d_pose_sensors;
+    Eigen::MatrixXd ceres_rows(M + 2, kG + 3);
+    ceres_rows << d_geometry, d_pose, Eigen::MatrixXd::Zero(2, kG), d_pose_sensors;
 
-    const MlRows<M, double> rows = MlResidualRows<M, double>(robot, q);
+    const Eigen::MatrixXd rows = MlResidualRows<double>(robot, q);
+    ASSERT_EQ(rows.rows(), M + 2);
+    ASSERT_EQ(rows.cols(), RowColumns(M));
     const double scale = MaxAbs(ceres_rows);
     EXPECT_LE(MaxAbs(rows - ceres_rows), kRowRelTol * scale) << robot.name << " q = " << q.transpose();
 
     // The virtual-work form: dl_i/da_i = u_i (the cable's unit vector from anchor to pulley,
     // W's force rows), dl_i/dl_i0 = -1, dl_i/dq = -W(:, i)'; nothing else.
-    const LengthRows<M, double> length_rows = LengthResidualRows<M, double>(robot, q);
+    const Eigen::MatrixXd length_rows = LengthResidualRows<double>(robot, q);
     const Eigen::Matrix<double, 3, Eigen::Dynamic> W = WrenchMatrix<double>(robot, q);
-    LengthRows<M, double> expected = LengthRows<M, double>::Zero();
+    Eigen::MatrixXd expected = Eigen::MatrixXd::Zero(M, kG + 3);
     for (int i = 0; i < M; ++i) {
       expected(i, 2 * i) = W(0, i);
       expected(i, 2 * i + 1) = W(1, i);
@@ -89,16 +91,16 @@ void CheckRowsOfRobot(const Robot& robot) {
       for (int k = 0; k < 3; ++k) expected(i, kG + k) = -W(k, i);
     }
     EXPECT_LE(MaxAbs(length_rows - expected), 1e-12 * MaxAbs(expected)) << robot.name << " q = " << q.transpose();
-    EXPECT_LE(MaxAbs(length_rows * weights.inv_sigma_encoder - rows.template topRows<M>()),
+    EXPECT_LE(MaxAbs(length_rows * weights.inv_sigma_encoder - rows.topRows(M)),
               kRowRelTol * scale)
         << robot.name;
 
     // The nested Jets' pose derivatives against central differences of the rows.
     using PoseJet = nested_jet::InnerJet<3>;
-    const MlRows<M, PoseJet> nested =
-        MlResidualRows<M, PoseJet>(robot, Pose<PoseJet>(PoseJet(q(0), 0), PoseJet(q(1), 1), PoseJet(q(2), 2)));
+    const Rows<PoseJet> nested =
+        MlResidualRows<PoseJet>(robot, Pose<PoseJet>(PoseJet(q(0), 0), PoseJet(q(1), 1), PoseJet(q(2), 2)));
     for (int k = 0; k < 3; ++k) {
-      Eigen::Matrix<double, M + 2, kG + 3> value, derivative;
+      Eigen::MatrixXd value(M + 2, kG + 3), derivative(M + 2, kG + 3);
       for (int r = 0; r < M + 2; ++r) {
         for (int c = 0; c < kG + 3; ++c) {
           value(r, c) = nested(r, c).a;
@@ -110,26 +112,30 @@ void CheckRowsOfRobot(const Robot& robot) {
       Eigen::Vector3d qp = q, qm = q;
       qp(k) += h;
       qm(k) -= h;
-      const Eigen::Matrix<double, M + 2, kG + 3> difference =
-          (MlResidualRows<M, double>(robot, qp) - MlResidualRows<M, double>(robot, qm)) / (2 * h);
+      const Eigen::MatrixXd difference = (MlResidualRows<double>(robot, qp) - MlResidualRows<double>(robot, qm)) / (2 * h);
       // Central differences: truncation h^2 times the third derivatives, rounding eps/h.
       EXPECT_LE(MaxAbs(derivative - difference), 1e-6 * std::max(1.0, MaxAbs(derivative)))
           << robot.name << " d/dq" << k;
     }
 
     // The reduced information against the dense Schur complement (a1x dropped).
-    constexpr int G = kG - 1;
-    Eigen::Matrix<double, M + 2, G + 3> A;
-    A << rows.template block<M + 2, G>(0, 1), rows.template block<M + 2, 3>(0, kG);
-    const Eigen::Matrix<double, G + 3, G + 3> H = A.transpose() * A;
-    const Eigen::Matrix<double, G, G> S_expected =
-        H.template topLeftCorner<G, G>() - H.template topRightCorner<G, 3>() *
-                                               H.template bottomRightCorner<3, 3>().inverse() *
-                                               H.template bottomLeftCorner<3, G>();
-    const Eigen::Matrix<double, G, G> S = ReducedInformation<M, double>(rows);
+    const int G = kG - 1;
+    Eigen::MatrixXd A(M + 2, G + 3);
+    A << rows.block(0, 1, M + 2, G), rows.block(0, kG, M + 2, 3);
+    const Eigen::MatrixXd H = A.transpose() * A;
+    const Eigen::MatrixXd S_expected = H.topLeftCorner(G, G) - H.topRightCorner(G, 3) *
+                                                                   H.bottomRightCorner(3, 3).inverse() *
+                                                                   H.bottomLeftCorner(3, G);
+    const Eigen::MatrixXd S = ReducedInformation<double>(rows);
     EXPECT_LE(MaxAbs(S - S_expected), 1e-8 * MaxAbs(S_expected)) << robot.name;
+    EXPECT_EQ(MaxAbs(S - S.transpose()), 0.0) << "symmetric by construction";
+    // The nested evaluation's information has the plain one as its values, to the last bit.
+    const Rows<PoseJet> S_nested = ReducedInformation<PoseJet>(nested);
+    for (int a = 0; a < G; ++a) {
+      for (int b = 0; b < G; ++b) ASSERT_EQ(S_nested(a, b).a, S(a, b)) << robot.name << " (" << a << ", " << b << ")";
+    }
     // Rank M - 1: the pose's readings beyond its 3 unknowns.
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, G, G>> eig(S);
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(S);
     EXPECT_GT(eig.eigenvalues()(G - M + 1), 1e-9 * eig.eigenvalues()(G - 1)) << robot.name;
     EXPECT_LT(std::abs(eig.eigenvalues()(G - M)), 1e-9 * eig.eigenvalues()(G - 1)) << robot.name;
   }
@@ -159,18 +165,17 @@ TEST(JacobianRows, AreCeresJacobianOfTheCostFunctorForEveryCableCount) {
 // geometry and the true poses, where the reduced Jacobian Identify builds from Ceres' own
 // Jacobian must give the information the design computes from its rows: its singular values
 // squared are the eigenvalues of sum_j S_j.
-template <int M>
 void CheckInformationOfIdentify(const Robot& robot) {
-  constexpr int G = 3 * M - 1;
+  const int G = 3 * robot.num_cables() - 1;
   const std::vector<PlanPose> plan = SampleFeasiblePoses(robot, 10, 23);
   Rng rng(1);
   const SimulatedExperiment exp =
       SimulateExperiment(robot, robot, plan, SimulationOptions{NoisySensors::kNone, false}, rng);
   const IdentifyResult r = Identify(robot, exp.measurements, IdentifyOptions{});
   ASSERT_EQ(r.status, IdentifyStatus::kConverged) << robot.name << ": " << r.message;
-  Eigen::Matrix<double, G, G> S = Eigen::Matrix<double, G, G>::Zero();
-  for (const PlanPose& p : plan) S += ReducedInformation<M, double>(MlResidualRows<M, double>(robot, p.q));
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, G, G>> eig(S);
+  Eigen::MatrixXd S = Eigen::MatrixXd::Zero(G, G);
+  for (const PlanPose& p : plan) S += ReducedInformation<double>(MlResidualRows<double>(robot, p.q));
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(S);
   const Eigen::VectorXd& sv = r.identifiability.singular_values;
   ASSERT_EQ(sv.size(), G) << robot.name;
   for (int k = 0; k < G; ++k) {
@@ -182,15 +187,7 @@ void CheckInformationOfIdentify(const Robot& robot) {
 TEST(JacobianRows, GiveTheInformationIdentifyFindsFromCeresJacobian) {
   for (const Robot& robot : TestRobots()) {
     SCOPED_TRACE(robot.name);
-    switch (robot.num_cables()) {
-      case 2: CheckInformationOfIdentify<2>(robot); break;
-      case 3: CheckInformationOfIdentify<3>(robot); break;
-      case 4: CheckInformationOfIdentify<4>(robot); break;
-      case 5: CheckInformationOfIdentify<5>(robot); break;
-      case 6: CheckInformationOfIdentify<6>(robot); break;
-      case 7: CheckInformationOfIdentify<7>(robot); break;
-      case 8: CheckInformationOfIdentify<8>(robot); break;
-    }
+    CheckInformationOfIdentify(robot);
   }
 }
 
