@@ -44,12 +44,21 @@ std::vector<PoseQuantity> PoseQuantities(const Robot& robot) {
 
 namespace {
 
+// `flatten` inlines the Jet arithmetic into each instance of RobustQuantitiesM: with seven
+// instances in this file GCC's inliner otherwise runs out of its unit-growth budget and calls
+// it out of line, which made M = 2 a third slower. Not under AddressSanitizer: instrumented,
+// the seven flattened instances took over 17 minutes to compile (2 without flatten), and that
+// build is for correctness, not speed.
+#if defined(__SANITIZE_ADDRESS__)
+#define CABLECAL_FLATTEN
+#else
+#define CABLECAL_FLATTEN __attribute__((flatten))
+#endif
+
 // RobustQuantities for M cables: Jets sized at compile time for (y, g), 3 + M + 3M entries
-// (M = 2: 11, as before the cable count became general). `flatten` inlines the Jet arithmetic
-// into each instance: with seven instances in this file GCC's inliner otherwise runs out of
-// its unit-growth budget and calls it out of line, which made M = 2 a third slower.
+// (M = 2: 11, as before the cable count became general).
 template <int M>
-__attribute__((flatten)) bool RobustQuantitiesM(const Robot& robot, const std::vector<Eigen::Vector2d>& points, const Eigen::VectorXd& y_in,
+CABLECAL_FLATTEN bool RobustQuantitiesM(const Robot& robot, const std::vector<Eigen::Vector2d>& points, const Eigen::VectorXd& y_in,
                        PoseRobustness* out, bool with_derivatives) {
   constexpr int P = 3 + M;  // pose variables x, z, theta, t1..tM
   constexpr int G = 3 * M;  // geometry a1x a1z .. aMx aMz l10 .. lM0

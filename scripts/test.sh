@@ -23,7 +23,7 @@ export LSAN_OPTIONS="suppressions=$root/tests/sanitizers/lsan.supp:print_suppres
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 # -O1: sanitizer reports stay readable and the (Ceres-template-heavy) build stays short.
 CABLECAL_BUILD_DIR="$root/build-sanitize" CMAKE_BUILD_TYPE=RelWithDebInfo \
-  "$root/scripts/build.sh" -DCABLECAL_SANITIZE=ON -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g"
+  "$root/scripts/build.sh" -DCABLECAL_SANITIZE=ON -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1"
 # Left to the Release stage, which runs them all: tests that repeat code other tests already
 # run under the sanitizers, for a statistical or determinism property that instrumentation
 # cannot change. The design-quality sizes N = 15 and 30 (N = 6 stays); the 40 random robots;
@@ -37,5 +37,5 @@ CABLECAL_BUILD_DIR="$root/build-sanitize" CMAKE_BUILD_TYPE=RelWithDebInfo \
 echo "== Fuzzers (libFuzzer, ${CABLECAL_FUZZ_SECONDS:-30} s each)"
 CC=clang CXX=clang++ CABLECAL_BUILD_DIR="$root/build-fuzz" CMAKE_BUILD_TYPE=RelWithDebInfo \
   "$root/scripts/build.sh" -DCABLECAL_FUZZ=ON -DCABLECAL_FUZZ_SECONDS="${CABLECAL_FUZZ_SECONDS:-30}" \
-  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g"
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1"
 (cd "$root/build-fuzz" && ctest --output-on-failure --parallel "$jobs" -L fuzz)
