@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <csignal>
@@ -11,6 +12,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 
 #include "cli/sigint.h"
 #include "common/atomic_output.h"
@@ -151,23 +153,12 @@ int RunSimulate(const Context& ctx, const SimulateOptions& options) {
   }
   const std::vector<PlanPose> plan = ReadPosePlanCsv(options.plan_path, nominal.num_cables());
   CheckPlanMatchesRobot(nominal, plan, options.plan_path);
-  // The geometry perturbation and the sensor noise use separate streams of the seed, so the
-  // same seed gives the same true robot whatever the sensors' settings.
-  Rng geometry_rng(StreamSeed(options.seed, {0}));
-  Rng noise_rng(StreamSeed(options.seed, {1}));
-  Robot truth = nominal;
-  if (!options.truth_path.empty()) {
-    truth = LoadRobotFile(options.truth_path);
-  } else if (options.geometry_sigma_m > 0.0) {
-    truth = PerturbGeometry(nominal, options.geometry_sigma_m, geometry_rng);
-  }
-  SimulatedExperiment experiment;
-  try {
-    experiment = SimulateExperiment(nominal, truth, plan, sim, noise_rng);
-  } catch (const SolverFailure& e) {
-    // Not a solver's fault: this plan does not suit this true robot. The plan's pose is named.
-    throw InputError(options.plan_path, "", std::string(e.what()) + ": the plan cannot be run on this true robot");
-  }
+  std::optional<Robot> given_truth;
+  if (!options.truth_path.empty()) given_truth = LoadRobotFile(options.truth_path);
+  const PlanSimulation run = SimulatePlan(nominal, given_truth, std::max(options.geometry_sigma_m, 0.0), plan, sim,
+                                          options.seed, options.plan_path);
+  const Robot& truth = run.truth;
+  const SimulatedExperiment& experiment = run.experiment;
   AtomicOutput output;
   output.WriteText(options.out_path, MeasurementsCsv(experiment.measurements, ProvenanceComment(ctx.command_line)));
   if (!options.truth_out_path.empty()) {
@@ -194,10 +185,7 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   const std::vector<Measurement> measurements = ReadMeasurementsCsv(options.measurements_path, nominal.num_cables());
   CheckReadingsPlausible(nominal, measurements, options.measurements_path);
   const IdentifyResult result = Identify(nominal, measurements, id);
-  if (result.status == IdentifyStatus::kRankDeficient || result.status == IdentifyStatus::kPoorFit) {
-    throw InputError(options.measurements_path, "", result.message);
-  }
-  if (!result.converged()) throw SolverFailure(options.measurements_path + ": " + result.message);
+  RequireUsableResult(result, options.measurements_path);
   AtomicOutput output;
   output.WriteText(options.out_path, IdentifyResultYaml(result, ctx.command_line));
   if (!options.calibrated_robot_path.empty()) {

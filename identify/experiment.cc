@@ -125,6 +125,26 @@ SimulatedExperiment SimulateExperiment(const Robot& nominal, const Robot& truth,
   return out;
 }
 
+PlanSimulation SimulatePlan(const Robot& nominal, const std::optional<Robot>& truth, double geometry_sigma_m,
+                            const std::vector<PlanPose>& plan, const SimulationOptions& options, std::uint64_t seed,
+                            const std::string& plan_source) {
+  Rng geometry_rng(StreamSeed(seed, {0}));
+  Rng noise_rng(StreamSeed(seed, {1}));
+  PlanSimulation run{nominal, {}};
+  if (truth) {
+    run.truth = *truth;
+  } else if (geometry_sigma_m > 0.0) {
+    run.truth = PerturbGeometry(nominal, geometry_sigma_m, geometry_rng);
+  }
+  try {
+    run.experiment = SimulateExperiment(nominal, run.truth, plan, options, noise_rng);
+  } catch (const SolverFailure& e) {
+    // Not a solver's fault: this plan does not suit this true robot. The plan's pose is named.
+    throw InputError(plan_source, "", std::string(e.what()) + ": the plan cannot be run on this true robot");
+  }
+  return run;
+}
+
 std::string MeasurementsCsv(const std::vector<Measurement>& measurements, const std::string& provenance) {
   std::string out = provenance + "pose";
   const int m = measurements.empty() ? 2 : static_cast<int>(measurements.front().dl_m.size());

@@ -17,6 +17,7 @@
 
 #include <Eigen/Core>
 #include <istream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -91,6 +92,20 @@ struct SimulatedExperiment {
 SimulatedExperiment SimulateExperiment(const Robot& nominal, const Robot& truth,
                                        const std::vector<PlanPose>& plan, const SimulationOptions& options,
                                        Rng& rng);
+
+// The `simulate` command's experiment, shared by the CLI and the Python module: the true
+// robot is `truth` when given, else the nominal one perturbed by PerturbGeometry with
+// geometry_sigma_m (0: the nominal robot itself). The geometry draws come from stream 0 of
+// `seed` and the sensor noise from stream 1, so a seed gives the same true robot whatever the
+// sensors' settings. A plan the true robot cannot run (SimulateExperiment's SolverFailure) is
+// an InputError naming `plan_source` and the pose: the plan does not suit that robot.
+struct PlanSimulation {
+  Robot truth;
+  SimulatedExperiment experiment;
+};
+PlanSimulation SimulatePlan(const Robot& nominal, const std::optional<Robot>& truth, double geometry_sigma_m,
+                            const std::vector<PlanPose>& plan, const SimulationOptions& options, std::uint64_t seed,
+                            const std::string& plan_source);
 
 // Measurement CSV: header pose,dl1..dlm,z,theta (m, m, m, rad).
 std::string MeasurementsCsv(const std::vector<Measurement>& measurements, const std::string& provenance);

@@ -72,4 +72,11 @@ IdentifyResult Identify(const Robot& nominal, const std::vector<Measurement>& me
   return {};
 }
 
+void RequireUsableResult(const IdentifyResult& result, const std::string& source) {
+  if (result.status == IdentifyStatus::kRankDeficient || result.status == IdentifyStatus::kPoorFit) {
+    throw InputError(source, "", result.message);
+  }
+  if (!result.converged()) throw SolverFailure(source + ": " + result.message);
+}
+
 }  // namespace cablecal

@@ -111,6 +111,11 @@ struct IdentifyResult {
 IdentifyResult Identify(const Robot& nominal, const std::vector<Measurement>& measurements,
                         const IdentifyOptions& options);
 
+// What `identify` (the CLI and the Python module) makes of a result that is not one: a
+// rank-deficient or poor fit is an InputError naming `source` (the data cannot calibrate
+// this robot), a solve that did not converge a SolverFailure. Returns quietly otherwise.
+void RequireUsableResult(const IdentifyResult& result, const std::string& source);
+
 // result.yaml (README, "identify").
 std::string IdentifyResultYaml(const IdentifyResult& result, const std::string& command_line);
 

@@ -18,6 +18,7 @@ PACKAGES=(
   libbenchmark-dev       # bench/
   python3-matplotlib     # figures (scripts/*.py, run with /usr/bin/python3)
   python3-yaml           # bench/rounds.py reads result YAML
+  pybind11-dev python3-dev python3-numpy  # the Python module (python/)
 )
 case "${1:-}" in
   "") ;;
@@ -30,6 +31,7 @@ case "${1:-}" in
       clang libclang-rt-dev       # libFuzzer targets of tests/fuzz
       libopenmpi-dev openmpi-bin  # the CABLECAL_MPI build and its mpirun tests
       locales-all                 # a decimal-comma locale: number parsing must not depend on it
+      python3-pytest              # the Python module's tests (tests/python)
     ) ;;
   *) echo "cablecal setup: unknown option '$1' (use --tests, --bench or nothing)" >&2; exit 2 ;;
 esac

@@ -1,0 +1,704 @@
+// The Python module `cablecal` (pybind11): the library's stages with the CLI's options as
+// keyword arguments and the CLI's defaults, NumPy arrays in and out, the CLI's errors as
+// exceptions (README, "Python"). It calls the same functions as the CLI (cli/commands.cc),
+// so a result equals the CLI's file for the same inputs; tests/python/ checks that.
+//
+// Arguments are converted here, not by pybind11's casters, so that a wrong type, shape or a
+// NaN is a cablecal.InputError naming the argument (a ValueError), as a bad flag is for the CLI.
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+#include <yaml-cpp/yaml.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <functional>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "common/error.h"
+#include "common/version.h"
+#include "design/design.h"
+#include "identify/experiment.h"
+#include "identify/identify.h"
+#include "model/robot.h"
+#include "model/statics.h"
+#include "montecarlo/montecarlo.h"
+#include "workspace/workspace.h"
+
+namespace py = pybind11;
+
+namespace cablecal::python {
+namespace {
+
+// ---- Arguments ------------------------------------------------------------------------------
+
+[[noreturn]] void Bad(const std::string& argument, const std::string& problem) { throw InputError(argument, "", problem); }
+
+std::string TypeName(py::handle h) { return py::str(py::type::of(h).attr("__name__")); }
+
+py::object Obj(py::handle h) { return py::reinterpret_borrow<py::object>(h); }
+
+bool IsNumpy(py::handle h, const char* type) { return py::isinstance(h, py::module_::import("numpy").attr(type)); }
+bool IsInteger(py::handle h) {
+  // bool is an int in Python; True for a pose count is a slip, not a 1.
+  return !py::isinstance<py::bool_>(h) && !IsNumpy(h, "bool_") && (py::isinstance<py::int_>(h) || IsNumpy(h, "integer"));
+}
+
+long long AsInteger(py::handle h, const std::string& name, long long lo, long long hi) {
+  if (!IsInteger(h)) Bad(name, "expected an integer, got " + TypeName(h));
+  long long v = 0;
+  try {
+    v = py::int_(Obj(h)).cast<long long>();
+  } catch (const py::cast_error&) {
+    Bad(name, "integer out of range");
+  }
+  if (v < lo || v > hi) Bad(name, std::to_string(v) + " is outside [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+  return v;
+}
+
+std::uint64_t AsSeed(py::handle h) {
+  if (!IsInteger(h)) Bad("seed", "expected an integer, got " + TypeName(h));
+  try {
+    return py::int_(Obj(h)).cast<std::uint64_t>();
+  } catch (const py::cast_error&) {
+    Bad("seed", "expected an integer from 0 to 2^64 - 1");
+  }
+}
+
+double AsNumber(py::handle h, const std::string& name) {
+  if (!IsInteger(h) && !py::isinstance<py::float_>(h) && !IsNumpy(h, "floating")) {
+    Bad(name, "expected a number, got " + TypeName(h));
+  }
+  const double v = py::float_(Obj(h)).cast<double>();
+  if (!std::isfinite(v)) Bad(name, "not a finite number");
+  return v;
+}
+
+std::string AsText(py::handle h, const std::string& name) {
+  if (!py::isinstance<py::str>(h)) Bad(name, "expected a string, got " + TypeName(h));
+  return h.cast<std::string>();
+}
+
+// A 2-D float array of `rows` (-1: any) x `cols`, finite. A 1-D array is taken as one column
+// when cols == 1.
+Eigen::MatrixXd AsMatrix(py::handle h, const std::string& name, long rows, long cols) {
+  py::array_t<double, py::array::c_style | py::array::forcecast> a;
+  try {
+    a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(h);
+  } catch (const py::error_already_set&) {
+  }
+  if (!a) Bad(name, "expected an array of numbers, got " + TypeName(h));
+  if (a.ndim() == 1 && cols == 1) a = a.reshape({a.shape(0), py::ssize_t{1}});
+  if (a.ndim() != 2) Bad(name, "expected a 2-D array, got " + std::to_string(a.ndim()) + " dimensions");
+  if ((rows >= 0 && a.shape(0) != rows) || a.shape(1) != cols) {
+    Bad(name, "expected shape (" + (rows >= 0 ? std::to_string(rows) : std::string("n")) + ", " + std::to_string(cols) +
+                  "), got (" + std::to_string(a.shape(0)) + ", " + std::to_string(a.shape(1)) + ")");
+  }
+  Eigen::MatrixXd m(a.shape(0), a.shape(1));
+  for (py::ssize_t r = 0; r < a.shape(0); ++r) {
+    for (py::ssize_t c = 0; c < a.shape(1); ++c) {
+      const double v = a.at(r, c);
+      if (!std::isfinite(v)) Bad(name, "row " + std::to_string(r) + ", column " + std::to_string(c) + " is not finite");
+      m(r, c) = v;
+    }
+  }
+  return m;
+}
+
+// ---- Long calls: the GIL released, Ctrl-C honoured -------------------------------------------
+
+// Runs f on a worker thread while this (Python's) thread waits without the GIL, checking for
+// signals every 50 ms and calling `tick` (with the GIL, on this thread: Python callbacks run
+// here, never on the worker). Ctrl-C, or an exception from `tick`, sets `stop` (which f's
+// solver polls) and, once f has returned, is raised: no partial result comes back.
+template <typename F>
+auto Interruptible(std::atomic<bool>& stop, F&& f, const std::function<void()>& tick = {}) -> decltype(f()) {
+  using Result = decltype(f());
+  std::optional<Result> result;
+  std::exception_ptr error;
+  std::mutex mutex;
+  std::condition_variable cv;
+  bool done = false;
+  std::thread worker([&] {
+    try {
+      result.emplace(f());
+    } catch (...) {
+      error = std::current_exception();
+    }
+    std::lock_guard<std::mutex> lock(mutex);
+    done = true;
+    cv.notify_all();
+  });
+  std::optional<py::error_already_set> interrupt;
+  for (;;) {
+    {
+      py::gil_scoped_release release;
+      std::unique_lock<std::mutex> lock(mutex);
+      if (cv.wait_for(lock, std::chrono::milliseconds(50), [&] { return done; })) break;
+    }
+    if (interrupt) continue;
+    if (PyErr_CheckSignals() != 0) {
+      interrupt.emplace();  // takes the pending KeyboardInterrupt
+      stop = true;
+      continue;
+    }
+    if (tick) {
+      try {
+        tick();
+      } catch (py::error_already_set& e) {
+        interrupt.emplace(std::move(e));
+        stop = true;
+      }
+    }
+  }
+  worker.join();
+  if (interrupt) throw std::move(*interrupt);
+  if (error) std::rethrow_exception(error);
+  return std::move(*result);
+}
+
+// ---- Values to Python ---------------------------------------------------------------------------
+
+py::object ScalarFromYaml(const std::string& s) {
+  if (s == "true") return py::bool_(true);
+  if (s == "false") return py::bool_(false);
+  try {
+    std::size_t used = 0;
+    const long long i = std::stoll(s, &used);
+    if (used == s.size()) return py::int_(i);
+  } catch (const std::exception&) {
+  }
+  try {
+    std::size_t used = 0;
+    const double d = std::stod(s, &used);
+    if (used == s.size()) return py::float_(d);
+  } catch (const std::exception&) {
+  }
+  return py::str(s);
+}
+
+py::object FromYaml(const YAML::Node& n) {
+  if (n.IsMap()) {
+    py::dict d;
+    for (const auto& kv : n) d[py::str(kv.first.as<std::string>())] = FromYaml(kv.second);
+    return d;
+  }
+  if (n.IsSequence()) {
+    py::list l;
+    for (const auto& e : n) l.append(FromYaml(e));
+    return l;
+  }
+  if (n.IsNull()) return py::none();
+  return ScalarFromYaml(n.Scalar());
+}
+
+// A dict in the robot file's schema to YAML text, for the file's own loader and its checks.
+void ToYaml(YAML::Emitter& out, py::handle h, const std::string& where) {
+  if (py::isinstance<py::dict>(h)) {
+    out << YAML::BeginMap;
+    for (const auto& kv : h.cast<py::dict>()) {
+      if (!py::isinstance<py::str>(kv.first)) Bad(where, "keys must be strings, got " + TypeName(kv.first));
+      const std::string key = kv.first.cast<std::string>();
+      out << YAML::Key << key << YAML::Value;
+      ToYaml(out, kv.second, where.empty() ? key : where + "." + key);
+    }
+    out << YAML::EndMap;
+  } else if (py::isinstance<py::list>(h) || py::isinstance<py::tuple>(h) || py::isinstance<py::array>(h)) {
+    out << YAML::Flow << YAML::BeginSeq;
+    int k = 0;
+    for (const auto& e : h) ToYaml(out, e, where + "[" + std::to_string(k++) + "]");
+    out << YAML::EndSeq;
+  } else if (py::isinstance<py::bool_>(h) || IsNumpy(h, "bool_")) {
+    out << (py::bool_(Obj(h)).cast<bool>() ? "true" : "false");
+  } else if (IsInteger(h)) {
+    out << py::str(py::int_(Obj(h))).cast<std::string>();
+  } else if (py::isinstance<py::float_>(h) || IsNumpy(h, "floating")) {
+    // repr gives the shortest text that reads back as the same double; nan and inf reach the
+    // loader as text it refuses by name.
+    out << py::repr(py::float_(h.cast<double>())).cast<std::string>();
+  } else if (py::isinstance<py::str>(h)) {
+    out << YAML::DoubleQuoted << h.cast<std::string>();
+  } else {
+    Bad(where.empty() ? "robot" : where, "unsupported value of type " + TypeName(h));
+  }
+}
+
+py::array_t<double> Array(const Eigen::MatrixXd& m) {
+  py::array_t<double> a({m.rows(), m.cols()});
+  auto w = a.mutable_unchecked<2>();
+  for (Eigen::Index r = 0; r < m.rows(); ++r) {
+    for (Eigen::Index c = 0; c < m.cols(); ++c) w(r, c) = m(r, c);
+  }
+  return a;
+}
+py::array_t<double> Vector(const Eigen::VectorXd& v) {
+  py::array_t<double> a(v.size());
+  auto w = a.mutable_unchecked<1>();
+  for (Eigen::Index k = 0; k < v.size(); ++k) w(k) = v(k);
+  return a;
+}
+
+// ---- Python-side types --------------------------------------------------------------------------
+
+struct PyPlan {
+  std::vector<PlanPose> poses;
+  int num_cables = 0;
+};
+struct PyDesign {
+  DesignResult result;
+  DesignOptions options;  // as run, without the interrupt flag
+};
+struct PyMeasurements {
+  std::vector<Measurement> readings;
+  int num_cables = 0;
+};
+
+Eigen::MatrixXd PlanColumn(const PyPlan& p, Eigen::VectorXd PlanPose::*member) {
+  Eigen::MatrixXd m(p.poses.size(), p.num_cables);
+  for (std::size_t j = 0; j < p.poses.size(); ++j) {
+    const Eigen::VectorXd& v = p.poses[j].*member;
+    for (int i = 0; i < p.num_cables; ++i) m(j, i) = i < v.size() ? v(i) : std::nan("");
+  }
+  return m;
+}
+
+std::string CallText(const std::string& function) { return "python: cablecal." + function; }
+
+py::dict CriteriaDict(const CriteriaValues& v) {
+  py::dict d;
+  d["condition_number"] = v.condition_number;
+  d["d_log_det_information"] = v.d_log_det_information;
+  d["a_trace_covariance_m2"] = v.a_trace_covariance_m2;
+  d["e_min_eigenvalue"] = v.e_min_eigenvalue;
+  return d;
+}
+
+PyMeasurements MakeMeasurements(const Robot& robot, py::handle dl, py::handle z, py::handle theta, py::handle pose_ids) {
+  const Eigen::MatrixXd dl_m = AsMatrix(dl, "dl", -1, robot.num_cables());
+  const long n = dl_m.rows();
+  const Eigen::MatrixXd z_m = AsMatrix(z, "z", n, 1);
+  const Eigen::MatrixXd theta_rad = AsMatrix(theta, "theta", n, 1);
+  PyMeasurements out{{}, robot.num_cables()};
+  std::vector<long long> ids;
+  if (pose_ids.is_none()) {
+    for (long j = 0; j < n; ++j) ids.push_back(j + 1);
+  } else {
+    if (!py::isinstance<py::sequence>(pose_ids) && !py::isinstance<py::array>(pose_ids)) {
+      Bad("pose_ids", "expected a sequence of integers");
+    }
+    for (const auto& e : pose_ids) ids.push_back(AsInteger(e, "pose_ids", 1, 1LL << 30));
+    if (static_cast<long>(ids.size()) != n) Bad("pose_ids", "one id per row of dl");
+  }
+  for (long j = 0; j < n; ++j) {
+    Measurement m;
+    m.pose_id = static_cast<int>(ids[j]);
+    m.dl_m = dl_m.row(j).transpose();
+    m.z_m = z_m(j, 0);
+    m.theta_rad = theta_rad(j, 0);
+    out.readings.push_back(m);
+  }
+  return out;
+}
+
+}  // namespace
+}  // namespace cablecal::python
+
+using namespace cablecal;          // NOLINT: the module's body names the library throughout
+using namespace cablecal::python;  // NOLINT
+
+PYBIND11_MODULE(cablecal, m) {
+  m.doc() = "cablecal: experiment design, identification and Monte Carlo for planar cable-driven parallel robots";
+  m.attr("__version__") = Version();
+  m.attr("commit") = GitCommit();
+
+  py::register_exception<InputError>(m, "InputError", PyExc_ValueError);
+  py::register_exception<SolverFailure>(m, "SolverError", PyExc_RuntimeError);
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const Interrupted&) {
+      PyErr_SetString(PyExc_KeyboardInterrupt, "interrupted");
+    }
+  });
+
+  // ---- Robot
+  py::class_<Robot>(m, "Robot", "A robot file's content (README, \"Robot file\").")
+      .def_static("load", [](py::handle path) { return LoadRobotFile(AsText(path, "path")); }, py::arg("path"),
+                  "Loads and validates a robot YAML file.")
+      .def_static(
+          "builtin",
+          [](py::handle name) {
+            const std::string n = AsText(name, "name");
+            if (n != BuiltinRobot().name) Bad("name", "no built-in robot '" + n + "' (there is '" + BuiltinRobot().name + "')");
+            return BuiltinRobot();
+          },
+          py::arg("name") = "wang2022", "The built-in robot (wang2022).")
+      .def_static(
+          "from_dict",
+          [](py::handle d) {
+            if (!py::isinstance<py::dict>(d)) Bad("robot", "expected a dict in the robot file's schema, got " + TypeName(d));
+            YAML::Emitter out;
+            ToYaml(out, d, "");
+            return LoadRobotFromString(out.c_str(), "dict");
+          },
+          py::arg("d"), "A robot from a dict in the robot file's schema (the file's checks apply).")
+      .def("to_dict", [](const Robot& r) { return FromYaml(YAML::Load(RobotToYaml(r))); })
+      .def("to_yaml", [](const Robot& r) { return RobotToYaml(r); })
+      .def_property_readonly("name", [](const Robot& r) { return r.name; })
+      .def_property_readonly("num_cables", &Robot::num_cables)
+      .def_property_readonly("geometry", [](const Robot& r) { return Vector(GeometryOf(r)); },
+                             "a1x a1z ... amx amz l10 ... lm0 (m)")
+      .def_property_readonly("geometry_names", [](const Robot& r) { return GeometryNames(r.num_cables()); })
+      .def("__repr__", [](const Robot& r) {
+        return "<cablecal.Robot '" + r.name + "', " + std::to_string(r.num_cables()) + " cables>";
+      });
+
+  // ---- Pose plans
+  py::class_<PyPlan>(m, "Plan", "Measurement poses: a pose plan (sample, design).")
+      .def_static(
+          "load",
+          [](const Robot& robot, py::handle path) {
+            const std::string p = AsText(path, "path");
+            PyPlan plan{ReadPosePlanCsv(p, robot.num_cables()), robot.num_cables()};
+            CheckPlanMatchesRobot(robot, plan.poses, p);
+            return plan;
+          },
+          py::arg("robot"), py::arg("path"), "Reads a pose plan CSV made for `robot`.")
+      .def_property_readonly("poses", [](const PyPlan& p) {
+        Eigen::MatrixXd q(p.poses.size(), 3);
+        for (std::size_t j = 0; j < p.poses.size(); ++j) q.row(j) = p.poses[j].q.transpose();
+        return Array(q);
+      }, "(n, 3): x (m), z (m), theta (rad)")
+      .def_property_readonly("tensions", [](const PyPlan& p) { return Array(PlanColumn(p, &PlanPose::tensions_N)); },
+                             "(n, m), N")
+      .def_property_readonly("lengths", [](const PyPlan& p) { return Array(PlanColumn(p, &PlanPose::lengths_m)); },
+                             "(n, m), m")
+      .def_property_readonly("length_changes",
+                             [](const PyPlan& p) { return Array(PlanColumn(p, &PlanPose::length_change_m)); },
+                             "(n, m), m: the encoder commands from home")
+      .def("to_csv", [](const PyPlan& p) { return PosePlanCsv(p.poses, ""); }, "The CLI's pose plan CSV (no provenance lines).")
+      .def("__len__", [](const PyPlan& p) { return p.poses.size(); });
+
+  // ---- Measurements
+  py::class_<PyMeasurements>(m, "Measurements", "One reading per pose: dl (n, m), z (n,), theta (n,).")
+      .def(py::init([](const Robot& robot, py::handle dl, py::handle z, py::handle theta, py::handle pose_ids) {
+             return MakeMeasurements(robot, dl, z, theta, pose_ids);
+           }),
+           py::arg("robot"), py::arg("dl"), py::arg("z"), py::arg("theta"), py::arg("pose_ids") = py::none())
+      .def_static(
+          "load",
+          [](const Robot& robot, py::handle path) {
+            return PyMeasurements{ReadMeasurementsCsv(AsText(path, "path"), robot.num_cables()), robot.num_cables()};
+          },
+          py::arg("robot"), py::arg("path"))
+      .def_property_readonly("dl", [](const PyMeasurements& p) {
+        Eigen::MatrixXd d(p.readings.size(), p.num_cables);
+        for (std::size_t j = 0; j < p.readings.size(); ++j) d.row(j) = p.readings[j].dl_m.transpose();
+        return Array(d);
+      })
+      .def_property_readonly("z", [](const PyMeasurements& p) {
+        Eigen::VectorXd v(p.readings.size());
+        for (std::size_t j = 0; j < p.readings.size(); ++j) v(j) = p.readings[j].z_m;
+        return Vector(v);
+      })
+      .def_property_readonly("theta", [](const PyMeasurements& p) {
+        Eigen::VectorXd v(p.readings.size());
+        for (std::size_t j = 0; j < p.readings.size(); ++j) v(j) = p.readings[j].theta_rad;
+        return Vector(v);
+      })
+      .def_property_readonly("pose_ids", [](const PyMeasurements& p) {
+        std::vector<int> ids;
+        for (const Measurement& r : p.readings) ids.push_back(r.pose_id);
+        return ids;
+      })
+      .def("to_csv", [](const PyMeasurements& p) { return MeasurementsCsv(p.readings, ""); })
+      .def("__len__", [](const PyMeasurements& p) { return p.readings.size(); });
+
+  // ---- workspace
+  m.def(
+      "workspace",
+      [](const Robot& robot, py::handle step) {
+        const double step_m = AsNumber(step, "step");
+        if (!(step_m > 0.0)) Bad("step", "must be positive (m)");
+        WorkspaceGrid grid;
+        {
+          py::gil_scoped_release release;
+          grid = ComputeWorkspaceGrid(robot, step_m);
+        }
+        const int mc = robot.num_cables();
+        const long n = static_cast<long>(grid.points.size());
+        Eigen::MatrixXd xzt(n, 3), t(n, mc);
+        py::array_t<bool> feasible(n);
+        py::list reasons;
+        auto f = feasible.mutable_unchecked<1>();
+        for (long k = 0; k < n; ++k) {
+          const WorkspacePoint& p = grid.points[k];
+          const bool has = p.evaluation.has_equilibrium;
+          xzt(k, 0) = p.x_m;
+          xzt(k, 1) = p.z_m;
+          xzt(k, 2) = has ? p.evaluation.equilibrium.q(2) : std::nan("");
+          for (int i = 0; i < mc; ++i) t(k, i) = has ? p.evaluation.equilibrium.tensions_N(i) : std::nan("");
+          f(k) = p.evaluation.feasible();
+          reasons.append(ToString(p.evaluation.feasibility));
+        }
+        py::dict d;
+        d["x"] = Vector(xzt.col(0));
+        d["z"] = Vector(xzt.col(1));
+        d["theta"] = Vector(xzt.col(2));
+        d["tensions"] = Array(t);
+        d["feasible"] = feasible;
+        d["reason"] = reasons;
+        d["area_m2"] = grid.feasible_area_m2();
+        d["csv"] = WorkspaceCsv(robot, grid, "");
+        return d;
+      },
+      py::arg("robot"), py::arg("step") = 0.05,
+      "The feasible workspace on a grid: x, z, theta, tensions (NaN without equilibrium), feasible, reason, "
+      "area_m2, and csv (the CLI's file).");
+
+  // ---- sample
+  m.def(
+      "sample",
+      [](const Robot& robot, py::handle n, py::handle seed) {
+        const int count = static_cast<int>(AsInteger(n, "n", 1, kMaxPlanPoses));
+        const std::uint64_t s = AsSeed(seed);
+        py::gil_scoped_release release;
+        return PyPlan{SampleFeasiblePoses(robot, count, s), robot.num_cables()};
+      },
+      py::arg("robot"), py::arg("n"), py::arg("seed") = 1, "n uniform random feasible poses (cablecal sample).");
+
+  // ---- design
+  py::class_<PyDesign>(m, "DesignResult")
+      .def_property_readonly("plan", [](const PyDesign& d) { return PyPlan{d.result.poses, d.result.num_cables}; })
+      .def_property_readonly("criteria", [](const PyDesign& d) { return CriteriaDict(d.result.criteria); })
+      .def_property_readonly("random_median", [](const PyDesign& d) { return CriteriaDict(d.result.random_median); })
+      .def_property_readonly("best_start", [](const PyDesign& d) { return d.result.best_start; })
+      .def_property_readonly("converged_starts", [](const PyDesign& d) { return d.result.converged_starts; })
+      .def_property_readonly("wall_time_s", [](const PyDesign& d) { return d.result.wall_time_s; })
+      .def_property_readonly("starts", [](const PyDesign& d) {
+        py::list l;
+        for (const StartReport& s : d.result.starts) {
+          py::dict e;
+          e["start"] = s.start;
+          e["ipopt_status"] = s.ipopt_status;
+          e["iterations"] = s.iterations;
+          e["converged"] = s.converged;
+          e["verified"] = s.verified;
+          e["verification_failure"] = s.verification_failure;
+          e["objective"] = s.objective;
+          l.append(e);
+        }
+        return l;
+      }, "Per Ipopt start: status, iterations, converged, verified, objective.")
+      .def("to_yaml", [](const PyDesign& d) { return DesignSummaryYaml(d.result, d.options, CallText("design")); },
+           "The CLI's summary.yaml.");
+  m.def(
+      "design",
+      [](const Robot& robot, py::handle n, py::handle criterion, py::handle starts, py::handle seed,
+         py::handle min_spacing, py::handle random_sets, py::handle geometry_sigma, py::handle robust_sigmas) {
+        DesignOptions o;
+        o.poses = static_cast<int>(AsInteger(n, "n", 1, kMaxPlanPoses));
+        o.criterion = ParseCriterion(AsText(criterion, "criterion"));
+        o.starts = static_cast<int>(AsInteger(starts, "starts", 1, 10000));
+        o.seed = AsSeed(seed);
+        o.min_spacing_m = AsNumber(min_spacing, "min_spacing");
+        o.random_sets = static_cast<int>(AsInteger(random_sets, "random_sets", 0, 100000));
+        o.geometry_sigma_m = AsNumber(geometry_sigma, "geometry_sigma");
+        o.robust_sigmas = AsNumber(robust_sigmas, "robust_sigmas");
+        // In process: a Python process may run threads of its own, and a fork copies them
+        // half-way; the plans are bit for bit the same (tests/design).
+        o.solve_in_child_processes = false;
+        std::atomic<bool> stop{false};
+        o.interrupted = &stop;
+        PyDesign d{Interruptible(stop, [&] { return DesignPoses(robot, o); }), o};
+        d.options.interrupted = nullptr;
+        return d;
+      },
+      py::arg("robot"), py::arg("n"), py::arg("criterion") = "a", py::arg("starts") = 8, py::arg("seed") = 1,
+      py::arg("min_spacing") = 0.0, py::arg("random_sets") = 100, py::arg("geometry_sigma") = 0.01,
+      py::arg("robust_sigmas") = 3.0, "Optimal measurement poses (cablecal design); SolverError if no start converges.");
+
+  // ---- simulate
+  py::class_<PlanSimulation>(m, "Experiment", "A simulated experiment: measurements, the true robot and poses.")
+      .def_property_readonly("measurements", [](const PlanSimulation& s) {
+        return PyMeasurements{s.experiment.measurements, s.truth.num_cables()};
+      })
+      .def_property_readonly("truth", [](const PlanSimulation& s) { return WithGeometry(s.truth, GeometryOf(s.truth)); })
+      .def_property_readonly("true_poses", [](const PlanSimulation& s) {
+        Eigen::MatrixXd q(s.experiment.true_poses.size(), 3);
+        for (std::size_t j = 0; j < s.experiment.true_poses.size(); ++j) q.row(j) = s.experiment.true_poses[j].transpose();
+        return Array(q);
+      });
+  m.def(
+      "simulate",
+      [](const Robot& robot, const PyPlan& plan, std::optional<Robot> truth, py::handle geometry_sigma,
+         py::handle sensors, py::handle encoder_noise, py::handle seed) {
+        if (plan.num_cables != robot.num_cables()) Bad("plan", "made for a robot with another number of cables");
+        double sigma = 0.0;
+        if (!geometry_sigma.is_none()) {
+          if (truth) Bad("truth", "give either truth or geometry_sigma, not both");
+          sigma = AsNumber(geometry_sigma, "geometry_sigma");
+          if (sigma < 0.0) Bad("geometry_sigma", "must be 0 or more (m)");
+        }
+        if (!py::isinstance<py::bool_>(encoder_noise)) Bad("encoder_noise", "expected True or False");
+        const SimulationOptions sim{ParseNoisySensors(AsText(sensors, "sensors")), encoder_noise.cast<bool>(), true};
+        const std::uint64_t s = AsSeed(seed);
+        CheckPlanMatchesRobot(robot, plan.poses, "plan");
+        py::gil_scoped_release release;
+        return SimulatePlan(robot, truth, sigma, plan.poses, sim, s, "plan");
+      },
+      py::arg("robot"), py::arg("plan"), py::arg("truth") = py::none(), py::arg("geometry_sigma") = py::none(),
+      py::arg("sensors") = "both", py::arg("encoder_noise") = true, py::arg("seed") = 1,
+      "The sensors' readings of a plan on a true robot (cablecal simulate).");
+
+  // ---- identify
+  py::class_<IdentifyResult>(m, "IdentifyResult")
+      .def_property_readonly("status", [](const IdentifyResult& r) { return std::string(ToString(r.status)); })
+      .def_readonly("message", &IdentifyResult::message)
+      .def_readonly("iterations", &IdentifyResult::iterations)
+      .def_readonly("final_cost", &IdentifyResult::final_cost)
+      .def_readonly("rms_encoder_m", &IdentifyResult::rms_encoder_m)
+      .def_readonly("rms_laser_m", &IdentifyResult::rms_laser_m)
+      .def_readonly("rms_inclinometer_rad", &IdentifyResult::rms_inclinometer_rad)
+      .def_property_readonly("geometry_names", [](const IdentifyResult& r) {
+        return GeometryNames(static_cast<int>(r.geometry.size() / 3));
+      })
+      .def_property_readonly("geometry", [](const IdentifyResult& r) { return Vector(r.geometry); }, "(3m,), m")
+      .def_property_readonly("std", [](const IdentifyResult& r) { return Vector(r.geometry_std); }, "(3m,), m")
+      .def_property_readonly("correlation", [](const IdentifyResult& r) { return Array(r.geometry_correlation); })
+      .def_property_readonly("covariance", [](const IdentifyResult& r) {
+        const Eigen::VectorXd& s = r.geometry_std;
+        return Array(s.asDiagonal() * r.geometry_correlation * s.asDiagonal());
+      }, "(3m, 3m), m^2")
+      .def_property_readonly("poses", [](const IdentifyResult& r) {
+        Eigen::MatrixXd q(r.poses.size(), 3);
+        for (std::size_t j = 0; j < r.poses.size(); ++j) q.row(j) = r.poses[j].q.transpose();
+        return Array(q);
+      }, "(n, 3): x, z, theta estimated")
+      .def_property_readonly("pose_std", [](const IdentifyResult& r) {
+        Eigen::MatrixXd q(r.poses.size(), 3);
+        for (std::size_t j = 0; j < r.poses.size(); ++j) q.row(j) = r.poses[j].std_dev.transpose();
+        return Array(q);
+      })
+      .def_property_readonly("identifiability", [](const IdentifyResult& r) {
+        py::dict d;
+        d["geometry_names"] = r.identifiability.geometry_names;
+        d["singular_values"] = Vector(r.identifiability.singular_values);
+        d["condition_number"] = r.identifiability.condition_number;
+        d["weakest_pose_id"] = r.identifiability.weakest_pose_id;
+        d["null_directions"] = r.identifiability.null_directions;
+        return d;
+      })
+      .def("to_yaml", [](const IdentifyResult& r) { return IdentifyResultYaml(r, CallText("identify")); },
+           "The CLI's result.yaml (the command line reads python: cablecal.identify).");
+  m.def(
+      "identify",
+      [](const Robot& robot, const PyMeasurements& measurements, py::handle estimator, py::handle gauge,
+         py::handle max_iterations) {
+        if (measurements.num_cables != robot.num_cables()) Bad("measurements", "read for a robot with another number of cables");
+        IdentifyOptions o;
+        o.estimator = ParseEstimator(AsText(estimator, "estimator"));
+        o.gauge = ParseGauge(AsText(gauge, "gauge"));
+        o.max_iterations = static_cast<int>(AsInteger(max_iterations, "max_iterations", 1, 100000));
+        o.source = "measurements";
+        CheckReadingsPlausible(robot, measurements.readings, "measurements");
+        IdentifyResult r;
+        {
+          py::gil_scoped_release release;
+          r = Identify(robot, measurements.readings, o);
+        }
+        RequireUsableResult(r, "measurements");
+        return r;
+      },
+      py::arg("robot"), py::arg("measurements"), py::arg("estimator") = "ml", py::arg("gauge") = "a1x",
+      py::arg("max_iterations") = 100,
+      "Identifies exit points and initial lengths (cablecal identify); InputError when the data cannot "
+      "calibrate this robot, SolverError when the solve does not converge.");
+  m.def("calibrated_robot", [](const Robot& nominal, const IdentifyResult& r) { return WithGeometry(nominal, r.geometry); },
+        py::arg("nominal"), py::arg("result"), "The nominal robot with the identified geometry.");
+
+  // ---- montecarlo
+  py::class_<MonteCarloResult>(m, "MonteCarloResult")
+      .def_readonly("wall_time_s", &MonteCarloResult::wall_time_s)
+      .def("summary_csv", [](const MonteCarloResult& r) { return SummaryCsv(r); }, "The CLI's summary.csv.")
+      .def("failures_csv", [](const MonteCarloResult& r) { return FailuresCsv(r); })
+      .def_property_readonly("summary", [](const MonteCarloResult& r) {
+        py::list rows;
+        for (const MonteCarloCell& cell : r.cells) {
+          for (const std::string& parameter : SummaryParameters(r.num_cables)) {
+            const ErrorStats s = Summarise(cell, r.num_cables, parameter);
+            py::dict d;
+            d["n"] = cell.n;
+            d["design"] = ToString(cell.design);
+            d["parameter"] = parameter;
+            d["mean"] = s.mean;
+            d["std"] = s.std;
+            d["rms"] = s.rms;
+            d["max_abs"] = s.max_abs;
+            d["share_within_5mm"] = s.share_within_5mm;
+            d["failures"] = cell.failures();
+            rows.append(d);
+          }
+        }
+        return rows;
+      }, "One dict per (n, design, parameter), as summary.csv's rows (errors in m).");
+  m.def(
+      "montecarlo",
+      [](const Robot& robot, py::handle poses, py::handle trials, py::handle designs, py::handle estimator,
+         py::handle gauge, py::handle sensors, py::handle geometry_sigma, py::handle seed, py::handle design_starts,
+         py::handle progress) {
+        MonteCarloOptions o;
+        if (py::isinstance<py::str>(poses)) {
+          o.pose_counts = ParsePoseCounts(poses.cast<std::string>());
+        } else if (py::isinstance<py::int_>(poses)) {
+          o.pose_counts = {static_cast<int>(AsInteger(poses, "poses", 1, kMaxPlanPoses))};
+        } else {
+          if (!py::isinstance<py::sequence>(poses)) Bad("poses", "expected \"first:last[:step]\", an integer or a list of them");
+          for (const auto& e : poses) o.pose_counts.push_back(static_cast<int>(AsInteger(e, "poses", 1, kMaxPlanPoses)));
+        }
+        o.trials = static_cast<int>(AsInteger(trials, "trials", 1, 100000000));
+        o.designs = ParseDesigns(AsText(designs, "designs"));
+        o.estimator = ParseEstimator(AsText(estimator, "estimator"));
+        o.gauge = ParseGauge(AsText(gauge, "gauge"));
+        o.sensors = ParseNoisySensors(AsText(sensors, "sensors"));
+        o.geometry_sigma_m = AsNumber(geometry_sigma, "geometry_sigma");
+        o.seed = AsSeed(seed);
+        o.design_starts = static_cast<int>(AsInteger(design_starts, "design_starts", 1, 10000));
+        o.design_in_child_processes = false;  // as design() above
+        ValidateOptions(o, &robot);
+        if (!progress.is_none() && !PyCallable_Check(progress.ptr())) Bad("progress", "expected a callable or None");
+        std::atomic<bool> stop{false};
+        o.interrupted = &stop;
+        // The study reports (done, total) from one of its threads; Python hears it from here.
+        std::atomic<long> done{0}, total{0};
+        o.progress = [&](long d, long t) {
+          done = d;
+          total = t;
+        };
+        long reported = -1;
+        const auto report = [&] {
+          if (progress.is_none() || total == 0 || done == reported) return;
+          reported = done;
+          progress(reported, total.load());
+        };
+        MonteCarloResult r = Interruptible(stop, [&] { return RunMonteCarlo(robot, o); }, report);
+        report();  // the last count: (total, total)
+        return r;
+      },
+      py::arg("robot"), py::arg("poses"), py::arg("trials"), py::arg("designs") = "random,optimized",
+      py::arg("estimator") = "ml", py::arg("gauge") = "a1x", py::arg("sensors") = "both",
+      py::arg("geometry_sigma") = 0.01, py::arg("seed") = 1, py::arg("design_starts") = 2,
+      py::arg("progress") = py::none(),
+      "The Monte Carlo study (cablecal montecarlo); Ctrl-C raises KeyboardInterrupt. progress(done, total), if "
+      "given, is called now and then with the trials done.");
+
+  m.def("loaded_blas", [] { return LoadedLibraryPath("libblas.so"); },
+        "The BLAS this process uses: designs equal the CLI's bit for bit with the reference BLAS (README, \"Python\").");
+}

@@ -1,0 +1,311 @@
+"""The Python module against the CLI: the same inputs give the same files, hostile input is a
+cablecal.InputError with the CLI's message, long calls release the GIL and honour Ctrl-C.
+
+Run by ctest (tests/CMakeLists.txt) with PYTHONPATH=build/python, CABLECAL_CLI=build/cablecal
+and CABLECAL_SOURCE_DIR set. Robots: the asymmetric file, the 3- and 4-cable files, and a robot
+built here as a dict (exit points at different heights, centre of mass off the bar) - never
+only the built-in one.
+"""
+import os
+import signal
+import subprocess
+import threading
+import time
+
+import cablecal  # before numpy: cablecal's reference BLAS is then the one numpy shares (README)
+import numpy as np
+import pytest
+
+SOURCE = os.environ.get("CABLECAL_SOURCE_DIR", os.path.join(os.path.dirname(__file__), "..", ".."))
+CLI = os.environ.get("CABLECAL_CLI", os.path.join(SOURCE, "build", "cablecal"))
+ROBOTS = os.path.join(SOURCE, "robots")
+
+
+def robot_file(name):
+    return os.path.join(ROBOTS, name + ".yaml")
+
+
+def cli(*args):
+    """Runs the CLI; returns its stdout, failing the test on a non-zero exit."""
+    done = subprocess.run([CLI, *args], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    return done.stdout
+
+
+def data_lines(path):
+    """A CLI file without its provenance comment lines (version, commit, command line)."""
+    with open(path) as f:
+        return "".join(line for line in f if not line.startswith("#"))
+
+
+def yaml_without_provenance(text):
+    """A result YAML's lines but its `cablecal:` (version, commit), `command:` and wall-time lines."""
+    return [l for l in text.splitlines() if not l.startswith(("cablecal:", "command:", "#", "wall_time_s:"))]
+
+
+def handmade_robot_dict():
+    """An asymmetric 2-cable robot written here: exits at different heights, offset mass."""
+    d = cablecal.Robot.builtin().to_dict()
+    d["name"] = "handmade"
+    d["cables"][0]["exit"] = [0.0, 2.4]
+    d["cables"][1]["exit"] = [d["frame"]["width"], 2.1]
+    d["platform"]["com"] = [0.04, -0.03]
+    return d
+
+
+# ---- Robots -------------------------------------------------------------------------------------
+
+
+def test_builtin_and_files_load():
+    assert cablecal.Robot.builtin().name == "wang2022"
+    for name, cables in [("asymmetric", 2), ("planar3_suspended", 3), ("planar4_fully_constrained", 4)]:
+        r = cablecal.Robot.load(robot_file(name))
+        assert r.num_cables == cables
+        assert r.geometry.shape == (3 * cables,)
+        assert len(r.geometry_names) == 3 * cables
+
+
+@pytest.mark.parametrize("name", ["asymmetric", "planar3_suspended", "planar4_fully_constrained"])
+def test_dict_round_trip_keeps_the_robot(name):
+    r = cablecal.Robot.load(robot_file(name))
+    back = cablecal.Robot.from_dict(r.to_dict())
+    assert back.to_yaml() == r.to_yaml()
+    np.testing.assert_array_equal(back.geometry, r.geometry)
+
+
+def test_handmade_dict_robot_is_asymmetric_and_valid():
+    r = cablecal.Robot.from_dict(handmade_robot_dict())
+    g = dict(zip(r.geometry_names, r.geometry))
+    assert g["a1z"] != g["a2z"]
+
+
+def test_misspelt_key_is_the_loaders_message():
+    d = handmade_robot_dict()
+    d["platform"]["mas"] = d["platform"].pop("mass")
+    with pytest.raises(cablecal.InputError) as e:
+        cablecal.Robot.from_dict(d)
+    assert "mas" in str(e.value)
+    assert isinstance(e.value, ValueError)
+
+
+@pytest.mark.parametrize(
+    "bad",
+    [
+        "not a dict",
+        {"name": "x"},  # missing keys
+        {**handmade_robot_dict(), "gravity": float("nan")},
+        {**handmade_robot_dict(), "gravity": "9.81 m/s^2"},
+        {**handmade_robot_dict(), "cables": [object()]},
+        {**handmade_robot_dict(), 3: "int key"},
+    ],
+)
+def test_bad_robot_dicts_raise_input_error(bad):
+    with pytest.raises(cablecal.InputError):
+        cablecal.Robot.from_dict(bad)
+
+
+def test_missing_file_and_unknown_builtin():
+    with pytest.raises(cablecal.InputError, match="no_such.yaml"):
+        cablecal.Robot.load("/nonexistent/no_such.yaml")
+    with pytest.raises(cablecal.InputError, match="no built-in robot"):
+        cablecal.Robot.builtin("nope")
+
+
+# ---- The CLI's files from the same inputs ------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", ["asymmetric", "planar3_suspended"])
+def test_sample_equals_cli(tmp_path, name):
+    robot = cablecal.Robot.load(robot_file(name))
+    plan = cablecal.sample(robot, 9, seed=5)
+    assert plan.poses.shape == (9, 3)
+    assert plan.tensions.shape == (9, robot.num_cables)
+    out = tmp_path / "plan.csv"
+    cli("sample", "--robot", robot_file(name), "--poses", "9", "--seed", "5", "--out", str(out))
+    assert plan.to_csv() == data_lines(out)
+
+
+def test_workspace_equals_cli(tmp_path):
+    robot = cablecal.Robot.load(robot_file("asymmetric"))
+    ws = cablecal.workspace(robot, step=0.1)
+    out = tmp_path / "ws.csv"
+    cli("workspace", "--robot", robot_file("asymmetric"), "--step", "0.1", "--out", str(out))
+    assert ws["csv"] == data_lines(out)
+    assert ws["feasible"].dtype == bool and ws["feasible"].any()
+    assert ws["tensions"].shape == (len(ws["x"]), 2)
+    assert np.isclose(ws["area_m2"], ws["feasible"].sum() * 0.01)
+
+
+def test_design_simulate_identify_equal_cli(tmp_path):
+    path = robot_file("asymmetric")
+    robot = cablecal.Robot.load(path)
+    design = cablecal.design(robot, 7, starts=2, random_sets=5, seed=3)
+    plan_csv, summary = tmp_path / "plan.csv", tmp_path / "summary.yaml"
+    cli("design", "--robot", path, "--poses", "7", "--starts", "2", "--random-sets", "5", "--seed", "3",
+        "--out", str(plan_csv), "--summary", str(summary))
+    assert design.plan.to_csv() == data_lines(plan_csv)
+    assert yaml_without_provenance(design.to_yaml()) == yaml_without_provenance(open(summary).read())
+    assert design.best_start >= 0 and design.converged_starts >= 1
+
+    experiment = cablecal.simulate(robot, design.plan, geometry_sigma=0.01, seed=4)
+    meas_csv, truth_yaml = tmp_path / "meas.csv", tmp_path / "truth.yaml"
+    cli("simulate", "--robot", path, "--plan", str(plan_csv), "--geometry-sigma", "0.01", "--seed", "4",
+        "--out", str(meas_csv), "--truth-out", str(truth_yaml))
+    assert experiment.measurements.to_csv() == data_lines(meas_csv)
+
+    result = cablecal.identify(robot, experiment.measurements)
+    result_yaml = tmp_path / "result.yaml"
+    cli("identify", "--robot", path, "--measurements", str(meas_csv), "--out", str(result_yaml))
+    assert yaml_without_provenance(result.to_yaml()) == yaml_without_provenance(open(result_yaml).read())
+    assert result.status == "converged"
+    # The estimate is within 4 predicted sigma of the truth on every identified parameter.
+    truth = experiment.truth.geometry
+    held = result.std == 0
+    assert held.sum() == 1  # a1x, the gauge
+    z = np.abs(result.geometry - truth)[~held] / result.std[~held]
+    assert z.max() < 4.0, z
+    cov = result.covariance
+    assert cov.shape == (6, 6)
+    np.testing.assert_allclose(np.sqrt(np.diag(cov)), result.std, rtol=1e-12)
+
+
+def test_measurements_from_arrays_equal_the_file(tmp_path):
+    path = robot_file("planar3_suspended")
+    robot = cablecal.Robot.load(path)
+    plan = cablecal.sample(robot, 8, seed=2)
+    exp = cablecal.simulate(robot, plan, seed=9)
+    m = exp.measurements
+    again = cablecal.Measurements(robot, m.dl, m.z, m.theta, pose_ids=m.pose_ids)
+    assert again.to_csv() == m.to_csv()
+    r1 = cablecal.identify(robot, m)
+    r2 = cablecal.identify(robot, again)
+    np.testing.assert_array_equal(r1.geometry, r2.geometry)
+    calibrated = cablecal.calibrated_robot(robot, r1)
+    np.testing.assert_array_equal(calibrated.geometry, r1.geometry)
+
+
+def test_montecarlo_equals_cli(tmp_path):
+    path = robot_file("asymmetric")
+    robot = cablecal.Robot.load(path)
+    result = cablecal.montecarlo(robot, "6:8:2", 15, designs="random", seed=7)
+    cli("montecarlo", "--robot", path, "--poses", "6:8:2", "--trials", "15", "--designs", "random", "--seed", "7",
+        "--no-plot", "--out", str(tmp_path))
+    assert result.summary_csv() == data_lines(tmp_path / "summary.csv")
+    rows = result.summary
+    assert {r["n"] for r in rows} == {6, 8}
+    assert all(r["design"] == "random" for r in rows)
+
+
+# ---- Hostile input ------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda r: cablecal.sample(r, "10"),
+        lambda r: cablecal.sample(r, True),
+        lambda r: cablecal.sample(r, 0),
+        lambda r: cablecal.sample(r, 5, seed=-1),
+        lambda r: cablecal.sample(r, 5, seed=1.5),
+        lambda r: cablecal.workspace(r, step=-0.1),
+        lambda r: cablecal.workspace(r, step=float("nan")),
+        lambda r: cablecal.workspace(r, step="0.1"),
+        lambda r: cablecal.design(r, 7, criterion="f"),
+        lambda r: cablecal.design(r, 2),
+        lambda r: cablecal.montecarlo(r, "6:x", 5),
+        lambda r: cablecal.montecarlo(r, [6], 0),
+        lambda r: cablecal.montecarlo(r, [6], 5, designs="random,nonsense"),
+        lambda r: cablecal.Measurements(r, np.full((3, 2), np.nan), np.zeros(3), np.zeros(3)),
+        lambda r: cablecal.Measurements(r, np.zeros((3, 3)), np.zeros(3), np.zeros(3)),
+        lambda r: cablecal.Measurements(r, np.zeros((3, 2)), np.zeros(4), np.zeros(3)),
+        lambda r: cablecal.Measurements(r, "abc", np.zeros(3), np.zeros(3)),
+        lambda r: cablecal.Measurements(r, np.zeros((3, 2)), np.zeros(3), np.zeros(3), pose_ids=[1, 1.5, 2]),
+        lambda r: cablecal.identify(r, cablecal.Measurements(r, np.zeros((3, 2)), np.ones(3), np.zeros(3))),
+        lambda r: cablecal.identify(r, cablecal.simulate(r, cablecal.sample(r, 8)).measurements, estimator="best"),
+        lambda r: cablecal.simulate(r, cablecal.sample(r, 4), sensors="all"),
+        lambda r: cablecal.simulate(r, cablecal.sample(r, 4), geometry_sigma=-1.0),
+        lambda r: cablecal.simulate(r, cablecal.sample(r, 4), truth=r, geometry_sigma=0.01),
+        lambda r: cablecal.simulate(r, cablecal.sample(cablecal.Robot.load(robot_file("planar3_suspended")), 4)),
+        lambda r: cablecal.Plan.load(r, os.path.join(ROBOTS, "asymmetric.yaml")),
+    ],
+)
+def test_hostile_input_raises_input_error(call):
+    robot = cablecal.Robot.load(robot_file("asymmetric"))
+    with pytest.raises(cablecal.InputError):
+        call(robot)
+
+
+def test_input_error_carries_the_clis_message(tmp_path):
+    d = handmade_robot_dict()
+    d["platform"]["mas"] = d["platform"].pop("mass")
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(cablecal.Robot.builtin().to_yaml().replace("mass:", "mas:"))
+    with pytest.raises(cablecal.InputError) as e:
+        cablecal.Robot.load(str(bad))
+    done = subprocess.run([CLI, "sample", "--robot", str(bad), "--poses", "3", "--out", str(tmp_path / "p.csv")],
+                          capture_output=True, text=True)
+    assert done.returncode == 2
+    assert str(e.value) in done.stderr
+    assert "mas" in str(e.value)
+    assert not (tmp_path / "p.csv").exists()
+
+
+def test_solver_error_is_a_runtime_error():
+    assert issubclass(cablecal.SolverError, RuntimeError)
+    assert issubclass(cablecal.InputError, ValueError)
+
+
+# ---- Long calls -------------------------------------------------------------------------------
+
+
+def test_montecarlo_releases_the_gil():
+    robot = cablecal.Robot.load(robot_file("asymmetric"))
+    done = threading.Event()
+
+    def run():
+        cablecal.montecarlo(robot, [6, 10], 400, designs="random", seed=1)
+        done.set()
+
+    worker = threading.Thread(target=run)
+    worker.start()
+    ticks = 0
+    while not done.is_set():
+        ticks += 1
+        time.sleep(0.005)
+    worker.join()
+    # With the GIL held for the whole study this thread could not run until it ended.
+    assert ticks > 20
+
+
+def test_ctrl_c_interrupts_a_montecarlo():
+    robot = cablecal.Robot.load(robot_file("asymmetric"))
+    seen = []
+    timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        cablecal.montecarlo(robot, [6, 10], 20000, designs="random", seed=1,
+                            progress=lambda done, total: seen.append((done, total)))
+    timer.join()
+    # Stopped part-way: a study that ran to its end would have reported (total, total).
+    assert seen, "progress was reported"
+    done, total = seen[-1]
+    assert total == 40000 and done < total
+
+
+def test_progress_reaches_the_total_and_an_exception_in_it_stops_the_study():
+    robot = cablecal.Robot.load(robot_file("asymmetric"))
+    seen = []
+    cablecal.montecarlo(robot, [6], 300, designs="random", seed=1, progress=lambda d, t: seen.append((d, t)))
+    assert seen[-1] == (300, 300)
+    assert all(a[0] <= b[0] for a, b in zip(seen, seen[1:]))
+
+    class Stop(Exception):
+        pass
+
+    def stop(done, total):
+        raise Stop()
+
+    with pytest.raises(Stop):
+        cablecal.montecarlo(robot, [6, 10], 20000, designs="random", seed=1, progress=stop)
+    with pytest.raises(cablecal.InputError):
+        cablecal.montecarlo(robot, [6], 10, progress="not callable")
