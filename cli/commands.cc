@@ -47,9 +47,23 @@ std::vector<std::string> FrameArgs(const Robot& robot) {
 
 }  // namespace
 
+// The plotting scripts sit beside the executable, not at a path baked in at build time:
+// share/cablecal/scripts under the build folder (copied there at configure time) or, once
+// installed, under bin/'s parent. CABLECAL_SCRIPTS_DIR overrides both.
+std::string PlotScriptsDir() {
+  if (const char* env = std::getenv("CABLECAL_SCRIPTS_DIR")) return env;
+  std::error_code error;
+  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", error);
+  if (error) return "scripts";
+  for (const std::filesystem::path& dir : {exe.parent_path() / "share/cablecal/scripts",
+                                           exe.parent_path().parent_path() / "share/cablecal/scripts"}) {
+    if (std::filesystem::is_directory(dir, error)) return dir.string();
+  }
+  return (exe.parent_path().parent_path() / "share/cablecal/scripts").string();  // named by the failure
+}
+
 void RunPlotScript(const std::string& script, const std::vector<std::string>& args) {
-  const char* scripts_env = std::getenv("CABLECAL_SCRIPTS_DIR");
-  const std::string scripts_dir = scripts_env ? scripts_env : CABLECAL_SCRIPTS_DIR;
+  const std::string scripts_dir = PlotScriptsDir();
   const char* python_env = std::getenv("CABLECAL_PYTHON");
   // Debian's python3-matplotlib is installed for /usr/bin/python3, which may not be the
   // python3 first on PATH (pyenv, conda).

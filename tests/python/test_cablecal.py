@@ -236,8 +236,6 @@ def test_hostile_input_raises_input_error(call):
 
 
 def test_input_error_carries_the_clis_message(tmp_path):
-    d = handmade_robot_dict()
-    d["platform"]["mas"] = d["platform"].pop("mass")
     bad = tmp_path / "bad.yaml"
     bad.write_text(cablecal.Robot.builtin().to_yaml().replace("mass:", "mas:"))
     with pytest.raises(cablecal.InputError) as e:
