@@ -18,6 +18,8 @@
 #include "common/atomic_output.h"
 #include "common/error.h"
 #include "common/format.h"
+#include "common/json.h"
+#include "common/yaml_writer.h"
 #include "common/version.h"
 #include "design/design.h"
 #include "identify/experiment.h"
@@ -45,7 +47,54 @@ std::vector<std::string> FrameArgs(const Robot& robot) {
   return args;
 }
 
+// The plan's poses as a YAML sequence of maps, the pose plan CSV's columns as keys (pose, x,
+// z, theta in m and rad, t1.., l1.., dl1.. in N and m), for design --json.
+std::string PosePlanJsonYaml(const std::vector<PlanPose>& poses) {
+  YAML::Emitter o;
+  o << YAML::BeginSeq;
+  for (std::size_t j = 0; j < poses.size(); ++j) {
+    const PlanPose& p = poses[j];
+    o << YAML::Flow << YAML::BeginMap << YAML::Key << "pose" << YAML::Value << j + 1;
+    const char* names[3] = {"x", "z", "theta"};
+    for (int k = 0; k < 3; ++k) o << YAML::Key << names[k] << YAML::Value << YamlNumber{p.q(k)};
+    const std::pair<const char*, const Eigen::VectorXd*> columns[3] = {
+        {"t", &p.tensions_N}, {"l", &p.lengths_m}, {"dl", &p.length_change_m}};
+    for (const auto& [prefix, values] : columns) {
+      for (Eigen::Index i = 0; i < values->size(); ++i) {
+        o << YAML::Key << prefix + std::to_string(i + 1) << YAML::Value << YamlNumber{(*values)(i)};
+      }
+    }
+    o << YAML::EndMap;
+  }
+  o << YAML::EndSeq;
+  return YamlText(o);
+}
+
 }  // namespace
+
+std::string Closest(const std::string& typed, const std::vector<std::string>& names) {
+  std::string best;
+  std::size_t best_distance = std::max<std::size_t>(2, typed.size() / 3) + 1;
+  for (const std::string& name : names) {
+    // Levenshtein distance, one row at a time.
+    std::vector<std::size_t> row(name.size() + 1);
+    for (std::size_t j = 0; j <= name.size(); ++j) row[j] = j;
+    for (std::size_t i = 1; i <= typed.size(); ++i) {
+      std::size_t diagonal = row[0];
+      row[0] = i;
+      for (std::size_t j = 1; j <= name.size(); ++j) {
+        const std::size_t above = row[j];
+        row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (typed[i - 1] == name[j - 1] ? 0 : 1)});
+        diagonal = above;
+      }
+    }
+    if (row[name.size()] < best_distance) {
+      best_distance = row[name.size()];
+      best = name;
+    }
+  }
+  return best;
+}
 
 // The plotting scripts sit beside the executable, not at a path baked in at build time:
 // share/cablecal/scripts under the build folder (copied there at configure time) or, once
@@ -190,6 +239,7 @@ int RunSimulate(const Context& ctx, const SimulateOptions& options) {
 int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   CheckCommandPaths({{"--robot", options.robot_path}, {"--measurements", options.measurements_path}},
                     {{"--out", options.out_path}, {"--calibrated-robot", options.calibrated_robot_path}});
+  if (options.out_path.empty() && !options.json) throw InputError("--out", "", "required (or print the result with --json)");
   const Robot nominal = LoadRobotOption(options.robot_path);
   IdentifyOptions id;
   id.estimator = ParseEstimator(options.estimator);
@@ -200,8 +250,9 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   CheckReadingsPlausible(nominal, measurements, options.measurements_path);
   const IdentifyResult result = Identify(nominal, measurements, id);
   RequireUsableResult(result, options.measurements_path);
+  const std::string result_yaml = IdentifyResultYaml(result, ctx.command_line);
   AtomicOutput output;
-  output.WriteText(options.out_path, IdentifyResultYaml(result, ctx.command_line));
+  if (!options.out_path.empty()) output.WriteText(options.out_path, result_yaml);
   if (!options.calibrated_robot_path.empty()) {
     const Robot calibrated = WithGeometry(nominal, result.geometry);
     output.WriteText(options.calibrated_robot_path,
@@ -209,6 +260,10 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
                          ToString(id.estimator) + ", gauge " + ToString(id.gauge) + ")\n" + RobotToYaml(calibrated));
   }
   output.Commit();
+  if (options.json) {
+    std::printf("%s\n", ToJson(YAML::Load(result_yaml)).c_str());
+    return kExitOk;
+  }
   std::printf("identified %s from %zu poses (%s, gauge %s): %d iterations, residual rms encoder %s m, laser %s m\n",
               PrintableText(nominal.name).c_str(), measurements.size(), ToString(id.estimator), ToString(id.gauge), result.iterations,
               FormatDouble(result.rms_encoder_m).c_str(), FormatDouble(result.rms_laser_m).c_str());
@@ -224,6 +279,8 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
 int RunDesign(const Context& ctx, const DesignCommandOptions& options) {
   CheckCommandPaths({{"--robot", options.robot_path}, {"--prior", options.prior_path}},
                     {{"--out", options.out_path}, {"--summary", options.summary_path}, {"--plot", options.plot_path}});
+  if (options.out_path.empty() && !options.json) throw InputError("--out", "", "required (or print the poses with --json)");
+  if (options.out_path.empty() && !options.plot_path.empty()) throw InputError("--plot", "", "needs --out (the plan it draws)");
   Robot robot = LoadRobotOption(options.robot_path);
   DesignOptions design;
   if (!options.prior_path.empty()) {
@@ -245,7 +302,8 @@ int RunDesign(const Context& ctx, const DesignCommandOptions& options) {
   const DesignResult result = DesignPoses(robot, design);
   AtomicOutput output;
   std::string figure_error;
-  const std::string temp_plan = output.WriteText(options.out_path, PosePlanCsv(result.poses, ProvenanceComment(ctx.command_line)));
+  const std::string temp_plan =
+      options.out_path.empty() ? "" : output.WriteText(options.out_path, PosePlanCsv(result.poses, ProvenanceComment(ctx.command_line)));
   if (!options.summary_path.empty()) {
     output.WriteText(options.summary_path, DesignSummaryYaml(result, design, ctx.command_line));
   }
@@ -272,13 +330,22 @@ int RunDesign(const Context& ctx, const DesignCommandOptions& options) {
     figure_error = TryPlot(output, options.plot_path, "plot_plan.py", args);
   }
   output.Commit();
+  if (options.json) {
+    // The summary's content, and the poses as the plan CSV's columns.
+    YAML::Node doc = YAML::Load(DesignSummaryYaml(result, design, ctx.command_line));
+    YAML::Node plan = YAML::Load(PosePlanJsonYaml(result.poses));
+    doc["plan"] = plan;
+    std::printf("%s\n", ToJson(doc).c_str());
+    if (!figure_error.empty()) throw FigureFailure(figure_error);
+    return kExitOk;
+  }
   std::printf("designed %zu poses (criterion %s, best of %d starts, %d converged): %s", result.poses.size(),
               ToString(design.criterion), design.starts, result.converged_starts,
               DescribeCriterion(design.criterion, result.criteria).c_str());
   if (design.random_sets > 0) {
     const double factor = Improvement(design.criterion, result.criteria, result.random_median);
     std::printf(", %.3g x the median of %d random sets (> 1 is better)", factor, design.random_sets);
-    if (!(factor > 1.0)) {
+    if (!(factor > 1.0) && !ctx.quiet) {
       std::fprintf(stderr,
                    "cablecal: warning: the designed set is no better than the median random set on its criterion: "
                    "the poses that stay holdable for geometry errors of %g x %g m are a small part of the nominal "

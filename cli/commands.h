@@ -15,7 +15,12 @@ namespace cablecal::cli {
 struct Context {
   std::string command_line;  // for provenance in outputs
   Processes processes;       // MPI ranks (one process without MPI)
+  bool quiet = false;        // -q: no progress bars or warnings (main silences stdout itself)
 };
+
+// The name in `names` closest to `typed` by edit distance, if within 2 edits (or a third of
+// its length); empty otherwise. For "did you mean".
+std::string Closest(const std::string& typed, const std::vector<std::string>& names);
 
 // The robot of --robot FILE, or the built-in one when the path is empty.
 Robot LoadRobotOption(const std::string& robot_path);
@@ -46,6 +51,7 @@ struct IdentifyCommandOptions {
   std::string robot_path, measurements_path, out_path, calibrated_robot_path;
   std::string estimator = "ml", gauge = "a1x";
   int max_iterations = 100;
+  bool json = false;  // the result on stdout as JSON (then --out is optional)
 };
 int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options);
 
@@ -57,6 +63,7 @@ struct DesignCommandOptions {
   double min_spacing_m = 0.0;
   double geometry_sigma_m = 0.01, robust_sigmas = 3.0;
   std::string prior_path;
+  bool json = false;  // the summary and the poses on stdout as JSON (then --out is optional)
 };
 int RunDesign(const Context& ctx, const DesignCommandOptions& options);
 

@@ -3,6 +3,9 @@
 // 0 success, 1 internal error, 2 bad input (file, flag, value), 3 solver failure, 4 a
 // process of an MPI run failed, 5 a figure failed (results written), 130 interrupted.
 #include <CLI/CLI.hpp>
+#include <glog/logging.h>
+
+#include <algorithm>
 
 #include <cstdio>
 #include <exception>
@@ -111,7 +114,8 @@ int main(int argc, char** argv) {
   id_cmd->add_option("--max-iterations", ident.max_iterations, "Levenberg-Marquardt iteration limit")
       ->capture_default_str()
       ->check(kPositive);
-  id_cmd->add_option("--out", ident.out_path, "result YAML")->required();
+  id_cmd->add_option("--out", ident.out_path, "result YAML (required unless --json)");
+  id_cmd->add_flag("--json", ident.json, "print the result (the YAML's content) as JSON on stdout");
   id_cmd->add_option("--calibrated-robot", ident.calibrated_robot_path, "robot file with the identified geometry");
 
   cablecal::cli::DesignCommandOptions des;
@@ -139,7 +143,8 @@ int main(int argc, char** argv) {
   des_cmd->add_option("--prior", des.prior_path,
                       "result.yaml of an earlier identification: plan the next poses around its estimate and "
                       "count its information");
-  des_cmd->add_option("--out", des.out_path, "pose plan CSV")->required();
+  des_cmd->add_option("--out", des.out_path, "pose plan CSV (required unless --json)");
+  des_cmd->add_flag("--json", des.json, "print the summary and the poses as JSON on stdout");
   des_cmd->add_option("--summary", des.summary_path, "summary YAML");
   des_cmd->add_option("--plot", des.plot_path, "PNG of the workspace with the chosen poses");
 
@@ -177,6 +182,31 @@ int main(int argc, char** argv) {
   rep_cmd->add_option("--seed", rep.seed, "random seed")->capture_default_str()->check(kSeed);
   rep_cmd->add_option("--out", rep.out_dir, "output folder")->capture_default_str();
 
+  // On every subcommand: --version, and -v / -q given after the subcommand's name.
+  bool verbose = false, quiet = false;
+  CLI::Option* verbose_flag = app.add_flag("-v,--verbose", verbose, "also show the solvers' (Ceres') log lines");
+  app.add_flag("-q,--quiet", quiet, "print nothing but errors (no summary, progress or warnings)")->excludes(verbose_flag);
+  std::vector<std::string> commands;
+  for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+    commands.push_back(sub->get_name());
+    sub->fallthrough();
+    sub->set_version_flag("--version", std::string("cablecal ") + cablecal::Version() + " (commit " +
+                                           cablecal::GitCommit() + ")");
+  }
+  // A misspelt command: CLI11 would call it an unexpected argument.
+  if (argc > 1 && argv[1][0] != '-' &&
+      std::find(commands.begin(), commands.end(), std::string(argv[1])) == commands.end()) {
+    if (root) {
+      const std::string guess = cablecal::cli::Closest(argv[1], commands);
+      std::string list;
+      for (const std::string& c : commands) list += (list.empty() ? "" : ", ") + c;
+      std::fprintf(stderr, "cablecal: error: unknown command '%s'%s; the commands are %s\nRun with --help for usage.\n",
+                   cablecal::PrintableText(argv[1]).c_str(),
+                   guess.empty() ? "" : (" (did you mean '" + guess + "'?)").c_str(), list.c_str());
+    }
+    return cablecal::kExitBadInput;
+  }
+
   // Every rank parses the same arguments; only rank 0 prints what parsing says.
   try {
     app.parse(argc, argv);
@@ -197,6 +227,18 @@ int main(int argc, char** argv) {
                    app.get_subcommands().front()->get_name().c_str());
     }
     return cablecal::kExitBadInput;
+  }
+
+  // Ceres logs through glog: its lines ("Linear solver failure ...") only with -v, and then
+  // without glog's "Logging before InitGoogleLogging()" line.
+  FLAGS_logtostderr = true;
+  FLAGS_minloglevel = verbose ? google::GLOG_INFO : google::GLOG_FATAL;
+  google::InitGoogleLogging("cablecal");
+  ctx.quiet = quiet;
+  const bool json = (id_cmd->parsed() && ident.json) || (des_cmd->parsed() && des.json);
+  if (quiet && !json && std::freopen("/dev/null", "w", stdout) == nullptr) {
+    std::fprintf(stderr, "cablecal: error: --quiet: cannot silence the standard output\n");
+    return cablecal::kExitInternal;
   }
 
   try {

@@ -123,7 +123,7 @@ MonteCarloResult RunStudy(const Context& ctx, const Robot& robot, MonteCarloOpti
   RunAgreed(ctx.processes, [&] {
     const SigintScope sigint;
     o.interrupted = &SigintFlag();
-    if (ctx.processes.root()) o.progress = ProgressBar(label);
+    if (ctx.processes.root() && !ctx.quiet) o.progress = ProgressBar(label);
 #ifdef CABLECAL_WITH_MPI
     r = ctx.processes.count > 1 ? RunMonteCarloMpi(robot, o) : RunMonteCarlo(robot, o);
 #else

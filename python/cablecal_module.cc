@@ -9,6 +9,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
+#include <glog/logging.h>
 #include <yaml-cpp/yaml.h>
 
 #include <atomic>
@@ -317,6 +318,11 @@ PYBIND11_MODULE(cablecal, m) {
   m.doc() = "cablecal: experiment design, identification and Monte Carlo for planar cable-driven parallel robots";
   m.attr("__version__") = Version();
   m.attr("commit") = GitCommit();
+  // Ceres' log lines (glog) would land on the notebook's stderr; results and errors say what
+  // matters. cablecal.set_solver_logging(True) shows them.
+  FLAGS_minloglevel = google::GLOG_FATAL;
+  m.def("set_solver_logging", [](bool on) { FLAGS_minloglevel = on ? google::GLOG_INFO : google::GLOG_FATAL; },
+        py::arg("on"), "Show (True) or hide (False, the default) Ceres' log lines on stderr.");
 
   py::register_exception<InputError>(m, "InputError", PyExc_ValueError);
   py::register_exception<SolverFailure>(m, "SolverError", PyExc_RuntimeError);

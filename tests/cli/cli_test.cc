@@ -1,5 +1,6 @@
 // End-to-end: the cablecal binary's outputs, exit codes and messages.
 #include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
 
 #include <functional>
 #include <sys/wait.h>
@@ -782,6 +783,47 @@ TEST_F(Cli, VersionAndHelp) {
   EXPECT_EQ(v.exit_code, 0);
   EXPECT_NE(v.output.find("cablecal 0.1.0 (commit "), std::string::npos) << v.output;
   EXPECT_EQ(RunCablecal("--help").exit_code, 0);
+}
+
+// The usual manners: "did you mean" for a misspelt command, --version on every command, -q
+// silencing the summary, --json giving the result YAML's content (JSON is YAML, so yaml-cpp
+// reads it back) without --out.
+TEST_F(Cli, MisspeltCommandsVersionQuietAndJson) {
+  const RunResult typo = RunCablecal("desing --poses 6");
+  EXPECT_EQ(typo.exit_code, 2);
+  EXPECT_NE(typo.output.find("unknown command 'desing' (did you mean 'design'?)"), std::string::npos) << typo.output;
+  const RunResult nonsense = RunCablecal("frobnicate");
+  EXPECT_EQ(nonsense.exit_code, 2);
+  EXPECT_EQ(nonsense.output.find("did you mean"), std::string::npos) << nonsense.output;
+  for (const char* command : {"workspace", "sample", "simulate", "identify", "design", "montecarlo", "reproduce"}) {
+    const RunResult v = RunCablecal(std::string(command) + " --version");
+    EXPECT_EQ(v.exit_code, 0) << command;
+    EXPECT_EQ(v.output.rfind("cablecal ", 0), 0u) << command << ": " << v.output;
+  }
+  const std::string robot = " --robot " CABLECAL_SOURCE_DIR "/robots/asymmetric.yaml";
+  const RunResult quiet = RunCablecal("sample --poses 12 --seed 4 -q --out " + Path("plan.csv") + robot);
+  EXPECT_EQ(quiet.exit_code, 0);
+  EXPECT_EQ(quiet.output, "");
+  EXPECT_EQ(RunCablecal("-q -v sample --poses 2 --out " + Path("x.csv")).exit_code, 2);
+  ASSERT_EQ(RunCablecal("simulate --plan " + Path("plan.csv") + " --seed 2 --out " + Path("meas.csv") + robot).exit_code, 0);
+  const RunResult json = RunCablecal("identify --json --measurements " + Path("meas.csv") + robot);
+  ASSERT_EQ(json.exit_code, 0) << json.output;
+  ASSERT_EQ(RunCablecal("identify --out " + Path("result.yaml") + " --measurements " + Path("meas.csv") + robot).exit_code, 0);
+  const YAML::Node from_json = YAML::Load(json.output), from_yaml = YAML::LoadFile(Path("result.yaml"));
+  EXPECT_EQ(json.output.front(), '{');
+  for (const char* p : {"a1z", "a2x", "a2z", "l10", "l20"}) {
+    EXPECT_EQ(from_json["parameters"][p]["value"].as<double>(), from_yaml["parameters"][p]["value"].as<double>()) << p;
+    EXPECT_EQ(from_json["parameters"][p]["std"].as<double>(), from_yaml["parameters"][p]["std"].as<double>()) << p;
+  }
+  EXPECT_EQ(from_json["status"].as<std::string>(), "converged");
+  EXPECT_EQ(RunCablecal("identify --measurements " + Path("meas.csv") + robot).exit_code, 2) << "neither --out nor --json";
+  const RunResult design = RunCablecal("design --json --poses 6 --starts 2 --random-sets 3" + robot);
+  ASSERT_EQ(design.exit_code, 0) << design.output;
+  const YAML::Node d = YAML::Load(design.output);
+  ASSERT_EQ(d["plan"].size(), 6u) << design.output;
+  EXPECT_EQ(d["plan"][0]["pose"].as<int>(), 1);
+  EXPECT_TRUE(d["plan"][5]["t2"].IsScalar());
+  EXPECT_EQ(d["criterion"].as<std::string>(), "a");
 }
 
 }  // namespace
