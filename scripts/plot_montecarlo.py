@@ -2,7 +2,8 @@
 """Figures of a `cablecal montecarlo` study (the paper's Figs. 6-11, extended), written into
 the study folder:
   sigma_vs_n.png       sigma of each identified variable against n, per design (Fig. 6)
-  distributions.png    error distributions at n = 6, 10, 20, 50, random sets (Figs. 7-9)
+  distributions.png    error distributions at up to four n of the study (6, 10, 20, 50 when
+                       run), random sets if it has them (Figs. 7-9)
   one_calibration.png  every variable's error in one calibration at the largest n (Fig. 11)
   ablation.png         with --ablation DIR: a2x errors at n = 50 per noisy-sensor setting (Fig. 10)
 Usage: /usr/bin/python3 scripts/plot_montecarlo.py STUDY_DIR [--ablation ABLATION_DIR]
@@ -18,6 +19,9 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
+from matplotlib.patches import Patch  # noqa: E402
+from matplotlib.ticker import FuncFormatter, MaxNLocator  # noqa: E402
 import numpy as np  # noqa: E402
 
 
@@ -58,7 +62,20 @@ def geometry_names(names):
     return sorted(seen, key=lambda p: (p[0] == "l", int(p[1:-1]), p[-1]))
 
 
-def sigma_vs_n(summary, out):
+def run_setting(study, key):
+    """A number from the study's run.yaml (`key: value` at the start of a line), or None."""
+    try:
+        with open(os.path.join(study, "run.yaml")) as f:
+            for line in f:
+                m = re.match(rf"{key}:\s*([-+0-9.eE]+)\s*$", line)
+                if m:
+                    return float(m.group(1))
+    except OSError:
+        pass
+    return None
+
+
+def sigma_vs_n(summary, out, geometry_sigma_m=None):
     # Every geometric parameter but the gauge's a1x (always 0 under gauge a1x), then x4; three
     # panels a row (2 x 3 for two cables).
     params = [p for p in geometry_names(r["parameter"] for r in summary) if p != "a1x"] + ["x4"]
@@ -74,10 +91,19 @@ def sigma_vs_n(summary, out):
             if rows:
                 label, colour = DESIGN_STYLE.get(d, (d, None))
                 ax.plot([r[0] for r in rows], [r[1] for r in rows], "o-", ms=3, label=label, color=colour)
+        if geometry_sigma_m and p != "x4":
+            # Without calibration the nominal geometry is off by the true robots' spread itself.
+            ax.axhline(1e3 * geometry_sigma_m, color="black", ls="--", lw=1.0,
+                       label=f"nominal, uncalibrated ({1e3 * geometry_sigma_m:g} mm)")
         ax.set_title(p)
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
         # Log scale: sigma falls by an order of magnitude from n = 6 to 50, and the designs'
         # differences at large n would vanish on a linear axis.
         ax.set_yscale("log")
+        # Plain numbers (2, 5, 10, 20 mm), not 2 x 10^0.
+        ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+        ax.yaxis.set_minor_formatter(FuncFormatter(
+            lambda v, _: f"{v:g}" if f"{v:.0e}"[0] in "25" else ""))
         ax.set_ylabel("sigma (mm, log scale)")
         ax.grid(alpha=0.3)
     for ax in axes.flat[len(params):]:
@@ -92,20 +118,32 @@ def sigma_vs_n(summary, out):
 
 def distributions(errors, out):
     params = ["a2x", "l10", "x4"]
-    ns = [6, 10, 20, 50]
+    # The study's own n and designs: random sets if it has them, else its first design, at up
+    # to four n spread over those it ran (the paper's 6, 10, 20, 50 when they are there).
+    order = list(DESIGN_STYLE)
+    designs = sorted({k[1] for k in errors}, key=lambda d: order.index(d) if d in order else len(order))
+    if not designs:
+        return
+    design = designs[0]
+    run = sorted({k[0] for k in errors if k[1] == design})
+    ns = [n for n in (6, 10, 20, 50) if n in run]
+    if len(ns) < min(4, len(run)):
+        ns = sorted({run[int(round(i))] for i in np.linspace(0, len(run) - 1, min(4, len(run)))})
     fig, axes = plt.subplots(1, 3, figsize=(14, 4.2))
     for ax, p in zip(axes, params):
         for n in ns:
-            e = errors.get((n, "random", p))
-            if not e:
+            e = errors.get((n, design, p))
+            if not e or len(e) < 2:
                 continue
             lim = max(5.0, np.percentile(np.abs(e), 99.5))
-            ax.hist(e, bins=60, range=(-lim, lim), density=True, histtype="step", lw=1.4,
-                    label=f"n = {n}, sigma = {np.std(e, ddof=1):.2f} mm")
-        ax.set_title(f"{p}, random pose sets")
+            # About 5 trials a bin at least: a short study gets a coarser, readable histogram.
+            ax.hist(e, bins=int(np.clip(len(e) // 5, 8, 60)), range=(-lim, lim), density=True, histtype="step",
+                    lw=1.4, label=f"n = {n}, sigma = {np.std(e, ddof=1):.2f} mm")
+        ax.set_title(f"{p}, {DESIGN_STYLE.get(design, (design,))[0]}")
         ax.set_xlabel("error (mm)")
         ax.set_ylabel("probability density")
-        ax.legend(fontsize=8)
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(out, dpi=110)
 
@@ -125,6 +163,9 @@ def one_calibration(first_trial, out):
            color=["tab:red"] * geometry_count + ["tab:blue"] * (len(names) - geometry_count))
     ax.axhline(5, color="0.5", ls="--", lw=0.8)
     ax.axhline(-5, color="0.5", ls="--", lw=0.8)
+    ax.legend(handles=[Patch(color="tab:red", label="geometric parameters (under the default gauge a1x is held: error 0)"),
+                       Patch(color="tab:blue", label="x of each pose"),
+                       Line2D([], [], color="0.5", ls="--", lw=0.8, label="±5 mm")], fontsize=8, loc="upper right")
     ax.set_xticks(range(len(names)))
     ax.set_xticklabels(names, rotation=90, fontsize=7)
     ax.set_ylabel("error (mm)")
@@ -161,7 +202,7 @@ def main():
     args = ap.parse_args()
     summary = read_summary(os.path.join(args.study, "summary.csv"))
     errors, first_trial = read_errors(os.path.join(args.study, "errors.csv"), {"a2x", "l10", "x4"})
-    sigma_vs_n(summary, os.path.join(args.study, "sigma_vs_n.png"))
+    sigma_vs_n(summary, os.path.join(args.study, "sigma_vs_n.png"), run_setting(args.study, "geometry_sigma_m"))
     distributions(errors, os.path.join(args.study, "distributions.png"))
     one_calibration(first_trial, os.path.join(args.study, "one_calibration.png"))
     if args.ablation:

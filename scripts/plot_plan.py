@@ -14,6 +14,8 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
+from matplotlib.patches import Patch  # noqa: E402
 import numpy as np  # noqa: E402
 
 
@@ -25,6 +27,26 @@ def pair(text):
 def read_csv(path):
     with open(path, newline="") as f:
         return list(csv.DictReader(line for line in f if not line.startswith("#")))
+
+
+def place_labels(fig, ax, labels):
+    """One label per place ("pose 3" or "poses 1, 4"), each put at the first of a few offsets
+    around its point where it overlaps no label placed before it."""
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    kept = []
+    offsets = [(0, -11), (0, 11), (34, 0), (-34, 0), (0, -22), (0, 22), (34, -14), (-34, 14)]
+    for (x, z), poses in labels.items():
+        text = ("poses " if len(poses) > 1 else "pose ") + ", ".join(poses)
+        for k, offset in enumerate(offsets):
+            t = ax.annotate(text, (x, z), textcoords="offset points", xytext=offset, fontsize=7, ha="center",
+                            va="center", zorder=3, bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none",
+                                                            alpha=0.85))
+            box = t.get_window_extent(renderer).expanded(1.05, 1.1)
+            if not any(box.overlaps(other) for other in kept) or k == len(offsets) - 1:
+                kept.append(box)
+                break
+            t.remove()
 
 
 def main():
@@ -65,17 +87,22 @@ def main():
         for (ax_, az_), (ex, ez) in zip(anchors, args.exit):
             ax.plot([ax_, ex], [az_, ez], color="0.6", lw=0.5, zorder=1)
         ax.plot([p[0] for p in anchors], [p[1] for p in anchors], color="tab:blue", lw=2.5, zorder=2)
-    for (x, z), poses in labels.items():
-        text = ("poses " if len(poses) > 1 else "pose ") + ", ".join(poses)
-        ax.annotate(text, (x, z), textcoords="offset points", xytext=(0, -10), fontsize=7, ha="center", zorder=3,
-                    bbox=dict(boxstyle="round,pad=0.15", fc="white", ec="none", alpha=0.8))
     ax.set_title(args.title, fontsize=10)
     ax.set_xlabel("x (m)")
     ax.set_ylabel("z (m)")
     ax.set_xlim(-0.2, w + 0.2)
     ax.set_ylim(-0.2, h + 0.3)
     ax.set_aspect("equal")
+    # Legend entries for what the plot draws (proxies: the real artists repeat per pose).
+    handles = [Patch(facecolor=plt.get_cmap("Greens")(0.25), label="feasible workspace (nominal)")] if args.workspace else []
+    handles += [Line2D([], [], color="black", lw=1.5, label="frame"),
+                Line2D([], [], color="red", marker="v", ls="none", ms=8, label="exit points"),
+                Line2D([], [], color="tab:blue", lw=2.5, label="platform at a pose (anchors joined)"),
+                Line2D([], [], color="0.6", lw=0.8, label="cables")]
+    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=len(handles), fontsize=8,
+              frameon=False)
     fig.tight_layout()
+    place_labels(fig, ax, labels)
     fig.savefig(args.png, dpi=120, format="png")
     return 0
 

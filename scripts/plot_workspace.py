@@ -22,6 +22,20 @@ def pair(text):
     return float(a), float(b)
 
 
+def hide_overlapping(fig, texts):
+    """Hides every contour label that would overlap one drawn before it (where contours crowd,
+    as near the top of a suspended robot's workspace)."""
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    kept = []
+    for text in texts:
+        box = text.get_window_extent(renderer).expanded(1.15, 1.3)
+        if any(box.overlaps(other) for other in kept):
+            text.set_visible(False)
+        else:
+            kept.append(box)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("csv")
@@ -56,12 +70,23 @@ def main():
     im = ax.imshow(np.where(feas, tmax, np.nan), origin="lower", extent=extent, cmap="viridis",
                    aspect="equal", interpolation="nearest")
     fig.colorbar(im, ax=ax, label="largest cable tension (N)", shrink=0.8)
-    styles = ["-", "--", ":", "-."]
-    style_names = ["solid", "dashed", "dotted", "dash-dot"]
-    for k, c in enumerate(tension_cols):
+    # One line style per cable, eight of them (the most cables a robot file has).
+    styles = ["-", "--", ":", "-.", (0, (8, 2)), (0, (3, 1, 1, 1, 1, 1)), (0, (1, 3)), (0, (6, 2, 1, 2, 1, 2))]
+    labels = []
+    # Two cables: each cable's contours. More: the per-cable fields, set by a tension
+    # distribution that sits on the lower bound over whole regions, give a thicket of lines;
+    # the largest tension's contours say where the limit is near (per-cable tensions are in the CSV).
+    if len(tension_cols) > 2 and np.isfinite(tmax).sum() > 4:
+        cs = ax.contour(xs, zs, tmax, levels=8, colors="white", linewidths=0.8)
+        labels += ax.clabel(cs, fontsize=7, fmt="%.0f N")
+        ax.plot([], [], color="0.35", lw=1.2, label="largest-tension contours (N)")
+    for k, c in enumerate(tension_cols if len(tension_cols) <= 2 else []):
         if np.isfinite(t[c]).sum() > 4:
-            cs = ax.contour(xs, zs, t[c], levels=8, colors="white", linestyles=styles[k % 4], linewidths=0.8)
-            ax.clabel(cs, fontsize=7, fmt="%.0f N")
+            cs = ax.contour(xs, zs, t[c], levels=8, colors="white", linestyles=[styles[k % len(styles)]],
+                            linewidths=0.8)
+            labels += ax.clabel(cs, fontsize=7, fmt="%.0f N")
+            # The legend's sample of this cable's contours (white would vanish on the legend).
+            ax.plot([], [], color="0.35", linestyle=styles[k % len(styles)], lw=1.2, label=f"{c} contours (N)")
     w, h = args.frame
     ax.plot([0, w, w, 0, 0], [0, 0, h, h, 0], color="black", lw=1.5, label="frame")
     for k, (x, z) in enumerate(args.exit):
@@ -69,22 +94,19 @@ def main():
     if args.home:
         ax.plot(*args.home, "w*", ms=12, mec="black", label="home")
     area = feas.sum() * step * step
-    # Line styles repeat after four cables; with 3 or more cables each point shows the pose at
-    # the middle of its feasible theta band (the CSV's theta_min, theta_max columns).
-    contours = ", ".join(f"{style_names[k % 4]} {c}" for k, c in enumerate(tension_cols))
-    band = " at mid theta band" if "theta_min" in rows[0] else ""
-    if len(tension_cols) == 2 and not band:
-        ax.set_title(f"{args.title}: {feas.sum()} feasible grid points, area ~ {area:.2f} m$^2$ "
-                     f"(tension contours: solid t1, dashed t2)", fontsize=10)
-    else:
-        ax.set_title(f"{args.title}: {feas.sum()} feasible grid points, area ~ {area:.2f} m$^2$\n"
-                     f"(tension contours{band}: {contours})", fontsize=10)
+    # With 3 or more cables each point shows the pose at the middle of its feasible theta band
+    # (the CSV's theta_min, theta_max columns).
+    band = "\n(tensions at the middle of each point's feasible theta band)" if "theta_min" in rows[0] else ""
+    ax.set_title(f"{args.title}: {feas.sum()} feasible grid points, area ~ {area:.2f} m$^2${band}", fontsize=10)
     ax.set_xlabel("x (m)")
     ax.set_ylabel("z (m)")
     ax.set_xlim(-0.2, w + 0.2)
     ax.set_ylim(-0.2, h + 0.3)
-    ax.legend(loc="lower right", fontsize=8)
+    # Below the map, where it hides no exit point or contour.
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=6, fontsize=8,
+              frameon=False)
     fig.tight_layout()
+    hide_overlapping(fig, labels)
     fig.savefig(args.png, dpi=120, format="png")
     return 0
 
