@@ -6,6 +6,9 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <functional>
+#include <memory>
+#include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -71,6 +74,26 @@ std::string PosePlanJsonYaml(const std::vector<PlanPose>& poses) {
 }
 
 }  // namespace
+
+// A progress bar with rate and time left when stderr is a terminal; nothing otherwise.
+std::function<void(long, long)> ProgressBar(const std::string& label, const std::string& unit) {
+  if (!::isatty(2)) return nullptr;
+  const auto start = std::chrono::steady_clock::now();
+  auto last = std::make_shared<std::chrono::steady_clock::time_point>(start - std::chrono::seconds(1));
+  return [=](long done, long total) {
+    const auto now = std::chrono::steady_clock::now();
+    if (done < total && now - *last < std::chrono::milliseconds(200)) return;
+    *last = now;
+    const double elapsed = std::chrono::duration<double>(now - start).count();
+    const double rate = elapsed > 0 ? done / elapsed : 0.0;
+    const double left = rate > 0 ? (total - done) / rate : 0.0;
+    const int width = 30, filled = static_cast<int>(width * done / std::max(1L, total));
+    std::fprintf(stderr, "\r%s [%s%s] %ld/%ld %s, %.3g/s, %.0f s left   ", label.c_str(),
+                 std::string(filled, '#').c_str(), std::string(width - filled, ' ').c_str(), done, total, unit.c_str(),
+                 rate, left);
+    if (done == total) std::fprintf(stderr, "\n");
+  };
+}
 
 std::string Closest(const std::string& typed, const std::vector<std::string>& names) {
   std::string best;
@@ -299,6 +322,7 @@ int RunDesign(const Context& ctx, const DesignCommandOptions& options) {
   design.robust_sigmas = options.robust_sigmas;
   const SigintScope sigint;  // Ctrl-C: Ipopt stops at its next iteration, exit 130, nothing written
   design.interrupted = &SigintFlag();
+  if (!ctx.quiet) design.progress = ProgressBar("design", "starts");
   const DesignResult result = DesignPoses(robot, design);
   AtomicOutput output;
   std::string figure_error;

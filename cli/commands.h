@@ -3,6 +3,7 @@
 // maps errors to exit codes (README, "Exit codes").
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,10 @@ struct Context {
   Processes processes;       // MPI ranks (one process without MPI)
   bool quiet = false;        // -q: no progress bars or warnings (main silences stdout itself)
 };
+
+// A progress bar on stderr, with the rate and the time left, when stderr is a terminal;
+// nullptr (nothing) otherwise. `unit` names what is counted ("trials", "starts").
+std::function<void(long, long)> ProgressBar(const std::string& label, const std::string& unit);
 
 // The name in `names` closest to `typed` by edit distance, if within 2 edits (or a third of
 // its length); empty otherwise. For "did you mean".

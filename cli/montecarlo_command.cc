@@ -24,25 +24,6 @@
 namespace cablecal::cli {
 namespace {
 
-// A progress bar with rate and time left when stderr is a terminal; nothing otherwise.
-std::function<void(long, long)> ProgressBar(const std::string& label) {
-  if (!::isatty(2)) return nullptr;
-  const auto start = std::chrono::steady_clock::now();
-  auto last = std::make_shared<std::chrono::steady_clock::time_point>(start - std::chrono::seconds(1));
-  return [=](long done, long total) {
-    const auto now = std::chrono::steady_clock::now();
-    if (done < total && now - *last < std::chrono::milliseconds(200)) return;
-    *last = now;
-    const double elapsed = std::chrono::duration<double>(now - start).count();
-    const double rate = elapsed > 0 ? done / elapsed : 0.0;
-    const double left = rate > 0 ? (total - done) / rate : 0.0;
-    const int width = 30, filled = static_cast<int>(width * done / std::max(1L, total));
-    std::fprintf(stderr, "\r%s [%s%s] %ld/%ld trials, %.0f/s, %.0f s left   ", label.c_str(),
-                 std::string(filled, '#').c_str(), std::string(width - filled, ' ').c_str(), done, total, rate, left);
-    if (done == total) std::fprintf(stderr, "\n");
-  };
-}
-
 // Every name a study may write into its folder (the figures only with plots).
 const std::vector<std::string> kStudyFiles = {"errors.csv",     "summary.csv",   "failures.csv",
                                               "summary.md",     "run.yaml",      "sigma_vs_n.png",
@@ -123,7 +104,7 @@ MonteCarloResult RunStudy(const Context& ctx, const Robot& robot, MonteCarloOpti
   RunAgreed(ctx.processes, [&] {
     const SigintScope sigint;
     o.interrupted = &SigintFlag();
-    if (ctx.processes.root() && !ctx.quiet) o.progress = ProgressBar(label);
+    if (ctx.processes.root() && !ctx.quiet) o.progress = ProgressBar(label, "trials");
 #ifdef CABLECAL_WITH_MPI
     r = ctx.processes.count > 1 ? RunMonteCarloMpi(robot, o) : RunMonteCarlo(robot, o);
 #else

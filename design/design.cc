@@ -2,6 +2,8 @@
 
 #include <omp.h>
 
+#include <atomic>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -367,6 +369,7 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
   std::vector<std::vector<PlanPose>> verified(K);
   std::vector<std::string> failures(K);
   std::vector<double> widest(K, 1.0);
+  std::atomic<long> starts_done{0};
   ParallelFor(K, 1, [&](long k) {
     std::vector<double> widening(n, 1.0);
     std::vector<PlanPose> from = starts[k];
@@ -414,6 +417,11 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
         // The plan lists the model's distribution; Ipopt continues from its own (certified) one.
         for (int j = 0; j < n; ++j) from[j].tensions_N = outcome.tensions_N[j];
       }
+    }
+    const long done = ++starts_done;
+    if (options.progress) {
+#pragma omp critical(cablecal_design_progress)
+      options.progress(done, K);
     }
   });
 

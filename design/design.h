@@ -16,6 +16,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -87,6 +88,9 @@ struct DesignOptions {
   // Set (e.g. by SIGINT) to stop: Ipopt ends at its next iteration and DesignPoses throws
   // Interrupted.
   const std::atomic<bool>* interrupted = nullptr;
+  // Called now and then with (starts done, starts in all), one call at a time (cablecal
+  // design's progress bar).
+  std::function<void(long, long)> progress;
   // Information already gathered (design --prior), counted by the D, A and E criteria.
   std::optional<PriorInformation> prior_information;
   // Each start's Ipopt solve in a child process of its own, so that starts solve at once on

@@ -826,6 +826,26 @@ TEST_F(Cli, MisspeltCommandsVersionQuietAndJson) {
   EXPECT_EQ(d["criterion"].as<std::string>(), "a");
 }
 
+// Progress bars only on a terminal (script(1) gives the command one), and not with -q.
+TEST_F(Cli, ProgressOnATerminalOnly) {
+  const std::string design = std::string(CABLECAL_BINARY) + " design --poses 6 --starts 3 --random-sets 2 --out " + Path("d.csv");
+  const RunResult tty = RunCablecal("env script -qec '" + design + "' /dev/null");
+  ASSERT_EQ(tty.exit_code, 0) << tty.output;
+  EXPECT_NE(tty.output.find("3/3 starts"), std::string::npos) << tty.output;
+  EXPECT_NE(tty.output.find("s left"), std::string::npos) << tty.output;
+  const RunResult quiet = RunCablecal("env script -qec '" + design + " -q' /dev/null");
+  ASSERT_EQ(quiet.exit_code, 0) << quiet.output;
+  EXPECT_EQ(quiet.output, "");
+  const RunResult pipe = RunCablecal("design --poses 6 --starts 3 --random-sets 2 --out " + Path("d2.csv"));
+  ASSERT_EQ(pipe.exit_code, 0) << pipe.output;
+  EXPECT_EQ(pipe.output.find("s left"), std::string::npos) << pipe.output;
+  const std::string mc = std::string(CABLECAL_BINARY) + " montecarlo --poses 6 --trials 30 --designs random --no-plot --out " +
+                         Path("mc");
+  const RunResult study = RunCablecal("env script -qec '" + mc + "' /dev/null");
+  ASSERT_EQ(study.exit_code, 0) << study.output;
+  EXPECT_NE(study.output.find("30/30 trials"), std::string::npos) << study.output;
+}
+
 }  // namespace
 
 // ---- Robots with more cables -------------------------------------------------------------
