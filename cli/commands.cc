@@ -287,12 +287,14 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
     std::printf("%s\n", ToJson(YAML::Load(result_yaml)).c_str());
     return kExitOk;
   }
-  std::printf("identified %s from %zu poses (%s, gauge %s): %d iterations, residual rms encoder %s m, laser %s m\n",
+  // The console rounds to what a reader compares (3 significant digits, 0.1 um for lengths);
+  // result.yaml keeps every digit.
+  std::printf("identified %s from %zu poses (%s, gauge %s): %d iterations, residual rms encoder %.3g m, laser %.3g m\n",
               PrintableText(nominal.name).c_str(), measurements.size(), ToString(id.estimator), ToString(id.gauge), result.iterations,
-              FormatDouble(result.rms_encoder_m).c_str(), FormatDouble(result.rms_laser_m).c_str());
+              result.rms_encoder_m, result.rms_laser_m);
   const std::vector<std::string> names = GeometryNames(nominal.num_cables());
   for (std::size_t k = 0; k < names.size(); ++k) {
-    std::printf("  %s = %.6f m", names[k].c_str(), result.geometry(k));
+    std::printf("  %s = %.7f m", names[k].c_str(), result.geometry(k));
     if (result.has_covariance) std::printf("  (std %.3g mm)", 1e3 * result.geometry_std(k));
     std::printf("\n");
   }
