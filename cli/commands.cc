@@ -95,6 +95,13 @@ std::function<void(long, long)> ProgressBar(const std::string& label, const std:
   };
 }
 
+// The figures are PNG: a --plot named otherwise would get PNG bytes under a misleading name.
+void CheckPngPath(const std::string& flag, const std::string& path) {
+  if (path.empty()) return;
+  const std::string ext = std::filesystem::path(path).extension().string();
+  if (ext != ".png" && ext != ".PNG") throw InputError(flag, "", "figures are PNG files: name it *.png (got '" + path + "')");
+}
+
 std::string Closest(const std::string& typed, const std::vector<std::string>& names) {
   std::string best;
   std::size_t best_distance = std::max<std::size_t>(2, typed.size() / 3) + 1;
@@ -193,6 +200,7 @@ std::string TryPlot(AtomicOutput& output, const std::string& figure_path, const 
 int RunWorkspace(const Context& ctx, const WorkspaceOptions& options) {
   CheckCommandPaths({{"--robot", options.robot_path}},
                     {{"--out", options.out_path}, {"--plot", options.plot_path}});
+  CheckPngPath("--plot", options.plot_path);
   const Robot robot = LoadRobotOption(options.robot_path);
   const WorkspaceGrid grid = ComputeWorkspaceGrid(robot, options.step_m);
   AtomicOutput output;
@@ -289,9 +297,9 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   }
   // The console rounds to what a reader compares (3 significant digits, 0.1 um for lengths);
   // result.yaml keeps every digit.
-  std::printf("identified %s from %zu poses (%s, gauge %s): %d iterations, residual rms encoder %.3g m, laser %.3g m\n",
+  std::printf("identified %s from %zu poses (%s, gauge %s): %d iterations, residual rms encoder %.3g m, laser %.3g m, inclinometer %.3g rad\n",
               PrintableText(nominal.name).c_str(), measurements.size(), ToString(id.estimator), ToString(id.gauge), result.iterations,
-              result.rms_encoder_m, result.rms_laser_m);
+              result.rms_encoder_m, result.rms_laser_m, result.rms_inclinometer_rad);
   const std::vector<std::string> names = GeometryNames(nominal.num_cables());
   for (std::size_t k = 0; k < names.size(); ++k) {
     std::printf("  %s = %.7f m", names[k].c_str(), result.geometry(k));
@@ -304,6 +312,7 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
 int RunDesign(const Context& ctx, const DesignCommandOptions& options) {
   CheckCommandPaths({{"--robot", options.robot_path}, {"--prior", options.prior_path}},
                     {{"--out", options.out_path}, {"--summary", options.summary_path}, {"--plot", options.plot_path}});
+  CheckPngPath("--plot", options.plot_path);
   if (options.out_path.empty() && !options.json) throw InputError("--out", "", "required (or print the poses with --json)");
   if (options.out_path.empty() && !options.plot_path.empty()) throw InputError("--plot", "", "needs --out (the plan it draws)");
   Robot robot = LoadRobotOption(options.robot_path);

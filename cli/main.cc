@@ -49,6 +49,21 @@ const CLI::Validator kSeed(
     },
     "SEED");
 
+// Counts (poses, trials, starts, threads): CLI11's Range says "Value abc not in range 1 to
+// 1000" for a word or "1e3"; this says what is wanted.
+CLI::Validator WholeNumberIn(long long lowest, long long highest) {
+  const std::string wanted = "a whole number from " + std::to_string(lowest) + " to " + std::to_string(highest);
+  return CLI::Validator(
+      [=](std::string& text) -> std::string {
+        const bool digits = !text.empty() && text.size() <= 18 && text.find_first_not_of("0123456789") == std::string::npos;
+        if (!digits || std::stoll(text) < lowest || std::stoll(text) > highest) {
+          return "must be " + wanted + " (got '" + text + "')";
+        }
+        return "";
+      },
+      "INT in [" + std::to_string(lowest) + ", " + std::to_string(highest) + "]");
+}
+
 void AddRobotOption(CLI::App* app, std::string* path) {
   app->add_option("--robot", *path, "robot YAML file (default: the built-in wang2022 robot)")
       ->check(CLI::ExistingFile);
@@ -81,7 +96,7 @@ int main(int argc, char** argv) {
   cablecal::cli::SampleOptions sample;
   CLI::App* sample_cmd = app.add_subcommand("sample", "draw random feasible poses as a pose plan CSV");
   AddRobotOption(sample_cmd, &sample.robot_path);
-  sample_cmd->add_option("--poses", sample.poses, "number of poses")->required()->check(CLI::Range(1, 100000));
+  sample_cmd->add_option("--poses", sample.poses, "number of poses")->required()->check(WholeNumberIn(1, 100000));
   sample_cmd->add_option("--seed", sample.seed, "random seed")->capture_default_str()->check(kSeed);
   sample_cmd->add_option("--out", sample.out_path, "pose plan CSV")->required();
 
@@ -121,20 +136,20 @@ int main(int argc, char** argv) {
   cablecal::cli::DesignCommandOptions des;
   CLI::App* des_cmd = app.add_subcommand("design", "choose optimal measurement poses (Ipopt)");
   AddRobotOption(des_cmd, &des.robot_path);
-  des_cmd->add_option("--poses", des.poses, "number of poses (at least 5)")->required();
+  des_cmd->add_option("--poses", des.poses, "number of poses (at least 5 with 2 cables, 4 with 3 to 8)")->required();
   des_cmd->add_option("--criterion", des.criterion, "a|d|e|condition")
       ->capture_default_str()
       ->check(CLI::IsMember({"condition", "d", "a", "e"}));
   des_cmd->add_option("--starts", des.starts, "random feasible starts (best kept)")
       ->capture_default_str()
-      ->check(CLI::Range(1, 1000));
+      ->check(WholeNumberIn(1, 1000));
   des_cmd->add_option("--seed", des.seed, "random seed")->capture_default_str()->check(kSeed);
   des_cmd->add_option("--min-spacing", des.min_spacing_m, "minimum distance between poses, m")
       ->capture_default_str()
       ->check(kNonNegative);
   des_cmd->add_option("--random-sets", des.random_sets, "random sets for the reference median (0: none)")
       ->capture_default_str()
-      ->check(CLI::Range(0, 100000));
+      ->check(WholeNumberIn(0, 100000));
   des_cmd->add_option("--geometry-sigma", des.geometry_sigma_m,
                       "uncertainty of the true exit points and initial lengths the plan must survive, m (0: off)")
       ->capture_default_str();
@@ -154,7 +169,7 @@ int main(int argc, char** argv) {
                                                   : "predict the calibration accuracy by Monte Carlo (OpenMP)");
   AddRobotOption(mc_cmd, &mc.robot_path);
   mc_cmd->add_option("--poses", mc.poses, "pose counts first:last[:step], e.g. 6:50 or 6:50:4")->required();
-  mc_cmd->add_option("--trials", mc.trials, "trials per cell")->required()->check(CLI::Range(1, 100000000));
+  mc_cmd->add_option("--trials", mc.trials, "trials per cell")->required()->check(WholeNumberIn(1, 100000000));
   mc_cmd->add_option("--designs", mc.designs, "comma list of random, optimized (= a), condition, d, a, e")->capture_default_str();
   mc_cmd->add_option("--estimator", mc.estimator, "ml|paper")->capture_default_str()->check(CLI::IsMember({"ml", "paper"}));
   mc_cmd->add_option("--gauge", mc.gauge, "a1x|prior|none")->capture_default_str()->check(CLI::IsMember({"a1x", "prior", "none"}));
@@ -166,9 +181,9 @@ int main(int argc, char** argv) {
       ->check(kNonNegative);
   mc_cmd->add_option("--design-starts", mc.design_starts, "Ipopt starts per designed set")
       ->capture_default_str()
-      ->check(CLI::Range(1, 1000));
+      ->check(WholeNumberIn(1, 1000));
   mc_cmd->add_option("--threads", mc.threads, "OpenMP threads (default: all cores)")
-      ->check(CLI::Range(1, kMaxThreads));
+      ->check(WholeNumberIn(1, kMaxThreads));
   mc_cmd->add_option("--seed", mc.seed, "random seed")->capture_default_str()->check(kSeed);
   mc_cmd->add_flag("!--no-plot", mc.plot, "skip the figures");
   mc_cmd->add_option("--out", mc.out_dir, "output folder")->required();
@@ -176,9 +191,9 @@ int main(int argc, char** argv) {
   cablecal::cli::ReproduceOptions rep;
   CLI::App* rep_cmd = app.add_subcommand("reproduce", "run the paper's study on the built-in robot into results/");
   AddRobotOption(rep_cmd, &rep.robot_path);
-  rep_cmd->add_option("--trials", rep.trials, "trials per cell")->capture_default_str()->check(CLI::Range(1, 100000000));
+  rep_cmd->add_option("--trials", rep.trials, "trials per cell")->capture_default_str()->check(WholeNumberIn(1, 100000000));
   rep_cmd->add_option("--threads", rep.threads, "OpenMP threads (default: all cores)")
-      ->check(CLI::Range(1, kMaxThreads));
+      ->check(WholeNumberIn(1, kMaxThreads));
   rep_cmd->add_option("--seed", rep.seed, "random seed")->capture_default_str()->check(kSeed);
   rep_cmd->add_option("--out", rep.out_dir, "output folder")->capture_default_str();
 

@@ -131,6 +131,11 @@ PlanSimulation SimulatePlan(const Robot& nominal, const std::optional<Robot>& tr
   Rng geometry_rng(StreamSeed(seed, {0}));
   Rng noise_rng(StreamSeed(seed, {1}));
   PlanSimulation run{nominal, {}};
+  if (truth && truth->num_cables() != nominal.num_cables()) {
+    throw InputError(truth->source, "", "the true robot has " + std::to_string(truth->num_cables()) +
+                                            " cables, the nominal robot " + std::to_string(nominal.num_cables()) +
+                                            ": a file for another robot?");
+  }
   if (truth) {
     run.truth = *truth;
   } else if (geometry_sigma_m > 0.0) {

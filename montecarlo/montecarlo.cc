@@ -74,7 +74,6 @@ std::vector<int> ParsePoseCounts(const std::string& text) {
   if (parts.size() < 2 || parts.size() > 3) throw InputError("--poses", "", "expected first:last[:step] (got '" + text + "')");
   const int step = parts.size() == 3 ? parts[2] : 1;
   if (parts[0] > parts[1]) throw InputError("--poses", "", "first must not exceed last (got '" + text + "')");
-  if (parts[0] < 5) throw InputError("--poses", "", "at least 5 poses are needed to identify the geometry (got '" + text + "')");
   std::vector<int> out;
   for (int n = parts[0]; n <= parts[1]; n += step) out.push_back(n);
   return out;
@@ -179,6 +178,16 @@ void ValidateOptions(const MonteCarloOptions& o, const Robot* nominal) {
     throw InputError("--trials", "", buffer);
   }
   if (o.pose_counts.empty()) throw InputError("--poses", "", "no pose counts");
+  // The design's rule (design.h MinDesignPoses): 5 poses for 2 cables, 4 for 3 to 8.
+  const int fewest = MinDesignPoses(nominal ? nominal->num_cables() : 2);
+  for (const int n : o.pose_counts) {
+    if (n < fewest) {
+      throw InputError("--poses", "", "at least " + std::to_string(fewest) + " poses are needed to identify the geometry" +
+                                          (nominal ? " of " + std::to_string(nominal->num_cables()) + " cables" : "") +
+                                          " (got " + std::to_string(n) + ")");
+    }
+    if (n > 1000) throw InputError("--poses", "", "at most 1000 poses per set (got " + std::to_string(n) + ")");
+  }
   if (o.designs.empty()) throw InputError("--designs", "", "no designs");
   if (!(o.geometry_sigma_m >= 0.0 && o.geometry_sigma_m <= kMaxGeometrySigma_m)) {
     throw InputError("--geometry-sigma", "", "must be between 0 and " + FormatDouble(kMaxGeometrySigma_m) +

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "common/error.h"
+#include "common/format.h"
 #include "common/version.h"
 #include "design/design.h"
 #include "identify/experiment.h"
@@ -80,6 +81,23 @@ double AsNumber(py::handle h, const std::string& name) {
   const double v = py::float_(Obj(h)).cast<double>();
   if (!std::isfinite(v)) Bad(name, "not a finite number");
   return v;
+}
+
+// A path: a str or any os.PathLike (pathlib.Path).
+std::string AsPath(py::handle h, const std::string& name) {
+  if (!py::isinstance<py::str>(h) && py::hasattr(h, "__fspath__")) {
+    py::object p = py::module_::import("os").attr("fspath")(h);
+    if (py::isinstance<py::str>(p)) return p.cast<std::string>();
+  }
+  if (!py::isinstance<py::str>(h)) Bad(name, "expected a path (str or pathlib.Path), got " + TypeName(h));
+  return h.cast<std::string>();
+}
+
+// One of the module's own objects (a Robot, a Plan, ...), or InputError naming the argument.
+template <typename T>
+const T& AsObject(py::handle h, const std::string& name, const char* type) {
+  if (!py::isinstance<T>(h)) Bad(name, std::string("expected a cablecal.") + type + ", got " + TypeName(h));
+  return h.cast<const T&>();
 }
 
 std::string AsText(py::handle h, const std::string& name) {
@@ -227,7 +245,7 @@ void ToYaml(YAML::Emitter& out, py::handle h, const std::string& where) {
   } else if (py::isinstance<py::str>(h)) {
     out << YAML::DoubleQuoted << h.cast<std::string>();
   } else {
-    Bad(where.empty() ? "robot" : where, "unsupported value of type " + TypeName(h));
+    Bad("robot dict: " + (where.empty() ? std::string("robot") : where), "unsupported value of type " + TypeName(h));
   }
 }
 
@@ -336,7 +354,7 @@ PYBIND11_MODULE(cablecal, m) {
 
   // ---- Robot
   py::class_<Robot>(m, "Robot", "A robot file's content (README, \"Robot file\").")
-      .def_static("load", [](py::handle path) { return LoadRobotFile(AsText(path, "path")); }, py::arg("path"),
+      .def_static("load", [](py::handle path) { return LoadRobotFile(AsPath(path, "path")); }, py::arg("path"),
                   "Loads and validates a robot YAML file.")
       .def_static(
           "builtin",
@@ -352,7 +370,19 @@ PYBIND11_MODULE(cablecal, m) {
             if (!py::isinstance<py::dict>(d)) Bad("robot", "expected a dict in the robot file's schema, got " + TypeName(d));
             YAML::Emitter out;
             ToYaml(out, d, "");
-            return LoadRobotFromString(out.c_str(), "dict");
+            try {
+              return LoadRobotFromString(out.c_str(), "robot dict");
+            } catch (const InputError& e) {
+              // "robot dict:30: gravty: ..." names a line of the YAML made here, not of anything
+              // the user wrote: keep the key.
+              std::string message = e.what();
+              const std::size_t colon = message.find(':', std::string("robot dict:").size());
+              if (message.rfind("robot dict:", 0) == 0 && colon != std::string::npos &&
+                  message.find_first_not_of("0123456789", 11) == colon) {
+                message = "robot dict:" + message.substr(colon + 1);
+              }
+              throw InputError("", "", message);
+            }
           },
           py::arg("d"), "A robot from a dict in the robot file's schema (the file's checks apply).")
       .def("to_dict", [](const Robot& r) { return FromYaml(YAML::Load(RobotToYaml(r))); })
@@ -370,8 +400,9 @@ PYBIND11_MODULE(cablecal, m) {
   py::class_<PyPlan>(m, "Plan", "Measurement poses: a pose plan (sample, design).")
       .def_static(
           "load",
-          [](const Robot& robot, py::handle path) {
-            const std::string p = AsText(path, "path");
+          [](py::handle robot_arg, py::handle path) {
+        const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
+            const std::string p = AsPath(path, "path");
             PyPlan plan{ReadPosePlanCsv(p, robot.num_cables()), robot.num_cables()};
             CheckPlanMatchesRobot(robot, plan.poses, p);
             return plan;
@@ -394,14 +425,16 @@ PYBIND11_MODULE(cablecal, m) {
 
   // ---- Measurements
   py::class_<PyMeasurements>(m, "Measurements", "One reading per pose: dl (n, m), z (n,), theta (n,).")
-      .def(py::init([](const Robot& robot, py::handle dl, py::handle z, py::handle theta, py::handle pose_ids) {
+      .def(py::init([](py::handle robot_arg, py::handle dl, py::handle z, py::handle theta, py::handle pose_ids) {
+        const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
              return MakeMeasurements(robot, dl, z, theta, pose_ids);
            }),
            py::arg("robot"), py::arg("dl"), py::arg("z"), py::arg("theta"), py::arg("pose_ids") = py::none())
       .def_static(
           "load",
-          [](const Robot& robot, py::handle path) {
-            return PyMeasurements{ReadMeasurementsCsv(AsText(path, "path"), robot.num_cables()), robot.num_cables()};
+          [](py::handle robot_arg, py::handle path) {
+        const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
+            return PyMeasurements{ReadMeasurementsCsv(AsPath(path, "path"), robot.num_cables()), robot.num_cables()};
           },
           py::arg("robot"), py::arg("path"))
       .def_property_readonly("dl", [](const PyMeasurements& p) {
@@ -430,7 +463,8 @@ PYBIND11_MODULE(cablecal, m) {
   // ---- workspace
   m.def(
       "workspace",
-      [](const Robot& robot, py::handle step) {
+      [](py::handle robot_arg, py::handle step) {
+        const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
         const double step_m = AsNumber(step, "step");
         if (!(step_m > 0.0)) Bad("step", "must be positive (m)");
         WorkspaceGrid grid;
@@ -472,7 +506,8 @@ PYBIND11_MODULE(cablecal, m) {
   // ---- sample
   m.def(
       "sample",
-      [](const Robot& robot, py::handle n, py::handle seed) {
+      [](py::handle robot_arg, py::handle n, py::handle seed) {
+        const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
         const int count = static_cast<int>(AsInteger(n, "n", 1, kMaxPlanPoses));
         const std::uint64_t s = AsSeed(seed);
         py::gil_scoped_release release;
@@ -507,12 +542,13 @@ PYBIND11_MODULE(cablecal, m) {
            "The CLI's summary.yaml.");
   m.def(
       "design",
-      [](const Robot& robot, py::handle n, py::handle criterion, py::handle starts, py::handle seed,
+      [](py::handle robot_arg, py::handle n, py::handle criterion, py::handle starts, py::handle seed,
          py::handle min_spacing, py::handle random_sets, py::handle geometry_sigma, py::handle robust_sigmas) {
+        const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
         DesignOptions o;
         o.poses = static_cast<int>(AsInteger(n, "n", 1, kMaxPlanPoses));
         o.criterion = ParseCriterion(AsText(criterion, "criterion"));
-        o.starts = static_cast<int>(AsInteger(starts, "starts", 1, 10000));
+        o.starts = static_cast<int>(AsInteger(starts, "starts", 1, 1000));
         o.seed = AsSeed(seed);
         o.min_spacing_m = AsNumber(min_spacing, "min_spacing");
         o.random_sets = static_cast<int>(AsInteger(random_sets, "random_sets", 0, 100000));
@@ -525,6 +561,15 @@ PYBIND11_MODULE(cablecal, m) {
         o.interrupted = &stop;
         PyDesign d{Interruptible(stop, [&] { return DesignPoses(robot, o); }), o};
         d.options.interrupted = nullptr;
+        if (o.random_sets > 0 && !(Improvement(o.criterion, d.result.criteria, d.result.random_median) > 1.0)) {
+          // As the CLI's warning (README, "Experiment design"): a result, but not a good plan.
+          const int warned = PyErr_WarnEx(PyExc_UserWarning,
+                       ("the designed set is no better than the median random set on its criterion: the poses that "
+                        "stay holdable for geometry errors of " + FormatDouble(o.robust_sigmas) + " x " +
+                        FormatDouble(o.geometry_sigma_m) + " m are a small part of the nominal workspace; if the "
+                        "geometry is known better, pass a smaller geometry_sigma").c_str(), 1);
+          if (warned < 0) throw py::error_already_set();  // warnings filtered into errors
+        }
         return d;
       },
       py::arg("robot"), py::arg("n"), py::arg("criterion") = "a", py::arg("starts") = 8, py::arg("seed") = 1,
@@ -544,9 +589,17 @@ PYBIND11_MODULE(cablecal, m) {
       });
   m.def(
       "simulate",
-      [](const Robot& robot, const PyPlan& plan, std::optional<Robot> truth, py::handle geometry_sigma,
+      [](py::handle robot_arg, py::handle plan_arg, py::handle truth_arg, py::handle geometry_sigma,
          py::handle sensors, py::handle encoder_noise, py::handle seed) {
+        const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
+        const PyPlan& plan = AsObject<PyPlan>(plan_arg, "plan", "Plan");
+        std::optional<Robot> truth;
+        if (!truth_arg.is_none()) truth = AsObject<Robot>(truth_arg, "truth", "Robot");
         if (plan.num_cables != robot.num_cables()) Bad("plan", "made for a robot with another number of cables");
+        if (truth && truth->num_cables() != robot.num_cables()) {
+          Bad("truth", "the true robot has " + std::to_string(truth->num_cables()) + " cables, the nominal robot " +
+                           std::to_string(robot.num_cables()));
+        }
         double sigma = 0.0;
         if (!geometry_sigma.is_none()) {
           if (truth) Bad("truth", "give either truth or geometry_sigma, not both");
@@ -566,34 +619,47 @@ PYBIND11_MODULE(cablecal, m) {
 
   // ---- identify
   py::class_<IdentifyResult>(m, "IdentifyResult")
-      .def_property_readonly("status", [](const IdentifyResult& r) { return std::string(ToString(r.status)); })
+      .def_property_readonly("status", [](py::handle result_arg) {
+        const IdentifyResult& r = AsObject<IdentifyResult>(result_arg, "result", "IdentifyResult");
+ return std::string(ToString(r.status)); })
       .def_readonly("message", &IdentifyResult::message)
       .def_readonly("iterations", &IdentifyResult::iterations)
       .def_readonly("final_cost", &IdentifyResult::final_cost)
       .def_readonly("rms_encoder_m", &IdentifyResult::rms_encoder_m)
       .def_readonly("rms_laser_m", &IdentifyResult::rms_laser_m)
       .def_readonly("rms_inclinometer_rad", &IdentifyResult::rms_inclinometer_rad)
-      .def_property_readonly("geometry_names", [](const IdentifyResult& r) {
+      .def_property_readonly("geometry_names", [](py::handle result_arg) {
+        const IdentifyResult& r = AsObject<IdentifyResult>(result_arg, "result", "IdentifyResult");
         return GeometryNames(static_cast<int>(r.geometry.size() / 3));
       })
-      .def_property_readonly("geometry", [](const IdentifyResult& r) { return Vector(r.geometry); }, "(3m,), m")
-      .def_property_readonly("std", [](const IdentifyResult& r) { return Vector(r.geometry_std); }, "(3m,), m")
-      .def_property_readonly("correlation", [](const IdentifyResult& r) { return Array(r.geometry_correlation); })
-      .def_property_readonly("covariance", [](const IdentifyResult& r) {
+      .def_property_readonly("geometry", [](py::handle result_arg) {
+        const IdentifyResult& r = AsObject<IdentifyResult>(result_arg, "result", "IdentifyResult");
+ return Vector(r.geometry); }, "(3m,), m")
+      .def_property_readonly("std", [](py::handle result_arg) {
+        const IdentifyResult& r = AsObject<IdentifyResult>(result_arg, "result", "IdentifyResult");
+ return Vector(r.geometry_std); }, "(3m,), m")
+      .def_property_readonly("correlation", [](py::handle result_arg) {
+        const IdentifyResult& r = AsObject<IdentifyResult>(result_arg, "result", "IdentifyResult");
+ return Array(r.geometry_correlation); })
+      .def_property_readonly("covariance", [](py::handle result_arg) {
+        const IdentifyResult& r = AsObject<IdentifyResult>(result_arg, "result", "IdentifyResult");
         const Eigen::VectorXd& s = r.geometry_std;
         return Array(s.asDiagonal() * r.geometry_correlation * s.asDiagonal());
       }, "(3m, 3m), m^2")
-      .def_property_readonly("poses", [](const IdentifyResult& r) {
+      .def_property_readonly("poses", [](py::handle result_arg) {
+        const IdentifyResult& r = AsObject<IdentifyResult>(result_arg, "result", "IdentifyResult");
         Eigen::MatrixXd q(r.poses.size(), 3);
         for (std::size_t j = 0; j < r.poses.size(); ++j) q.row(j) = r.poses[j].q.transpose();
         return Array(q);
       }, "(n, 3): x, z, theta estimated")
-      .def_property_readonly("pose_std", [](const IdentifyResult& r) {
+      .def_property_readonly("pose_std", [](py::handle result_arg) {
+        const IdentifyResult& r = AsObject<IdentifyResult>(result_arg, "result", "IdentifyResult");
         Eigen::MatrixXd q(r.poses.size(), 3);
         for (std::size_t j = 0; j < r.poses.size(); ++j) q.row(j) = r.poses[j].std_dev.transpose();
         return Array(q);
       })
-      .def_property_readonly("identifiability", [](const IdentifyResult& r) {
+      .def_property_readonly("identifiability", [](py::handle result_arg) {
+        const IdentifyResult& r = AsObject<IdentifyResult>(result_arg, "result", "IdentifyResult");
         py::dict d;
         d["geometry_names"] = r.identifiability.geometry_names;
         d["singular_values"] = Vector(r.identifiability.singular_values);
@@ -602,12 +668,16 @@ PYBIND11_MODULE(cablecal, m) {
         d["null_directions"] = r.identifiability.null_directions;
         return d;
       })
-      .def("to_yaml", [](const IdentifyResult& r) { return IdentifyResultYaml(r, CallText("identify")); },
+      .def("to_yaml", [](py::handle result_arg) {
+        const IdentifyResult& r = AsObject<IdentifyResult>(result_arg, "result", "IdentifyResult");
+ return IdentifyResultYaml(r, CallText("identify")); },
            "The CLI's result.yaml (the command line reads python: cablecal.identify).");
   m.def(
       "identify",
-      [](const Robot& robot, const PyMeasurements& measurements, py::handle estimator, py::handle gauge,
+      [](py::handle robot_arg, py::handle measurements_arg, py::handle estimator, py::handle gauge,
          py::handle max_iterations) {
+        const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
+        const PyMeasurements& measurements = AsObject<PyMeasurements>(measurements_arg, "measurements", "Measurements");
         if (measurements.num_cables != robot.num_cables()) Bad("measurements", "read for a robot with another number of cables");
         IdentifyOptions o;
         o.estimator = ParseEstimator(AsText(estimator, "estimator"));
@@ -627,7 +697,15 @@ PYBIND11_MODULE(cablecal, m) {
       py::arg("max_iterations") = 100,
       "Identifies exit points and initial lengths (cablecal identify); InputError when the data cannot "
       "calibrate this robot, SolverError when the solve does not converge.");
-  m.def("calibrated_robot", [](const Robot& nominal, const IdentifyResult& r) { return WithGeometry(nominal, r.geometry); },
+  m.def("calibrated_robot", [](py::handle nominal_arg, py::handle result_arg) {
+        const Robot& nominal = AsObject<Robot>(nominal_arg, "nominal", "Robot");
+        const IdentifyResult& r = AsObject<IdentifyResult>(result_arg, "result", "IdentifyResult");
+        if (r.geometry.size() != GeometrySize(nominal.num_cables())) {
+          Bad("result", "identified for a robot with " + std::to_string(r.geometry.size() / 3) + " cables, the nominal robot has " +
+                            std::to_string(nominal.num_cables()));
+        }
+        return WithGeometry(nominal, r.geometry);
+      },
         py::arg("nominal"), py::arg("result"), "The nominal robot with the identified geometry.");
 
   // ---- montecarlo
@@ -657,13 +735,14 @@ PYBIND11_MODULE(cablecal, m) {
       }, "One dict per (n, design, parameter), as summary.csv's rows (errors in m).");
   m.def(
       "montecarlo",
-      [](const Robot& robot, py::handle poses, py::handle trials, py::handle designs, py::handle estimator,
+      [](py::handle robot_arg, py::handle poses, py::handle trials, py::handle designs, py::handle estimator,
          py::handle gauge, py::handle sensors, py::handle geometry_sigma, py::handle seed, py::handle design_starts,
          py::handle progress) {
+        const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
         MonteCarloOptions o;
         if (py::isinstance<py::str>(poses)) {
           o.pose_counts = ParsePoseCounts(poses.cast<std::string>());
-        } else if (py::isinstance<py::int_>(poses)) {
+        } else if (IsInteger(poses)) {
           o.pose_counts = {static_cast<int>(AsInteger(poses, "poses", 1, kMaxPlanPoses))};
         } else {
           if (!py::isinstance<py::sequence>(poses)) Bad("poses", "expected \"first:last[:step]\", an integer or a list of them");
@@ -676,7 +755,7 @@ PYBIND11_MODULE(cablecal, m) {
         o.sensors = ParseNoisySensors(AsText(sensors, "sensors"));
         o.geometry_sigma_m = AsNumber(geometry_sigma, "geometry_sigma");
         o.seed = AsSeed(seed);
-        o.design_starts = static_cast<int>(AsInteger(design_starts, "design_starts", 1, 10000));
+        o.design_starts = static_cast<int>(AsInteger(design_starts, "design_starts", 1, 1000));
         o.design_in_child_processes = false;  // as design() above
         ValidateOptions(o, &robot);
         if (!progress.is_none() && !PyCallable_Check(progress.ptr())) Bad("progress", "expected a callable or None");

@@ -846,6 +846,30 @@ TEST_F(Cli, ProgressOnATerminalOnly) {
   EXPECT_NE(study.output.find("30/30 trials"), std::string::npos) << study.output;
 }
 
+// Found by a new user: a truth file with another cable count, a --plot that is not a PNG, a
+// count that is not a whole number.
+TEST_F(Cli, OtherRobotsTruthPlotNamesAndCountsAreRefusedByName) {
+  const std::string r3 = " --robot " CABLECAL_SOURCE_DIR "/robots/planar3_suspended.yaml";
+  ASSERT_EQ(RunCablecal("sample --poses 5 --out " + Path("plan.csv") + r3).exit_code, 0);
+  const RunResult truth = RunCablecal("simulate --plan " + Path("plan.csv") + " --out " + Path("m.csv") + r3 +
+                                      " --truth " CABLECAL_SOURCE_DIR "/robots/asymmetric.yaml");
+  EXPECT_EQ(truth.exit_code, 2) << truth.output;
+  EXPECT_NE(truth.output.find("the true robot has 2 cables, the nominal robot 3"), std::string::npos) << truth.output;
+  EXPECT_FALSE(fs::exists(Path("m.csv")));
+  const RunResult pdf = RunCablecal("workspace --step 0.2 --out " + Path("ws.csv") + " --plot " + Path("ws.pdf"));
+  EXPECT_EQ(pdf.exit_code, 2) << pdf.output;
+  EXPECT_NE(pdf.output.find("--plot: figures are PNG files"), std::string::npos) << pdf.output;
+  EXPECT_FALSE(fs::exists(Path("ws.csv")));
+  const RunResult word = RunCablecal("sample --poses abc --out " + Path("p.csv"));
+  EXPECT_EQ(word.exit_code, 2);
+  EXPECT_NE(word.output.find("must be a whole number from 1 to 100000 (got 'abc')"), std::string::npos) << word.output;
+  const RunResult four = RunCablecal("montecarlo --poses 4 --trials 3 --designs random --no-plot --out " + Path("mc") + r3);
+  EXPECT_EQ(four.exit_code, 0) << "4 poses identify 3 cables: " << four.output;
+  const RunResult four2 = RunCablecal("montecarlo --poses 4 --trials 3 --designs random --no-plot --out " + Path("mc2"));
+  EXPECT_EQ(four2.exit_code, 2) << four2.output;
+  EXPECT_NE(four2.output.find("at least 5 poses"), std::string::npos) << four2.output;
+}
+
 }  // namespace
 
 // ---- Robots with more cables -------------------------------------------------------------

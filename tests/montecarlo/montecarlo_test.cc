@@ -172,9 +172,19 @@ TEST(MonteCarlo, ParsesPoseRangesAndDesigns) {
   EXPECT_EQ(ParsePoseCounts("6:10"), (std::vector<int>{6, 7, 8, 9, 10}));
   EXPECT_EQ(ParsePoseCounts("6:50:22"), (std::vector<int>{6, 28, 50}));
   EXPECT_EQ(ParsePoseCounts("7"), (std::vector<int>{7}));
-  for (const char* bad : {"4:10", "10:6", "6:x", "6:10:0", "", "6.5:10"}) {
+  for (const char* bad : {"10:6", "6:x", "6:10:0", "", "6.5:10", "0:4"}) {
     EXPECT_THROW(ParsePoseCounts(bad), InputError) << bad;
   }
+  // The fewest poses depend on the robot (design.h MinDesignPoses): 5 for 2 cables, 4 for 3.
+  MonteCarloOptions o;
+  o.trials = 1;
+  o.designs = {PoseSetDesign::kRandom};
+  o.pose_counts = ParsePoseCounts("4:10");
+  EXPECT_THROW(ValidateOptions(o, &BuiltinRobot()), InputError);
+  const Robot three = LoadRobotFile(CABLECAL_SOURCE_DIR "/robots/planar3_suspended.yaml");
+  EXPECT_NO_THROW(ValidateOptions(o, &three));
+  o.pose_counts = {3};
+  EXPECT_THROW(ValidateOptions(o, &three), InputError);
   EXPECT_EQ(ParseDesigns("random,e").size(), 2u);
   EXPECT_EQ(ParseDesigns("condition"), (std::vector<PoseSetDesign>{PoseSetDesign::kCondition}));
   EXPECT_THROW(ParseDesigns("random,random"), InputError);

@@ -235,6 +235,38 @@ def test_hostile_input_raises_input_error(call):
         call(robot)
 
 
+def test_objects_of_the_wrong_kind_and_other_robots_raise_input_error(tmp_path):
+    r2 = cablecal.Robot.load(robot_file("asymmetric"))
+    r3 = cablecal.Robot.load(robot_file("planar3_suspended"))
+    plan3 = cablecal.sample(r3, 6, seed=1)
+    for call in [
+        lambda: cablecal.workspace(None),
+        lambda: cablecal.workspace(robot_file("asymmetric")),
+        lambda: cablecal.montecarlo(r2.to_dict(), 8, 3),
+        lambda: cablecal.identify(r3, plan3),
+        lambda: cablecal.simulate(r3, None),
+        lambda: cablecal.simulate(r3, plan3, truth="lab.yaml"),
+        lambda: cablecal.simulate(r3, plan3, truth=r2),  # another cable count
+    ]:
+        with pytest.raises(cablecal.InputError):
+            call()
+    result3 = cablecal.identify(r3, cablecal.simulate(r3, plan3, seed=2).measurements)
+    with pytest.raises(cablecal.InputError, match="cables"):
+        cablecal.calibrated_robot(r2, result3)
+
+
+def test_paths_numpy_integers_and_dict_messages():
+    import pathlib
+    r = cablecal.Robot.load(pathlib.Path(robot_file("asymmetric")))
+    assert r.name == "asymmetric"
+    assert len(cablecal.montecarlo(r, np.int64(6), np.int32(4), designs="random").summary) > 0
+    d = handmade_robot_dict()
+    d["gravty"] = d.pop("gravity")
+    with pytest.raises(cablecal.InputError) as e:
+        cablecal.Robot.from_dict(d)
+    assert str(e.value).startswith("robot dict: gravty"), str(e.value)
+
+
 def test_input_error_carries_the_clis_message(tmp_path):
     bad = tmp_path / "bad.yaml"
     bad.write_text(cablecal.Robot.builtin().to_yaml().replace("mass:", "mas:"))
