@@ -543,9 +543,16 @@ PYBIND11_MODULE(cablecal, m) {
   m.def(
       "design",
       [](py::handle robot_arg, py::handle n, py::handle criterion, py::handle starts, py::handle seed,
-         py::handle min_spacing, py::handle random_sets, py::handle geometry_sigma, py::handle robust_sigmas) {
-        const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
+         py::handle min_spacing, py::handle random_sets, py::handle geometry_sigma, py::handle robust_sigmas,
+         py::handle prior) {
+        Robot robot = AsObject<Robot>(robot_arg, "robot", "Robot");
         DesignOptions o;
+        if (!prior.is_none()) {
+          // The next round of a calibration, planned around the estimate (design --prior).
+          DesignPrior p = LoadDesignPrior(robot, AsPath(prior, "prior"));
+          robot = p.robot;
+          o.prior_information = p.information;
+        }
         o.poses = static_cast<int>(AsInteger(n, "n", 1, kMaxPlanPoses));
         o.criterion = ParseCriterion(AsText(criterion, "criterion"));
         o.starts = static_cast<int>(AsInteger(starts, "starts", 1, 1000));
@@ -574,7 +581,9 @@ PYBIND11_MODULE(cablecal, m) {
       },
       py::arg("robot"), py::arg("n"), py::arg("criterion") = "a", py::arg("starts") = 8, py::arg("seed") = 1,
       py::arg("min_spacing") = 0.0, py::arg("random_sets") = 100, py::arg("geometry_sigma") = 0.01,
-      py::arg("robust_sigmas") = 3.0, "Optimal measurement poses (cablecal design); SolverError if no start converges.");
+      py::arg("robust_sigmas") = 3.0, py::arg("prior") = py::none(),
+      "Optimal measurement poses (cablecal design); SolverError if no start converges. prior: the path of an earlier "
+      "identification's result.yaml (design --prior).");
 
   // ---- simulate
   py::class_<PlanSimulation>(m, "Experiment", "A simulated experiment: measurements, the true robot and poses.")

@@ -169,6 +169,21 @@ def test_design_simulate_identify_equal_cli(tmp_path):
     np.testing.assert_allclose(np.sqrt(np.diag(cov)), result.std, rtol=1e-12)
 
 
+def test_design_with_a_prior_equals_cli(tmp_path):
+    path = robot_file("planar3_suspended")
+    robot = cablecal.Robot.load(path)
+    exp = cablecal.simulate(robot, cablecal.sample(robot, 8, seed=3), geometry_sigma=0.005, seed=5)
+    result_yaml = tmp_path / "result.yaml"
+    result_yaml.write_text(cablecal.identify(robot, exp.measurements).to_yaml())
+    design = cablecal.design(robot, 5, starts=2, random_sets=3, prior=result_yaml)
+    plan_csv = tmp_path / "plan.csv"
+    cli("design", "--robot", path, "--poses", "5", "--starts", "2", "--random-sets", "3", "--prior", str(result_yaml),
+        "--out", str(plan_csv))
+    assert design.plan.to_csv() == data_lines(plan_csv)
+    with pytest.raises(cablecal.InputError):
+        cablecal.design(robot, 5, prior=tmp_path / "missing.yaml")
+
+
 def test_measurements_from_arrays_equal_the_file(tmp_path):
     path = robot_file("planar3_suspended")
     robot = cablecal.Robot.load(path)
