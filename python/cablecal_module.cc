@@ -12,6 +12,8 @@
 #include <glog/logging.h>
 #include <yaml-cpp/yaml.h>
 
+#include <omp.h>
+
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -746,7 +748,7 @@ PYBIND11_MODULE(cablecal, m) {
       "montecarlo",
       [](py::handle robot_arg, py::handle poses, py::handle trials, py::handle designs, py::handle estimator,
          py::handle gauge, py::handle sensors, py::handle geometry_sigma, py::handle seed, py::handle design_starts,
-         py::handle progress) {
+         py::handle threads, py::handle progress) {
         const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
         MonteCarloOptions o;
         if (py::isinstance<py::str>(poses)) {
@@ -782,14 +784,23 @@ PYBIND11_MODULE(cablecal, m) {
           reported = done;
           progress(reported, total.load());
         };
-        MonteCarloResult r = Interruptible(stop, [&] { return RunMonteCarlo(robot, o); }, report);
+        // OpenMP threads of the worker that runs the study (its own setting, as --threads);
+        // the results do not depend on it.
+        const int thread_count = threads.is_none() ? 0 : static_cast<int>(AsInteger(threads, "threads", 1, 1024));
+        MonteCarloResult r = Interruptible(
+            stop,
+            [&] {
+              if (thread_count > 0) omp_set_num_threads(thread_count);
+              return RunMonteCarlo(robot, o);
+            },
+            report);
         report();  // the last count: (total, total)
         return r;
       },
       py::arg("robot"), py::arg("poses"), py::arg("trials"), py::arg("designs") = "random,optimized",
       py::arg("estimator") = "ml", py::arg("gauge") = "a1x", py::arg("sensors") = "both",
       py::arg("geometry_sigma") = 0.01, py::arg("seed") = 1, py::arg("design_starts") = 2,
-      py::arg("progress") = py::none(),
+      py::arg("threads") = py::none(), py::arg("progress") = py::none(),
       "The Monte Carlo study (cablecal montecarlo); Ctrl-C raises KeyboardInterrupt. progress(done, total), if "
       "given, is called now and then with the trials done.");
 

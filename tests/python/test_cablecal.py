@@ -208,6 +208,8 @@ def test_montecarlo_equals_cli(tmp_path):
     assert result.summary_csv() == data_lines(tmp_path / "summary.csv")
     rows = result.summary
     assert {r["n"] for r in rows} == {6, 8}
+    one_thread = cablecal.montecarlo(robot, "6:8:2", 15, designs="random", seed=7, threads=1)
+    assert one_thread.summary_csv() == result.summary_csv()
     assert all(r["design"] == "random" for r in rows)
 
 
