@@ -56,8 +56,18 @@ def main():
     places = {}
     for j, (x, z) in enumerate(q[:, :2], start=1):
         places.setdefault((round(x, 3), round(z, 3)), []).append(str(j))
+    # Each label at the first of a few offsets where it overlaps no label placed before it.
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    kept = []
     for (x, z), ids in places.items():
-        ax_plan.annotate(", ".join(ids), (x, z), textcoords="offset points", xytext=(5, 5), fontsize=8)
+        for k, offset in enumerate([(6, 6), (6, -10), (-14, 6), (-14, -10), (6, 16), (6, -20)]):
+            label = ax_plan.annotate(", ".join(ids), (x, z), textcoords="offset points", xytext=offset, fontsize=8)
+            box = label.get_window_extent(renderer)
+            if not any(box.overlaps(other) for other in kept) or k == 5:
+                kept.append(box)
+                break
+            label.remove()
     ax_plan.set_xlabel("x (m)")
     ax_plan.set_ylabel("z (m)")
     ax_plan.set_title(f"{robot.name}: 12 designed poses")
