@@ -277,7 +277,15 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   id.gauge = ParseGauge(options.gauge);
   id.source = options.measurements_path;
   id.max_iterations = options.max_iterations;
-  const std::vector<Measurement> measurements = ReadMeasurementsCsv(options.measurements_path, nominal.num_cables());
+  const std::vector<Measurement> measurements = ReadMeasurementsCsv(
+      options.measurements_path, nominal.num_cables(), ParseDelimiter(options.delimiter),
+      [&](const std::vector<std::string>& ignored) {
+        if (ctx.quiet) return;
+        std::string list;
+        for (const std::string& c : ignored) list += (list.empty() ? "'" : ", '") + PrintableText(c) + "'";
+        std::fprintf(stderr, "cablecal: note: %s: ignoring column%s %s\n", options.measurements_path.c_str(),
+                     ignored.size() > 1 ? "s" : "", list.c_str());
+      });
   CheckReadingsPlausible(nominal, measurements, options.measurements_path);
   const IdentifyResult result = Identify(nominal, measurements, id);
   RequireUsableResult(result, options.measurements_path);

@@ -57,6 +57,7 @@ struct IdentifyCommandOptions {
   std::string estimator = "ml", gauge = "a1x";
   int max_iterations = 100;
   bool json = false;  // the result on stdout as JSON (then --out is optional)
+  std::string delimiter = ",";  // of the measurement CSV
 };
 int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options);
 

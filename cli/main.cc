@@ -131,6 +131,8 @@ int main(int argc, char** argv) {
       ->check(kPositive);
   id_cmd->add_option("--out", ident.out_path, "result YAML (required unless --json)");
   id_cmd->add_flag("--json", ident.json, "print the result (the YAML's content) as JSON on stdout");
+  id_cmd->add_option("--delimiter", ident.delimiter, "the measurement CSV's separator: ',', ';' or tab")
+      ->capture_default_str();
   id_cmd->add_option("--calibrated-robot", ident.calibrated_robot_path, "robot file with the identified geometry");
 
   cablecal::cli::DesignCommandOptions des;

@@ -17,11 +17,11 @@ std::string Trim(const std::string& s) {
   return s.substr(a, s.find_last_not_of(ws) - a + 1);
 }
 
-std::vector<std::string> Split(const std::string& line) {
+std::vector<std::string> Split(const std::string& line, char delimiter = ',') {
   std::vector<std::string> cells;
   std::size_t start = 0;
   while (true) {
-    const std::size_t comma = line.find(',', start);
+    const std::size_t comma = line.find(delimiter, start);
     cells.push_back(Trim(line.substr(start, comma == std::string::npos ? std::string::npos : comma - start)));
     if (comma == std::string::npos) break;
     start = comma + 1;
@@ -41,9 +41,12 @@ std::string CsvRow::Where() const { return *path + ":" + std::to_string(line); }
 
 double CsvRow::Number(int col) const {
   double v = 0.0;
+  if (cells[col].empty()) throw InputError(Where(), "column '" + (*header)[col] + "'", "is empty: a reading is missing");
   if (!ParseFiniteDouble(cells[col], &v)) {
+    const bool decimal_comma = cells[col].find(',') != std::string::npos;
     throw InputError(Where(), "column '" + (*header)[col] + "'",
-                     "must be a finite number (got '" + cells[col] + "')");
+                     "must be a finite number (got '" + cells[col] + "')" +
+                         (decimal_comma ? ": a decimal comma? numbers use '.'" : ""));
   }
   return v;
 }
@@ -142,6 +145,84 @@ void ForEachCsvRow(std::istream& in, const std::string& path, const std::vector<
   }
   if (in.bad()) throw InputError(path, "", "read error");
   if (!have_header) throw InputError(path, "", "is empty: no header line '" + JoinCsv(expected_header) + "'");
+  if (rows == 0) throw InputError(path, "", "has a header but no data rows");
+}
+
+void ForEachCsvRowByName(std::istream& in, const std::string& path, char delimiter,
+                         const std::vector<std::string>& required,
+                         const std::function<void(const std::vector<std::string>&)>& on_ignored,
+                         const std::function<void(const CsvRow&)>& on_row) {
+  std::string line;
+  int line_no = 0;
+  bool have_header = false;
+  std::size_t columns = 0;
+  std::vector<std::size_t> index;  // file column of each required name
+  int rows = 0;
+  CsvRow row;
+  row.path = &path;
+  row.header = &required;
+  const std::string separator(1, delimiter);
+  while (ReadLine(in, line, path, line_no + 1)) {
+    ++line_no;
+    if (line_no == 1 && line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);  // UTF-8 BOM
+    const std::string trimmed = Trim(line);
+    if (trimmed.empty() || trimmed[0] == '#') continue;
+    std::vector<std::string> cells = Split(trimmed, delimiter);
+    const std::string where = path + ":" + std::to_string(line_no);
+    if (!have_header) {
+      std::vector<std::string> missing, ignored;
+      for (const std::string& name : required) {
+        const auto count = std::count(cells.begin(), cells.end(), name);
+        if (count > 1) throw InputError(where, "header", "column '" + name + "' appears " + std::to_string(count) + " times");
+        if (count == 0) missing.push_back(name);
+        index.push_back(static_cast<std::size_t>(std::find(cells.begin(), cells.end(), name) - cells.begin()));
+      }
+      for (const std::string& c : cells) {
+        if (std::find(required.begin(), required.end(), c) == required.end()) ignored.push_back(c);
+      }
+      // One dl<i> column per cable: a file with other dl columns than the robot's is for a
+      // robot with another cable count, never a column to ignore.
+      const auto cable_columns = [](const std::vector<std::string>& names) {
+        return std::count_if(names.begin(), names.end(), [](const std::string& c) {
+          return c.size() > 2 && c.compare(0, 2, "dl") == 0 && c.find_first_not_of("0123456789", 2) == std::string::npos;
+        });
+      };
+      const auto want = cable_columns(required), got = cable_columns(cells);
+      if (want > 0 && got > 0 && got != want) {
+        throw InputError(where, "header", "the file has columns for " + std::to_string(got) + " cables, the robot has " +
+                                              std::to_string(want) + ": a file for another robot? (got '" + trimmed + "')");
+      }
+      if (!missing.empty()) {
+        std::string list;
+        for (const std::string& m : missing) list += (list.empty() ? "'" : ", '") + m + "'";
+        const std::string hint =
+            want > 0 && got > 0 && want != got
+                ? " (the file has columns for " + std::to_string(got) + " cables, the robot has " + std::to_string(want) +
+                      ": a file for another robot?)"
+                : cells.size() == 1 && delimiter == ',' && trimmed.find_first_of(";\t") != std::string::npos
+                      ? " (another separator? give it with --delimiter)"
+                      : "";
+        throw InputError(where, "header",
+                         "no column " + list + " (the columns needed are '" + JoinCsv(required) + "', in any order; got '" +
+                             trimmed + "')" + hint);
+      }
+      if (!ignored.empty() && on_ignored) on_ignored(ignored);
+      columns = cells.size();
+      have_header = true;
+      continue;
+    }
+    if (cells.size() != columns) {
+      throw InputError(where, "", "expected " + std::to_string(columns) + " cells (as the header), got " +
+                                      std::to_string(cells.size()) + " (separator '" + separator + "')");
+    }
+    row.line = line_no;
+    row.cells.resize(required.size());
+    for (std::size_t k = 0; k < required.size(); ++k) row.cells[k] = std::move(cells[index[k]]);
+    on_row(row);
+    ++rows;
+  }
+  if (in.bad()) throw InputError(path, "", "read error");
+  if (!have_header) throw InputError(path, "", "is empty: no header line with '" + JoinCsv(required) + "'");
   if (rows == 0) throw InputError(path, "", "has a header but no data rows");
 }
 

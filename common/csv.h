@@ -39,6 +39,16 @@ void ForEachCsvRow(std::istream& in, const std::string& name, const std::vector<
 void ForEachCsvRow(std::istream& in, const std::string& name, const std::vector<std::string>& expected_header,
                    const std::vector<std::string>& optional_trailing, const std::function<void(const CsvRow&)>& on_row);
 
+// A lab's file, read by column name: the header must name every column of `required` once,
+// in any order; other columns are ignored and `on_ignored` (if any) hears their names once.
+// Cells are split at `delimiter` (',', ';' or a tab). Rows reach `on_row` with their cells
+// in `required`'s order (row.header is `required`). An empty cell is refused by CsvRow with
+// its line and column.
+void ForEachCsvRowByName(std::istream& in, const std::string& name, char delimiter,
+                         const std::vector<std::string>& required,
+                         const std::function<void(const std::vector<std::string>&)>& on_ignored,
+                         const std::function<void(const CsvRow&)>& on_row);
+
 constexpr std::size_t kMaxCsvLineBytes = 1 << 16;
 
 std::string JoinCsv(const std::vector<std::string>& cells);

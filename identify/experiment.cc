@@ -163,20 +163,30 @@ std::string MeasurementsCsv(const std::vector<Measurement>& measurements, const 
   return out;
 }
 
-std::vector<Measurement> ReadMeasurementsCsv(const std::string& path, int num_cables) {
+std::vector<Measurement> ReadMeasurementsCsv(const std::string& path, int num_cables, char delimiter,
+                                             const std::function<void(const std::vector<std::string>&)>& on_ignored) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "", "cannot open the file");
-  return ReadMeasurementsCsv(in, path, num_cables);
+  return ReadMeasurementsCsv(in, path, num_cables, delimiter, on_ignored);
 }
 
-std::vector<Measurement> ReadMeasurementsCsv(std::istream& in, const std::string& path, int num_cables) {
+char ParseDelimiter(const std::string& text) {
+  if (text == ",") return ',';
+  if (text == ";") return ';';
+  if (text == "tab" || text == "\t") return '\t';
+  throw InputError("--delimiter", "", "must be ',', ';' or 'tab' (got '" + text + "')");
+}
+
+std::vector<Measurement> ReadMeasurementsCsv(std::istream& in, const std::string& path, int num_cables,
+                                             char delimiter,
+                                             const std::function<void(const std::vector<std::string>&)>& on_ignored) {
   std::vector<std::string> header = {"pose"};
   for (int i = 1; i <= num_cables; ++i) header.push_back("dl" + std::to_string(i));
   header.push_back("z");
   header.push_back("theta");
   std::vector<Measurement> out;
   std::set<int> ids;
-  ForEachCsvRow(in, path, header, [&](const CsvRow& row) {
+  ForEachCsvRowByName(in, path, delimiter, header, on_ignored, [&](const CsvRow& row) {
     if (static_cast<int>(out.size()) >= kMaxMeasuredPoses) {
       throw InputError(row.Where(), "", "more than " + std::to_string(kMaxMeasuredPoses) + " poses");
     }

@@ -16,6 +16,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <functional>
 #include <istream>
 #include <optional>
 #include <string>
@@ -113,8 +114,16 @@ std::string MeasurementsCsv(const std::vector<Measurement>& measurements, const 
 // duplicate or non-positive pose id).
 // CheckReadingsPlausible (below) then checks them against a robot's sensors.
 // At most kMaxMeasuredPoses rows (the file is streamed and rejected at the next row).
-std::vector<Measurement> ReadMeasurementsCsv(const std::string& path, int num_cables);
-std::vector<Measurement> ReadMeasurementsCsv(std::istream& in, const std::string& name, int num_cables);
+// The file is read by column name (a lab's log): pose, dl1..dlm, z and theta in any order,
+// other columns (a timestamp, a temperature) ignored and named once to `on_ignored`; cells
+// split at `delimiter` (',', ';' or '\t'); an empty cell is refused with line and column.
+std::vector<Measurement> ReadMeasurementsCsv(const std::string& path, int num_cables, char delimiter = ',',
+                                             const std::function<void(const std::vector<std::string>&)>& on_ignored = {});
+std::vector<Measurement> ReadMeasurementsCsv(std::istream& in, const std::string& name, int num_cables,
+                                             char delimiter = ',',
+                                             const std::function<void(const std::vector<std::string>&)>& on_ignored = {});
+// The delimiter of --delimiter: ",", ";", "tab" (or a tab character); InputError otherwise.
+char ParseDelimiter(const std::string& text);
 constexpr int kMaxMeasuredPoses = 100000;
 
 // Readings no sensor of `robot` can give: an encoder length change longer than the frame's

@@ -434,11 +434,24 @@ PYBIND11_MODULE(cablecal, m) {
            py::arg("robot"), py::arg("dl"), py::arg("z"), py::arg("theta"), py::arg("pose_ids") = py::none())
       .def_static(
           "load",
-          [](py::handle robot_arg, py::handle path) {
+          [](py::handle robot_arg, py::handle path, py::handle delimiter) {
         const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
-            return PyMeasurements{ReadMeasurementsCsv(AsPath(path, "path"), robot.num_cables()), robot.num_cables()};
+            std::vector<std::string> ignored;
+            PyMeasurements m{ReadMeasurementsCsv(AsPath(path, "path"), robot.num_cables(),
+                                                 ParseDelimiter(AsText(delimiter, "delimiter")),
+                                                 [&](const std::vector<std::string>& names) { ignored = names; }),
+                             robot.num_cables()};
+            if (!ignored.empty()) {
+              std::string list;
+              for (const std::string& c : ignored) list += (list.empty() ? "'" : ", '") + c + "'";
+              if (PyErr_WarnEx(PyExc_UserWarning, ("ignoring columns " + list).c_str(), 1) < 0) {
+                throw py::error_already_set();
+              }
+            }
+            return m;
           },
-          py::arg("robot"), py::arg("path"))
+          py::arg("robot"), py::arg("path"), py::arg("delimiter") = ",",
+          "Reads a measurement CSV by column name (other columns ignored, with a warning).")
       .def_property_readonly("dl", [](const PyMeasurements& p) {
         Eigen::MatrixXd d(p.readings.size(), p.num_cables);
         for (std::size_t j = 0; j < p.readings.size(); ++j) d.row(j) = p.readings[j].dl_m.transpose();

@@ -156,13 +156,20 @@ TEST_F(Cli, IdentifyBadMeasurementsExitTwoAndWriteNothing) {
   write("columns.csv", "pose,dl1,dl2,z,theta\n1,0,0,1\n");
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"identical.csv", "cannot determine"},
-      {"header.csv", "header.csv:1: header: expected 'pose,dl1,dl2,z,theta'"},
+      {"header.csv", "header.csv:1: header: no column 'theta' (the columns needed are 'pose,dl1,dl2,z,theta', in any order"},
       {"nan.csv", "nan.csv:2: column 'z': must be a finite number (got 'nan')"},
       {"dup.csv", "dup.csv:3: column 'pose': duplicate pose id 1"},
       {"few.csv", "2 poses give 8 equations for 11 unknowns"},
-      {"columns.csv", "columns.csv:2: expected 5 columns, got 4"}};
+      {"columns.csv", "columns.csv:2: expected 5 cells (as the header), got 4"},
+      {"empty.csv", "empty.csv:3: column 'z': is empty: a reading is missing"},
+      {"comma.csv", "comma.csv:2: column 'z': must be a finite number (got '1,2'): a decimal comma?"},
+      {"semicolon.csv", "another separator? give it with --delimiter"}};
+  write("empty.csv", "pose,dl1,dl2,z,theta\n1,0,0,1,0\n2,0,0,,0\n");
+  write("comma.csv", "pose;dl1;dl2;z;theta\n1;0;0;1,2;0\n");
+  write("semicolon.csv", "pose;dl1;dl2;z;theta\n1;0;0;1.2;0\n");
   for (const auto& [file, message] : cases) {
-    const RunResult r = RunCablecal("identify --measurements " + Path(file) + " --out " + Path("r.yaml"));
+    const RunResult r = RunCablecal("identify --measurements " + Path(file) + " --out " + Path("r.yaml") +
+                                    (file == "comma.csv" ? " --delimiter ';'" : ""));
     EXPECT_EQ(r.exit_code, 2) << file << "\n" << r.output;
     EXPECT_NE(r.output.find(message), std::string::npos) << file << "\n" << r.output;
     EXPECT_FALSE(fs::exists(Path("r.yaml")));
@@ -868,6 +875,44 @@ TEST_F(Cli, OtherRobotsTruthPlotNamesAndCountsAreRefusedByName) {
   const RunResult four2 = RunCablecal("montecarlo --poses 4 --trials 3 --designs random --no-plot --out " + Path("mc2"));
   EXPECT_EQ(four2.exit_code, 2) << four2.output;
   EXPECT_NE(four2.output.find("at least 5 poses"), std::string::npos) << four2.output;
+}
+
+// A lab's log: extra columns (ignored, named once), another column order, ';' as separator:
+// the same estimate as the file cablecal wrote.
+TEST_F(Cli, MeasurementsAreReadByColumnName) {
+  ASSERT_EQ(RunCablecal("sample --poses 10 --seed 3 --out " + Path("plan.csv")).exit_code, 0);
+  ASSERT_EQ(RunCablecal("simulate --plan " + Path("plan.csv") + " --seed 4 --out " + Path("meas.csv")).exit_code, 0);
+  // Rewrite it: timestamp first, theta before z, a temperature at the end, ';' between cells.
+  std::ifstream in(Path("meas.csv"));
+  std::ofstream out(Path("lab.csv"));
+  std::string line;
+  bool header = true;
+  int k = 0;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::vector<std::string> c;
+    std::stringstream ss(line);
+    for (std::string cell; std::getline(ss, cell, ',');) c.push_back(cell);
+    ASSERT_EQ(c.size(), 5u) << line;
+    out << (header ? "timestamp" : "2026-11-24T10:0" + std::to_string(k++)) << ";" << c[0] << ";" << c[1] << ";" << c[2]
+        << ";" << c[4] << ";" << c[3] << ";" << (header ? "temperature_C" : "21.5") << "\n";
+    header = false;
+  }
+  out.close();
+  const RunResult plain = RunCablecal("identify --measurements " + Path("meas.csv") + " --out " + Path("a.yaml"));
+  ASSERT_EQ(plain.exit_code, 0) << plain.output;
+  const RunResult lab = RunCablecal("identify --delimiter ';' --measurements " + Path("lab.csv") + " --out " + Path("b.yaml"));
+  ASSERT_EQ(lab.exit_code, 0) << lab.output;
+  EXPECT_NE(lab.output.find("ignoring columns 'timestamp', 'temperature_C'"), std::string::npos) << lab.output;
+  const YAML::Node a = YAML::LoadFile(Path("a.yaml")), b = YAML::LoadFile(Path("b.yaml"));
+  for (const char* p : {"a1z", "a2x", "a2z", "l10", "l20"}) {
+    EXPECT_EQ(a["parameters"][p]["value"].as<double>(), b["parameters"][p]["value"].as<double>()) << p;
+  }
+  EXPECT_EQ(RunCablecal("identify --delimiter '|' --measurements " + Path("lab.csv") + " --out " + Path("c.yaml")).exit_code, 2);
+  const RunResult comma = RunCablecal("identify --measurements " + Path("lab.csv") + " --out " + Path("c.yaml"));
+  EXPECT_EQ(comma.exit_code, 2);
+  EXPECT_NE(comma.output.find("another separator?"), std::string::npos) << comma.output;
+  EXPECT_FALSE(fs::exists(Path("c.yaml")));
 }
 
 }  // namespace

@@ -199,6 +199,21 @@ def test_measurements_from_arrays_equal_the_file(tmp_path):
     np.testing.assert_array_equal(calibrated.geometry, r1.geometry)
 
 
+def test_a_labs_log_is_read_by_column_name(tmp_path):
+    robot = cablecal.Robot.load(robot_file("asymmetric"))
+    m = cablecal.simulate(robot, cablecal.sample(robot, 9, seed=1), seed=2).measurements
+    lines = [l for l in m.to_csv().splitlines() if l]
+    rows = [l.split(",") for l in lines]
+    log = tmp_path / "log.csv"
+    log.write_text("\n".join(";".join([("time" if k == 0 else str(k)), r[0], r[4], r[3], r[1], r[2]])
+                             for k, r in enumerate(rows)) + "\n")
+    with pytest.warns(UserWarning, match="ignoring columns 'time'"):
+        again = cablecal.Measurements.load(robot, log, delimiter=";")
+    assert again.to_csv() == m.to_csv()
+    with pytest.raises(cablecal.InputError, match="another separator"):
+        cablecal.Measurements.load(robot, log)
+
+
 def test_montecarlo_equals_cli(tmp_path):
     path = robot_file("asymmetric")
     robot = cablecal.Robot.load(path)
