@@ -6,8 +6,6 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <functional>
-#include <memory>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -15,6 +13,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <memory>
 #include <optional>
 
 #include "cli/sigint.h"
@@ -127,7 +127,7 @@ std::string Closest(const std::string& typed, const std::vector<std::string>& na
 }
 
 // The plotting scripts sit beside the executable, not at a path baked in at build time:
-// share/cablecal/scripts under the build folder (copied there at configure time) or, once
+// share/cablecal/scripts under the build folder (copied there at every build) or, once
 // installed, under bin/'s parent. CABLECAL_SCRIPTS_DIR overrides both.
 std::string PlotScriptsDir() {
   if (const char* env = std::getenv("CABLECAL_SCRIPTS_DIR")) return env;
@@ -281,10 +281,8 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
       options.measurements_path, nominal.num_cables(), ParseDelimiter(options.delimiter),
       [&](const std::vector<std::string>& ignored) {
         if (ctx.quiet) return;
-        std::string list;
-        for (const std::string& c : ignored) list += (list.empty() ? "'" : ", '") + PrintableText(c) + "'";
         std::fprintf(stderr, "cablecal: note: %s: ignoring column%s %s\n", options.measurements_path.c_str(),
-                     ignored.size() > 1 ? "s" : "", list.c_str());
+                     ignored.size() > 1 ? "s" : "", QuotedList(ignored).c_str());
       });
   CheckReadingsPlausible(nominal, measurements, options.measurements_path);
   const IdentifyResult result = Identify(nominal, measurements, id);
@@ -389,14 +387,7 @@ int RunDesign(const Context& ctx, const DesignCommandOptions& options) {
     const double factor = Improvement(design.criterion, result.criteria, result.random_median);
     std::printf(", %.3g x the median of %d random sets (> 1 is better)", factor, design.random_sets);
     if (!(factor > 1.0) && !ctx.quiet) {
-      std::fprintf(stderr,
-                   "cablecal: warning: the designed set is no better than the median random set on its criterion: "
-                   "the poses that stay holdable for geometry errors of %g x %g m are a small part of the nominal "
-                   "workspace the random sets are drawn from (compare with --geometry-sigma 0). If the exit points "
-                   "and initial lengths are known better than that (a tape, a laser tracker), say so with a smaller "
-                   "--geometry-sigma (e.g. 0.005 or 0.001 m); a robot whose cable lines nearly meet at one point "
-                   "of the platform needs it (README, \"Any number of cables\")\n",
-                   design.robust_sigmas, design.geometry_sigma_m);
+      std::fprintf(stderr, "cablecal: warning: %s\n", NoBetterThanRandomWarning(design, "--geometry-sigma").c_str());
     }
   }
   std::printf(", %.1f s\n", result.wall_time_s);

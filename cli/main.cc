@@ -6,7 +6,6 @@
 #include <glog/logging.h>
 
 #include <algorithm>
-
 #include <cstdio>
 #include <exception>
 #include <string>
@@ -82,8 +81,8 @@ int main(int argc, char** argv) {
   ctx.command_line = cablecal::CommandLine(args);
 
   CLI::App app{"cablecal: plan, identify and predict the calibration of cable-driven parallel robots"};
-  app.set_version_flag("--version", std::string("cablecal ") + cablecal::Version() + " (commit " +
-                                        cablecal::GitCommit() + ")");
+  const std::string version = std::string("cablecal ") + cablecal::Version() + " (commit " + cablecal::GitCommit() + ")";
+  app.set_version_flag("--version", version);
   app.require_subcommand(1);
 
   cablecal::cli::WorkspaceOptions ws;
@@ -207,8 +206,7 @@ int main(int argc, char** argv) {
   for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
     commands.push_back(sub->get_name());
     sub->fallthrough();
-    sub->set_version_flag("--version", std::string("cablecal ") + cablecal::Version() + " (commit " +
-                                           cablecal::GitCommit() + ")");
+    sub->set_version_flag("--version", version);
   }
   // A misspelt command: CLI11 would call it an unexpected argument.
   if (argc > 1 && argv[1][0] != '-' &&

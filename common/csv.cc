@@ -17,7 +17,7 @@ std::string Trim(const std::string& s) {
   return s.substr(a, s.find_last_not_of(ws) - a + 1);
 }
 
-std::vector<std::string> Split(const std::string& line, char delimiter = ',') {
+std::vector<std::string> Split(const std::string& line, char delimiter) {
   std::vector<std::string> cells;
   std::size_t start = 0;
   while (true) {
@@ -90,6 +90,39 @@ bool ReadLine(std::istream& in, std::string& line, const std::string& path, int 
   return true;
 }
 
+// Every content line of a CSV: a UTF-8 byte-order mark, blank lines and '#' comment lines
+// skipped, the line trimmed and split at `delimiter`. `on_line` gets the line number, the
+// trimmed line and its cells.
+void ForEachCsvLine(std::istream& in, const std::string& path, char delimiter,
+                    const std::function<void(int, const std::string&, std::vector<std::string>&)>& on_line) {
+  std::string line;
+  int line_no = 0;
+  while (ReadLine(in, line, path, line_no + 1)) {
+    ++line_no;
+    if (line_no == 1 && line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);  // UTF-8 BOM
+    const std::string trimmed = Trim(line);
+    if (trimmed.empty() || trimmed[0] == '#') continue;
+    std::vector<std::string> cells = Split(trimmed, delimiter);
+    on_line(line_no, trimmed, cells);
+  }
+  if (in.bad()) throw InputError(path, "", "read error");
+}
+
+// Plans and measurement files have one dl<i> column per cable: a header whose dl columns
+// differ in number from the robot's is a file for a robot with another cable count. The
+// message part that says so, or "" when the counts agree or either has none.
+std::string OtherCableCount(const std::vector<std::string>& wanted, const std::vector<std::string>& got) {
+  const auto cable_columns = [](const std::vector<std::string>& names) {
+    return std::count_if(names.begin(), names.end(), [](const std::string& c) {
+      return c.size() > 2 && c.compare(0, 2, "dl") == 0 && c.find_first_not_of("0123456789", 2) == std::string::npos;
+    });
+  };
+  const auto want = cable_columns(wanted), have = cable_columns(got);
+  if (want == 0 || have == 0 || want == have) return "";
+  return "the file has columns for " + std::to_string(have) + " cables, the robot has " + std::to_string(want) +
+         ": a file for another robot?";
+}
+
 }  // namespace
 
 void ForEachCsvRow(std::istream& in, const std::string& path, const std::vector<std::string>& expected_header,
@@ -97,41 +130,22 @@ void ForEachCsvRow(std::istream& in, const std::string& path, const std::vector<
   std::vector<std::string> full_header = expected_header;
   full_header.insert(full_header.end(), optional_trailing.begin(), optional_trailing.end());
   std::vector<std::string> found_header = expected_header;
-  std::string line;
-  int line_no = 0;
   bool have_header = false;
   int rows = 0;
   CsvRow row;
   row.path = &path;
   row.header = &found_header;
-  while (ReadLine(in, line, path, line_no + 1)) {
-    ++line_no;
-    if (line_no == 1 && line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);  // UTF-8 BOM
-    const std::string trimmed = Trim(line);
-    if (trimmed.empty() || trimmed[0] == '#') continue;
-    std::vector<std::string> cells = Split(trimmed);
+  ForEachCsvLine(in, path, ',', [&](int line_no, const std::string& trimmed, std::vector<std::string>& cells) {
     if (!have_header) {
       if (!optional_trailing.empty() && cells == full_header) found_header = full_header;
       if (cells != found_header) {
-        // Plans and measurement files have one dl<i> column per cable: a file for a robot
-        // with another cable count is the likely cause when the counts differ, so say so.
-        const auto cable_columns = [](const std::vector<std::string>& names) {
-          return std::count_if(names.begin(), names.end(), [](const std::string& c) {
-            return c.size() > 2 && c.compare(0, 2, "dl") == 0 &&
-                   c.find_first_not_of("0123456789", 2) == std::string::npos;
-          });
-        };
-        const auto want = cable_columns(expected_header), got = cable_columns(cells);
-        const std::string hint =
-            want > 0 && got > 0 && want != got
-                ? " (the file has columns for " + std::to_string(got) + " cables, the robot has " +
-                      std::to_string(want) + ": a file for another robot?)"
-                : "";
+        const std::string other = OtherCableCount(expected_header, cells);
         throw InputError(path + ":" + std::to_string(line_no), "header",
-                         "expected '" + JoinCsv(expected_header) + "', got '" + trimmed + "'" + hint);
+                         "expected '" + JoinCsv(expected_header) + "', got '" + trimmed + "'" +
+                             (other.empty() ? "" : " (" + other + ")"));
       }
       have_header = true;
-      continue;
+      return;
     }
     if (cells.size() != found_header.size()) {
       throw InputError(path + ":" + std::to_string(line_no), "",
@@ -142,8 +156,7 @@ void ForEachCsvRow(std::istream& in, const std::string& path, const std::vector<
     row.cells = std::move(cells);
     on_row(row);
     ++rows;
-  }
-  if (in.bad()) throw InputError(path, "", "read error");
+  });
   if (!have_header) throw InputError(path, "", "is empty: no header line '" + JoinCsv(expected_header) + "'");
   if (rows == 0) throw InputError(path, "", "has a header but no data rows");
 }
@@ -152,8 +165,6 @@ void ForEachCsvRowByName(std::istream& in, const std::string& path, char delimit
                          const std::vector<std::string>& required,
                          const std::function<void(const std::vector<std::string>&)>& on_ignored,
                          const std::function<void(const CsvRow&)>& on_row) {
-  std::string line;
-  int line_no = 0;
   bool have_header = false;
   std::size_t columns = 0;
   std::vector<std::size_t> index;  // file column of each required name
@@ -161,15 +172,12 @@ void ForEachCsvRowByName(std::istream& in, const std::string& path, char delimit
   CsvRow row;
   row.path = &path;
   row.header = &required;
-  const std::string separator(1, delimiter);
-  while (ReadLine(in, line, path, line_no + 1)) {
-    ++line_no;
-    if (line_no == 1 && line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);  // UTF-8 BOM
-    const std::string trimmed = Trim(line);
-    if (trimmed.empty() || trimmed[0] == '#') continue;
-    std::vector<std::string> cells = Split(trimmed, delimiter);
+  ForEachCsvLine(in, path, delimiter, [&](int line_no, const std::string& trimmed, std::vector<std::string>& cells) {
     const std::string where = path + ":" + std::to_string(line_no);
     if (!have_header) {
+      // dl columns other than the robot's are another robot's file, never columns to ignore.
+      const std::string other = OtherCableCount(required, cells);
+      if (!other.empty()) throw InputError(where, "header", other + " (got '" + trimmed + "')");
       std::vector<std::string> missing, ignored;
       for (const std::string& name : required) {
         const auto count = std::count(cells.begin(), cells.end(), name);
@@ -180,48 +188,28 @@ void ForEachCsvRowByName(std::istream& in, const std::string& path, char delimit
       for (const std::string& c : cells) {
         if (std::find(required.begin(), required.end(), c) == required.end()) ignored.push_back(c);
       }
-      // One dl<i> column per cable: a file with other dl columns than the robot's is for a
-      // robot with another cable count, never a column to ignore.
-      const auto cable_columns = [](const std::vector<std::string>& names) {
-        return std::count_if(names.begin(), names.end(), [](const std::string& c) {
-          return c.size() > 2 && c.compare(0, 2, "dl") == 0 && c.find_first_not_of("0123456789", 2) == std::string::npos;
-        });
-      };
-      const auto want = cable_columns(required), got = cable_columns(cells);
-      if (want > 0 && got > 0 && got != want) {
-        throw InputError(where, "header", "the file has columns for " + std::to_string(got) + " cables, the robot has " +
-                                              std::to_string(want) + ": a file for another robot? (got '" + trimmed + "')");
-      }
       if (!missing.empty()) {
-        std::string list;
-        for (const std::string& m : missing) list += (list.empty() ? "'" : ", '") + m + "'";
-        const std::string hint =
-            want > 0 && got > 0 && want != got
-                ? " (the file has columns for " + std::to_string(got) + " cables, the robot has " + std::to_string(want) +
-                      ": a file for another robot?)"
-                : cells.size() == 1 && delimiter == ',' && trimmed.find_first_of(";\t") != std::string::npos
-                      ? " (another separator? give it with --delimiter)"
-                      : "";
+        const bool other_separator = cells.size() == 1 && delimiter == ',' && trimmed.find_first_of(";\t") != std::string::npos;
         throw InputError(where, "header",
-                         "no column " + list + " (the columns needed are '" + JoinCsv(required) + "', in any order; got '" +
-                             trimmed + "')" + hint);
+                         "no column " + QuotedList(missing) + " (the columns needed are '" + JoinCsv(required) +
+                             "', in any order; got '" + trimmed + "')" +
+                             (other_separator ? " (another separator? give it with --delimiter)" : ""));
       }
       if (!ignored.empty() && on_ignored) on_ignored(ignored);
       columns = cells.size();
       have_header = true;
-      continue;
+      return;
     }
     if (cells.size() != columns) {
       throw InputError(where, "", "expected " + std::to_string(columns) + " cells (as the header), got " +
-                                      std::to_string(cells.size()) + " (separator '" + separator + "')");
+                                      std::to_string(cells.size()) + " (separator '" + std::string(1, delimiter) + "')");
     }
     row.line = line_no;
     row.cells.resize(required.size());
     for (std::size_t k = 0; k < required.size(); ++k) row.cells[k] = std::move(cells[index[k]]);
     on_row(row);
     ++rows;
-  }
-  if (in.bad()) throw InputError(path, "", "read error");
+  });
   if (!have_header) throw InputError(path, "", "is empty: no header line with '" + JoinCsv(required) + "'");
   if (rows == 0) throw InputError(path, "", "has a header but no data rows");
 }

@@ -44,6 +44,12 @@ std::string PrintableText(const std::string& text) {
   return out;
 }
 
+std::string QuotedList(const std::vector<std::string>& names) {
+  std::string list;
+  for (const std::string& name : names) list += (list.empty() ? "'" : ", '") + PrintableText(name) + "'";
+  return list;
+}
+
 bool ParseFiniteDouble(const std::string& text, double* value) {
   // std::from_chars, not strtod: the decimal point must not follow the C locale of the
   // process (a library user's may be "de_DE", where strtod expects a comma).

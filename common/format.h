@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 namespace cablecal {
 
@@ -12,6 +13,9 @@ std::string FormatDouble(double value);
 // `text` with control characters escaped (\n, \r, \t, \xNN), for a terminal or a one-line
 // heading: a file's bytes quoted in a message must not clear the screen or break a line.
 std::string PrintableText(const std::string& text);
+
+// "'a', 'b', 'c'": names for a message, each quoted and made printable (PrintableText).
+std::string QuotedList(const std::vector<std::string>& names);
 
 // Parses a whole string as a finite double; returns false on anything else
 // (empty, trailing characters, nan, inf, out of range such as 1e400). Independent of the

@@ -2,9 +2,8 @@
 
 #include <omp.h>
 
-#include <atomic>
-
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -545,6 +544,15 @@ DesignPrior LoadDesignPrior(const Robot& nominal, const std::string& path) {
   prior.robot = WithGeometry(nominal, g);
   prior.information = eig.eigenvectors() * eig.eigenvalues().cwiseInverse().asDiagonal() * eig.eigenvectors().transpose();
   return prior;
+}
+
+std::string NoBetterThanRandomWarning(const DesignOptions& options, const std::string& sigma_option) {
+  return "the designed set is no better than the median random set on its criterion: the poses that stay holdable "
+         "for geometry errors of " + FormatDouble(options.robust_sigmas) + " x " + FormatDouble(options.geometry_sigma_m) +
+         " m are a small part of the nominal workspace the random sets are drawn from (compare with " + sigma_option +
+         " 0). If the exit points and initial lengths are known better than that (a tape, a laser tracker), say so "
+         "with a smaller " + sigma_option + " (e.g. 0.005 or 0.001 m); a robot whose cable lines nearly meet at one "
+         "point of the platform needs it (README, \"Any number of cables\")";
 }
 
 std::string DesignSummaryYaml(const DesignResult& r, const DesignOptions& options, const std::string& command_line) {

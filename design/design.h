@@ -138,6 +138,12 @@ int MinDesignPoses(int num_cables);
 // SolverFailure when no start converges to verified poses.
 DesignResult DesignPoses(const Robot& robot, const DesignOptions& options);
 
+// Why a designed set can be no better than the median random set on its criterion, and
+// what to do: the warning `cablecal design` prints and the Python module issues.
+// `sigma_option` spells the geometry-sigma option the reader knows ("--geometry-sigma",
+// "geometry_sigma").
+std::string NoBetterThanRandomWarning(const DesignOptions& options, const std::string& sigma_option);
+
 // summary.yaml of `cablecal design`.
 std::string DesignSummaryYaml(const DesignResult& result, const DesignOptions& options,
                               const std::string& command_line);

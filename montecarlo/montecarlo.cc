@@ -65,8 +65,9 @@ std::vector<int> ParsePoseCounts(const std::string& text) {
     if (!ParseFiniteDouble(item, &v) || v != std::floor(v) || v < 1) {
       throw InputError("--poses", "", "expected first:last[:step] with whole numbers (got '" + text + "')");
     }
-    if (v > 1000) {
-      throw InputError("--poses", "", "at most 1000 poses per set (got '" + item + "' in '" + text + "')");
+    if (v > kMaxPosesPerSet) {
+      throw InputError("--poses", "", "at most " + std::to_string(kMaxPosesPerSet) + " poses per set (got '" + item +
+                                          "' in '" + text + "')");
     }
     parts.push_back(static_cast<int>(v));
   }
@@ -186,7 +187,10 @@ void ValidateOptions(const MonteCarloOptions& o, const Robot* nominal) {
                                           (nominal ? " of " + std::to_string(nominal->num_cables()) + " cables" : "") +
                                           " (got " + std::to_string(n) + ")");
     }
-    if (n > 1000) throw InputError("--poses", "", "at most 1000 poses per set (got " + std::to_string(n) + ")");
+    if (n > kMaxPosesPerSet) {
+      throw InputError("--poses", "", "at most " + std::to_string(kMaxPosesPerSet) + " poses per set (got " +
+                                          std::to_string(n) + ")");
+    }
   }
   if (o.designs.empty()) throw InputError("--designs", "", "no designs");
   if (!(o.geometry_sigma_m >= 0.0 && o.geometry_sigma_m <= kMaxGeometrySigma_m)) {

@@ -37,6 +37,7 @@ const char* ToString(PoseSetDesign d);
 std::vector<PoseSetDesign> ParseDesigns(const std::string& text);  // "random,optimized,d"
 // "6:50" or "6:50:2" (first:last[:step]); InputError naming --poses otherwise.
 std::vector<int> ParsePoseCounts(const std::string& text);
+constexpr int kMaxPosesPerSet = 1000;  // per pose set of a study (ParsePoseCounts, ValidateOptions)
 
 struct MonteCarloOptions {
   std::vector<int> pose_counts;

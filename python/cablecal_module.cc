@@ -403,7 +403,7 @@ PYBIND11_MODULE(cablecal, m) {
       .def_static(
           "load",
           [](py::handle robot_arg, py::handle path) {
-        const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
+            const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
             const std::string p = AsPath(path, "path");
             PyPlan plan{ReadPosePlanCsv(p, robot.num_cables()), robot.num_cables()};
             CheckPlanMatchesRobot(robot, plan.poses, p);
@@ -428,23 +428,21 @@ PYBIND11_MODULE(cablecal, m) {
   // ---- Measurements
   py::class_<PyMeasurements>(m, "Measurements", "One reading per pose: dl (n, m), z (n,), theta (n,).")
       .def(py::init([](py::handle robot_arg, py::handle dl, py::handle z, py::handle theta, py::handle pose_ids) {
-        const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
+             const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
              return MakeMeasurements(robot, dl, z, theta, pose_ids);
            }),
            py::arg("robot"), py::arg("dl"), py::arg("z"), py::arg("theta"), py::arg("pose_ids") = py::none())
       .def_static(
           "load",
           [](py::handle robot_arg, py::handle path, py::handle delimiter) {
-        const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
+            const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
             std::vector<std::string> ignored;
             PyMeasurements m{ReadMeasurementsCsv(AsPath(path, "path"), robot.num_cables(),
                                                  ParseDelimiter(AsText(delimiter, "delimiter")),
                                                  [&](const std::vector<std::string>& names) { ignored = names; }),
                              robot.num_cables()};
             if (!ignored.empty()) {
-              std::string list;
-              for (const std::string& c : ignored) list += (list.empty() ? "'" : ", '") + c + "'";
-              if (PyErr_WarnEx(PyExc_UserWarning, ("ignoring columns " + list).c_str(), 1) < 0) {
+              if (PyErr_WarnEx(PyExc_UserWarning, ("ignoring columns " + QuotedList(ignored)).c_str(), 1) < 0) {
                 throw py::error_already_set();
               }
             }
@@ -584,12 +582,9 @@ PYBIND11_MODULE(cablecal, m) {
         PyDesign d{Interruptible(stop, [&] { return DesignPoses(robot, o); }), o};
         d.options.interrupted = nullptr;
         if (o.random_sets > 0 && !(Improvement(o.criterion, d.result.criteria, d.result.random_median) > 1.0)) {
-          // As the CLI's warning (README, "Experiment design"): a result, but not a good plan.
-          const int warned = PyErr_WarnEx(PyExc_UserWarning,
-                       ("the designed set is no better than the median random set on its criterion: the poses that "
-                        "stay holdable for geometry errors of " + FormatDouble(o.robust_sigmas) + " x " +
-                        FormatDouble(o.geometry_sigma_m) + " m are a small part of the nominal workspace; if the "
-                        "geometry is known better, pass a smaller geometry_sigma").c_str(), 1);
+          // The CLI's warning: a result, but not a good plan.
+          const int warned =
+              PyErr_WarnEx(PyExc_UserWarning, NoBetterThanRandomWarning(o, "geometry_sigma").c_str(), 1);
           if (warned < 0) throw py::error_already_set();  // warnings filtered into errors
         }
         return d;
@@ -620,10 +615,6 @@ PYBIND11_MODULE(cablecal, m) {
         std::optional<Robot> truth;
         if (!truth_arg.is_none()) truth = AsObject<Robot>(truth_arg, "truth", "Robot");
         if (plan.num_cables != robot.num_cables()) Bad("plan", "made for a robot with another number of cables");
-        if (truth && truth->num_cables() != robot.num_cables()) {
-          Bad("truth", "the true robot has " + std::to_string(truth->num_cables()) + " cables, the nominal robot " +
-                           std::to_string(robot.num_cables()));
-        }
         double sigma = 0.0;
         if (!geometry_sigma.is_none()) {
           if (truth) Bad("truth", "give either truth or geometry_sigma, not both");
@@ -643,47 +634,34 @@ PYBIND11_MODULE(cablecal, m) {
 
   // ---- identify
   py::class_<IdentifyResult>(m, "IdentifyResult")
-      .def_property_readonly("status", [](py::handle result_arg) {
-        const IdentifyResult& r = AsObject<IdentifyResult>(result_arg, "result", "IdentifyResult");
- return std::string(ToString(r.status)); })
+      .def_property_readonly("status", [](const IdentifyResult& r) { return std::string(ToString(r.status)); })
       .def_readonly("message", &IdentifyResult::message)
       .def_readonly("iterations", &IdentifyResult::iterations)
       .def_readonly("final_cost", &IdentifyResult::final_cost)
       .def_readonly("rms_encoder_m", &IdentifyResult::rms_encoder_m)
       .def_readonly("rms_laser_m", &IdentifyResult::rms_laser_m)
       .def_readonly("rms_inclinometer_rad", &IdentifyResult::rms_inclinometer_rad)
-      .def_property_readonly("geometry_names", [](py::handle result_arg) {
-        const IdentifyResult& r = AsObject<IdentifyResult>(result_arg, "result", "IdentifyResult");
+      .def_property_readonly("geometry_names", [](const IdentifyResult& r) {
         return GeometryNames(static_cast<int>(r.geometry.size() / 3));
       })
-      .def_property_readonly("geometry", [](py::handle result_arg) {
-        const IdentifyResult& r = AsObject<IdentifyResult>(result_arg, "result", "IdentifyResult");
- return Vector(r.geometry); }, "(3m,), m")
-      .def_property_readonly("std", [](py::handle result_arg) {
-        const IdentifyResult& r = AsObject<IdentifyResult>(result_arg, "result", "IdentifyResult");
- return Vector(r.geometry_std); }, "(3m,), m")
-      .def_property_readonly("correlation", [](py::handle result_arg) {
-        const IdentifyResult& r = AsObject<IdentifyResult>(result_arg, "result", "IdentifyResult");
- return Array(r.geometry_correlation); })
-      .def_property_readonly("covariance", [](py::handle result_arg) {
-        const IdentifyResult& r = AsObject<IdentifyResult>(result_arg, "result", "IdentifyResult");
+      .def_property_readonly("geometry", [](const IdentifyResult& r) { return Vector(r.geometry); }, "(3m,), m")
+      .def_property_readonly("std", [](const IdentifyResult& r) { return Vector(r.geometry_std); }, "(3m,), m")
+      .def_property_readonly("correlation", [](const IdentifyResult& r) { return Array(r.geometry_correlation); })
+      .def_property_readonly("covariance", [](const IdentifyResult& r) {
         const Eigen::VectorXd& s = r.geometry_std;
         return Array(s.asDiagonal() * r.geometry_correlation * s.asDiagonal());
       }, "(3m, 3m), m^2")
-      .def_property_readonly("poses", [](py::handle result_arg) {
-        const IdentifyResult& r = AsObject<IdentifyResult>(result_arg, "result", "IdentifyResult");
+      .def_property_readonly("poses", [](const IdentifyResult& r) {
         Eigen::MatrixXd q(r.poses.size(), 3);
         for (std::size_t j = 0; j < r.poses.size(); ++j) q.row(j) = r.poses[j].q.transpose();
         return Array(q);
       }, "(n, 3): x, z, theta estimated")
-      .def_property_readonly("pose_std", [](py::handle result_arg) {
-        const IdentifyResult& r = AsObject<IdentifyResult>(result_arg, "result", "IdentifyResult");
+      .def_property_readonly("pose_std", [](const IdentifyResult& r) {
         Eigen::MatrixXd q(r.poses.size(), 3);
         for (std::size_t j = 0; j < r.poses.size(); ++j) q.row(j) = r.poses[j].std_dev.transpose();
         return Array(q);
       })
-      .def_property_readonly("identifiability", [](py::handle result_arg) {
-        const IdentifyResult& r = AsObject<IdentifyResult>(result_arg, "result", "IdentifyResult");
+      .def_property_readonly("identifiability", [](const IdentifyResult& r) {
         py::dict d;
         d["geometry_names"] = r.identifiability.geometry_names;
         d["singular_values"] = Vector(r.identifiability.singular_values);
@@ -692,9 +670,7 @@ PYBIND11_MODULE(cablecal, m) {
         d["null_directions"] = r.identifiability.null_directions;
         return d;
       })
-      .def("to_yaml", [](py::handle result_arg) {
-        const IdentifyResult& r = AsObject<IdentifyResult>(result_arg, "result", "IdentifyResult");
- return IdentifyResultYaml(r, CallText("identify")); },
+      .def("to_yaml", [](const IdentifyResult& r) { return IdentifyResultYaml(r, CallText("identify")); },
            "The CLI's result.yaml (the command line reads python: cablecal.identify).");
   m.def(
       "identify",
