@@ -169,6 +169,35 @@ def test_design_simulate_identify_equal_cli(tmp_path):
     np.testing.assert_allclose(np.sqrt(np.diag(cov)), result.std, rtol=1e-12)
 
 
+def test_design_warns_where_the_cli_does(tmp_path):
+    """A 3-cable robot whose robust poses lose to random ones (found by a new user): the CLI's
+    warning on stderr is the module's UserWarning, with the option spelt the Python way."""
+    d = {
+        "name": "lab3", "gravity": 9.81, "frame": {"width": 2.5, "height": 1.8},
+        "platform": {"mass": 2.0, "com": [0.03, -0.05], "anchors": [[-0.3, 0.0], [0.05, 0.2], [0.3, -0.02]]},
+        "cables": [{"exit": [0.0, 1.7], "pulley_radius": 0.02, "side": "left"},
+                   {"exit": [0.8, 1.8], "pulley_radius": 0.025, "side": "left"},
+                   {"exit": [2.5, 1.6], "pulley_radius": 0.02, "side": "right"}],
+        "tension": {"min": 1.0, "max": 90.0},
+        "limits": {"theta_max_deg": 40, "laser_range": 2.0, "margin": 0.05},
+        "home": [1.25, 0.9], "home_theta_deg": 10,
+        "sensors": {"laser": {"accuracy": 0.006, "repeatability": 0.0015},
+                    "inclinometer": {"accuracy_deg": 0.1, "repeatability_deg": 0.05},
+                    "encoder": {"sigma": 0.00005}},
+    }
+    robot = cablecal.Robot.from_dict(d)
+    with pytest.warns(UserWarning, match="no better than the median random set.*smaller geometry_sigma"):
+        design = cablecal.design(robot, 12, starts=4)
+    assert design.criteria["a_trace_covariance_m2"] >= design.random_median["a_trace_covariance_m2"]
+    path = tmp_path / "lab3.yaml"
+    path.write_text(robot.to_yaml())
+    done = subprocess.run([CLI, "design", "--robot", str(path), "--poses", "12", "--starts", "4",
+                           "--out", str(tmp_path / "p.csv")], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert "warning: the designed set is no better" in done.stderr
+    assert "smaller --geometry-sigma" in done.stderr
+
+
 def test_design_with_a_prior_equals_cli(tmp_path):
     path = robot_file("planar3_suspended")
     robot = cablecal.Robot.load(path)
