@@ -16,6 +16,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -101,6 +102,10 @@ struct IdentifyResult {
   Eigen::MatrixXd geometry_correlation;  // 3m x 3m, the same order (identity without covariance)
   std::vector<PoseEstimate> poses;
   Identifiability identifiability;
+  // The robot file's systematic sensor errors the laser and inclinometer readings were
+  // corrected for before the solve (sensors/correction.h; the caller sets it, Identify does
+  // not correct); none: the readings were used as read. result.yaml says which.
+  std::optional<SystematicSensorErrors> corrected_for;
   bool converged() const { return status == IdentifyStatus::kConverged; }
 };
 
