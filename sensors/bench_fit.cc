@@ -296,7 +296,7 @@ std::string SensorsFitYaml(const Robot& robot, const SensorsFit& fit, const std:
     const InclinometerFit& f = *fit.inclinometer;
     head += "# inclinometer (" + PrintableText(f.source) + "): " + BenchText(BenchSensor::kInclinometer, f.bench) +
             ";\n#   e = offset + k (sec theta - 1): offset " + Short(f.offset_rad / kDegToRad) +
-            " degrees (standard error " + Short(f.offset_se_rad / kDegToRad) + "), k " +
+            " degrees (standard error " + Short(f.offset_se_rad / kDegToRad) + "),\n#   k " +
             Short(f.sec_coefficient_rad / kDegToRad) + " degrees (standard error " +
             Short(f.sec_coefficient_se_rad / kDegToRad) + "), correlation " + Short(f.correlation) +
             ";\n#   accuracy " + Short(f.accuracy_rad / kDegToRad) + " degrees, repeatability " +
