@@ -313,9 +313,18 @@ TEST(SystematicErrors, CorrectedReadingsIdentifyAsWellAsCleanOnesAndRawOnesAreBi
       EXPECT_LT(std::abs(corrected.geometry(k) - reference.geometry(k)), 0.01 * sd) << names[k] << " seed " << seed;
       EXPECT_LT(std::abs(corrected.geometry(k) - truth(k)), 4.0 * sd) << names[k] << " seed " << seed;
     }
+    ASSERT_TRUE(raw.converged()) << "seed " << seed << ": " << ToString(raw.status) << " " << raw.message;
+    // Each pose's angle as well (the inclinometer's correction): as from clean readings to a
+    // twentieth of its standard deviation; as read, off by the inclinometer's error there.
+    for (std::size_t j = 0; j < plan.size(); ++j) {
+      const double sd = reference.poses[j].std_dev(2);
+      EXPECT_NEAR(corrected.poses[j].q(2), reference.poses[j].q(2), 0.05 * sd) << "pose " << j + 1 << " seed " << seed;
+      EXPECT_NEAR(raw.poses[j].q(2) - reference.poses[j].q(2),
+                  InclinometerError(with.sensors.systematic, sys.experiment.true_poses[j](2)), 0.1 * sd)
+          << "pose " << j + 1 << " seed " << seed;
+    }
     // The laser's offset moves the frame's z origin: both exit heights by the offset, many
     // standard deviations on every seed; the other parameters hardly move.
-    ASSERT_TRUE(raw.converged()) << "seed " << seed << ": " << ToString(raw.status) << " " << raw.message;
     for (const int k : {1, 3}) {
       const double bias = raw.geometry(k) - reference.geometry(k);
       EXPECT_NEAR(bias, with.sensors.systematic.laser_offset_m, 0.05 * with.sensors.systematic.laser_offset_m)
