@@ -28,6 +28,7 @@
 #include "identify/experiment.h"
 #include "identify/identify.h"
 #include "model/statics.h"
+#include "sensors/sensors.h"
 #include "workspace/workspace.h"
 
 namespace cablecal::cli {
@@ -241,7 +242,14 @@ int RunSimulate(const Context& ctx, const SimulateOptions& options) {
   // A pose where the true robot settles outside its own workspace (beyond a tension limit,
   // the inclinometer range or the margin) would stop a lab's experiment: exit 2 naming the
   // plan's pose (the Monte Carlo counts such a trial as failed).
-  const SimulationOptions sim{ParseNoisySensors(options.sensors), !options.no_encoder_noise, true};
+  SimulationOptions sim{ParseNoisySensors(options.sensors), !options.no_encoder_noise, true};
+  sim.systematic_errors = options.systematic_errors;
+  if (sim.systematic_errors && !nominal.sensors.systematic.any()) {
+    throw InputError("--systematic-errors", "",
+                     "the robot " + PrintableText(nominal.name) + " (" + (options.robot_path.empty() ? "built in" : options.robot_path) +
+                         ") has no systematic sensor errors to add (sensors.laser.offset, "
+                         "sensors.inclinometer.offset_deg, sec_coefficient_deg; cablecal sensors fit makes them)");
+  }
   if (!options.truth_path.empty() && options.geometry_sigma_m >= 0.0) {
     throw InputError("--truth", "", "give either --truth or --geometry-sigma, not both");
   }
@@ -262,8 +270,9 @@ int RunSimulate(const Context& ctx, const SimulateOptions& options) {
                                             experiment.true_poses));
   }
   output.Commit();
-  std::printf("simulated %zu poses (noisy sensors: %s, encoder noise %s) to %s\n", plan.size(),
-              ToString(sim.noisy), sim.encoder_noise ? "on" : "off", options.out_path.c_str());
+  std::printf("simulated %zu poses (noisy sensors: %s, encoder noise %s%s) to %s\n", plan.size(),
+              ToString(sim.noisy), sim.encoder_noise ? "on" : "off",
+              sim.systematic_errors ? ", systematic sensor errors added" : "", options.out_path.c_str());
   return kExitOk;
 }
 
@@ -285,8 +294,10 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
         std::fprintf(stderr, "cablecal: note: %s: ignoring column%s %s\n", options.measurements_path.c_str(),
                      ignored.size() > 1 ? "s" : "", QuotedList(ignored).c_str());
       });
-  CheckReadingsPlausible(nominal, measurements, options.measurements_path);
-  const IdentifyResult result = Identify(nominal, measurements, id);
+  // A robot file with systematic sensor errors (sensors fit) has them removed before the solve.
+  const std::vector<Measurement> readings = CorrectedReadings(nominal, measurements, options.measurements_path);
+  IdentifyResult result = Identify(nominal, readings, id);
+  if (nominal.sensors.systematic.any()) result.corrected_for = nominal.sensors.systematic;
   RequireUsableResult(result, options.measurements_path);
   const std::string result_yaml = IdentifyResultYaml(result, ctx.command_line);
   AtomicOutput output;
@@ -322,12 +333,70 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   if (!ctx.quiet) {
     for (const std::string& w : result.warnings) std::fprintf(stderr, "cablecal: warning: %s\n", w.c_str());
   }
+  if (result.corrected_for) {
+    const SystematicSensorErrors& e = *result.corrected_for;
+    std::printf("  readings corrected for the robot file's systematic sensor errors: laser offset %.3g m, "
+                "inclinometer offset %.3g deg, sec coefficient %.3g deg\n",
+                e.laser_offset_m, e.inclinometer_offset_rad * 180.0 / M_PI,
+                e.inclinometer_sec_coefficient_rad * 180.0 / M_PI);
+  }
   const std::vector<std::string> names = GeometryNames(nominal.num_cables());
   for (std::size_t k = 0; k < names.size(); ++k) {
     std::printf("  %s = %.7f m", names[k].c_str(), result.geometry(k));
     if (result.has_covariance) std::printf("  (std %.3g mm)", 1e3 * result.geometry_std(k));
     std::printf("\n");
   }
+  return kExitOk;
+}
+
+int RunSensorsFit(const Context& ctx, const SensorsFitOptions& options) {
+  CheckCommandPaths({{"--robot", options.robot_path},
+                     {"--inclinometer", options.inclinometer_path},
+                     {"--laser", options.laser_path}},
+                    {{"--out", options.out_path}});
+  if (options.inclinometer_path.empty() && options.laser_path.empty()) {
+    throw InputError("--inclinometer", "", "give --inclinometer, --laser or both: the bench readings to fit");
+  }
+  const Robot robot = LoadRobotOption(options.robot_path);
+  const char delimiter = ParseDelimiter(options.delimiter);
+  const auto note_ignored = [&](const std::string& path) {
+    return [&ctx, path](const std::vector<std::string>& ignored) {
+      if (ctx.quiet) return;
+      std::fprintf(stderr, "cablecal: note: %s: ignoring column%s %s\n", path.c_str(), ignored.size() > 1 ? "s" : "",
+                   QuotedList(ignored).c_str());
+    };
+  };
+  SensorsFit fit;
+  if (!options.inclinometer_path.empty()) {
+    const std::string& path = options.inclinometer_path;
+    fit.inclinometer = FitInclinometer(ReadBenchCsv(BenchSensor::kInclinometer, path, delimiter, note_ignored(path)), path);
+  }
+  if (!options.laser_path.empty()) {
+    const std::string& path = options.laser_path;
+    fit.laser = FitLaser(ReadBenchCsv(BenchSensor::kLaser, path, delimiter, note_ignored(path)), path);
+  }
+  AtomicOutput output;
+  output.WriteText(options.out_path, SensorsFitYaml(robot, fit, ctx.command_line));
+  output.Commit();
+  if (!ctx.quiet) {
+    for (const std::string& w : FitWarnings(robot, fit)) std::fprintf(stderr, "cablecal: warning: %s\n", w.c_str());
+  }
+  constexpr double kDeg = 180.0 / M_PI;
+  if (fit.inclinometer) {
+    const InclinometerFit& f = *fit.inclinometer;
+    std::printf("inclinometer, %d readings of %d references: offset %.3g deg (standard error %.2g), sec coefficient "
+                "%.3g deg (standard error %.2g), accuracy %.3g deg, repeatability %.3g deg (3-sigma ranges)\n",
+                f.bench.readings, f.bench.references, f.offset_rad * kDeg, f.offset_se_rad * kDeg,
+                f.sec_coefficient_rad * kDeg, f.sec_coefficient_se_rad * kDeg, f.accuracy_rad * kDeg,
+                f.repeatability_rad * kDeg);
+  }
+  if (fit.laser) {
+    const LaserFit& f = *fit.laser;
+    std::printf("laser, %d readings of %d references: offset %.3g m (standard error %.2g), accuracy %.3g m, "
+                "repeatability %.3g m (3-sigma ranges)\n",
+                f.bench.readings, f.bench.references, f.offset_m, f.offset_se_m, f.accuracy_m, f.repeatability_m);
+  }
+  std::printf("wrote the sensors block for a robot file to %s\n", options.out_path.c_str());
   return kExitOk;
 }
 

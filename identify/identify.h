@@ -145,6 +145,10 @@ struct IdentifyResult {
   std::vector<std::string> missing_sensors;  // "laser", "inclinometer": no such column in the data
   std::vector<std::string> warnings;         // a result, but one to read with care
   Identifiability identifiability;
+  // The robot file's systematic sensor errors the laser and inclinometer readings were
+  // corrected for before the solve (sensors/correction.h; the caller sets it, Identify does
+  // not correct); none: the readings were used as read. result.yaml says which.
+  std::optional<SystematicSensorErrors> corrected_for;
   bool converged() const { return status == IdentifyStatus::kConverged; }
 };
 
