@@ -716,10 +716,45 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
 
   if (options.compute_covariance && static_cast<int>(analysis.null_vectors.size()) == expected_null) {
     // gauge none: the Moore-Penrose pseudo-inverse (identify/schur.h).
-    if (const std::optional<BlockCovariance> cov = CovarianceOf(blocks, analysis)) {
-      // paper: residuals are not whitened, so scale by the residual variance s^2.
+    if (std::optional<BlockCovariance> cov = CovarianceOf(blocks, analysis)) {
       double scale = 1.0;
-      if (!ml) {
+      if (!ml && expected_null == 0) {
+        // paper: its residuals f_ij = l_model^2 - (dl_ij + l_i0)^2 take z and theta as exact,
+        // yet the laser's and inclinometer's noise enters them through l_model, with the
+        // encoder's through dl_ij. The sandwich propagates all three: per reading,
+        // Sigma = diag(2 (dl + l0) sigma_enc)^2 + sigma_z^2 b_z b_z^T + sigma_theta^2 b_th b_th^T,
+        // b = 2 l_model dl_model/d(z, theta) (schur.h, SandwichCovariance).
+        using Jet2 = ceres::Jet<double, 2>;
+        Jet2 geometry_jets[kGeometry];
+        for (int k = 0; k < kGeometry; ++k) geometry_jets[k] = Jet2(geometry[k]);
+        std::vector<Eigen::MatrixXd> sigma(n);
+        for (int j = 0; j < n; ++j) {
+          const int count = static_cast<int>(readings_of[j].size());
+          sigma[j] = Eigen::MatrixXd::Zero(M * count, M * count);
+          for (int c = 0; c < count; ++c) {
+            const Measurement& m = measurements[readings_of[j][c]];
+            Jet2 r[M];
+            LengthResiduals<M, Jet2>(nominal, geometry_jets,
+                                     Pose<Jet2>(Jet2(poses[j][0]), Jet2(m.z_m, 0), Jet2(m.theta_rad, 1)),
+                                     m.dl_m.data(), r);
+            Eigen::Matrix<double, M, 1> b_z, b_theta, encoder;
+            for (int i = 0; i < M; ++i) {
+              const double measured = m.dl_m(i) + geometry[2 * M + i];
+              const double model = r[i].a + measured;
+              b_z(i) = 2.0 * model * r[i].v(0);
+              b_theta(i) = 2.0 * model * r[i].v(1);
+              encoder(i) = 2.0 * measured * s.encoder_sigma_m;
+            }
+            sigma[j].block<M, M>(M * c, M * c) = Eigen::Matrix<double, M, M>(encoder.cwiseAbs2().asDiagonal()) +
+                                                   s.laser_sigma_m() * s.laser_sigma_m() * b_z * b_z.transpose() +
+                                                   s.inclinometer_sigma_rad() * s.inclinometer_sigma_rad() * b_theta *
+                                                       b_theta.transpose();
+          }
+        }
+        cov = SandwichCovariance(blocks, analysis, *cov, sigma);
+      } else if (!ml) {
+        // gauge none: the covariance scaled by the residual variance s^2 (conservative: the
+        // sandwich above is not taken through the pseudo-inverse).
         const int dof = summary.num_residuals - (summary.num_effective_parameters - expected_null);
         scale = dof > 0 ? 2.0 * summary.final_cost / dof : std::numeric_limits<double>::quiet_NaN();
       }
