@@ -315,12 +315,16 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     int sensor;   // 0 .. M - 1: encoders; M: laser; M + 1: inclinometer
   };
   const double length_sigma = ml ? s.encoder_sigma_m : std::max(s.laser_sigma_m(), s.encoder_sigma_m);
+  // The per-reading ReadingFits are for a person (the CLI, Python); the Monte Carlo, which asks
+  // for neither covariance nor identifiability, is spared their allocations.
+  const bool reading_fits = options.compute_covariance || options.compute_identifiability;
   const auto residuals_at = [&](const double* g, const PoseValues& q, const std::vector<char>& use, bool fits) {
     std::vector<Reading> readings;
     readings.reserve(static_cast<std::size_t>(values_per_reading) * num_readings);
     double sum_enc = 0.0, sum_laser = 0.0, sum_inc = 0.0;
+    const bool keep_fits = fits && reading_fits;
     if (fits) {
-      result.readings.assign(num_readings, ReadingFit{});
+      result.readings.assign(keep_fits ? num_readings : 0, ReadingFit{});
       result.poses.clear();
     }
     for (int j = 0; j < n; ++j) {
@@ -339,32 +343,36 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
       for (const int k : readings_of[j]) {
         const Measurement& m = measurements[k];
         const Eigen::Vector3d q_k = ml ? e.q : Eigen::Vector3d(q[j][0], m.z_m, m.theta_rad);
-        ReadingFit fit;
-        fit.pose_id = m.pose_id;
-        fit.where = m.where;
-        fit.encoder_sigmas.resize(M);
-        fit.encoder_weights.resize(M);
         double length_residuals[M];
         LengthResiduals<M, double>(nominal, g, q_k, m.dl_m.data(), length_residuals);
         for (int i = 0; i < M; ++i) {
           sum_enc += length_residuals[i] * length_residuals[i];
-          fit.encoder_sigmas(i) = length_residuals[i] / length_sigma;
-          fit.encoder_weights(i) = LossWeight(options.loss, fit.encoder_sigmas(i));
-          readings.push_back({std::abs(fit.encoder_sigmas(i)), k, i});
+          readings.push_back({std::abs(length_residuals[i]) / length_sigma, k, i});
         }
+        const double laser_sigmas = (q_k(1) - m.z_m) / s.laser_sigma_m();
+        const double inclinometer_sigmas = (q_k(2) - m.theta_rad) / s.inclinometer_sigma_rad();
         if (ml && laser) {
           sum_laser += (q_k(1) - m.z_m) * (q_k(1) - m.z_m);
-          fit.laser_sigmas = (q_k(1) - m.z_m) / s.laser_sigma_m();
-          fit.laser_weight = LossWeight(options.loss, *fit.laser_sigmas);
-          readings.push_back({std::abs(*fit.laser_sigmas), k, M});
+          readings.push_back({std::abs(laser_sigmas), k, M});
         }
         if (ml && inclinometer) {
           sum_inc += (q_k(2) - m.theta_rad) * (q_k(2) - m.theta_rad);
-          fit.inclinometer_sigmas = (q_k(2) - m.theta_rad) / s.inclinometer_sigma_rad();
-          fit.inclinometer_weight = LossWeight(options.loss, *fit.inclinometer_sigmas);
-          readings.push_back({std::abs(*fit.inclinometer_sigmas), k, M + 1});
+          readings.push_back({std::abs(inclinometer_sigmas), k, M + 1});
         }
-        if (fits) result.readings[k] = fit;
+        if (!keep_fits) continue;
+        ReadingFit& fit = result.readings[k];
+        fit.pose_id = m.pose_id;
+        fit.where = m.where;
+        fit.encoder_sigmas = Eigen::Map<const Eigen::Matrix<double, M, 1>>(length_residuals) / length_sigma;
+        fit.encoder_weights = fit.encoder_sigmas.unaryExpr([&](double r) { return LossWeight(options.loss, r); });
+        if (ml && laser) {
+          fit.laser_sigmas = laser_sigmas;
+          fit.laser_weight = LossWeight(options.loss, laser_sigmas);
+        }
+        if (ml && inclinometer) {
+          fit.inclinometer_sigmas = inclinometer_sigmas;
+          fit.inclinometer_weight = LossWeight(options.loss, inclinometer_sigmas);
+        }
       }
       if (fits) result.poses.push_back(e);
     }
@@ -395,7 +403,8 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     return (with_pose ? "pose " + std::to_string(m.pose_id) + ": " : std::string()) + sensor +
            (repeated ? " (" + m.where + ")" : "") + buffer;
   };
-  std::vector<Reading> tripped = beyond(residuals_at(geometry, poses, every_pose, false));
+  std::vector<Reading> readings = residuals_at(geometry, poses, every_pose, true);
+  std::vector<Reading> tripped = beyond(readings);
   const std::size_t few = std::max<std::size_t>(kFewOutliers, static_cast<std::size_t>(values_per_reading) * num_readings / 20);
 
   // A bad reading at a pose that decides part of the geometry (high leverage) is absorbed by
@@ -501,8 +510,10 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   result.final_cost = summary.final_cost;
   result.geometry = Eigen::Map<const GeometryVector>(geometry, kGeometry);
   result.status = IdentifyStatus::kConverged;
-  const std::vector<Reading> readings = residuals_at(geometry, poses, every_pose, true);
-  if (robust) tripped = beyond(readings);
+  if (robust) {
+    readings = residuals_at(geometry, poses, every_pose, true);
+    tripped = beyond(readings);
+  }
 
   // Goodness of fit. With the right model the whitened residuals have RMS near 1 (ml), and
   // the paper estimator's length residuals are of the order of the laser's noise, which
