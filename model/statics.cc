@@ -36,12 +36,21 @@ struct MomentBalance {
 
 MomentBalance EvaluateMomentBalance(const Robot& robot, double x_m, double z_m, double theta_rad) {
   MomentBalance b;
-  const Pose<double> q(x_m, z_m, theta_rad);
-  for (const Cable& c : robot.cables) {
-    if (!CableGeometryValid(CableAtPose<double>(c, q), c.pulley_radius_m)) return b;
+  // One rotation and one state per cable, shared by the validity test, W and the gravity
+  // wrench (the same arithmetic as CableAtPose, WrenchMatrix and GravityWrench, so the same
+  // bits): the sampler's theta scans call this some 50 times per pose, and computing each
+  // sine, cosine and arctangent once made sampling twice as fast.
+  const Eigen::Matrix2d R = Rotation(theta_rad);
+  const Eigen::Vector2d p(x_m, z_m);
+  Eigen::Matrix<double, 3, 2> W;
+  for (int i = 0; i < 2; ++i) {
+    const Cable& c = robot.cables[i];
+    const Eigen::Vector2d r_F_anchor = R * c.p_P_anchor_m;
+    const CableState<double> s = CableGeometry<double>(c.p_F_exit_m, c.pulley_radius_m, SignsOf(c), p + r_F_anchor);
+    if (!CableGeometryValid(s, c.pulley_radius_m)) return b;
+    W.col(i) = WrenchColumn<double>(r_F_anchor, s);
   }
-  const Eigen::Matrix<double, 3, Eigen::Dynamic> W = WrenchMatrix<double>(robot, q);
-  const Eigen::Vector3d w_g = GravityWrench<double>(robot, q);
+  const Eigen::Vector3d w_g = GravityWrench<double>(robot, R);
   const Eigen::Matrix2d F = W.topRows<2>();
   b.det = F.determinant();
   Eigen::Matrix2d adj;
@@ -449,9 +458,20 @@ ForwardResult ForwardNewton(const Robot& robot, const Eigen::VectorXd& lengths_m
     for (int k = 0; k < 5; ++k) yj(k) = Jet5(y(k), k);
     const Pose<Jet5> q = yj.head<3>();
     const Eigen::Matrix<Jet5, Eigen::Dynamic, 1> t = yj.tail<2>();
+    // [l(q) - L; W t + w_g] with one rotation and one state per cable, as in
+    // EvaluateMomentBalance (the same arithmetic as CableAtPose and EquilibriumResidual).
     Eigen::Matrix<Jet5, 5, 1> r;
-    for (int i = 0; i < 2; ++i) r(i) = CableAtPose<Jet5>(robot.cables[i], q).length_m - lengths_m(i);
-    r.tail<3>() = EquilibriumResidual<Jet5>(robot, q, t) / weight_N;
+    const Eigen::Matrix<Jet5, 2, 2> R = Rotation(q(2));
+    Eigen::Matrix<Jet5, 3, Eigen::Dynamic> W(3, 2);
+    for (int i = 0; i < 2; ++i) {
+      const Cable& c = robot.cables[i];
+      const Vec2<Jet5> r_F_anchor = R * c.p_P_anchor_m.cast<Jet5>();
+      const CableState<Jet5> s = CableGeometry<Jet5>(c.p_F_exit_m.cast<Jet5>(), Jet5(c.pulley_radius_m), SignsOf(c),
+                                                     Vec2<Jet5>(q(0), q(1)) + r_F_anchor);
+      r(i) = s.length_m - lengths_m(i);
+      W.col(i) = WrenchColumn<Jet5>(r_F_anchor, s);
+    }
+    r.tail<3>() = (W * t + GravityWrench<Jet5>(robot, R)) / weight_N;
     Vector5d value;
     for (int k = 0; k < 5; ++k) {
       value(k) = r(k).a;
