@@ -4,6 +4,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -34,13 +35,14 @@ struct MomentBalance {
   Eigen::Vector2d tensions_N = Eigen::Vector2d::Zero();
 };
 
-MomentBalance EvaluateMomentBalance(const Robot& robot, double x_m, double z_m, double theta_rad) {
+MomentBalance EvaluateMomentBalance(const Robot& robot, double x_m, double z_m, double theta_rad,
+                                    const Eigen::Matrix2d* rotation = nullptr) {
   MomentBalance b;
   // One rotation and one state per cable, shared by the validity test, W and the gravity
   // wrench (the same arithmetic as CableAtPose, WrenchMatrix and GravityWrench, so the same
   // bits): the sampler's theta scans call this some 50 times per pose, and computing each
   // sine, cosine and arctangent once made sampling twice as fast.
-  const Eigen::Matrix2d R = Rotation(theta_rad);
+  const Eigen::Matrix2d R = rotation ? *rotation : Rotation(theta_rad);
   const Eigen::Vector2d p(x_m, z_m);
   Eigen::Matrix<double, 3, 2> W;
   for (int i = 0; i < 2; ++i) {
@@ -161,12 +163,19 @@ EquilibriumResult SolveEquilibrium(const Robot& robot, double x_m, double z_m) {
   };
 
   const double step = 2.0 * kThetaSearchMax_rad / kThetaSearchSteps;
+  // The scan's angles are the same at every (x, z): their rotations once per process.
+  static const std::array<Eigen::Matrix2d, kThetaSearchSteps + 1> kScanRotations = [step] {
+    std::array<Eigen::Matrix2d, kThetaSearchSteps + 1> r;
+    r[0] = Rotation(-kThetaSearchMax_rad);
+    for (int k = 1; k <= kThetaSearchSteps; ++k) r[k] = Rotation(-kThetaSearchMax_rad + k * step);
+    return r;
+  }();
   double theta_prev = -kThetaSearchMax_rad;
-  MomentBalance prev = EvaluateMomentBalance(robot, x_m, z_m, theta_prev);
+  MomentBalance prev = EvaluateMomentBalance(robot, x_m, z_m, theta_prev, &kScanRotations[0]);
   any_valid = prev.valid;
   for (int k = 1; k <= kThetaSearchSteps; ++k) {
     const double theta = -kThetaSearchMax_rad + k * step;
-    const MomentBalance cur = EvaluateMomentBalance(robot, x_m, z_m, theta);
+    const MomentBalance cur = EvaluateMomentBalance(robot, x_m, z_m, theta, &kScanRotations[k]);
     any_valid = any_valid || cur.valid;
     if (prev.valid && cur.valid) {
       if (cur.scaled_moment == 0.0) {
