@@ -111,6 +111,12 @@ struct IdentifyResult {
 IdentifyResult Identify(const Robot& nominal, const std::vector<Measurement>& measurements,
                         const IdentifyOptions& options);
 
+// The x where `robot`'s model, with `geometry` (GeometryOf(robot)), best explains a pose's
+// encoder readings at its measured z and theta: Identify's start for each x_j, and Validate's
+// start for the forward model (both need a start near the platform's real pose; home is too
+// far for some poses).
+double XFromReadings(const Robot& robot, const GeometryVector& geometry, const Measurement& measurement);
+
 // What `identify` (the CLI and the Python module) makes of a result that is not one: a
 // rank-deficient or poor fit is an InputError naming `source` (the data cannot calibrate
 // this robot), a solve that did not converge a SolverFailure. Returns quietly otherwise.
