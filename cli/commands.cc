@@ -27,6 +27,7 @@
 #include "design/design.h"
 #include "identify/experiment.h"
 #include "identify/identify.h"
+#include "identify/validate.h"
 #include "model/statics.h"
 #include "workspace/workspace.h"
 
@@ -71,6 +72,20 @@ std::string PosePlanJsonYaml(const std::vector<PlanPose>& poses) {
   }
   o << YAML::EndSeq;
   return YamlText(o);
+}
+
+// --measurements: the CSV read by column name for `robot` (the ignored columns noted on
+// stderr unless -q), then checked against what its sensors can read.
+std::vector<Measurement> ReadMeasurementsOption(const Context& ctx, const Robot& robot, const std::string& path,
+                                                const std::string& delimiter) {
+  const std::vector<Measurement> measurements =
+      ReadMeasurementsCsv(path, robot.num_cables(), ParseDelimiter(delimiter), [&](const std::vector<std::string>& ignored) {
+        if (ctx.quiet) return;
+        std::fprintf(stderr, "cablecal: note: %s: ignoring column%s %s\n", path.c_str(), ignored.size() > 1 ? "s" : "",
+                     QuotedList(ignored).c_str());
+      });
+  CheckReadingsPlausible(robot, measurements, path);
+  return measurements;
 }
 
 }  // namespace
@@ -277,14 +292,8 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   id.gauge = ParseGauge(options.gauge);
   id.source = options.measurements_path;
   id.max_iterations = options.max_iterations;
-  const std::vector<Measurement> measurements = ReadMeasurementsCsv(
-      options.measurements_path, nominal.num_cables(), ParseDelimiter(options.delimiter),
-      [&](const std::vector<std::string>& ignored) {
-        if (ctx.quiet) return;
-        std::fprintf(stderr, "cablecal: note: %s: ignoring column%s %s\n", options.measurements_path.c_str(),
-                     ignored.size() > 1 ? "s" : "", QuotedList(ignored).c_str());
-      });
-  CheckReadingsPlausible(nominal, measurements, options.measurements_path);
+  const std::vector<Measurement> measurements =
+      ReadMeasurementsOption(ctx, nominal, options.measurements_path, options.delimiter);
   const IdentifyResult result = Identify(nominal, measurements, id);
   RequireUsableResult(result, options.measurements_path);
   const std::string result_yaml = IdentifyResultYaml(result, ctx.command_line);
@@ -311,6 +320,49 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
     std::printf("  %s = %.7f m", names[k].c_str(), result.geometry(k));
     if (result.has_covariance) std::printf("  (std %.3g mm)", 1e3 * result.geometry_std(k));
     std::printf("\n");
+  }
+  return kExitOk;
+}
+
+int RunValidate(const Context& ctx, const ValidateCommandOptions& options) {
+  CheckCommandPaths({{"--robot", options.robot_path},
+                     {"--nominal", options.nominal_path},
+                     {"--measurements", options.measurements_path}},
+                    {{"--out", options.out_path}, {"--summary", options.summary_path}});
+  if (options.out_path.empty() && !options.json) throw InputError("--out", "", "required (or print the result with --json)");
+  const Robot calibrated = LoadRobotFile(options.robot_path);
+  std::optional<Robot> nominal;
+  if (!options.nominal_path.empty()) nominal = LoadRobotFile(options.nominal_path);
+  const std::vector<Measurement> measurements =
+      ReadMeasurementsOption(ctx, calibrated, options.measurements_path, options.delimiter);
+  const ValidationResult result = Validate(calibrated, nominal, measurements, options.measurements_path);
+  const std::string summary_yaml = ValidationSummaryYaml(result, ctx.command_line);
+  AtomicOutput output;
+  if (!options.out_path.empty()) {
+    output.WriteText(options.out_path, ValidationCsv(result, ProvenanceComment(ctx.command_line)));
+  }
+  if (!options.summary_path.empty()) output.WriteText(options.summary_path, summary_yaml);
+  output.Commit();
+  if (options.json) {
+    YAML::Node doc = YAML::Load(summary_yaml);
+    doc["rows"] = YAML::Load(ValidationRowsYaml(result));
+    std::printf("%s\n", ToJson(doc).c_str());
+    return kExitOk;
+  }
+  // Millimetres and milliradians, 3 significant digits: what a reader compares; the files keep
+  // every digit.
+  std::printf("validated on %zu poses of %s (error = predicted - measured; sensor noise: laser %.3g mm, "
+              "inclinometer %.3g mrad)\n",
+              measurements.size(), options.measurements_path.c_str(), 1e3 * result.laser_sigma_m,
+              1e3 * result.inclinometer_sigma_rad);
+  for (const RobotPrediction& p : result.robots) {
+    std::printf("  %-10s z rms %.3g mm (max %.3g mm), theta rms %.3g mrad (max %.3g mrad)  [%s]\n", p.name.c_str(),
+                1e3 * p.z_m.rms, 1e3 * p.z_m.max_abs, 1e3 * p.theta_rad.rms, 1e3 * p.theta_rad.max_abs,
+                PrintableText(p.source).c_str());
+  }
+  if (nominal) {
+    std::printf("  nominal / calibrated rms: z %.3g, theta %.3g (> 1: the calibration helped)\n", ZRmsRatio(result),
+                ThetaRmsRatio(result));
   }
   return kExitOk;
 }

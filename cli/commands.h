@@ -61,6 +61,13 @@ struct IdentifyCommandOptions {
 };
 int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options);
 
+struct ValidateCommandOptions {
+  std::string robot_path, nominal_path, measurements_path, out_path, summary_path;
+  std::string delimiter = ",";  // of the measurement CSV
+  bool json = false;  // the summary and the per-pose rows on stdout as JSON (then --out is optional)
+};
+int RunValidate(const Context& ctx, const ValidateCommandOptions& options);
+
 struct DesignCommandOptions {
   std::string robot_path, out_path, summary_path, plot_path;
   int poses = 0, starts = 8, random_sets = 100;
