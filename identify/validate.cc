@@ -51,8 +51,8 @@ Eigen::Vector3d PredictPose(const Robot& robot, const std::string& role, const G
   return q;
 }
 
-ErrorStats Stats(const std::vector<double>& errors) {
-  ErrorStats s;
+ErrorSummary Stats(const std::vector<double>& errors) {
+  ErrorSummary s;
   double sum2 = 0.0;
   for (const double e : errors) {
     sum2 += e * e;
@@ -80,7 +80,7 @@ RobotPrediction Predict(const Robot& robot, const std::string& role, const std::
   return p;
 }
 
-double Ratio(const ValidationResult& r, ErrorStats RobotPrediction::*stats) {
+double Ratio(const ValidationResult& r, ErrorSummary RobotPrediction::*stats) {
   if (r.robots.size() < 2) return std::numeric_limits<double>::quiet_NaN();
   return (r.robots[1].*stats).rms / (r.robots[0].*stats).rms;
 }
@@ -104,7 +104,7 @@ std::vector<double> Row(const ValidationResult& r, std::size_t j) {
   return v;
 }
 
-void EmitStats(YAML::Emitter& o, const char* key, const char* unit, const ErrorStats& s) {
+void EmitStats(YAML::Emitter& o, const char* key, const char* unit, const ErrorSummary& s) {
   o << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << std::string("rms_") + unit
     << YAML::Value << YamlNumber{s.rms} << YAML::Key << std::string("max_abs_") + unit << YAML::Value
     << YamlNumber{s.max_abs} << YAML::EndMap;

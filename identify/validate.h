@@ -17,7 +17,7 @@
 
 namespace cablecal {
 
-struct ErrorStats {
+struct ErrorSummary {
   double rms = 0.0;
   double max_abs = 0.0;
 };
@@ -29,7 +29,7 @@ struct RobotPrediction {
   std::string source;
   std::vector<Eigen::Vector3d> q;  // predicted (x, z, theta), m and rad
   std::vector<double> z_error_m, theta_error_rad;
-  ErrorStats z_m, theta_rad;
+  ErrorSummary z_m, theta_rad;
 };
 
 struct ValidationResult {

@@ -243,6 +243,61 @@ def test_a_labs_log_is_read_by_column_name(tmp_path):
         cablecal.Measurements.load(robot, log)
 
 
+def test_validate_equals_cli_and_the_calibration_wins(tmp_path):
+    """Identified on one experiment, validated on another of the same true robot: the module's
+    CSV and summary are the CLI's, and the calibrated robot predicts z better than the nominal."""
+    path = robot_file("asymmetric")
+    robot = cablecal.Robot.load(path)
+    first = cablecal.simulate(robot, cablecal.sample(robot, 14, seed=2), geometry_sigma=0.015, seed=5)
+    truth = first.truth
+    holdout = cablecal.simulate(robot, cablecal.sample(robot, 12, seed=3), truth=truth, seed=6).measurements
+    calibrated = cablecal.calibrated_robot(robot, cablecal.identify(robot, first.measurements))
+    v = cablecal.validate(calibrated, holdout, nominal=robot)
+    assert set(v.robots) == {"calibrated", "nominal"}
+    cal, nom = v.robots["calibrated"], v.robots["nominal"]
+    assert cal["poses"].shape == (12, 3)
+    np.testing.assert_array_equal(cal["z_error"], cal["poses"][:, 1] - v.z_measured)
+    np.testing.assert_array_equal(nom["theta_error"], nom["poses"][:, 2] - v.theta_measured)
+    assert v.pose_ids == holdout.pose_ids
+    assert np.isclose(cal["z_rms"], np.sqrt(np.mean(cal["z_error"] ** 2)), rtol=1e-12)
+    assert v.ratio["z_rms"] == nom["z_rms"] / cal["z_rms"]
+    assert v.ratio["z_rms"] >= 3.0, v.ratio
+
+    # The CLI on the same files.
+    cal_yaml, meas_csv = tmp_path / "cal.yaml", tmp_path / "holdout.csv"
+    cal_yaml.write_text(calibrated.to_yaml())
+    meas_csv.write_text(holdout.to_csv())
+    out, summary = tmp_path / "v.csv", tmp_path / "v.yaml"
+    cli("validate", "--robot", str(cal_yaml), "--nominal", path, "--measurements", str(meas_csv),
+        "--out", str(out), "--summary", str(summary))
+    assert v.to_csv() == data_lines(out)
+    # The robot files' names differ: the module's calibrated robot was not loaded from cal.yaml.
+    ours = [l for l in yaml_without_provenance(v.to_yaml()) if "file:" not in l]
+    theirs = [l for l in yaml_without_provenance(summary.read_text()) if "file:" not in l]
+    assert ours == theirs
+
+    alone = cablecal.validate(truth, holdout)
+    assert alone.ratio is None and set(alone.robots) == {"calibrated"}
+
+
+def test_validate_refuses_what_it_cannot_compare():
+    r2 = cablecal.Robot.load(robot_file("asymmetric"))
+    r3 = cablecal.Robot.load(robot_file("planar3_suspended"))
+    m2 = cablecal.simulate(r2, cablecal.sample(r2, 4, seed=1), seed=2).measurements
+    m3 = cablecal.simulate(r3, cablecal.sample(r3, 4, seed=1), seed=2).measurements
+    slack = cablecal.Measurements(r2, np.vstack([m2.dl, [3.0, 0.0]]), np.append(m2.z, 1.2), np.append(m2.theta, 0.0))
+    for call, message in [
+        (lambda: cablecal.validate(r2, slack), "measurements: pose 5: the calibrated robot .* cannot hold"),
+        (lambda: cablecal.validate(r2, m3), "another number of cables"),
+        (lambda: cablecal.validate(r2, m2, nominal=r3), "the nominal robot has 3 cables"),
+        (lambda: cablecal.validate(r2, m2, nominal=robot_file("asymmetric")), "expected a cablecal.Robot"),
+        (lambda: cablecal.validate(r2.to_dict(), m2), "expected a cablecal.Robot"),
+        (lambda: cablecal.validate(r2, m2.dl), "expected a cablecal.Measurements"),
+    ]:
+        with pytest.raises(cablecal.InputError, match=message):
+            call()
+
+
 def test_montecarlo_equals_cli(tmp_path):
     path = robot_file("asymmetric")
     robot = cablecal.Robot.load(path)
