@@ -353,7 +353,7 @@ int RunValidate(const Context& ctx, const ValidateCommandOptions& options) {
   // every digit.
   std::printf("validated on %zu poses of %s (error = predicted - measured; sensor noise: laser %.3g mm, "
               "inclinometer %.3g mrad)\n",
-              measurements.size(), options.measurements_path.c_str(), 1e3 * result.laser_sigma_m,
+              measurements.size(), PrintableText(options.measurements_path).c_str(), 1e3 * result.laser_sigma_m,
               1e3 * result.inclinometer_sigma_rad);
   for (const RobotPrediction& p : result.robots) {
     std::printf("  %-10s z rms %.3g mm (max %.3g mm), theta rms %.3g mrad (max %.3g mrad)  [%s]\n", p.name.c_str(),

@@ -1,6 +1,7 @@
 #include "identify/validate.h"
 
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "common/error.h"
@@ -32,9 +33,9 @@ Eigen::Vector3d PredictPose(const Robot& robot, const std::string& role, const G
   const Eigen::VectorXd lengths = geometry.tail(cables) + m.dl_m;  // l_i0 + dl_i
   const ForwardResult fwd = SolveForwardGeometricoStatic(robot, lengths, &start);
   const std::string where = Where(m, source);
-  const std::string hint = ": readings of another robot, or a pose outside this one's workspace?";
+  const std::string hint = ": readings of another robot, or a pose outside its workspace?";
   if (fwd.status != ForwardStatus::kConverged) {
-    throw InputError(where, "", RobotLabel(role, robot) + " cannot hold these lengths (initial length + dl) (" +
+    throw InputError(where, "", RobotLabel(role, robot) + " cannot hold these lengths, its initial lengths + dl (" +
                                     CannotHoldReason(fwd.status, "where the laser and inclinometer saw the platform") +
                                     ")" + hint);
   }
@@ -43,10 +44,11 @@ Eigen::Vector3d PredictPose(const Robot& robot, const std::string& role, const G
   const Eigen::Vector3d& q = fwd.equilibrium.q;
   const double distance_m = (q.head<2>() - start.head<2>()).norm(), turn_rad = std::abs(q(2) - start(2));
   if (distance_m > kOtherAssemblyDistance_m || turn_rad > kOtherAssemblyAngle_rad) {
-    throw InputError(where, "", RobotLabel(role, robot) + " holds these lengths only at (" + FormatDouble(q(0)) + ", " +
-                                    FormatDouble(q(1)) + ") m, " + FormatDouble(q(2)) + " rad, " +
-                                    FormatDouble(distance_m) + " m and " + FormatDouble(turn_rad) +
-                                    " rad from where the laser and inclinometer saw the platform" + hint);
+    char at[160];
+    std::snprintf(at, sizeof at, "(%.3f, %.3f) m, %.3f rad, %.3f m and %.3f rad", q(0), q(1), q(2), distance_m,
+                  turn_rad);
+    throw InputError(where, "", RobotLabel(role, robot) + " holds these lengths only at " + at +
+                                    " from where the laser and inclinometer saw the platform" + hint);
   }
   return q;
 }

@@ -4,7 +4,7 @@
 // laser's and the inclinometer's readings (error = predicted - measured). Run on a calibrated
 // robot and, optionally, on the nominal one, the RMS and largest errors of both say what the
 // calibration bought on poses it was not fitted to (README, "validate").
-// Depends on model/ and identify/experiment.h (measurements).
+// Depends on model/ (the forward model) and identify/ (measurements; identify.h's per-pose x start).
 #pragma once
 
 #include <Eigen/Core>
