@@ -6,6 +6,7 @@
 //   experiment.h  simulated or measured readings, measurement CSV
 //   residuals.h   the templated residuals (shared with design/)
 //   identify.h    Identify(), its options and result, result YAML
+//   validate.h    Validate(): a robot's predictions of held-out poses against the readings
 // Depends on model/, workspace/ (pose plans) and common/.
 //
 // The gauge (README, "Identification"): encoders, a vertical laser and an inclinometer cannot see a
