@@ -292,6 +292,7 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   id.gauge = ParseGauge(options.gauge);
   id.source = options.measurements_path;
   id.max_iterations = options.max_iterations;
+  id.loss = ParseLoss(options.loss);
   const std::vector<Measurement> measurements =
       ReadMeasurementsOption(ctx, nominal, options.measurements_path, options.delimiter);
   const IdentifyResult result = Identify(nominal, measurements, id);
@@ -312,9 +313,24 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   }
   // The console rounds to what a reader compares (3 significant digits, 0.1 um for lengths);
   // result.yaml keeps every digit.
-  std::printf("identified %s from %zu poses (%s, gauge %s): %d iterations, residual rms encoder %.3g m, laser %.3g m, inclinometer %.3g rad\n",
-              PrintableText(nominal.name).c_str(), measurements.size(), ToString(id.estimator), ToString(id.gauge), result.iterations,
-              result.rms_encoder_m, result.rms_laser_m, result.rms_inclinometer_rad);
+  std::printf("identified %s from %zu poses", PrintableText(nominal.name).c_str(), result.poses.size());
+  if (result.poses.size() != measurements.size()) std::printf(" (%zu readings)", measurements.size());
+  std::printf(" (%s, gauge %s%s): %d iterations, residual rms encoder %.3g m", ToString(id.estimator), ToString(id.gauge),
+              id.loss.kind == LossKind::kNone ? "" : (", loss " + ToString(id.loss)).c_str(), result.iterations,
+              result.rms_encoder_m);
+  const auto has = [&](const char* sensor) {
+    return std::find(result.missing_sensors.begin(), result.missing_sensors.end(), sensor) == result.missing_sensors.end();
+  };
+  if (has("laser")) std::printf(", laser %.3g m", result.rms_laser_m);
+  if (has("inclinometer")) std::printf(", inclinometer %.3g rad", result.rms_inclinometer_rad);
+  std::printf("\n");
+  if (!result.missing_sensors.empty()) {
+    std::printf("  the data have %s: see identifiability in the result\n", MissingSensorsText(result.missing_sensors).c_str());
+  }
+  for (const std::string& d : result.down_weighted) std::printf("  down-weighted: %s\n", d.c_str());
+  if (!ctx.quiet) {
+    for (const std::string& w : result.warnings) std::fprintf(stderr, "cablecal: warning: %s\n", w.c_str());
+  }
   const std::vector<std::string> names = GeometryNames(nominal.num_cables());
   for (std::size_t k = 0; k < names.size(); ++k) {
     std::printf("  %s = %.7f m", names[k].c_str(), result.geometry(k));

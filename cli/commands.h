@@ -58,6 +58,7 @@ struct IdentifyCommandOptions {
   int max_iterations = 100;
   bool json = false;  // the result on stdout as JSON (then --out is optional)
   std::string delimiter = ",";  // of the measurement CSV
+  std::string loss = "none";     // ParseLoss
 };
 int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options);
 
@@ -82,7 +83,7 @@ int RunDesign(const Context& ctx, const DesignCommandOptions& options);
 
 struct MonteCarloCommandOptions {
   std::string robot_path, poses, designs = "random,optimized", estimator = "ml", gauge = "a1x", sensors = "both",
-                          out_dir;
+                          out_dir, loss = "none", outliers = "0";
   int trials = 0, threads = 0, design_starts = 2;
   double geometry_sigma_m = 0.01;
   unsigned long long seed = 1;

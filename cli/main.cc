@@ -133,6 +133,10 @@ int main(int argc, char** argv) {
   id_cmd->add_option("--delimiter", ident.delimiter, "the measurement CSV's separator: ',', ';' or tab")
       ->capture_default_str();
   id_cmd->add_option("--calibrated-robot", ident.calibrated_robot_path, "robot file with the identified geometry");
+  id_cmd->add_option("--loss", ident.loss,
+                     "robust loss on each reading: none, huber or cauchy, optionally :SCALE in sigmas "
+                     "(defaults huber:3, cauchy:10; ml only)")
+      ->capture_default_str();
 
   cablecal::cli::ValidateCommandOptions val;
   CLI::App* val_cmd =
@@ -197,6 +201,11 @@ int main(int argc, char** argv) {
   mc_cmd->add_option("--geometry-sigma", mc.geometry_sigma_m, "true geometry's deviation from nominal, m")
       ->capture_default_str()
       ->check(kNonNegative);
+  mc_cmd->add_option("--loss", mc.loss, "robust loss of every identification, as identify --loss")
+      ->capture_default_str();
+  mc_cmd->add_option("--outliers", mc.outliers,
+                     "RATE[:SIZE]: each reading off by SIZE sigmas (default 100) with probability RATE")
+      ->capture_default_str();
   mc_cmd->add_option("--design-starts", mc.design_starts, "Ipopt starts per designed set")
       ->capture_default_str()
       ->check(WholeNumberIn(1, 1000));

@@ -56,6 +56,12 @@ std::string RunYaml(const Robot& robot, const MonteCarloOptions& o, const std::s
   y << Key << "gauge" << Value << ToString(o.gauge);
   y << Key << "sensors" << Value << ToString(o.sensors);
   y << Key << "geometry_sigma_m" << Value << YamlNumber{o.geometry_sigma_m};
+  if (o.loss.kind != LossKind::kNone) y << Key << "loss" << Value << ToString(o.loss);
+  if (o.outliers.rate > 0.0) {
+    y << Key << "outliers" << Value << YAML::Flow << YAML::BeginMap << Key << "rate" << Value
+      << YamlNumber{o.outliers.rate} << Key << "size_sigmas" << Value << YamlNumber{o.outliers.size_sigmas}
+      << YAML::EndMap;
+  }
   y << Key << "design_starts" << Value << o.design_starts;
   y << Key << "seed" << Value << o.seed;
   y << Key << "blas" << Value << YamlString{LoadedLibraryPath("libblas.so")};
@@ -129,6 +135,8 @@ int RunMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptions& opt
     o.gauge = ParseGauge(options.gauge);
     o.sensors = ParseNoisySensors(options.sensors);
     o.geometry_sigma_m = options.geometry_sigma_m;
+    o.loss = ParseLoss(options.loss);
+    o.outliers = ParseOutliers(options.outliers);
     o.seed = options.seed;
     o.design_starts = options.design_starts;
     ValidateOptions(o, &robot);

@@ -162,16 +162,18 @@ void ForEachCsvRow(std::istream& in, const std::string& path, const std::vector<
 }
 
 void ForEachCsvRowByName(std::istream& in, const std::string& path, char delimiter,
-                         const std::vector<std::string>& required,
+                         const std::vector<std::string>& required, const std::vector<std::string>& optional,
                          const std::function<void(const std::vector<std::string>&)>& on_ignored,
                          const std::function<void(const CsvRow&)>& on_row) {
+  std::vector<std::string> wanted = required;
+  wanted.insert(wanted.end(), optional.begin(), optional.end());
   bool have_header = false;
   std::size_t columns = 0;
-  std::vector<std::size_t> index;  // file column of each required name
+  std::vector<std::size_t> index;  // file column of each wanted name (npos: an optional one absent)
   int rows = 0;
   CsvRow row;
   row.path = &path;
-  row.header = &required;
+  row.header = &wanted;
   ForEachCsvLine(in, path, delimiter, [&](int line_no, const std::string& trimmed, std::vector<std::string>& cells) {
     const std::string where = path + ":" + std::to_string(line_no);
     if (!have_header) {
@@ -179,20 +181,25 @@ void ForEachCsvRowByName(std::istream& in, const std::string& path, char delimit
       const std::string other = OtherCableCount(required, cells);
       if (!other.empty()) throw InputError(where, "header", other + " (got '" + trimmed + "')");
       std::vector<std::string> missing, ignored;
-      for (const std::string& name : required) {
+      for (std::size_t k = 0; k < wanted.size(); ++k) {
+        const std::string& name = wanted[k];
         const auto count = std::count(cells.begin(), cells.end(), name);
         if (count > 1) throw InputError(where, "header", "column '" + name + "' appears " + std::to_string(count) + " times");
-        if (count == 0) missing.push_back(name);
-        index.push_back(static_cast<std::size_t>(std::find(cells.begin(), cells.end(), name) - cells.begin()));
+        const bool is_required = k < required.size();
+        if (count == 0 && is_required) missing.push_back(name);
+        index.push_back(count == 0 ? std::string::npos
+                                   : static_cast<std::size_t>(std::find(cells.begin(), cells.end(), name) - cells.begin()));
+        row.present.push_back(count > 0);
       }
       for (const std::string& c : cells) {
-        if (std::find(required.begin(), required.end(), c) == required.end()) ignored.push_back(c);
+        if (std::find(wanted.begin(), wanted.end(), c) == wanted.end()) ignored.push_back(c);
       }
       if (!missing.empty()) {
         const bool other_separator = cells.size() == 1 && delimiter == ',' && trimmed.find_first_of(";\t") != std::string::npos;
         throw InputError(where, "header",
-                         "no column " + QuotedList(missing) + " (the columns needed are '" + JoinCsv(required) +
-                             "', in any order; got '" + trimmed + "')" +
+                         "no column " + QuotedList(missing) + " (the columns needed are '" + JoinCsv(required) + "'" +
+                             (optional.empty() ? std::string() : ", optionally '" + JoinCsv(optional) + "'") +
+                             ", in any order; got '" + trimmed + "')" +
                              (other_separator ? " (another separator? give it with --delimiter)" : ""));
       }
       if (!ignored.empty() && on_ignored) on_ignored(ignored);
@@ -205,8 +212,14 @@ void ForEachCsvRowByName(std::istream& in, const std::string& path, char delimit
                                       std::to_string(cells.size()) + " (separator '" + std::string(1, delimiter) + "')");
     }
     row.line = line_no;
-    row.cells.resize(required.size());
-    for (std::size_t k = 0; k < required.size(); ++k) row.cells[k] = std::move(cells[index[k]]);
+    row.cells.resize(wanted.size());
+    for (std::size_t k = 0; k < wanted.size(); ++k) {
+      if (index[k] == std::string::npos) {
+        row.cells[k].clear();
+      } else {
+        row.cells[k] = std::move(cells[index[k]]);
+      }
+    }
     on_row(row);
     ++rows;
   });

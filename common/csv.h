@@ -16,6 +16,9 @@ struct CsvRow {
   int line = 0;  // 1-based line number in the file
   const std::vector<std::string>* header = nullptr;
   std::vector<std::string> cells;
+  // Per column of `header`: false for an optional column the file does not have (its cell is
+  // then empty). Empty means every column is there.
+  std::vector<bool> present;
 
   // The cell of column `col` as a finite double; InputError "file:line: column 'x': ..." otherwise.
   double Number(int col) const;
@@ -40,12 +43,13 @@ void ForEachCsvRow(std::istream& in, const std::string& name, const std::vector<
                    const std::vector<std::string>& optional_trailing, const std::function<void(const CsvRow&)>& on_row);
 
 // A lab's file, read by column name: the header must name every column of `required` once,
-// in any order; other columns are ignored and `on_ignored` (if any) hears their names once.
-// Cells are split at `delimiter` (',', ';' or a tab). Rows reach `on_row` with their cells
-// in `required`'s order (row.header is `required`). An empty cell is refused by CsvRow with
-// its line and column.
+// in any order, and may name those of `optional` (a sensor the lab does not have); other
+// columns are ignored and `on_ignored` (if any) hears their names once. Cells are split at
+// `delimiter` (',', ';' or a tab). Rows reach `on_row` with their cells in the order of
+// `required` then `optional` (row.header), row.present saying which optional columns the file
+// has. An empty cell is refused by CsvRow with its line and column.
 void ForEachCsvRowByName(std::istream& in, const std::string& name, char delimiter,
-                         const std::vector<std::string>& required,
+                         const std::vector<std::string>& required, const std::vector<std::string>& optional,
                          const std::function<void(const std::vector<std::string>&)>& on_ignored,
                          const std::function<void(const CsvRow&)>& on_row);
 

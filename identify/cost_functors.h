@@ -69,6 +69,40 @@ struct MlSensorCost {
   }
 };
 
+// With a robust loss (identify --loss) every reading is a residual block of its own, so that
+// the loss weighs each reading, not a pose's readings together: one cable's length residual,
+// and the laser's or the inclinometer's (sensor 0 or 1 of MlSensorResiduals).
+template <int M>
+struct MlCableCost {
+  const Robot* robot;
+  PoseReadings<M> readings;
+  ReadingWeights weights;
+  int cable;
+
+  template <typename T>
+  bool operator()(const T* geometry, const T* pose, T* residual) const {
+    const Cable& c = robot->cables[cable];
+    const Vec2<T> p_F_anchor = PlatformPointInF<T>(Pose<T>(pose[0], pose[1], pose[2]), c.p_P_anchor_m.cast<T>());
+    residual[0] = LengthResidual<M, T>(c, cable, geometry, p_F_anchor, readings.dl_m(cable)) * weights.inv_sigma_encoder;
+    return AllFinite<T, 1>(residual);
+  }
+};
+
+template <int M>
+struct MlOneSensorCost {
+  PoseReadings<M> readings;
+  ReadingWeights weights;
+  int sensor;  // 0: laser, 1: inclinometer
+
+  template <typename T>
+  bool operator()(const T* pose, T* residual) const {
+    T both[2];
+    MlSensorResiduals<M, T>(readings, weights, pose, both);
+    residual[0] = both[sensor];
+    return true;
+  }
+};
+
 // The paper's estimator: Eq. (6) with z_j and theta_j taken as measured; only x_j unknown.
 template <int M>
 struct PaperPoseCost {

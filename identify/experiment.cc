@@ -1,7 +1,6 @@
 #include "identify/experiment.h"
 
 #include <fstream>
-#include <set>
 
 #include "common/csv.h"
 #include "common/error.h"
@@ -154,15 +153,50 @@ PlanSimulation SimulatePlan(const Robot& nominal, const std::optional<Robot>& tr
   return run;
 }
 
+OutlierModel ParseOutliers(const std::string& text) {
+  const std::string::size_type colon = text.find(':');
+  OutlierModel model;
+  const bool rate_ok = ParseFiniteDouble(text.substr(0, colon), &model.rate) && model.rate >= 0.0 && model.rate <= 1.0;
+  const bool size_ok = colon == std::string::npos ||
+                       (ParseFiniteDouble(text.substr(colon + 1), &model.size_sigmas) && model.size_sigmas > 0.0);
+  if (!rate_ok || !size_ok) {
+    throw InputError("--outliers", "",
+                     "must be RATE[:SIZE]: the probability of a gross reading, 0 to 1, and its size in sigmas of "
+                     "the sensor, > 0 (default 100), e.g. 0.01:100 (got '" + text + "')");
+  }
+  return model;
+}
+
+std::string ToString(const OutlierModel& model) {
+  return FormatDouble(model.rate) + ":" + FormatDouble(model.size_sigmas);
+}
+
+void AddOutliers(std::vector<Measurement>& readings, const SensorNoise& sensors, const OutlierModel& model, Rng& rng) {
+  const auto perturb = [&](double& value, double sigma) {
+    const double hit = rng.Uniform(), sign = rng.Uniform() < 0.5 ? -1.0 : 1.0;
+    if (hit < model.rate) value += sign * model.size_sigmas * sigma;
+  };
+  for (Measurement& m : readings) {
+    for (int i = 0; i < m.dl_m.size(); ++i) perturb(m.dl_m(i), sensors.encoder_sigma_m);
+    perturb(m.z_m, sensors.laser_sigma_m());
+    perturb(m.theta_rad, sensors.inclinometer_sigma_rad());
+  }
+}
+
 std::string MeasurementsCsv(const std::vector<Measurement>& measurements, const std::string& provenance) {
   std::string out = provenance + "pose";
   const int m = measurements.empty() ? 2 : static_cast<int>(measurements.front().dl_m.size());
+  const bool laser = measurements.empty() || measurements.front().has_laser;
+  const bool inclinometer = measurements.empty() || measurements.front().has_inclinometer;
   for (int i = 1; i <= m; ++i) out += ",dl" + std::to_string(i);
-  out += ",z,theta\n";
+  out += std::string(laser ? ",z" : "") + (inclinometer ? ",theta" : "") + "\n";
   for (const Measurement& r : measurements) {
+    CABLECAL_CHECK(r.has_laser == laser && r.has_inclinometer == inclinometer, "one file, one set of sensors");
     out += std::to_string(r.pose_id);
     for (int i = 0; i < m; ++i) out += "," + FormatDouble(r.dl_m(i));
-    out += "," + FormatDouble(r.z_m) + "," + FormatDouble(r.theta_rad) + "\n";
+    if (laser) out += "," + FormatDouble(r.z_m);
+    if (inclinometer) out += "," + FormatDouble(r.theta_rad);
+    out += "\n";
   }
   return out;
 }
@@ -186,24 +220,22 @@ std::vector<Measurement> ReadMeasurementsCsv(std::istream& in, const std::string
                                              const std::function<void(const std::vector<std::string>&)>& on_ignored) {
   std::vector<std::string> header = {"pose"};
   for (int i = 1; i <= num_cables; ++i) header.push_back("dl" + std::to_string(i));
-  header.push_back("z");
-  header.push_back("theta");
   std::vector<Measurement> out;
-  std::set<int> ids;
-  ForEachCsvRowByName(in, path, delimiter, header, on_ignored, [&](const CsvRow& row) {
+  // z and theta may be absent (no laser, no inclinometer): Identify then says what the data
+  // can no longer determine. The encoders are what is calibrated and always needed.
+  ForEachCsvRowByName(in, path, delimiter, header, {"z", "theta"}, on_ignored, [&](const CsvRow& row) {
     if (static_cast<int>(out.size()) >= kMaxMeasuredPoses) {
-      throw InputError(row.Where(), "", "more than " + std::to_string(kMaxMeasuredPoses) + " poses");
+      throw InputError(row.Where(), "", "more than " + std::to_string(kMaxMeasuredPoses) + " readings");
     }
     Measurement m;
     m.where = row.Where();
     m.pose_id = row.PositiveInt(0);
-    if (!ids.insert(m.pose_id).second) {
-      throw InputError(row.Where(), "column 'pose'", "duplicate pose id " + std::to_string(m.pose_id));
-    }
     m.dl_m.resize(num_cables);
     for (int i = 0; i < num_cables; ++i) m.dl_m(i) = row.Number(1 + i);
-    m.z_m = row.Number(1 + num_cables);
-    m.theta_rad = row.Number(2 + num_cables);
+    m.has_laser = row.present[1 + num_cables];
+    m.has_inclinometer = row.present[2 + num_cables];
+    if (m.has_laser) m.z_m = row.Number(1 + num_cables);
+    if (m.has_inclinometer) m.theta_rad = row.Number(2 + num_cables);
     out.push_back(m);
   });
   return out;
@@ -230,13 +262,13 @@ void CheckReadingsPlausible(const Robot& robot, const std::vector<Measurement>& 
                              "lengths are in m)");
       }
     }
-    if (!(m.z_m >= z_min && m.z_m <= z_max)) {
+    if (m.has_laser && !(m.z_m >= z_min && m.z_m <= z_max)) {
       throw InputError(where, "column 'z'",
                        FormatDouble(m.z_m) + " m is outside what the laser can read here, [" + FormatDouble(z_min) +
                            ", " + FormatDouble(z_max) + "] m (the laser range and the frame height of " + robot.name +
                            ", widened by 5 sigma of the laser's noise)");
     }
-    if (!(std::abs(m.theta_rad) <= theta_max)) {
+    if (m.has_inclinometer && !(std::abs(m.theta_rad) <= theta_max)) {
       throw InputError(where, "column 'theta'",
                        FormatDouble(m.theta_rad) + " rad is beyond the inclinometer range of +-" +
                            FormatDouble(robot.theta_max_rad) + " rad (+-" + FormatDouble(theta_max) +

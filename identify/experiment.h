@@ -29,14 +29,18 @@
 
 namespace cablecal {
 
-// One pose's readings. dl: encoder length changes from the home pose (m); z: laser
-// height (m); theta: inclinometer angle (rad).
+// One reading of a pose. dl: encoder length changes from the home pose (m); z: laser
+// height (m); theta: inclinometer angle (rad). A lab without a laser or an inclinometer has
+// no z or theta (has_laser / has_inclinometer false, the value then unused). Several readings
+// may share a pose_id: repeated measurements of one pose, fitted with one set of pose unknowns.
 struct Measurement {
   int pose_id = 0;
   std::string where;  // "file:line" when read from a file, for messages; empty when simulated
   Eigen::VectorXd dl_m;
   double z_m = 0.0;
   double theta_rad = 0.0;
+  bool has_laser = true;
+  bool has_inclinometer = true;
 };
 
 // The geometric parameters the identification estimates, 3m of them for m cables, in this
@@ -113,12 +117,28 @@ PlanSimulation SimulatePlan(const Robot& nominal, const std::optional<Robot>& tr
                             const std::vector<PlanPose>& plan, const SimulationOptions& options, std::uint64_t seed,
                             const std::string& plan_source);
 
-// Measurement CSV: header pose,dl1..dlm,z,theta (m, m, m, rad).
+// Gross errors, to study robust identification (montecarlo --outliers RATE[:SIZE]): each
+// reading value (every encoder, the laser, the inclinometer) independently, with probability
+// `rate`, is off by size_sigmas of its sensor's sigma (laser, inclinometer: the combined
+// accuracy and repeatability sigma), with a random sign. SIZE defaults to 100 sigma (0.2 m
+// for the built-in robot's laser).
+struct OutlierModel {
+  double rate = 0.0;
+  double size_sigmas = 100.0;
+};
+OutlierModel ParseOutliers(const std::string& text);  // "RATE[:SIZE]", 0 <= RATE <= 1, SIZE > 0; InputError naming --outliers
+std::string ToString(const OutlierModel& model);     // "0.01:100"
+// Draws two uniforms per reading value, used or not, so the stream does not depend on the rate.
+void AddOutliers(std::vector<Measurement>& readings, const SensorNoise& sensors, const OutlierModel& model, Rng& rng);
+
+// Measurement CSV: header pose,dl1..dlm,z,theta (m, m, m, rad); z or theta left out when the
+// readings have no laser or inclinometer.
 std::string MeasurementsCsv(const std::vector<Measurement>& measurements, const std::string& provenance);
 // Throws InputError naming file, line and column (wrong header or count, non-finite number,
-// duplicate or non-positive pose id).
+// non-positive pose id). A pose id may repeat (repeated readings of one pose); the z and
+// theta columns may be absent (no laser, no inclinometer: has_laser / has_inclinometer false).
 // CheckReadingsPlausible (below) then checks them against a robot's sensors.
-// At most kMaxMeasuredPoses rows (the file is streamed and rejected at the next row).
+// At most kMaxMeasuredPoses rows (readings; the file is streamed and rejected at the next row).
 // The file is read by column name (a lab's log): pose, dl1..dlm, z and theta in any order,
 // other columns (a timestamp, a temperature) ignored and named once to `on_ignored`; cells
 // split at `delimiter` (',', ';' or '\t'); an empty cell is refused with line and column.

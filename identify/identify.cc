@@ -1,5 +1,6 @@
 #include "identify/identify.h"
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -7,6 +8,7 @@
 #include <vector>
 
 #include "common/error.h"
+#include "common/format.h"
 
 namespace cablecal {
 
@@ -21,6 +23,57 @@ Gauge ParseGauge(const std::string& text) {
   if (text == "prior") return Gauge::kPrior;
   if (text == "none") return Gauge::kNone;
   throw InputError("--gauge", "", "must be a1x, prior or none (got '" + text + "')");
+}
+
+RobustLoss ParseLoss(const std::string& text) {
+  const std::string::size_type colon = text.find(':');
+  const std::string kind = text.substr(0, colon);
+  RobustLoss loss;
+  if (kind == "none" && colon == std::string::npos) return loss;
+  if (kind == "huber") {
+    loss = {LossKind::kHuber, kDefaultHuberScaleSigmas};
+  } else if (kind == "cauchy") {
+    loss = {LossKind::kCauchy, kDefaultCauchyScaleSigmas};
+  } else {
+    throw InputError("--loss", "", "must be none, huber or cauchy, optionally with :SCALE in sigmas, e.g. huber:3 (got '" +
+                                       text + "')");
+  }
+  if (colon != std::string::npos) {
+    double scale = 0.0;
+    if (!ParseFiniteDouble(text.substr(colon + 1), &scale) || !(scale > 0.0)) {
+      throw InputError("--loss", "", "the scale after ':' must be a number > 0, in sigmas (got '" + text + "')");
+    }
+    loss.scale_sigmas = scale;
+  }
+  return loss;
+}
+
+std::string ToString(const RobustLoss& loss) {
+  switch (loss.kind) {
+    case LossKind::kNone: return "none";
+    case LossKind::kHuber: return "huber:" + FormatDouble(loss.scale_sigmas);
+    case LossKind::kCauchy: return "cauchy:" + FormatDouble(loss.scale_sigmas);
+  }
+  return "unknown";
+}
+
+double LossWeight(const RobustLoss& loss, double sigmas) {
+  const double a = loss.scale_sigmas, r = std::abs(sigmas);
+  switch (loss.kind) {
+    case LossKind::kNone: return 1.0;
+    case LossKind::kHuber: return r <= a ? 1.0 : a / r;  // Ceres' HuberLoss: rho'(s) for s = r^2
+    case LossKind::kCauchy: return 1.0 / (1.0 + (r / a) * (r / a));
+  }
+  return 1.0;
+}
+
+std::string MissingSensorsText(const std::vector<std::string>& missing_sensors) {
+  std::string text;
+  for (const std::string& sensor : missing_sensors) {
+    const std::string column = sensor == "laser" ? "z" : "theta";
+    text += (text.empty() ? "no '" : " and no '") + column + "' column (" + sensor + ")";
+  }
+  return text;
 }
 
 const char* ToString(Estimator e) { return e == Estimator::kPaper ? "paper" : "ml"; }

@@ -1,4 +1,5 @@
 // result.yaml of `cablecal identify`.
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -43,9 +44,33 @@ std::string IdentifyResultYaml(const IdentifyResult& r, const std::string& comma
   o << Key << "iterations" << Value << r.iterations;
   o << Key << "final_cost" << Value << YamlNumber{r.final_cost}
     << YAML::Comment("half the sum of squared (whitened, for ml) residuals");
-  o << Key << "residual_rms" << Value << Flow << BeginMap << Key << "encoder_m" << Value << YamlNumber{r.rms_encoder_m}
-    << Key << "laser_m" << Value << YamlNumber{r.rms_laser_m} << Key << "inclinometer_rad" << Value
-    << YamlNumber{r.rms_inclinometer_rad} << EndMap;
+  const auto missing = [&](const char* sensor) {
+    return std::find(r.missing_sensors.begin(), r.missing_sensors.end(), sensor) != r.missing_sensors.end();
+  };
+  o << Key << "residual_rms" << Value << Flow << BeginMap << Key << "encoder_m" << Value << YamlNumber{r.rms_encoder_m};
+  if (!missing("laser")) o << Key << "laser_m" << Value << YamlNumber{r.rms_laser_m};
+  if (!missing("inclinometer")) o << Key << "inclinometer_rad" << Value << YamlNumber{r.rms_inclinometer_rad};
+  o << EndMap;
+  if (!r.missing_sensors.empty()) {
+    o << Key << "missing_sensors" << Value << Flow << BeginSeq;
+    for (const std::string& sensor : r.missing_sensors) o << sensor;
+    o << EndSeq << YAML::Comment("no such column in the measurements: see identifiability");
+  }
+  if (!r.warnings.empty()) {
+    o << Key << "warnings" << Value << BeginSeq;
+    for (const std::string& w : r.warnings) o << YamlString{w};
+    o << EndSeq;
+  }
+  o << Key << "loss" << Value << ToString(r.loss);
+  if (r.loss.kind != LossKind::kNone) {
+    o << Key << "down_weighted" << Value
+      << YAML::Comment("readings beyond " + FormatDouble(kOutlierSigmas) +
+                       " sigma that the loss kept at a reduced weight instead of refusing the fit");
+    if (r.down_weighted.empty()) o << Flow;
+    o << BeginSeq;
+    for (const std::string& d : r.down_weighted) o << YamlString{d};
+    o << EndSeq;
+  }
   if (r.estimator == Estimator::kPaper) {
     o << Key << "std_note" << Value << YamlString{std::string("paper estimator: covariance scaled by the residual variance")};
   }
@@ -80,6 +105,32 @@ std::string IdentifyResultYaml(const IdentifyResult& r, const std::string& comma
     o << EndMap;
   }
   o << EndSeq;
+  if (!r.readings.empty()) {
+    o << Key << "readings" << Value
+      << YAML::Comment(std::string("per reading (data row), each sensor's residual (model - reading) over its sigma") +
+                       (r.estimator == Estimator::kPaper ? " (paper: length residuals over the laser's sigma)" : "") +
+                       (r.loss.kind != LossKind::kNone ? "; weights: the loss's, 1 = full" : ""))
+      << BeginSeq;
+    const bool robust = r.loss.kind != LossKind::kNone;
+    for (std::size_t k = 0; k < r.readings.size(); ++k) {
+      const ReadingFit& f = r.readings[k];
+      o << Flow << BeginMap << Key << "reading" << Value << k + 1 << Key << "pose" << Value << f.pose_id;
+      o << Key << "encoder_sigmas" << Value << Flow << BeginSeq;
+      for (int i = 0; i < f.encoder_sigmas.size(); ++i) o << YamlNumber{f.encoder_sigmas(i)};
+      o << EndSeq;
+      if (f.laser_sigmas) o << Key << "laser_sigmas" << Value << YamlNumber{*f.laser_sigmas};
+      if (f.inclinometer_sigmas) o << Key << "inclinometer_sigmas" << Value << YamlNumber{*f.inclinometer_sigmas};
+      if (robust) {
+        o << Key << "encoder_weights" << Value << Flow << BeginSeq;
+        for (int i = 0; i < f.encoder_weights.size(); ++i) o << YamlNumber{f.encoder_weights(i)};
+        o << EndSeq;
+        if (f.laser_sigmas) o << Key << "laser_weight" << Value << YamlNumber{f.laser_weight};
+        if (f.inclinometer_sigmas) o << Key << "inclinometer_weight" << Value << YamlNumber{f.inclinometer_weight};
+      }
+      o << EndMap;
+    }
+    o << EndSeq;
+  }
   const Identifiability& id = r.identifiability;
   if (!id.names.empty()) {
     o << Key << "identifiability" << Value
@@ -99,7 +150,14 @@ std::string IdentifyResultYaml(const IdentifyResult& r, const std::string& comma
     if (id.null_directions.empty()) o << Flow;
     o << BeginSeq;
     for (const std::string& d : id.null_directions) o << YamlString{d};
-    o << EndSeq << EndMap;
+    o << EndSeq;
+    if (!r.missing_sensors.empty()) {
+      o << Key << "note" << Value
+        << YamlString{"the data have " + MissingSensorsText(r.missing_sensors) +
+                      ": every pose's unmeasured coordinates come from the encoders alone; the singular values "
+                      "above say what the data still determine"};
+    }
+    o << EndMap;
   }
   o << EndMap;
   return YamlText(o);

@@ -34,13 +34,13 @@ BlockAnalysis AnalyzeBlocks(const BlockJacobian& jacobian, double null_tolerance
   int reduced_rows = static_cast<int>(jacobian.prior.rows());
   for (int j = 0; j < n; ++j) {
     const PoseBlock& b = jacobian.poses[j];
-    CABLECAL_CHECK(b.geometry.cols() == g_cols && b.geometry.rows() == b.pose.rows() && b.pose.rows() > b.pose.cols(),
-                   "a pose block has more rows than unknowns and every pose the same geometry columns");
+    CABLECAL_CHECK(b.geometry.cols() == g_cols && b.geometry.rows() == b.pose.rows() && b.pose.rows() > 0,
+                   "a pose block has rows and every pose the same geometry columns");
     geometry_normal.noalias() += b.geometry.transpose() * b.geometry;
     svds.emplace_back(b.pose, Eigen::ComputeFullU | Eigen::ComputeFullV);
     const Eigen::VectorXd& s = svds.back().singularValues();
     a.poses[j].max_singular_value = s(0);
-    a.poses[j].min_singular_value = s(s.size() - 1);
+    a.poses[j].min_singular_value = s.size() < b.pose.cols() ? 0.0 : s(s.size() - 1);
     pose_scale = std::max(pose_scale, s(0));
     if (a.weakest_pose < 0 || a.poses[j].min_singular_value < a.poses[a.weakest_pose].min_singular_value) {
       a.weakest_pose = j;
@@ -61,7 +61,8 @@ BlockAnalysis AnalyzeBlocks(const BlockJacobian& jacobian, double null_tolerance
     int rank = 0;
     while (rank < s.size() && s(rank) >= threshold && s(rank) > 0.0) ++rank;
     pose_rank[j] = rank;
-    if (rank < s.size()) a.pose_block_deficient = true;
+    // Fewer readings than unknowns (a pose without laser or inclinometer) leave some unseen.
+    if (rank < jacobian.poses[j].pose.cols()) a.pose_block_deficient = true;
     reduced_rows += static_cast<int>(jacobian.poses[j].pose.rows()) - rank;
   }
   a.reduced.resize(reduced_rows, g_cols);

@@ -24,7 +24,7 @@ namespace cablecal {
 
 struct PoseBlock {
   Eigen::MatrixXd geometry;  // r x G: this pose's rows, geometry columns
-  Eigen::MatrixXd pose;      // r x p: the same rows, this pose's own columns (r > p)
+  Eigen::MatrixXd pose;      // r x p: the same rows, this pose's own columns (r > p when they fix them)
 };
 
 struct BlockJacobian {

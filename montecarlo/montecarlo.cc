@@ -127,9 +127,14 @@ TrialOutcome RunTrial(const Robot& nominal, const MonteCarloOptions& o, int n, P
       out.failure = std::string("simulation: ") + e.what();
       return out;
     }
+    if (o.outliers.rate > 0.0) {  // a stream of their own: the other draws stay as without outliers
+      Rng outlier_rng(StreamSeed(o.seed, {n64, d64, t64, 2}));
+      AddOutliers(sim.measurements, nominal.sensors, o.outliers, outlier_rng);
+    }
     IdentifyOptions id;
     id.estimator = o.estimator;
     id.gauge = o.gauge;
+    id.loss = o.loss;
     id.compute_covariance = false;
     id.compute_identifiability = false;
     id.check_plausible_geometry = false;  // a wild estimate from a poor pose set is counted, not refused
@@ -162,6 +167,9 @@ Criterion CriterionOf(PoseSetDesign d) {
 
 void ValidateOptions(const MonteCarloOptions& o, const Robot* nominal) {
   if (o.trials < 1) throw InputError("--trials", "", "must be at least 1");
+  if (o.loss.kind != LossKind::kNone && o.estimator != Estimator::kMaximumLikelihood) {
+    throw InputError("--loss", "", "needs --estimator ml (the paper estimator's residuals are not in sigmas)");
+  }
   if (nominal && o.gauge == Gauge::kPrior && !nominal->sensors.tracker_sigma_m) {
     throw InputError(nominal->source, "sensors.tracker.sigma", "is needed for --gauge prior");
   }

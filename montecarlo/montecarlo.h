@@ -47,6 +47,8 @@ struct MonteCarloOptions {
   Gauge gauge = Gauge::kA1x;
   NoisySensors sensors = NoisySensors::kBoth;
   double geometry_sigma_m = 0.01;
+  RobustLoss loss;       // of every trial's identification (identify --loss)
+  OutlierModel outliers;  // gross readings added to every trial's (identify/experiment.h)
   std::uint64_t seed = 1;
   int design_starts = 2;  // Ipopt starts per designed set (4x as many if none converges)
   // The designs' Ipopt solves in child processes (DesignOptions::solve_in_child_processes);

@@ -305,8 +305,9 @@ py::dict CriteriaDict(const CriteriaValues& v) {
 PyMeasurements MakeMeasurements(const Robot& robot, py::handle dl, py::handle z, py::handle theta, py::handle pose_ids) {
   const Eigen::MatrixXd dl_m = AsMatrix(dl, "dl", -1, robot.num_cables());
   const long n = dl_m.rows();
-  const Eigen::MatrixXd z_m = AsMatrix(z, "z", n, 1);
-  const Eigen::MatrixXd theta_rad = AsMatrix(theta, "theta", n, 1);
+  // None: no such sensor (the CSV without that column).
+  const Eigen::MatrixXd z_m = z.is_none() ? Eigen::MatrixXd() : AsMatrix(z, "z", n, 1);
+  const Eigen::MatrixXd theta_rad = theta.is_none() ? Eigen::MatrixXd() : AsMatrix(theta, "theta", n, 1);
   PyMeasurements out{{}, robot.num_cables()};
   std::vector<long long> ids;
   if (pose_ids.is_none()) {
@@ -322,8 +323,10 @@ PyMeasurements MakeMeasurements(const Robot& robot, py::handle dl, py::handle z,
     Measurement m;
     m.pose_id = static_cast<int>(ids[j]);
     m.dl_m = dl_m.row(j).transpose();
-    m.z_m = z_m(j, 0);
-    m.theta_rad = theta_rad(j, 0);
+    m.has_laser = !z.is_none();
+    m.has_inclinometer = !theta.is_none();
+    if (m.has_laser) m.z_m = z_m(j, 0);
+    if (m.has_inclinometer) m.theta_rad = theta_rad(j, 0);
     out.readings.push_back(m);
   }
   return out;
@@ -427,12 +430,15 @@ PYBIND11_MODULE(cablecal, m) {
       .def("__len__", [](const PyPlan& p) { return p.poses.size(); });
 
   // ---- Measurements
-  py::class_<PyMeasurements>(m, "Measurements", "One reading per pose: dl (n, m), z (n,), theta (n,).")
+  py::class_<PyMeasurements>(m, "Measurements",
+                             "Readings: dl (n, m), z (n,) or None (no laser), theta (n,) or None (no inclinometer); "
+                             "pose_ids may repeat (repeated readings of one pose).")
       .def(py::init([](py::handle robot_arg, py::handle dl, py::handle z, py::handle theta, py::handle pose_ids) {
              const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
              return MakeMeasurements(robot, dl, z, theta, pose_ids);
            }),
-           py::arg("robot"), py::arg("dl"), py::arg("z"), py::arg("theta"), py::arg("pose_ids") = py::none())
+           py::arg("robot"), py::arg("dl"), py::arg("z") = py::none(), py::arg("theta") = py::none(),
+           py::arg("pose_ids") = py::none())
       .def_static(
           "load",
           [](py::handle robot_arg, py::handle path, py::handle delimiter) {
@@ -456,16 +462,18 @@ PYBIND11_MODULE(cablecal, m) {
         for (std::size_t j = 0; j < p.readings.size(); ++j) d.row(j) = p.readings[j].dl_m.transpose();
         return Array(d);
       })
-      .def_property_readonly("z", [](const PyMeasurements& p) {
+      .def_property_readonly("z", [](const PyMeasurements& p) -> py::object {
+        if (p.readings.empty() || !p.readings.front().has_laser) return py::none();
         Eigen::VectorXd v(p.readings.size());
         for (std::size_t j = 0; j < p.readings.size(); ++j) v(j) = p.readings[j].z_m;
         return Vector(v);
-      })
-      .def_property_readonly("theta", [](const PyMeasurements& p) {
+      }, "(n,) laser heights, m; None without a laser")
+      .def_property_readonly("theta", [](const PyMeasurements& p) -> py::object {
+        if (p.readings.empty() || !p.readings.front().has_inclinometer) return py::none();
         Eigen::VectorXd v(p.readings.size());
         for (std::size_t j = 0; j < p.readings.size(); ++j) v(j) = p.readings[j].theta_rad;
         return Vector(v);
-      })
+      }, "(n,) inclinometer angles, rad; None without an inclinometer")
       .def_property_readonly("pose_ids", [](const PyMeasurements& p) {
         std::vector<int> ids;
         for (const Measurement& r : p.readings) ids.push_back(r.pose_id);
@@ -652,6 +660,30 @@ PYBIND11_MODULE(cablecal, m) {
         const Eigen::VectorXd& s = r.geometry_std;
         return Array(s.asDiagonal() * r.geometry_correlation * s.asDiagonal());
       }, "(3m, 3m), m^2")
+      .def_property_readonly("loss", [](const IdentifyResult& r) { return ToString(r.loss); })
+      .def_readonly("down_weighted", &IdentifyResult::down_weighted)
+      .def_readonly("warnings", &IdentifyResult::warnings)
+      .def_readonly("missing_sensors", &IdentifyResult::missing_sensors)
+      .def_property_readonly("readings", [](const IdentifyResult& r) {
+        py::list out;
+        for (const ReadingFit& f : r.readings) {
+          py::dict d;
+          d["pose_id"] = f.pose_id;
+          d["encoder_sigmas"] = Vector(f.encoder_sigmas);
+          d["laser_sigmas"] = f.laser_sigmas ? py::cast(*f.laser_sigmas) : py::none();
+          d["inclinometer_sigmas"] = f.inclinometer_sigmas ? py::cast(*f.inclinometer_sigmas) : py::none();
+          d["encoder_weights"] = Vector(f.encoder_weights);
+          d["laser_weight"] = f.laser_weight;
+          d["inclinometer_weight"] = f.inclinometer_weight;
+          out.append(d);
+        }
+        return out;
+      }, "per reading: each sensor's residual (model - reading) over its sigma, and the loss's weights")
+      .def_property_readonly("pose_ids", [](const IdentifyResult& r) {
+        std::vector<int> ids;
+        for (const PoseEstimate& p : r.poses) ids.push_back(p.pose_id);
+        return ids;
+      }, "the poses of `poses`, one per pose id")
       .def_property_readonly("poses", [](const IdentifyResult& r) {
         Eigen::MatrixXd q(r.poses.size(), 3);
         for (std::size_t j = 0; j < r.poses.size(); ++j) q.row(j) = r.poses[j].q.transpose();
@@ -676,7 +708,7 @@ PYBIND11_MODULE(cablecal, m) {
   m.def(
       "identify",
       [](py::handle robot_arg, py::handle measurements_arg, py::handle estimator, py::handle gauge,
-         py::handle max_iterations) {
+         py::handle max_iterations, py::handle loss) {
         const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
         const PyMeasurements& measurements = AsObject<PyMeasurements>(measurements_arg, "measurements", "Measurements");
         if (measurements.num_cables != robot.num_cables()) Bad("measurements", "read for a robot with another number of cables");
@@ -684,6 +716,7 @@ PYBIND11_MODULE(cablecal, m) {
         o.estimator = ParseEstimator(AsText(estimator, "estimator"));
         o.gauge = ParseGauge(AsText(gauge, "gauge"));
         o.max_iterations = static_cast<int>(AsInteger(max_iterations, "max_iterations", 1, 100000));
+        o.loss = ParseLoss(AsText(loss, "loss"));
         o.source = "measurements";
         CheckReadingsPlausible(robot, measurements.readings, "measurements");
         IdentifyResult r;
@@ -692,10 +725,13 @@ PYBIND11_MODULE(cablecal, m) {
           r = Identify(robot, measurements.readings, o);
         }
         RequireUsableResult(r, "measurements");
+        for (const std::string& w : r.warnings) {
+          if (PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 1) < 0) throw py::error_already_set();
+        }
         return r;
       },
       py::arg("robot"), py::arg("measurements"), py::arg("estimator") = "ml", py::arg("gauge") = "a1x",
-      py::arg("max_iterations") = 100,
+      py::arg("max_iterations") = 100, py::arg("loss") = "none",
       "Identifies exit points and initial lengths (cablecal identify); InputError when the data cannot "
       "calibrate this robot, SolverError when the solve does not converge.");
   m.def("calibrated_robot", [](py::handle nominal_arg, py::handle result_arg) {
@@ -794,7 +830,7 @@ PYBIND11_MODULE(cablecal, m) {
       "montecarlo",
       [](py::handle robot_arg, py::handle poses, py::handle trials, py::handle designs, py::handle estimator,
          py::handle gauge, py::handle sensors, py::handle geometry_sigma, py::handle seed, py::handle design_starts,
-         py::handle threads, py::handle progress) {
+         py::handle threads, py::handle progress, py::handle loss, py::handle outliers) {
         const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
         MonteCarloOptions o;
         if (py::isinstance<py::str>(poses)) {
@@ -813,6 +849,8 @@ PYBIND11_MODULE(cablecal, m) {
         o.geometry_sigma_m = AsNumber(geometry_sigma, "geometry_sigma");
         o.seed = AsSeed(seed);
         o.design_starts = static_cast<int>(AsInteger(design_starts, "design_starts", 1, 1000));
+        o.loss = ParseLoss(AsText(loss, "loss"));
+        o.outliers = ParseOutliers(AsText(outliers, "outliers"));
         o.design_in_child_processes = false;  // as design() above
         ValidateOptions(o, &robot);
         if (!progress.is_none() && !PyCallable_Check(progress.ptr())) Bad("progress", "expected a callable or None");
@@ -846,7 +884,8 @@ PYBIND11_MODULE(cablecal, m) {
       py::arg("robot"), py::arg("poses"), py::arg("trials"), py::arg("designs") = "random,optimized",
       py::arg("estimator") = "ml", py::arg("gauge") = "a1x", py::arg("sensors") = "both",
       py::arg("geometry_sigma") = 0.01, py::arg("seed") = 1, py::arg("design_starts") = 2,
-      py::arg("threads") = py::none(), py::arg("progress") = py::none(),
+      py::arg("threads") = py::none(), py::arg("progress") = py::none(), py::arg("loss") = "none",
+      py::arg("outliers") = "0",
       "The Monte Carlo study (cablecal montecarlo); Ctrl-C raises KeyboardInterrupt. progress(done, total), if "
       "given, is called now and then with the trials done.");
 

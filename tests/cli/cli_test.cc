@@ -149,16 +149,19 @@ TEST_F(Cli, IdentifyBadMeasurementsExitTwoAndWriteNothing) {
   std::string rows;
   for (int j = 1; j <= 8; ++j) rows += std::to_string(j) + ",0.01,-0.01,1.2,0.05\n";  // identical poses
   write("identical.csv", "pose,dl1,dl2,z,theta\n" + rows);
-  write("header.csv", "pose,dl1,dl2,z\n1,0,0,1\n");
+  write("header.csv", "id,dl1,dl2,z,theta\n1,0,0,1,0\n");
+  write("noinclinometer.csv", "pose,dl1,dl2,z\n1,0,0,1\n2,0.1,0,1\n3,0,0.1,1.1\n");
   write("nan.csv", "pose,dl1,dl2,z,theta\n1,0,0,nan,0\n");
-  write("dup.csv", "pose,dl1,dl2,z,theta\n1,0,0,1,0\n1,0,0,1,0\n");
+  write("dup.csv", "pose,dl1,dl2,z,theta\n1,0,0,1,0\n1,0,0,1,0\n1,0,0,1,0\n");
   write("few.csv", "pose,dl1,dl2,z,theta\n1,0,0,1,0\n2,0.1,0,1,0\n");
   write("columns.csv", "pose,dl1,dl2,z,theta\n1,0,0,1\n");
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"identical.csv", "cannot determine"},
-      {"header.csv", "header.csv:1: header: no column 'theta' (the columns needed are 'pose,dl1,dl2,z,theta', in any order"},
+      {"header.csv", "header.csv:1: header: no column 'pose' (the columns needed are 'pose,dl1,dl2', optionally 'z,theta', in any order"},
+      {"noinclinometer.csv", "each reading's 3 values only fix its pose's own 3 unknowns, so no number of poses determines "
+                             "the geometry (the data have no 'theta' column (inclinometer))"},
       {"nan.csv", "nan.csv:2: column 'z': must be a finite number (got 'nan')"},
-      {"dup.csv", "dup.csv:3: column 'pose': duplicate pose id 1"},
+      {"dup.csv", "cannot determine"},  // three readings of one pose: enough equations, one pose's information
       {"few.csv", "2 poses give 8 equations for 11 unknowns"},
       {"columns.csv", "columns.csv:2: expected 5 cells (as the header), got 4"},
       {"empty.csv", "empty.csv:3: column 'z': is empty: a reading is missing"},
@@ -330,10 +333,13 @@ TEST_F(Cli, ImpossibleAndOutlyingReadingsAreRefusedByName) {
       {0, 4, [](double t) { return t * 180 / M_PI; }, "column 'theta': "},
       {0, 4, [](double) { return 3.0; }, "rad is beyond the inclinometer range"},
       // One redundant reading per pose (4 readings, 3 pose unknowns): the pose is named
-      // reliably, the sensor is that pose's largest whitened residual, which may be another one.
-      {7, 4, [](double t) { return t + 0.3; }, "pose 7: "},
-      {7, 3, [](double z) { return z + 0.05; }, "pose 7: laser"},
-      {12, 1, [](double dl) { return dl + 0.03; }, "pose 12: "},
+      // reliably (left out, the rest fit), the sensor is that pose's largest residual against
+      // the others' geometry, which may be another one.
+      {7, 4, [](double t) { return t + 0.3; }, "pose 7 does not fit the others: fitted without it, every other "
+                                               "reading is within 4.5 sigma, and its readings are then off by "},
+      {7, 3, [](double z) { return z + 0.05; }, "pose 7 does not fit the others: fitted without it, every other "
+                                                "reading is within 4.5 sigma, and its readings are then off by laser"},
+      {12, 1, [](double dl) { return dl + 0.03; }, "pose 12 does not fit the others"},
       // The inclinometer reading of 0 instead of -1.0 rad: the fit absorbs it (no
       // residual stands out) and lands off the frame; refused, with a bad reading named as a cause.
       {2, 4, [](double) { return 0.0; }, "A single wrong reading can do this too"},
@@ -365,7 +371,10 @@ TEST_F(Cli, OneBadReadingAmongTwoHundredPosesIsNamed) {
   std::ofstream(Path("bad.csv")) << out;
   const RunResult r = RunCablecal("identify --measurements " + Path("bad.csv") + " --out " + Path("r.yaml"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_NE(r.output.find("pose 117: "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("pose 117 does not fit the others: fitted without it, every other reading is within 4.5 "
+                          "sigma, and its readings are then off by laser "),
+            std::string::npos)
+      << r.output;
   EXPECT_FALSE(fs::exists(Path("r.yaml")));
   EXPECT_EQ(RunCablecal("identify --measurements " + Path("m.csv") + " --out " + Path("r.yaml")).exit_code, 0);
 }

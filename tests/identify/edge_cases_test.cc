@@ -109,7 +109,7 @@ TEST(EdgeCases, MillionRowCsvIsStreamedAndRejectedAtTheCap) {
     FAIL() << "10^6 rows accepted";
   } catch (const InputError& e) {
     EXPECT_EQ(std::string(e.what()), path.string() + ":" + std::to_string(kMaxMeasuredPoses + 2) +
-                                         ": more than " + std::to_string(kMaxMeasuredPoses) + " poses");
+                                         ": more than " + std::to_string(kMaxMeasuredPoses) + " readings");
   }
 }
 

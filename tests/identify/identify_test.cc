@@ -505,7 +505,10 @@ TEST(AnyCableCount, MessagesNameTheCountsAndTheSensor) {
   exp.measurements[6].dl_m(2) += 40.0 * planar4.sensors.encoder_sigma_m;
   const IdentifyResult r = Identify(planar4, exp.measurements, IdentifyOptions{});
   EXPECT_EQ(r.status, IdentifyStatus::kPoorFit);
-  EXPECT_EQ(r.message.find("readings that do not fit this robot: pose 7: encoder 3 "), 0u) << r.message;
+  EXPECT_EQ(r.message.find("readings that do not fit this robot: pose 7 does not fit the others: fitted without it, "
+                           "every other reading is within 4.5 sigma, and its readings are then off by encoder 3 "),
+            0u)
+      << r.message;
 }
 
 }  // namespace

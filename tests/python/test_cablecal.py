@@ -298,6 +298,58 @@ def test_validate_refuses_what_it_cannot_compare():
             call()
 
 
+def test_repeated_readings_and_a_missing_inclinometer(tmp_path):
+    robot = cablecal.Robot.load(robot_file("planar4_fully_constrained"))
+    plan = cablecal.sample(robot, 12, seed=4)
+    m = cablecal.simulate(robot, plan, geometry_sigma=0.01, seed=5).measurements
+    twice = cablecal.Measurements(robot, np.vstack([m.dl, m.dl]), np.concatenate([m.z, m.z]), None,
+                                  pose_ids=list(m.pose_ids) * 2)
+    assert twice.theta is None and len(twice) == 24
+    r = cablecal.identify(robot, twice)
+    assert r.missing_sensors == ["inclinometer"]
+    assert r.pose_ids == list(range(1, 13)) and r.poses.shape == (12, 3)
+    assert len(r.readings) == 24 and r.readings[0]["inclinometer_sigmas"] is None
+    csv = tmp_path / "m.csv"
+    csv.write_text(twice.to_csv())
+    assert twice.to_csv().splitlines()[0] == "pose,dl1,dl2,dl3,dl4,z"
+    result = tmp_path / "r.yaml"
+    cli("identify", "--robot", robot_file("planar4_fully_constrained"), "--measurements", str(csv), "--out", str(result))
+    assert yaml_without_provenance(r.to_yaml()) == yaml_without_provenance(open(result).read())
+
+
+def test_a_gross_laser_reading_is_named_and_rejected_by_cauchy():
+    robot = cablecal.Robot.load(robot_file("asymmetric"))
+    for seed in range(21, 60):  # a random plan the true robot can run (some hold a pose it cannot)
+        try:
+            exp = cablecal.simulate(robot, cablecal.sample(robot, 20, seed=seed), geometry_sigma=0.01, seed=seed)
+            break
+        except cablecal.InputError:
+            continue
+    m = exp.measurements
+    z = m.z.copy()
+    z[6] += 0.3
+    bad = cablecal.Measurements(robot, m.dl, z, m.theta)
+    with pytest.raises(cablecal.InputError, match="pose 7"):
+        cablecal.identify(robot, bad)
+    r = cablecal.identify(robot, bad, loss="cauchy")
+    assert r.loss == "cauchy:10" and r.down_weighted[0].startswith("pose 7: ")
+    held = r.std == 0
+    assert (np.abs(r.geometry - exp.truth.geometry)[~held] / r.std[~held]).max() < 3.0
+    with pytest.raises(cablecal.InputError, match="--loss: must be none, huber or cauchy"):
+        cablecal.identify(robot, m, loss="tukey")
+
+
+def test_montecarlo_with_outliers_and_a_loss():
+    robot = cablecal.Robot.builtin()
+    clean = cablecal.montecarlo(robot, 12, 4, designs="random", seed=3, threads=1)
+    rough = cablecal.montecarlo(robot, 12, 4, designs="random", seed=3, threads=1, outliers="0.05:100")
+    robust = cablecal.montecarlo(robot, 12, 4, designs="random", seed=3, threads=1, outliers="0.05:100", loss="cauchy")
+    assert clean.summary_csv() != rough.summary_csv()
+    assert robust.summary_csv() != rough.summary_csv()
+    with pytest.raises(cablecal.InputError, match="--outliers"):
+        cablecal.montecarlo(robot, 12, 4, outliers="2")
+
+
 def test_montecarlo_equals_cli(tmp_path):
     path = robot_file("asymmetric")
     robot = cablecal.Robot.load(path)
