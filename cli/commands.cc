@@ -74,6 +74,13 @@ std::string PosePlanJsonYaml(const std::vector<PlanPose>& poses) {
   return YamlText(o);
 }
 
+// "%.3g": the console's rounding of a number a reader compares.
+std::string Rounded(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g", value);
+  return text;
+}
+
 // --measurements: the CSV read by column name for `robot` (the ignored columns noted on
 // stderr unless -q), then checked against what its sensors can read.
 std::vector<Measurement> ReadMeasurementsOption(const Context& ctx, const Robot& robot, const std::string& path,
@@ -367,19 +374,36 @@ int RunValidate(const Context& ctx, const ValidateCommandOptions& options) {
   }
   // Millimetres and milliradians, 3 significant digits: what a reader compares; the files keep
   // every digit.
-  std::printf("validated on %zu poses of %s (error = predicted - measured; sensor noise: laser %.3g mm, "
-              "inclinometer %.3g mrad)\n",
-              measurements.size(), PrintableText(options.measurements_path).c_str(), 1e3 * result.laser_sigma_m,
-              1e3 * result.inclinometer_sigma_rad);
+  const std::string readings = result.num_poses == static_cast<int>(measurements.size())
+                                   ? std::to_string(measurements.size()) + " poses"
+                                   : std::to_string(measurements.size()) + " readings (" +
+                                         std::to_string(result.num_poses) + " poses)";
+  std::string noise;
+  if (result.has_laser) noise += "laser " + Rounded(1e3 * result.laser_sigma_m) + " mm";
+  if (result.has_inclinometer) {
+    noise += (noise.empty() ? "" : ", ") + std::string("inclinometer ") + Rounded(1e3 * result.inclinometer_sigma_rad) +
+             " mrad";
+  }
+  std::printf("validated on %s of %s (error = predicted - measured; sensor noise: %s)\n", readings.c_str(),
+              PrintableText(options.measurements_path).c_str(), noise.c_str());
   for (const RobotPrediction& p : result.robots) {
-    std::printf("  %-10s z rms %.3g mm (max %.3g mm), theta rms %.3g mrad (max %.3g mrad)  [%s]\n", p.name.c_str(),
-                1e3 * p.z_m.rms, 1e3 * p.z_m.max_abs, 1e3 * p.theta_rad.rms, 1e3 * p.theta_rad.max_abs,
-                PrintableText(p.source).c_str());
+    std::string line;
+    if (p.z_m) line += "z rms " + Rounded(1e3 * p.z_m->rms) + " mm (max " + Rounded(1e3 * p.z_m->max_abs) + " mm)";
+    if (p.theta_rad) {
+      line += (line.empty() ? "" : ", ") + std::string("theta rms ") + Rounded(1e3 * p.theta_rad->rms) + " mrad (max " +
+              Rounded(1e3 * p.theta_rad->max_abs) + " mrad)";
+    }
+    std::printf("  %-10s %s  [%s]\n", p.name.c_str(), line.c_str(), PrintableText(p.source).c_str());
   }
   if (nominal) {
-    std::printf("  nominal / calibrated rms: z %.3g, theta %.3g (> 1: the calibration helped)\n", ZRmsRatio(result),
-                ThetaRmsRatio(result));
+    std::string ratios;
+    if (result.has_laser) ratios += "z " + Rounded(ZRmsRatio(result));
+    if (result.has_inclinometer) {
+      ratios += (ratios.empty() ? "" : ", ") + std::string("theta ") + Rounded(ThetaRmsRatio(result));
+    }
+    std::printf("  nominal / calibrated rms: %s (> 1: the calibration helped)\n", ratios.c_str());
   }
+  if (!NotCompared(result).empty()) std::printf("  not compared: %s\n", NotCompared(result).c_str());
   return kExitOk;
 }
 

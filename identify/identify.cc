@@ -103,13 +103,13 @@ std::string FormatCoefficient(double c) {
   return buffer;
 }
 
-// The identification for M cables and its per-pose x start: identify_cables.h, instantiated
+// The identification for M cables and its per-pose start: identify_cables.h, instantiated
 // for each M in its own translation unit (generated from identify_cables.cc.in).
 template <int M>
 IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measurement>& measurements,
                                   const IdentifyOptions& options);
 template <int M>
-double StartingX(const Robot& nominal, const GeometryVector& g, const Measurement& m);
+Eigen::Vector3d StartingPose(const Robot& robot, const GeometryVector& g, Measurement m);
 
 // f(std::integral_constant<int, M>{}) for the robot's cable count M: the one dispatch from a
 // run-time count to the compile-time instances.
@@ -138,11 +138,11 @@ IdentifyResult Identify(const Robot& nominal, const std::vector<Measurement>& me
   });
 }
 
-double XFromReadings(const Robot& robot, const GeometryVector& geometry, const Measurement& measurement) {
-  CABLECAL_CHECK(measurement.dl_m.size() == robot.num_cables() && geometry.size() == GeometrySize(robot.num_cables()),
+Eigen::Vector3d StartingPose(const Robot& robot, const GeometryVector& geometry, const Measurement& reading) {
+  CABLECAL_CHECK(reading.dl_m.size() == robot.num_cables() && geometry.size() == GeometrySize(robot.num_cables()),
                  "one encoder reading and three geometry entries per cable");
   return internal::WithCableCount(robot.num_cables(), [&](auto m) {
-    return internal::StartingX<decltype(m)::value>(robot, geometry, measurement);
+    return internal::StartingPose<decltype(m)::value>(robot, geometry, reading);
   });
 }
 

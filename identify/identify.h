@@ -156,11 +156,12 @@ struct IdentifyResult {
 IdentifyResult Identify(const Robot& nominal, const std::vector<Measurement>& measurements,
                         const IdentifyOptions& options);
 
-// The x where `robot`'s model, with `geometry` (GeometryOf(robot)), best explains a pose's
-// encoder readings at its measured z and theta: Identify's start for each x_j, and Validate's
-// start for the forward model (both need a start near the platform's real pose; home is too
-// far for some poses).
-double XFromReadings(const Robot& robot, const GeometryVector& geometry, const Measurement& measurement);
+// Where a reading's pose starts, for `robot` with `geometry` (GeometryOf(robot)): the measured z
+// and theta, with the x where the model best explains the encoder readings there; a missing z
+// or theta from where the robot settles with these lengths. Identify's start for each pose, and
+// Validate's start for the forward model (both need a start near the platform's real pose; home
+// is too far for some poses, and some lengths hold the platform in two places).
+Eigen::Vector3d StartingPose(const Robot& robot, const GeometryVector& geometry, const Measurement& reading);
 
 // What `identify` (the CLI and the Python module) makes of a result that is not one: a
 // rank-deficient or poor fit is an InputError naming `source` (the data cannot calibrate

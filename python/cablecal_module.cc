@@ -748,14 +748,20 @@ PYBIND11_MODULE(cablecal, m) {
   // ---- validate
   py::class_<ValidationResult>(m, "Validation",
                                "Each robot's predictions of held-out poses against the readings (cablecal validate).")
-      .def_property_readonly("pose_ids", [](const ValidationResult& r) { return r.pose_ids; })
-      .def_property_readonly("z_measured", [](const ValidationResult& r) {
+      .def_property_readonly("pose_ids", [](const ValidationResult& r) { return r.pose_ids; }, "one per reading")
+      .def_property_readonly("z_measured", [](const ValidationResult& r) -> py::object {
+        if (!r.has_laser) return py::none();
         return Vector(Eigen::Map<const Eigen::VectorXd>(r.z_measured_m.data(), r.z_measured_m.size()));
-      }, "(n,), m")
-      .def_property_readonly("theta_measured", [](const ValidationResult& r) {
+      }, "(n,), m; None without a laser")
+      .def_property_readonly("theta_measured", [](const ValidationResult& r) -> py::object {
+        if (!r.has_inclinometer) return py::none();
         return Vector(Eigen::Map<const Eigen::VectorXd>(r.theta_measured_rad.data(), r.theta_measured_rad.size()));
-      }, "(n,), rad")
+      }, "(n,), rad; None without an inclinometer")
       .def_property_readonly("robots", [](const ValidationResult& r) {
+        const auto errors = [](const std::vector<double>& e, bool measured) -> py::object {
+          if (!measured) return py::none();
+          return Vector(Eigen::Map<const Eigen::VectorXd>(e.data(), e.size()));
+        };
         py::dict d;
         for (const RobotPrediction& p : r.robots) {
           Eigen::MatrixXd q(p.q.size(), 3);
@@ -763,26 +769,28 @@ PYBIND11_MODULE(cablecal, m) {
           py::dict e;
           e["robot"] = p.robot;
           e["poses"] = Array(q);
-          e["z_error"] = Vector(Eigen::Map<const Eigen::VectorXd>(p.z_error_m.data(), p.z_error_m.size()));
-          e["theta_error"] = Vector(Eigen::Map<const Eigen::VectorXd>(p.theta_error_rad.data(), p.theta_error_rad.size()));
-          e["z_rms"] = p.z_m.rms;
-          e["z_max_abs"] = p.z_m.max_abs;
-          e["theta_rms"] = p.theta_rad.rms;
-          e["theta_max_abs"] = p.theta_rad.max_abs;
+          e["z_error"] = errors(p.z_error_m, r.has_laser);
+          e["theta_error"] = errors(p.theta_error_rad, r.has_inclinometer);
+          e["z_rms"] = p.z_m ? py::object(py::float_(p.z_m->rms)) : py::none();
+          e["z_max_abs"] = p.z_m ? py::object(py::float_(p.z_m->max_abs)) : py::none();
+          e["theta_rms"] = p.theta_rad ? py::object(py::float_(p.theta_rad->rms)) : py::none();
+          e["theta_max_abs"] = p.theta_rad ? py::object(py::float_(p.theta_rad->max_abs)) : py::none();
           d[py::str(p.name)] = e;
         }
         return d;
       }, "'calibrated' (and 'nominal'): poses (n, 3) predicted x, z, theta; z_error, theta_error (n,) = predicted - "
-         "measured; z_rms, z_max_abs (m), theta_rms, theta_max_abs (rad)")
+         "measured; z_rms, z_max_abs (m), theta_rms, theta_max_abs (rad); None for a sensor the data lack")
       .def_property_readonly("ratio", [](const ValidationResult& r) -> py::object {
         if (r.robots.size() < 2) return py::none();
         py::dict d;
-        d["z_rms"] = ZRmsRatio(r);
-        d["theta_rms"] = ThetaRmsRatio(r);
+        d["z_rms"] = r.has_laser ? py::object(py::float_(ZRmsRatio(r))) : py::none();
+        d["theta_rms"] = r.has_inclinometer ? py::object(py::float_(ThetaRmsRatio(r))) : py::none();
         return d;
       }, "nominal / calibrated RMS errors (> 1: the calibration helped); None without a nominal robot")
+      .def_property_readonly("not_compared", [](const ValidationResult& r) { return NotCompared(r); },
+                             "what the data lack, e.g. \"no 'theta' column (inclinometer)\"; empty when both compared")
       .def("to_csv", [](const ValidationResult& r) { return ValidationCsv(r, ""); },
-           "The CLI's per-pose CSV (no provenance lines).")
+           "The CLI's per-reading CSV (no provenance lines).")
       .def("to_yaml", [](const ValidationResult& r) { return ValidationSummaryYaml(r, CallText("validate")); },
            "The CLI's summary YAML (the command line reads python: cablecal.validate).");
   m.def(

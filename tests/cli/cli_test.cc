@@ -971,6 +971,25 @@ TEST_F(Cli, ValidateComparesCalibratedAndNominalOnHeldOutPoses) {
   // Without the nominal robot: the calibrated columns only.
   run("validate --robot " + Path("cal.yaml") + " --measurements " + Path("b.csv") + " --out " + Path("v2.csv") + " -q");
   EXPECT_EQ(Read("v2.csv").find("nominal"), std::string::npos);
+  // A lab without an inclinometer: the theta comparison is left out, and said so.
+  std::ifstream in(Path("b.csv"));
+  std::ofstream out(Path("no_theta.csv"));
+  for (std::string line; std::getline(in, line);) {
+    out << (line[0] == '#' ? line : line.substr(0, line.rfind(','))) << "\n";
+  }
+  out.close();
+  const RunResult z_only = run("validate --robot " + Path("cal.yaml") + " --nominal " + nominal + " --measurements " +
+                               Path("no_theta.csv") + " --out " + Path("v3.csv") + " --summary " + Path("v3.yaml"));
+  EXPECT_NE(Read("v3.csv").find("\npose,z_measured_m,x_calibrated_m,z_calibrated_m,theta_calibrated_rad,"
+                                "z_error_calibrated_m,x_nominal_m,"),
+            std::string::npos)
+      << Read("v3.csv");
+  EXPECT_EQ(Read("v3.csv").find("theta_error"), std::string::npos);
+  EXPECT_NE(z_only.output.find("  not compared: no 'theta' column (inclinometer)\n"), std::string::npos) << z_only.output;
+  EXPECT_NE(z_only.output.find("nominal / calibrated rms: z "), std::string::npos) << z_only.output;
+  const YAML::Node z_summary = YAML::LoadFile(Path("v3.yaml"));
+  EXPECT_EQ(z_summary["not_compared"].as<std::string>(), "no 'theta' column (inclinometer)");
+  EXPECT_NEAR(z_summary["calibrated"]["z"]["rms_m"].as<double>(), summary["calibrated"]["z"]["rms_m"].as<double>(), 1e-12);
 }
 
 // What validate cannot compare is exit 2 naming file, line and (where one is to blame) column,
@@ -983,6 +1002,7 @@ TEST_F(Cli, ValidateRefusesWhatItCannotCompareAndWritesNothing) {
   write("slack.csv", meas + "9,3,0,1.4,0\n");
   write("nan.csv", meas + "9,0,0,nan,0\n");
   write("three.csv", "pose,dl1,dl2,dl3,z,theta\n1,0,0,0,1.4,0\n");
+  write("neither.csv", "pose,dl1,dl2\n1,0,0\n");
   const std::string builtin = " --robot " CABLECAL_SOURCE_DIR "/robots/wang2022.yaml";
   const std::string planar3 = CABLECAL_SOURCE_DIR "/robots/planar3_suspended.yaml";
   const std::string outputs = " --out " + Path("v.csv") + " --summary " + Path("v.yaml");
@@ -993,6 +1013,8 @@ TEST_F(Cli, ValidateRefusesWhatItCannotCompareAndWritesNothing) {
        "planar3_suspended.yaml: the nominal robot has 3 cables, the calibrated robot 2"},
       {"--measurements " + Path("nan.csv") + builtin + outputs, "nan.csv:8: column 'z': must be a finite number"},
       {"--measurements " + Path("three.csv") + builtin + outputs, "the file has columns for 3 cables, the robot has 2"},
+      {"--measurements " + Path("neither.csv") + builtin + outputs,
+       "neither.csv: nothing to compare the predictions with: the data have no 'z' column (laser) and no 'theta' column"},
       {"--measurements " + Path("meas.csv") + builtin + " --summary " + Path("v.yaml"), "--out: required"},
       {"--measurements " + Path("meas.csv") + outputs, "--robot is required"},
       {"--measurements " + Path("meas.csv") + builtin + " --out " + Path("meas.csv"), "--out"},

@@ -77,11 +77,11 @@ ValidationResult CalibrateAndValidate(const Robot& nominal, double sigma_m, std:
   EXPECT_EQ(v.robots.size(), 2u);
   EXPECT_EQ(v.pose_ids.size(), holdout.size());
   const RobotPrediction &calibrated = v.robots[0], &uncalibrated = v.robots[1];
-  EXPECT_GE(uncalibrated.z_m.rms, 3.0 * calibrated.z_m.rms)
-      << nominal.name << ": calibrated z rms " << calibrated.z_m.rms << " m, nominal " << uncalibrated.z_m.rms << " m";
-  EXPECT_EQ(ZRmsRatio(v), uncalibrated.z_m.rms / calibrated.z_m.rms);
+  EXPECT_GE(uncalibrated.z_m.value().rms, 3.0 * calibrated.z_m.value().rms)
+      << nominal.name << ": calibrated z rms " << calibrated.z_m.value().rms << " m, nominal " << uncalibrated.z_m.value().rms << " m";
+  EXPECT_EQ(ZRmsRatio(v), uncalibrated.z_m.value().rms / calibrated.z_m.value().rms);
   // The calibrated robot is left with about the laser's noise (which a perfect model shows too).
-  EXPECT_LT(calibrated.z_m.rms, 2.0 * v.laser_sigma_m) << nominal.name;
+  EXPECT_LT(calibrated.z_m.value().rms, 2.0 * v.laser_sigma_m) << nominal.name;
   return v;
 }
 
@@ -126,8 +126,8 @@ TEST(Validate, TrueRobotMatchesNoiseFreeReadings) {
     ASSERT_GE(exp.measurements.size(), 10u);
     const ValidationResult v = Validate(truth, std::nullopt, exp.measurements, "noise-free");
     ASSERT_EQ(v.robots.size(), 1u);
-    EXPECT_LT(v.robots[0].z_m.max_abs, 1e-9);
-    EXPECT_LT(v.robots[0].theta_rad.max_abs, 1e-9);
+    EXPECT_LT(v.robots[0].z_m.value().max_abs, 1e-9);
+    EXPECT_LT(v.robots[0].theta_rad.value().max_abs, 1e-9);
     for (std::size_t j = 0; j < exp.true_poses.size(); ++j) {
       EXPECT_NEAR(v.robots[0].q[j](0), exp.true_poses[j](0), 1e-9) << "pose " << j + 1;
     }
@@ -186,11 +186,77 @@ TEST(Validate, CsvAndJsonRowsShareTheColumnsAndTheSummaryReadsBack) {
   const YAML::Node summary = YAML::Load(ValidationSummaryYaml(v, "cablecal validate ..."));
   EXPECT_EQ(summary["command"].as<std::string>(), "cablecal validate ...");
   EXPECT_EQ(summary["poses"].as<int>(), 6);
-  EXPECT_EQ(summary["calibrated"]["z"]["rms_m"].as<double>(), v.robots[0].z_m.rms);
-  EXPECT_EQ(summary["nominal"]["theta"]["max_abs_rad"].as<double>(), v.robots[1].theta_rad.max_abs);
+  EXPECT_EQ(summary["calibrated"]["z"]["rms_m"].as<double>(), v.robots[0].z_m.value().rms);
+  EXPECT_EQ(summary["nominal"]["theta"]["max_abs_rad"].as<double>(), v.robots[1].theta_rad.value().max_abs);
   EXPECT_EQ(summary["nominal"]["file"].as<std::string>(), nominal.source);
   EXPECT_EQ(summary["nominal_over_calibrated"]["z_rms"].as<double>(), ZRmsRatio(v));
   EXPECT_EQ(summary["sensor_noise"]["laser_sigma_m"].as<double>(), nominal.sensors.laser_sigma_m());
+  EXPECT_EQ(summary["readings"].as<int>(), 6);
+  EXPECT_FALSE(summary["not_compared"]);
+  // Repeated readings of a pose are each predicted: counted as readings, the poses once.
+  std::vector<Measurement> twice = exp.measurements;
+  twice.insert(twice.end(), exp.measurements.begin(), exp.measurements.end());
+  const YAML::Node repeated = YAML::Load(ValidationSummaryYaml(Validate(truth, nominal, twice, "m.csv"), ""));
+  EXPECT_EQ(repeated["readings"].as<int>(), 12);
+  EXPECT_EQ(repeated["poses"].as<int>(), 6);
+}
+
+// A file without the z (or theta) column: that comparison is left out (no columns, no
+// statistics, no ratio; the summary says why) and the other one is made as with both; a
+// missing coordinate starts where the robot settles, and the predictions are the same. With
+// neither column there is nothing to compare: refused, naming the file.
+TEST(Validate, AMissingSensorsComparisonIsLeftOut) {
+  for (const Robot& nominal : {BuiltinRobot(), LoadRobotFile(CABLECAL_SOURCE_DIR "/robots/planar3_suspended.yaml")}) {
+    SCOPED_TRACE(nominal.name);
+    Rng rng(12);
+    const Robot truth = PerturbGeometry(nominal, nominal.num_cables() == 2 ? 0.015 : 0.005, rng);
+    const SimulatedExperiment exp = Experiment(nominal, truth, 20, 13);
+    const ValidationResult both = Validate(truth, nominal, exp.measurements, "m.csv");
+    for (const bool laser : {false, true}) {
+      std::vector<Measurement> readings = exp.measurements;
+      for (Measurement& m : readings) (laser ? m.has_inclinometer : m.has_laser) = false;
+      const ValidationResult v = Validate(truth, nominal, readings, "m.csv");
+      EXPECT_EQ(v.has_laser, laser);
+      EXPECT_EQ(v.has_inclinometer, !laser);
+      for (std::size_t k = 0; k < 2; ++k) {
+        for (std::size_t j = 0; j < readings.size(); ++j) {
+          EXPECT_LT((v.robots[k].q[j] - both.robots[k].q[j]).norm(), 1e-9) << v.robots[k].name << " pose " << j + 1;
+        }
+        EXPECT_EQ(v.robots[k].z_m.has_value(), laser);
+        EXPECT_EQ(v.robots[k].theta_rad.has_value(), !laser);
+        EXPECT_NEAR(laser ? v.robots[k].z_m.value().rms : v.robots[k].theta_rad.value().rms,
+                    laser ? both.robots[k].z_m.value().rms : both.robots[k].theta_rad.value().rms, 1e-12);
+      }
+      EXPECT_EQ(std::isnan(ZRmsRatio(v)), !laser);
+      EXPECT_EQ(std::isnan(ThetaRmsRatio(v)), laser);
+      const std::string csv = ValidationCsv(v, "");
+      const std::string header = csv.substr(0, csv.find('\n'));
+      EXPECT_EQ(header, laser ? "pose,z_measured_m,x_calibrated_m,z_calibrated_m,theta_calibrated_rad,"
+                                "z_error_calibrated_m,x_nominal_m,z_nominal_m,theta_nominal_rad,z_error_nominal_m"
+                              : "pose,theta_measured_rad,x_calibrated_m,z_calibrated_m,theta_calibrated_rad,"
+                                "theta_error_calibrated_rad,x_nominal_m,z_nominal_m,theta_nominal_rad,"
+                                "theta_error_nominal_rad");
+      const YAML::Node summary = YAML::Load(ValidationSummaryYaml(v, "cablecal validate ..."));
+      EXPECT_EQ(summary["compared"][0].as<std::string>(), laser ? "z" : "theta");
+      EXPECT_EQ(summary["compared"].size(), 1u);
+      EXPECT_EQ(summary["not_compared"].as<std::string>(),
+                laser ? "no 'theta' column (inclinometer)" : "no 'z' column (laser)");
+      EXPECT_FALSE(summary["calibrated"][laser ? "theta" : "z"]);
+      EXPECT_TRUE(summary["nominal"][laser ? "z" : "theta"]);
+      EXPECT_FALSE(summary["nominal_over_calibrated"][laser ? "theta_rms" : "z_rms"]);
+      EXPECT_EQ(YAML::Load(ValidationRowsYaml(v))[0].size(), 10u);
+    }
+    std::vector<Measurement> neither = exp.measurements;
+    for (Measurement& m : neither) m.has_laser = m.has_inclinometer = false;
+    try {
+      Validate(truth, nominal, neither, "m.csv");
+      ADD_FAILURE() << "nothing to compare, accepted";
+    } catch (const InputError& e) {
+      EXPECT_EQ(std::string(e.what()), "m.csv: nothing to compare the predictions with: the data have no 'z' column "
+                                       "(laser) and no 'theta' column (inclinometer) (validate compares the predicted z "
+                                       "and theta with those readings)");
+    }
+  }
 }
 
 // Readings a robot cannot produce, each refused with the file and line of the pose.

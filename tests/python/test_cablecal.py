@@ -280,6 +280,26 @@ def test_validate_equals_cli_and_the_calibration_wins(tmp_path):
     assert alone.ratio is None and set(alone.robots) == {"calibrated"}
 
 
+def test_validate_without_an_inclinometer_equals_cli(tmp_path):
+    path = robot_file("planar3_suspended")
+    robot = cablecal.Robot.load(path)
+    m = cablecal.simulate(robot, cablecal.sample(robot, 8, seed=3), seed=4).measurements
+    no_theta = cablecal.Measurements(robot, m.dl, m.z, None, pose_ids=m.pose_ids)
+    v = cablecal.validate(robot, no_theta, nominal=robot)
+    assert v.theta_measured is None and v.not_compared == "no 'theta' column (inclinometer)"
+    cal = v.robots["calibrated"]
+    assert cal["theta_error"] is None and cal["theta_rms"] is None and cal["theta_max_abs"] is None
+    assert cal["z_rms"] < 0.02 and cal["poses"].shape == (8, 3)
+    assert v.ratio == {"z_rms": 1.0, "theta_rms": None}  # the same robot twice
+    csv, out = tmp_path / "m.csv", tmp_path / "v.csv"
+    csv.write_text(no_theta.to_csv())
+    cli("validate", "--robot", path, "--nominal", path, "--measurements", str(csv), "--out", str(out))
+    assert v.to_csv() == data_lines(out)
+    assert "theta_measured_rad" not in v.to_csv()
+    with pytest.raises(cablecal.InputError, match="nothing to compare the predictions with"):
+        cablecal.validate(robot, cablecal.Measurements(robot, m.dl, None, None))
+
+
 def test_validate_refuses_what_it_cannot_compare():
     r2 = cablecal.Robot.load(robot_file("asymmetric"))
     r3 = cablecal.Robot.load(robot_file("planar3_suspended"))
