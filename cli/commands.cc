@@ -29,6 +29,7 @@
 #include "identify/identify.h"
 #include "identify/validate.h"
 #include "model/statics.h"
+#include "sensors/sensors.h"
 #include "workspace/workspace.h"
 
 namespace cablecal::cli {
@@ -81,8 +82,16 @@ std::string Rounded(double value) {
   return text;
 }
 
+// The console's line for readings corrected for the robot file's systematic sensor errors.
+void PrintSensorCorrection(const SystematicSensorErrors& e) {
+  std::printf("  readings corrected for the robot file's systematic sensor errors: laser offset %.3g m, "
+              "inclinometer offset %.3g deg, sec coefficient %.3g deg\n",
+              e.laser_offset_m, e.inclinometer_offset_rad * 180.0 / M_PI, e.inclinometer_sec_coefficient_rad * 180.0 / M_PI);
+}
+
 // --measurements: the CSV read by column name for `robot` (the ignored columns noted on
-// stderr unless -q), then checked against what its sensors can read.
+// stderr unless -q), then corrected for the robot file's systematic sensor errors and checked
+// against what its sensors can read (CorrectedReadings).
 std::vector<Measurement> ReadMeasurementsOption(const Context& ctx, const Robot& robot, const std::string& path,
                                                 const std::string& delimiter) {
   const std::vector<Measurement> measurements =
@@ -91,8 +100,7 @@ std::vector<Measurement> ReadMeasurementsOption(const Context& ctx, const Robot&
         std::fprintf(stderr, "cablecal: note: %s: ignoring column%s %s\n", path.c_str(), ignored.size() > 1 ? "s" : "",
                      QuotedList(ignored).c_str());
       });
-  CheckReadingsPlausible(robot, measurements, path);
-  return measurements;
+  return CorrectedReadings(robot, measurements, path);
 }
 
 }  // namespace
@@ -263,7 +271,14 @@ int RunSimulate(const Context& ctx, const SimulateOptions& options) {
   // A pose where the true robot settles outside its own workspace (beyond a tension limit,
   // the inclinometer range or the margin) would stop a lab's experiment: exit 2 naming the
   // plan's pose (the Monte Carlo counts such a trial as failed).
-  const SimulationOptions sim{ParseNoisySensors(options.sensors), !options.no_encoder_noise, true};
+  SimulationOptions sim{ParseNoisySensors(options.sensors), !options.no_encoder_noise, true};
+  sim.systematic_errors = options.systematic_errors;
+  if (sim.systematic_errors && !nominal.sensors.systematic.any()) {
+    throw InputError("--systematic-errors", "",
+                     "the robot " + PrintableText(nominal.name) + " (" + (options.robot_path.empty() ? "built in" : options.robot_path) +
+                         ") has no systematic sensor errors to add (sensors.laser.offset, "
+                         "sensors.inclinometer.offset_deg, sec_coefficient_deg; cablecal sensors fit makes them)");
+  }
   if (!options.truth_path.empty() && options.geometry_sigma_m >= 0.0) {
     throw InputError("--truth", "", "give either --truth or --geometry-sigma, not both");
   }
@@ -284,8 +299,9 @@ int RunSimulate(const Context& ctx, const SimulateOptions& options) {
                                             experiment.true_poses));
   }
   output.Commit();
-  std::printf("simulated %zu poses (noisy sensors: %s, encoder noise %s) to %s\n", plan.size(),
-              ToString(sim.noisy), sim.encoder_noise ? "on" : "off", options.out_path.c_str());
+  std::printf("simulated %zu poses (noisy sensors: %s, encoder noise %s%s) to %s\n", plan.size(),
+              ToString(sim.noisy), sim.encoder_noise ? "on" : "off",
+              sim.systematic_errors ? ", systematic sensor errors added" : "", options.out_path.c_str());
   return kExitOk;
 }
 
@@ -300,9 +316,11 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   id.source = options.measurements_path;
   id.max_iterations = options.max_iterations;
   id.loss = ParseLoss(options.loss);
+  // A robot file with systematic sensor errors (sensors fit) has them removed before the solve.
   const std::vector<Measurement> measurements =
       ReadMeasurementsOption(ctx, nominal, options.measurements_path, options.delimiter);
-  const IdentifyResult result = Identify(nominal, measurements, id);
+  IdentifyResult result = Identify(nominal, measurements, id);
+  if (nominal.sensors.systematic.any()) result.corrected_for = nominal.sensors.systematic;
   RequireUsableResult(result, options.measurements_path);
   const std::string result_yaml = IdentifyResultYaml(result, ctx.command_line);
   AtomicOutput output;
@@ -338,6 +356,7 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   if (!ctx.quiet) {
     for (const std::string& w : result.warnings) std::fprintf(stderr, "cablecal: warning: %s\n", w.c_str());
   }
+  if (result.corrected_for) PrintSensorCorrection(*result.corrected_for);
   const std::vector<std::string> names = GeometryNames(nominal.num_cables());
   for (std::size_t k = 0; k < names.size(); ++k) {
     std::printf("  %s = %.7f m", names[k].c_str(), result.geometry(k));
@@ -358,7 +377,8 @@ int RunValidate(const Context& ctx, const ValidateCommandOptions& options) {
   if (!options.nominal_path.empty()) nominal = LoadRobotFile(options.nominal_path);
   const std::vector<Measurement> measurements =
       ReadMeasurementsOption(ctx, calibrated, options.measurements_path, options.delimiter);
-  const ValidationResult result = Validate(calibrated, nominal, measurements, options.measurements_path);
+  ValidationResult result = Validate(calibrated, nominal, measurements, options.measurements_path);
+  if (calibrated.sensors.systematic.any()) result.corrected_for = calibrated.sensors.systematic;
   const std::string summary_yaml = ValidationSummaryYaml(result, ctx.command_line);
   AtomicOutput output;
   if (!options.out_path.empty()) {
@@ -404,6 +424,58 @@ int RunValidate(const Context& ctx, const ValidateCommandOptions& options) {
     std::printf("  nominal / calibrated rms: %s (> 1: the calibration helped)\n", ratios.c_str());
   }
   if (!NotCompared(result).empty()) std::printf("  not compared: %s\n", NotCompared(result).c_str());
+  if (result.corrected_for) PrintSensorCorrection(*result.corrected_for);
+  return kExitOk;
+}
+
+int RunSensorsFit(const Context& ctx, const SensorsFitOptions& options) {
+  CheckCommandPaths({{"--robot", options.robot_path},
+                     {"--inclinometer", options.inclinometer_path},
+                     {"--laser", options.laser_path}},
+                    {{"--out", options.out_path}});
+  if (options.inclinometer_path.empty() && options.laser_path.empty()) {
+    throw InputError("--inclinometer", "", "give --inclinometer, --laser or both: the bench readings to fit");
+  }
+  const Robot robot = LoadRobotOption(options.robot_path);
+  const char delimiter = ParseDelimiter(options.delimiter);
+  const auto note_ignored = [&](const std::string& path) {
+    return [&ctx, path](const std::vector<std::string>& ignored) {
+      if (ctx.quiet) return;
+      std::fprintf(stderr, "cablecal: note: %s: ignoring column%s %s\n", path.c_str(), ignored.size() > 1 ? "s" : "",
+                   QuotedList(ignored).c_str());
+    };
+  };
+  SensorsFit fit;
+  if (!options.inclinometer_path.empty()) {
+    const std::string& path = options.inclinometer_path;
+    fit.inclinometer = FitInclinometer(ReadBenchCsv(BenchSensor::kInclinometer, path, delimiter, note_ignored(path)), path);
+  }
+  if (!options.laser_path.empty()) {
+    const std::string& path = options.laser_path;
+    fit.laser = FitLaser(ReadBenchCsv(BenchSensor::kLaser, path, delimiter, note_ignored(path)), path);
+  }
+  AtomicOutput output;
+  output.WriteText(options.out_path, SensorsFitYaml(robot, fit, ctx.command_line));
+  output.Commit();
+  if (!ctx.quiet) {
+    for (const std::string& w : FitWarnings(robot, fit)) std::fprintf(stderr, "cablecal: warning: %s\n", w.c_str());
+  }
+  constexpr double kDeg = 180.0 / M_PI;
+  if (fit.inclinometer) {
+    const InclinometerFit& f = *fit.inclinometer;
+    std::printf("inclinometer, %d readings of %d references: offset %.3g deg (standard error %.2g), sec coefficient "
+                "%.3g deg (standard error %.2g), accuracy %.3g deg, repeatability %.3g deg (3-sigma ranges)\n",
+                f.bench.readings, f.bench.references, f.offset_rad * kDeg, f.offset_se_rad * kDeg,
+                f.sec_coefficient_rad * kDeg, f.sec_coefficient_se_rad * kDeg, f.accuracy_rad * kDeg,
+                f.repeatability_rad * kDeg);
+  }
+  if (fit.laser) {
+    const LaserFit& f = *fit.laser;
+    std::printf("laser, %d readings of %d references: offset %.3g m (standard error %.2g), accuracy %.3g m, "
+                "repeatability %.3g m (3-sigma ranges)\n",
+                f.bench.readings, f.bench.references, f.offset_m, f.offset_se_m, f.accuracy_m, f.repeatability_m);
+  }
+  std::printf("wrote the sensors block for a robot file to %s\n", options.out_path.c_str());
   return kExitOk;
 }
 

@@ -49,6 +49,7 @@ struct SimulateOptions {
   unsigned long long seed = 1;
   std::string sensors = "both";
   bool no_encoder_noise = false;
+  bool systematic_errors = false;  // add the robot file's systematic sensor errors
 };
 int RunSimulate(const Context& ctx, const SimulateOptions& options);
 
@@ -68,6 +69,12 @@ struct ValidateCommandOptions {
   bool json = false;  // the summary and the per-pose rows on stdout as JSON (then --out is optional)
 };
 int RunValidate(const Context& ctx, const ValidateCommandOptions& options);
+
+struct SensorsFitOptions {
+  std::string robot_path, inclinometer_path, laser_path, out_path;
+  std::string delimiter = ",";  // of the bench CSVs
+};
+int RunSensorsFit(const Context& ctx, const SensorsFitOptions& options);
 
 struct DesignCommandOptions {
   std::string robot_path, out_path, summary_path, plot_path;

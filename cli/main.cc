@@ -112,6 +112,8 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::IsMember({"both", "laser", "inclinometer", "none"}));
   sim_cmd->add_flag("--no-encoder-noise", sim.no_encoder_noise, "encoders read the commanded changes exactly");
+  sim_cmd->add_flag("--systematic-errors", sim.systematic_errors,
+                    "also add the robot file's systematic laser and inclinometer errors (sensors fit)");
   sim_cmd->add_option("--out", sim.out_path, "measurement CSV (pose,dl1..dlm,z,theta)")->required();
   sim_cmd->add_option("--truth-out", sim.truth_out_path, "true robot and true poses (YAML)");
 
@@ -154,6 +156,18 @@ int main(int argc, char** argv) {
   val_cmd->add_option("--out", val.out_path, "per-pose CSV: measured and predicted z, theta and their errors (required unless --json)");
   val_cmd->add_option("--summary", val.summary_path, "summary YAML: RMS and largest errors per robot");
   val_cmd->add_flag("--json", val.json, "print the summary and the per-pose rows as JSON on stdout");
+
+  cablecal::cli::SensorsFitOptions sfit;
+  CLI::App* sensors_cmd = app.add_subcommand("sensors", "the laser's and inclinometer's error models");
+  sensors_cmd->require_subcommand(1);
+  CLI::App* sfit_cmd = sensors_cmd->add_subcommand(
+      "fit", "fit systematic errors, accuracy and repeatability from bench readings to a robot file's sensors block");
+  AddRobotOption(sfit_cmd, &sfit.robot_path);
+  sfit_cmd->add_option("--inclinometer", sfit.inclinometer_path, "inclinometer bench CSV (reference_rad,reading_rad)")
+      ->check(CLI::ExistingFile);
+  sfit_cmd->add_option("--laser", sfit.laser_path, "laser bench CSV (reference_m,reading_m)")->check(CLI::ExistingFile);
+  sfit_cmd->add_option("--delimiter", sfit.delimiter, "the bench CSVs' separator: ',', ';' or tab")->capture_default_str();
+  sfit_cmd->add_option("--out", sfit.out_path, "the sensors: block (YAML) for a robot file")->required();
 
   cablecal::cli::DesignCommandOptions des;
   CLI::App* des_cmd = app.add_subcommand("design", "choose optimal measurement poses (Ipopt)");
@@ -233,6 +247,10 @@ int main(int argc, char** argv) {
     commands.push_back(sub->get_name());
     sub->fallthrough();
     sub->set_version_flag("--version", version);
+    for (CLI::App* nested : sub->get_subcommands([](CLI::App*) { return true; })) {
+      nested->fallthrough();
+      nested->set_version_flag("--version", version);
+    }
   }
   // A misspelt command: CLI11 would call it an unexpected argument.
   if (argc > 1 && argv[1][0] != '-' &&
@@ -289,6 +307,7 @@ int main(int argc, char** argv) {
     if (id_cmd->parsed()) return cablecal::cli::RunIdentify(ctx, ident);
     if (val_cmd->parsed()) return cablecal::cli::RunValidate(ctx, val);
     if (des_cmd->parsed()) return cablecal::cli::RunDesign(ctx, des);
+    if (sfit_cmd->parsed()) return cablecal::cli::RunSensorsFit(ctx, sfit);
     if (mc_cmd->parsed()) return cablecal::cli::RunMonteCarloCommand(ctx, mc);
     if (rep_cmd->parsed()) return cablecal::cli::RunReproduce(ctx, rep);
   } catch (const cablecal::AlreadyReported& e) {

@@ -6,6 +6,7 @@
 #include "common/error.h"
 #include "common/format.h"
 #include "common/yaml_writer.h"
+#include "model/sensor_model.h"
 #include "model/statics.h"
 
 namespace cablecal {
@@ -120,8 +121,13 @@ SimulatedExperiment SimulateExperiment(const Robot& nominal, const Robot& truth,
     const double laser_rep = rng.Normal(0.0, s.laser_repeatability_m / 3.0);
     const double inc_acc = rng.Normal(0.0, s.inclinometer_accuracy_rad / 3.0);
     const double inc_rep = rng.Normal(0.0, s.inclinometer_repeatability_rad / 3.0);
-    m.z_m = fwd.equilibrium.q(1) + (laser ? laser_acc + laser_rep : 0.0);
-    m.theta_rad = fwd.equilibrium.q(2) + (inclinometer ? inc_acc + inc_rep : 0.0);
+    // Off, the sensors read the true pose exactly as before the option existed (same bits).
+    const SystematicSensorErrors& sys = s.systematic;
+    const double z_read = options.systematic_errors ? LaserReading(sys, fwd.equilibrium.q(1)) : fwd.equilibrium.q(1);
+    const double theta_read =
+        options.systematic_errors ? InclinometerReading(sys, fwd.equilibrium.q(2)) : fwd.equilibrium.q(2);
+    m.z_m = z_read + (laser ? laser_acc + laser_rep : 0.0);
+    m.theta_rad = theta_read + (inclinometer ? inc_acc + inc_rep : 0.0);
     out.measurements.push_back(m);
     out.true_poses.push_back(fwd.equilibrium.q);
   }

@@ -85,6 +85,9 @@ struct SimulationOptions {
   // tension beyond the limits, theta beyond the inclinometer range, the margin broken):
   // the Monte Carlo counts such an experiment as failed, as a lab would.
   bool require_feasible = false;
+  // Also add the nominal robot file's systematic sensor errors (model/sensor_model.h) to the
+  // laser and inclinometer readings, whatever `noisy` says (simulate --systematic-errors).
+  bool systematic_errors = false;
 };
 
 struct SimulatedExperiment {

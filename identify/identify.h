@@ -24,6 +24,10 @@
 #include "identify/experiment.h"
 #include "model/robot.h"
 
+namespace YAML {
+class Emitter;
+}
+
 namespace cablecal {
 
 enum class Estimator {
@@ -146,6 +150,10 @@ struct IdentifyResult {
   std::vector<std::string> missing_sensors;  // "laser", "inclinometer": no such column in the data
   std::vector<std::string> warnings;         // a result, but one to read with care
   Identifiability identifiability;
+  // The robot file's systematic sensor errors the laser and inclinometer readings were
+  // corrected for before the solve (sensors/correction.h; the caller sets it, Identify does
+  // not correct); none: the readings were used as read. result.yaml says which.
+  std::optional<SystematicSensorErrors> corrected_for;
   bool converged() const { return status == IdentifyStatus::kConverged; }
 };
 
@@ -167,6 +175,10 @@ Eigen::Vector3d StartingPose(const Robot& robot, const GeometryVector& geometry,
 // rank-deficient or poor fit is an InputError naming `source` (the data cannot calibrate
 // this robot), a solve that did not converge a SolverFailure. Returns quietly otherwise.
 void RequireUsableResult(const IdentifyResult& result, const std::string& source);
+
+// The `sensor_correction` map of result.yaml and of validate's summary: the robot file's
+// systematic sensor errors the readings were corrected for, and `when` ("before the solve").
+void EmitSensorCorrection(YAML::Emitter& out, const SystematicSensorErrors& errors, const std::string& when);
 
 // result.yaml (README, "identify").
 std::string IdentifyResultYaml(const IdentifyResult& result, const std::string& command_line);

@@ -228,6 +228,7 @@ std::string ValidationSummaryYaml(const ValidationResult& result, const std::str
     o << YAML::Key << "inclinometer_sigma_rad" << YAML::Value << YamlNumber{result.inclinometer_sigma_rad};
   }
   o << YAML::EndMap << YAML::Comment("the RMS errors a perfect model would show");
+  if (result.corrected_for) EmitSensorCorrection(o, *result.corrected_for, "before the comparison");
   for (const RobotPrediction& p : result.robots) {
     o << YAML::Key << p.name << YAML::Value << YAML::BeginMap;
     o << YAML::Key << "robot" << YAML::Value << YamlString{p.robot};

@@ -43,6 +43,9 @@ struct ValidationResult {
   std::vector<RobotPrediction> robots;  // the calibrated robot, then the nominal one when given
   // The sensors' noise (their sigma): the RMS error even a perfect model would show.
   double laser_sigma_m = 0.0, inclinometer_sigma_rad = 0.0;
+  // Set by a caller that corrected the readings for the robot file's systematic sensor errors
+  // (CorrectedReadings, sensors/correction.h, which depends on identify/): said in the summary.
+  std::optional<SystematicSensorErrors> corrected_for;
 };
 
 // Predicts every reading of `measurements` with `calibrated` and, when given, `nominal`. Throws

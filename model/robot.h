@@ -52,6 +52,19 @@ struct Cable {
   std::optional<double> initial_length_m;  // overrides the length at the home pose
 };
 
+// The sensors' systematic errors (README, "Sensor error models"; the formulas are in
+// model/sensor_model.h): what a bench test fits and what is left once they are removed is the
+// random noise below. All zero when the robot file gives none, so older files and every
+// result made from them are unchanged.
+struct SystematicSensorErrors {
+  double laser_offset_m = 0.0;                    // laser reading - true height, everywhere
+  double inclinometer_offset_rad = 0.0;           // inclinometer error at theta = 0
+  double inclinometer_sec_coefficient_rad = 0.0;  // k of k (sec theta - 1)
+  bool any() const {
+    return laser_offset_m != 0.0 || inclinometer_offset_rad != 0.0 || inclinometer_sec_coefficient_rad != 0.0;
+  }
+};
+
 struct SensorNoise {
   // Each +- range of the paper is three standard deviations of a zero-mean Gaussian.
   double laser_accuracy_m = 0.0;
@@ -62,6 +75,9 @@ struct SensorNoise {
   // Laser-tracker measurement of the exit points, one standard deviation per coordinate;
   // used by the identification's `prior` gauge. Optional in the file.
   std::optional<double> tracker_sigma_m;
+  // Optional in the file (sensors.laser.offset, sensors.inclinometer.offset_deg and
+  // sec_coefficient_deg); simulate adds them only when asked, identify removes them.
+  SystematicSensorErrors systematic;
 
   // Standard deviation of one reading: accuracy and repeatability are drawn separately
   // (each range = 3 sigma) and added, so their variances add.
@@ -121,5 +137,8 @@ const std::string& BuiltinRobotYaml();
 std::string RobotToYaml(const Robot& robot);
 // The same fields into an open block map of `out` (a truth file adds its own after them).
 void EmitRobotFields(YAML::Emitter& out, const Robot& robot);
+// The value of the file's `sensors:` key, as EmitRobotFields writes it (the sensors fit's
+// output is this block, so that it pastes into a robot file as is).
+void EmitSensors(YAML::Emitter& out, const SensorNoise& sensors);
 
 }  // namespace cablecal

@@ -14,6 +14,7 @@
 #include "common/format.h"
 #include "common/yaml_writer.h"
 #include "model/robot.h"
+#include "model/sensor_model.h"
 #include "model/statics.h"
 
 namespace cablecal {
@@ -262,8 +263,9 @@ Robot Parse(const YAML::Node& root, const Reader& rd) {
 
   const YAML::Node sensors = root["sensors"];
   rd.ExpectMap(sensors, "sensors", {"laser", "inclinometer", "encoder"}, {"tracker"});
-  rd.ExpectMap(sensors["laser"], "sensors.laser", {"accuracy", "repeatability"}, {});
-  rd.ExpectMap(sensors["inclinometer"], "sensors.inclinometer", {"accuracy_deg", "repeatability_deg"}, {});
+  rd.ExpectMap(sensors["laser"], "sensors.laser", {"accuracy", "repeatability"}, {"offset"});
+  rd.ExpectMap(sensors["inclinometer"], "sensors.inclinometer", {"accuracy_deg", "repeatability_deg"},
+               {"offset_deg", "sec_coefficient_deg"});
   rd.ExpectMap(sensors["encoder"], "sensors.encoder", {"sigma"}, {});
   SensorNoise& s = robot.sensors;
   s.laser_accuracy_m = rd.Number(sensors["laser"], "sensors.laser", "accuracy");
@@ -286,6 +288,21 @@ Robot Parse(const YAML::Node& root, const Reader& rd) {
   }
   s.inclinometer_accuracy_rad = inc_acc_deg * kDegToRad;
   s.inclinometer_repeatability_rad = inc_rep_deg * kDegToRad;
+  // The systematic errors a bench test fitted (cablecal sensors fit); absent means none.
+  SystematicSensorErrors& sys = s.systematic;
+  if (sensors["laser"]["offset"]) sys.laser_offset_m = rd.Number(sensors["laser"], "sensors.laser", "offset");
+  if (sensors["inclinometer"]["offset_deg"]) {
+    sys.inclinometer_offset_rad = rd.Number(sensors["inclinometer"], "sensors.inclinometer", "offset_deg") * kDegToRad;
+  }
+  if (sensors["inclinometer"]["sec_coefficient_deg"]) {
+    sys.inclinometer_sec_coefficient_rad =
+        rd.Number(sensors["inclinometer"], "sensors.inclinometer", "sec_coefficient_deg") * kDegToRad;
+  }
+  if (const std::optional<SensorModelProblem> problem = CheckSystematicErrors(sys, robot.theta_max_rad)) {
+    const std::string name = problem->key.substr(problem->key.rfind('.') + 1);
+    const YAML::Node sensor = sensors[problem->key.find(".laser.") != std::string::npos ? "laser" : "inclinometer"];
+    rd.Fail(sensor[name], problem->key, problem->problem);
+  }
 
   robot.p_F_home_m = rd.Vector2(root["home"], "home");
   double home_theta_deg = 0.0;  // as typed, for messages
@@ -437,14 +454,30 @@ void EmitRobotFields(YAML::Emitter& o, const Robot& robot) {
   if (robot.theta_is_free()) {
     o << YAML::Key << "home_theta_deg" << YAML::Value << YamlNumber{Degrees(robot.home_theta_rad)};
   }
-  const SensorNoise& s = robot.sensors;
-  o << YAML::Key << "sensors" << YAML::Value << YAML::BeginMap;
+  o << YAML::Key << "sensors" << YAML::Value;
+  EmitSensors(o, robot.sensors);
+}
+
+void EmitSensors(YAML::Emitter& o, const SensorNoise& s) {
+  // The systematic terms only where they are not zero: a robot without them is written as
+  // before this option existed.
+  const SystematicSensorErrors& sys = s.systematic;
+  o << YAML::BeginMap;
   o << YAML::Key << "laser" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "accuracy" << YAML::Value
     << YamlNumber{s.laser_accuracy_m} << YAML::Key << "repeatability" << YAML::Value
-    << YamlNumber{s.laser_repeatability_m} << YAML::EndMap;
+    << YamlNumber{s.laser_repeatability_m};
+  if (sys.laser_offset_m != 0.0) o << YAML::Key << "offset" << YAML::Value << YamlNumber{sys.laser_offset_m};
+  o << YAML::EndMap;
   o << YAML::Key << "inclinometer" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "accuracy_deg"
     << YAML::Value << YamlNumber{Degrees(s.inclinometer_accuracy_rad)} << YAML::Key << "repeatability_deg"
-    << YAML::Value << YamlNumber{Degrees(s.inclinometer_repeatability_rad)} << YAML::EndMap;
+    << YAML::Value << YamlNumber{Degrees(s.inclinometer_repeatability_rad)};
+  if (sys.inclinometer_offset_rad != 0.0) {
+    o << YAML::Key << "offset_deg" << YAML::Value << YamlNumber{Degrees(sys.inclinometer_offset_rad)};
+  }
+  if (sys.inclinometer_sec_coefficient_rad != 0.0) {
+    o << YAML::Key << "sec_coefficient_deg" << YAML::Value << YamlNumber{Degrees(sys.inclinometer_sec_coefficient_rad)};
+  }
+  o << YAML::EndMap;
   o << YAML::Key << "encoder" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "sigma" << YAML::Value
     << YamlNumber{s.encoder_sigma_m} << YAML::EndMap;
   if (s.tracker_sigma_m) {

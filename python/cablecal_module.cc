@@ -35,6 +35,7 @@
 #include "model/robot.h"
 #include "model/statics.h"
 #include "montecarlo/montecarlo.h"
+#include "sensors/sensors.h"
 #include "workspace/workspace.h"
 
 namespace py = pybind11;
@@ -281,6 +282,43 @@ struct PyMeasurements {
   std::vector<Measurement> readings;
   int num_cables = 0;
 };
+struct PySensorsFit {
+  SensorsFit fit;
+  Robot robot;  // whose other sensor entries the block keeps
+};
+
+// A sensor's bench readings: a CSV path, or an (n, 2) array of (reference, reading) in SI units.
+std::vector<BenchReading> BenchReadings(BenchSensor sensor, py::handle h, const std::string& name, char delimiter) {
+  if (py::isinstance<py::str>(h) || py::hasattr(h, "__fspath__")) {
+    std::vector<std::string> ignored;
+    std::vector<BenchReading> readings = ReadBenchCsv(sensor, AsPath(h, name), delimiter,
+                                                      [&](const std::vector<std::string>& names) { ignored = names; });
+    if (!ignored.empty()) {
+      if (PyErr_WarnEx(PyExc_UserWarning, (name + ": ignoring columns " + QuotedList(ignored)).c_str(), 1) < 0) {
+        throw py::error_already_set();
+      }
+    }
+    return readings;
+  }
+  const Eigen::MatrixXd a = AsMatrix(h, name, -1, 2);
+  std::vector<BenchReading> readings;
+  for (Eigen::Index k = 0; k < a.rows(); ++k) {
+    BenchReading r{a(k, 0), a(k, 1), name + ": row " + std::to_string(k)};
+    CheckBenchReading(sensor, r);
+    readings.push_back(std::move(r));
+  }
+  return readings;
+}
+
+py::dict BenchDict(const BenchSummary& b, const std::string& unit) {
+  py::dict d;
+  d["readings"] = b.readings;
+  d["references"] = b.references;
+  d["repeated_references"] = b.repeated_references;
+  d[py::str("reference_min_" + unit)] = b.reference_min;
+  d[py::str("reference_max_" + unit)] = b.reference_max;
+  return d;
+}
 
 Eigen::MatrixXd PlanColumn(const PyPlan& p, Eigen::VectorXd PlanPose::*member) {
   Eigen::MatrixXd m(p.poses.size(), p.num_cables);
@@ -618,7 +656,7 @@ PYBIND11_MODULE(cablecal, m) {
   m.def(
       "simulate",
       [](py::handle robot_arg, py::handle plan_arg, py::handle truth_arg, py::handle geometry_sigma,
-         py::handle sensors, py::handle encoder_noise, py::handle seed) {
+         py::handle sensors, py::handle encoder_noise, py::handle seed, py::handle systematic_errors) {
         const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
         const PyPlan& plan = AsObject<PyPlan>(plan_arg, "plan", "Plan");
         std::optional<Robot> truth;
@@ -631,7 +669,14 @@ PYBIND11_MODULE(cablecal, m) {
           if (sigma < 0.0) Bad("geometry_sigma", "must be 0 or more (m)");
         }
         if (!py::isinstance<py::bool_>(encoder_noise)) Bad("encoder_noise", "expected True or False");
-        const SimulationOptions sim{ParseNoisySensors(AsText(sensors, "sensors")), encoder_noise.cast<bool>(), true};
+        SimulationOptions sim{ParseNoisySensors(AsText(sensors, "sensors")), encoder_noise.cast<bool>(), true};
+        if (!py::isinstance<py::bool_>(systematic_errors)) Bad("systematic_errors", "expected True or False");
+        sim.systematic_errors = systematic_errors.cast<bool>();
+        if (sim.systematic_errors && !robot.sensors.systematic.any()) {
+          Bad("systematic_errors", "the robot " + robot.name +
+                                       " has no systematic sensor errors to add (its sensors block has no laser offset, "
+                                       "inclinometer offset_deg or sec_coefficient_deg; fit_sensors makes them)");
+        }
         const std::uint64_t s = AsSeed(seed);
         CheckPlanMatchesRobot(robot, plan.poses, "plan");
         py::gil_scoped_release release;
@@ -639,7 +684,9 @@ PYBIND11_MODULE(cablecal, m) {
       },
       py::arg("robot"), py::arg("plan"), py::arg("truth") = py::none(), py::arg("geometry_sigma") = py::none(),
       py::arg("sensors") = "both", py::arg("encoder_noise") = true, py::arg("seed") = 1,
-      "The sensors' readings of a plan on a true robot (cablecal simulate).");
+      py::arg("systematic_errors") = false,
+      "The sensors' readings of a plan on a true robot (cablecal simulate); systematic_errors=True also adds the "
+      "robot's systematic laser and inclinometer errors (simulate --systematic-errors).");
 
   // ---- identify
   py::class_<IdentifyResult>(m, "IdentifyResult")
@@ -703,6 +750,14 @@ PYBIND11_MODULE(cablecal, m) {
         d["null_directions"] = r.identifiability.null_directions;
         return d;
       })
+      .def_property_readonly("sensor_correction", [](const IdentifyResult& r) -> py::object {
+        if (!r.corrected_for) return py::none();
+        py::dict d;
+        d["laser_offset_m"] = r.corrected_for->laser_offset_m;
+        d["inclinometer_offset_rad"] = r.corrected_for->inclinometer_offset_rad;
+        d["inclinometer_sec_coefficient_rad"] = r.corrected_for->inclinometer_sec_coefficient_rad;
+        return d;
+      }, "The systematic sensor errors the readings were corrected for before the solve, or None.")
       .def("to_yaml", [](const IdentifyResult& r) { return IdentifyResultYaml(r, CallText("identify")); },
            "The CLI's result.yaml (the command line reads python: cablecal.identify).");
   m.def(
@@ -718,12 +773,14 @@ PYBIND11_MODULE(cablecal, m) {
         o.max_iterations = static_cast<int>(AsInteger(max_iterations, "max_iterations", 1, 100000));
         o.loss = ParseLoss(AsText(loss, "loss"));
         o.source = "measurements";
-        CheckReadingsPlausible(robot, measurements.readings, "measurements");
+        // As the CLI: a robot with systematic sensor errors has them removed before the solve.
+        const std::vector<Measurement> readings = CorrectedReadings(robot, measurements.readings, "measurements");
         IdentifyResult r;
         {
           py::gil_scoped_release release;
-          r = Identify(robot, measurements.readings, o);
+          r = Identify(robot, readings, o);
         }
+        if (robot.sensors.systematic.any()) r.corrected_for = robot.sensors.systematic;
         RequireUsableResult(r, "measurements");
         for (const std::string& w : r.warnings) {
           if (PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 1) < 0) throw py::error_already_set();
@@ -801,13 +858,84 @@ PYBIND11_MODULE(cablecal, m) {
         if (measurements.num_cables != robot.num_cables()) Bad("measurements", "read for a robot with another number of cables");
         std::optional<Robot> nominal;
         if (!nominal_arg.is_none()) nominal = AsObject<Robot>(nominal_arg, "nominal", "Robot");
-        CheckReadingsPlausible(robot, measurements.readings, "measurements");
-        py::gil_scoped_release release;
-        return Validate(robot, nominal, measurements.readings, "measurements");
+        const std::vector<Measurement> readings = CorrectedReadings(robot, measurements.readings, "measurements");
+        ValidationResult r;
+        {
+          py::gil_scoped_release release;
+          r = Validate(robot, nominal, readings, "measurements");
+        }
+        if (robot.sensors.systematic.any()) r.corrected_for = robot.sensors.systematic;
+        return r;
       },
       py::arg("robot"), py::arg("measurements"), py::arg("nominal") = py::none(),
       "Predicts every measured pose with `robot` (and `nominal`) and compares z and theta with the readings "
       "(cablecal validate); InputError when a robot cannot hold a pose's lengths.");
+
+  // ---- sensors fit
+  py::class_<PySensorsFit>(m, "SensorsFit", "Sensor error models fitted from bench readings (cablecal sensors fit).")
+      .def_property_readonly("inclinometer", [](const PySensorsFit& p) -> py::object {
+        if (!p.fit.inclinometer) return py::none();
+        const InclinometerFit& f = *p.fit.inclinometer;
+        py::dict d = BenchDict(f.bench, "rad");
+        d["offset_rad"] = f.offset_rad;
+        d["offset_se_rad"] = f.offset_se_rad;
+        d["sec_coefficient_rad"] = f.sec_coefficient_rad;
+        d["sec_coefficient_se_rad"] = f.sec_coefficient_se_rad;
+        d["correlation"] = f.correlation;
+        d["accuracy_rad"] = f.accuracy_rad;
+        d["repeatability_rad"] = f.repeatability_rad;
+        return d;
+      }, "e = offset + k (sec theta - 1): coefficients and standard errors (se), 3-sigma ranges, rad; or None.")
+      .def_property_readonly("laser", [](const PySensorsFit& p) -> py::object {
+        if (!p.fit.laser) return py::none();
+        const LaserFit& f = *p.fit.laser;
+        py::dict d = BenchDict(f.bench, "m");
+        d["offset_m"] = f.offset_m;
+        d["offset_se_m"] = f.offset_se_m;
+        d["accuracy_m"] = f.accuracy_m;
+        d["repeatability_m"] = f.repeatability_m;
+        return d;
+      }, "e = offset: the offset and its standard error (se), 3-sigma ranges, m; or None.")
+      .def_property_readonly("robot", [](const PySensorsFit& p) {
+        Robot r = p.robot;
+        r.sensors = FittedSensors(p.robot, p.fit);
+        return r;
+      }, "The robot given to fit_sensors with the fitted sensors.")
+      .def("to_yaml", [](const PySensorsFit& p) { return SensorsFitYaml(p.robot, p.fit, CallText("fit_sensors")); },
+           "The CLI's sensors.yaml: the sensors: block for a robot file (the command line reads python: "
+           "cablecal.fit_sensors).");
+  m.def(
+      "fit_sensors",
+      [](py::handle inclinometer, py::handle laser, py::handle robot_arg, py::handle delimiter) {
+        const Robot robot = robot_arg.is_none() ? BuiltinRobot() : AsObject<Robot>(robot_arg, "robot", "Robot");
+        const char d = ParseDelimiter(AsText(delimiter, "delimiter"));
+        if (inclinometer.is_none() && laser.is_none()) {
+          Bad("inclinometer", "give inclinometer, laser or both: the bench readings to fit");
+        }
+        PySensorsFit p{{}, robot};
+        if (!inclinometer.is_none()) {
+          const std::string source = py::isinstance<py::str>(inclinometer) || py::hasattr(inclinometer, "__fspath__")
+                                         ? AsPath(inclinometer, "inclinometer")
+                                         : "inclinometer";
+          p.fit.inclinometer =
+              FitInclinometer(BenchReadings(BenchSensor::kInclinometer, inclinometer, "inclinometer", d), source);
+        }
+        if (!laser.is_none()) {
+          const std::string source =
+              py::isinstance<py::str>(laser) || py::hasattr(laser, "__fspath__") ? AsPath(laser, "laser") : "laser";
+          p.fit.laser = FitLaser(BenchReadings(BenchSensor::kLaser, laser, "laser", d), source);
+        }
+        FittedSensors(robot, p.fit);  // refuses what a robot file would refuse, as the CLI
+        for (const std::string& w : FitWarnings(robot, p.fit)) {
+          if (PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 1) < 0) throw py::error_already_set();
+        }
+        return p;
+      },
+      py::arg("inclinometer") = py::none(), py::arg("laser") = py::none(), py::arg("robot") = py::none(),
+      py::arg("delimiter") = ",",
+      "Fits the sensors' error models from bench readings (cablecal sensors fit): each a CSV path (reference_rad,"
+      "reading_rad or reference_m,reading_m) or an (n, 2) array of (reference, reading) in rad or m. robot (default "
+      "the built-in one) gives the entries that are not fitted.");
 
   // ---- montecarlo
   py::class_<MonteCarloResult>(m, "MonteCarloResult")

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "common/format.h"
+#include "common/random.h"
 #include "tests/support/temp_dir.h"
 
 namespace {
@@ -1028,6 +1029,167 @@ TEST_F(Cli, ValidateRefusesWhatItCannotCompareAndWritesNothing) {
     EXPECT_FALSE(fs::exists(Path("v.yaml"))) << args;
   }
   EXPECT_EQ(Read("meas.csv"), meas);
+}
+
+// ---- sensors fit, simulate --systematic-errors, identify's correction ---------------------
+
+// Bench CSVs of a known error model: every reference read `repeats` times; the accuracy's error
+// drawn once per reference, the repeatability's per reading (3-sigma ranges), fixed seed.
+std::string InclinometerBench(double offset_deg, double k_deg, int repeats, std::uint64_t seed) {
+  cablecal::Rng rng(seed);
+  const double d = M_PI / 180.0;
+  std::string csv = "# bench test, inclinometer\nreference_rad,reading_rad,operator\n";
+  for (int deg = -60; deg <= 60; deg += 5) {
+    const double r = deg * d, a = rng.Normal(0.0, 0.1 * d / 3.0);
+    for (int k = 0; k < repeats; ++k) {
+      const double e = offset_deg * d + k_deg * d * (1.0 / std::cos(r) - 1.0) + a + rng.Normal(0.0, 0.05 * d / 3.0);
+      csv += cablecal::FormatDouble(r) + "," + cablecal::FormatDouble(r + e) + ",ab\n";
+    }
+  }
+  return csv;
+}
+std::string LaserBench(double offset_m, int repeats, std::uint64_t seed) {
+  cablecal::Rng rng(seed);
+  std::string csv = "reference_m,reading_m\n";
+  for (int j = 2; j <= 29; ++j) {
+    const double r = 0.1 * j, a = rng.Normal(0.0, 0.006 / 3.0);
+    for (int k = 0; k < repeats; ++k) {
+      csv += cablecal::FormatDouble(r) + "," + cablecal::FormatDouble(r + offset_m + a + rng.Normal(0.0, 0.0015 / 3.0)) + "\n";
+    }
+  }
+  return csv;
+}
+
+// The built-in robot file with its sensors block replaced by the one `sensors fit` wrote.
+std::string PasteSensors(const std::string& fitted) {
+  std::ifstream in(std::string(CABLECAL_SOURCE_DIR) + "/robots/wang2022.yaml");
+  std::stringstream s;
+  s << in.rdbuf();
+  const std::string robot = s.str();
+  return robot.substr(0, robot.find("\nsensors:\n") + 1) + fitted.substr(fitted.find("\nsensors:\n") + 1);
+}
+
+TEST_F(Cli, SensorsFitBlockPastesAndIdentifyCorrectsWhatSimulateAdds) {
+  tmp_.Write("incl.csv", InclinometerBench(0.05, -0.3, 6, 1));
+  tmp_.Write("laser.csv", LaserBench(0.02, 5, 2));
+  const RunResult fit = RunCablecal("sensors fit --inclinometer " + Path("incl.csv") + " --laser " + Path("laser.csv") +
+                                    " --out " + Path("sensors.yaml"));
+  ASSERT_EQ(fit.exit_code, 0) << fit.output;
+  EXPECT_NE(fit.output.find("ignoring column 'operator'"), std::string::npos) << fit.output;
+  EXPECT_NE(fit.output.find("inclinometer, 150 readings of 25 references: offset "), std::string::npos) << fit.output;
+  const std::string fitted = Read("sensors.yaml");
+  EXPECT_EQ(fitted.rfind("# cablecal ", 0), 0u) << fitted;
+  EXPECT_NE(fitted.find("\n# command: cablecal sensors fit --inclinometer "), std::string::npos) << fitted;
+  const YAML::Node block = YAML::Load(fitted)["sensors"];
+  EXPECT_NEAR(block["laser"]["offset"].as<double>(), 0.02, 0.002) << fitted;
+  EXPECT_NEAR(block["inclinometer"]["offset_deg"].as<double>(), 0.05, 0.03) << fitted;
+  EXPECT_NEAR(block["inclinometer"]["sec_coefficient_deg"].as<double>(), -0.3, 0.06) << fitted;
+  EXPECT_EQ(block["encoder"]["sigma"].as<double>(), 5e-5);
+  tmp_.Write("fitted.yaml", PasteSensors(fitted));
+
+  ASSERT_EQ(RunCablecal("sample --poses 30 --seed 8 --out " + Path("plan.csv")).exit_code, 0);
+  const std::string sim = "simulate --robot " + Path("fitted.yaml") + " --plan " + Path("plan.csv") +
+                          " --geometry-sigma 0.005 --seed 3 --systematic-errors --out " + Path("m.csv") +
+                          " --truth-out " + Path("truth.yaml");
+  const RunResult simulated = RunCablecal(sim);
+  ASSERT_EQ(simulated.exit_code, 0) << simulated.output;
+  EXPECT_NE(simulated.output.find("systematic sensor errors added"), std::string::npos) << simulated.output;
+  const RunResult corrected = RunCablecal("identify --robot " + Path("fitted.yaml") + " --measurements " + Path("m.csv") +
+                                          " --out " + Path("corrected.yaml"));
+  ASSERT_EQ(corrected.exit_code, 0) << corrected.output;
+  EXPECT_NE(corrected.output.find("readings corrected for the robot file's systematic sensor errors: laser offset 0.02"),
+            std::string::npos)
+      << corrected.output;
+  const RunResult raw = RunCablecal("identify --measurements " + Path("m.csv") + " --out " + Path("raw.yaml"));
+  ASSERT_EQ(raw.exit_code, 0) << raw.output;
+  EXPECT_EQ(raw.output.find("corrected"), std::string::npos) << raw.output;
+  const YAML::Node truth = YAML::LoadFile(Path("truth.yaml"));
+  const YAML::Node c = YAML::LoadFile(Path("corrected.yaml")), r = YAML::LoadFile(Path("raw.yaml"));
+  EXPECT_EQ(c["sensor_correction"]["laser_offset_m"].as<double>(), block["laser"]["offset"].as<double>());
+  EXPECT_FALSE(r["sensor_correction"]);
+  // Corrected, the exit heights are within 3 standard deviations of the truth; as read, both
+  // are off by the laser's offset.
+  for (const auto& [name, cable] : {std::pair<const char*, int>{"a1z", 0}, {"a2z", 1}}) {
+    const double true_z = truth["cables"][cable]["exit"][1].as<double>();
+    const double sd = c["parameters"][name]["std"].as<double>();
+    EXPECT_NEAR(c["parameters"][name]["value"].as<double>(), true_z, 3.0 * sd) << name;
+    EXPECT_NEAR(r["parameters"][name]["value"].as<double>() - c["parameters"][name]["value"].as<double>(),
+                block["laser"]["offset"].as<double>(), 0.002)
+        << name;
+  }
+  // --json carries the same record.
+  const RunResult json = RunCablecal("identify --json --robot " + Path("fitted.yaml") + " --measurements " + Path("m.csv"));
+  ASSERT_EQ(json.exit_code, 0) << json.output;
+  EXPECT_NE(json.output.find("\"sensor_correction\": {"), std::string::npos) << json.output;
+  // A robot without systematic terms has nothing to add.
+  const RunResult nothing = RunCablecal("simulate --plan " + Path("plan.csv") + " --systematic-errors --out " + Path("n.csv"));
+  EXPECT_EQ(nothing.exit_code, 2);
+  EXPECT_NE(nothing.output.find("--systematic-errors: the robot wang2022 (built in) has no systematic sensor errors"),
+            std::string::npos)
+      << nothing.output;
+  EXPECT_FALSE(fs::exists(Path("n.csv")));
+}
+
+TEST_F(Cli, SensorsFitWarnsWhereTheBenchDoesNotReachTheRobotsRange) {
+  std::string narrow = "reference_rad,reading_rad\n";
+  for (const double r : {-0.4, -0.2, 0.0, 0.2, 0.4}) {
+    for (const double e : {0.0001, -0.0001, 0.0003}) narrow += cablecal::FormatDouble(r) + "," + cablecal::FormatDouble(r + e) + "\n";
+  }
+  tmp_.Write("narrow.csv", narrow);
+  const RunResult r = RunCablecal("sensors fit --inclinometer " + Path("narrow.csv") + " --out " + Path("s.yaml"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("cablecal: warning: " + Path("narrow.csv") +
+                          ": the references reach 22.9 degrees, the inclinometer range of wang2022 is 60: the sec term "
+                          "is extrapolated beyond them"),
+            std::string::npos)
+      << r.output;
+  const RunResult quiet = RunCablecal("sensors fit -q --inclinometer " + Path("narrow.csv") + " --out " + Path("s.yaml"));
+  EXPECT_EQ(quiet.exit_code, 0);
+  EXPECT_EQ(quiet.output, "");
+}
+
+TEST_F(Cli, SensorsFitRefusesHostileBenchFilesAndWritesNothing) {
+  const std::string ih = "reference_rad,reading_rad\n", lh = "reference_m,reading_m\n";
+  const std::string good = ih + "0,0.001\n0,0.0012\n0.5,0.5\n1,1.002\n";
+  const struct {
+    const char* file;
+    const char* flag;
+    std::string csv;
+    std::string message;
+  } cases[] = {
+      {"text.csv", "--inclinometer", ih + "0,0.001\n0.5,half\n", "text.csv:3: column 'reading_rad': must be a finite number (got 'half')"},
+      {"one.csv", "--inclinometer", ih + "0.1,0.1\n", "one.csv: 1 reading of 1 reference value: the offset, the sec coefficient and the accuracy need readings at 3 or more"},
+      {"nan.csv", "--inclinometer", ih + "0,0\nnan,0.1\n", "nan.csv:3: column 'reference_rad': must be a finite number (got 'nan')"},
+      {"ninety.csv", "--inclinometer", ih + "0,0\n1.5707963267948966,1.57\n", "ninety.csv:3: column 'reference_rad': 1.5707963267948966 rad is at or beyond +-90 degrees, where sec(theta) is infinite"},
+      {"degrees.csv", "--inclinometer", ih + "30,30.01\n", "degrees.csv:2: column 'reference_rad': 30 rad is at or beyond +-90 degrees, where sec(theta) is infinite (degrees? angles are in radians)"},
+      {"negative.csv", "--laser", lh + "1,1.001\n-1,-0.999\n", "negative.csv:3: column 'reference_m': -1 m is negative: a distance is not"},
+      {"column.csv", "--laser", "reference_m,distance_m\n1,1\n", "column.csv:1: header: no column 'reading_m' (the columns needed are 'reference_m,reading_m', in any order"},
+      {"norepeat.csv", "--laser", lh + "1,1.001\n2,2.001\n", "norepeat.csv: no reference value was read more than once"},
+      {"other.csv", "--laser", ih + "0,0\n", "other.csv:1: header: no column 'reference_m', 'reading_m'"},
+  };
+  for (const auto& c : cases) {
+    tmp_.Write(c.file, c.csv);
+    const RunResult r = RunCablecal(std::string("sensors fit ") + c.flag + " " + Path(c.file) + " --out " + Path("s.yaml"));
+    EXPECT_EQ(r.exit_code, 2) << c.file << "\n" << r.output;
+    EXPECT_NE(r.output.find("cablecal: error: " + Path(c.message)), std::string::npos) << c.file << "\n" << r.output;
+    EXPECT_FALSE(fs::exists(Path("s.yaml"))) << c.file;
+  }
+  // A good inclinometer file beside a bad laser one: nothing is written either.
+  tmp_.Write("good.csv", good);
+  const RunResult mixed = RunCablecal("sensors fit --inclinometer " + Path("good.csv") + " --laser " + Path("negative.csv") +
+                                      " --out " + Path("s.yaml"));
+  EXPECT_EQ(mixed.exit_code, 2) << mixed.output;
+  EXPECT_FALSE(fs::exists(Path("s.yaml")));
+  for (const std::string& args : {std::string("sensors fit --out ") + Path("s.yaml"),
+                                  "sensors fit --inclinometer " + Path("good.csv") + " --delimiter '|' --out " + Path("s.yaml"),
+                                  "sensors fit --inclinometer " + Path("missing.csv") + " --out " + Path("s.yaml"),
+                                  "sensors fit --inclinometer " + Path("good.csv") + " --out " + Path("good.csv"),
+                                  std::string("sensors")}) {
+    const RunResult r = RunCablecal(args);
+    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
+    EXPECT_FALSE(fs::exists(Path("s.yaml"))) << args;
+  }
+  EXPECT_EQ(Read("good.csv"), good);
 }
 
 }  // namespace

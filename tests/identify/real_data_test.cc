@@ -108,9 +108,11 @@ TEST(RepeatedReadings, NoiseFreeCopiesRecoverTheTruth) {
 }
 
 std::vector<Measurement> Without(std::vector<Measurement> readings, bool laser, bool inclinometer) {
-  for (Measurement& m : readings) {
+  for (Measurement& m : readings) {  // as the CSV reader leaves them: no value read
     m.has_laser = laser;
     m.has_inclinometer = inclinometer;
+    if (!laser) m.z_m = 0.0;
+    if (!inclinometer) m.theta_rad = 0.0;
   }
   return readings;
 }

@@ -368,6 +368,122 @@ def test_montecarlo_with_outliers_and_a_loss():
     assert robust.summary_csv() != rough.summary_csv()
     with pytest.raises(cablecal.InputError, match="--outliers"):
         cablecal.montecarlo(robot, 12, 4, outliers="2")
+# ---- Sensor error models -------------------------------------------------------------------------
+
+
+def bench_arrays(seed=1):
+    """Bench readings of a known model: inclinometer offset 0.05 deg, k -0.3 deg; laser offset 20 mm;
+    the paper's accuracy and repeatability (3-sigma ranges), accuracy drawn per reference."""
+    rng = np.random.default_rng(seed)
+    d = np.pi / 180
+    ref = np.repeat(np.arange(-60, 61, 5) * d, 6)
+    acc = np.repeat(rng.normal(0, 0.1 * d / 3, 25), 6)
+    incl = np.column_stack([ref, ref + 0.05 * d - 0.3 * d * (1 / np.cos(ref) - 1) + acc + rng.normal(0, 0.05 * d / 3, ref.size)])
+    lref = np.repeat(np.arange(2, 30) * 0.1, 5)
+    lacc = np.repeat(rng.normal(0, 0.006 / 3, 28), 5)
+    laser = np.column_stack([lref, lref + 0.02 + lacc + rng.normal(0, 0.0015 / 3, lref.size)])
+    return incl, laser
+
+
+def write_bench(path, header, rows):
+    with open(path, "w") as f:
+        f.write(header + "\n")
+        for r in rows:
+            f.write("%r,%r\n" % (float(r[0]), float(r[1])))
+
+
+def test_fit_sensors_from_arrays_equals_the_files_and_the_cli(tmp_path):
+    path = robot_file("asymmetric")
+    robot = cablecal.Robot.load(path)
+    incl, laser = bench_arrays()
+    incl_csv, laser_csv, out = str(tmp_path / "incl.csv"), str(tmp_path / "laser.csv"), str(tmp_path / "sensors.yaml")
+    write_bench(incl_csv, "reference_rad,reading_rad", incl)
+    write_bench(laser_csv, "reference_m,reading_m", laser)
+    from_arrays = cablecal.fit_sensors(inclinometer=incl, laser=laser, robot=robot)
+    import pathlib
+    from_files = cablecal.fit_sensors(inclinometer=pathlib.Path(incl_csv), laser=laser_csv, robot=robot)
+    assert from_arrays.inclinometer == from_files.inclinometer
+    assert from_arrays.laser == from_files.laser
+    cli("sensors", "fit", "--robot", path, "--inclinometer", incl_csv, "--laser", laser_csv, "--out", out)
+    cli_text = open(out).read()
+    assert from_files.to_yaml().splitlines()[2:] == cli_text.splitlines()[2:]  # all but version and command
+    assert from_files.to_yaml().splitlines()[1] == "# command: python: cablecal.fit_sensors"
+    i, l = from_arrays.inclinometer, from_arrays.laser
+    d = np.pi / 180
+    assert abs(i["offset_rad"] - 0.05 * d) < 3 * i["offset_se_rad"]
+    assert abs(i["sec_coefficient_rad"] + 0.3 * d) < 3 * i["sec_coefficient_se_rad"]
+    assert abs(l["offset_m"] - 0.02) < 3 * l["offset_se_m"]
+    assert (i["readings"], i["references"], l["readings"], l["references"]) == (150, 25, 140, 28)
+    assert 0.03 * d < i["repeatability_rad"] < 0.07 * d and 0.001 < l["repeatability_m"] < 0.002
+    # The fitted robot holds the block; what was not fitted is the robot's own.
+    sensors = from_arrays.robot.to_dict()["sensors"]
+    assert sensors["laser"]["offset"] == l["offset_m"]
+    assert sensors["encoder"] == robot.to_dict()["sensors"]["encoder"]
+    laser_only = cablecal.fit_sensors(laser=laser, robot=robot)
+    assert laser_only.inclinometer is None
+    assert laser_only.robot.to_dict()["sensors"]["inclinometer"] == robot.to_dict()["sensors"]["inclinometer"]
+
+
+def test_systematic_errors_simulated_and_corrected_as_the_cli(tmp_path):
+    path = robot_file("asymmetric")
+    incl, laser = bench_arrays(2)
+    robot_yaml = tmp_path / "fitted.yaml"
+    robot_yaml.write_text(cablecal.fit_sensors(inclinometer=incl, laser=laser, robot=cablecal.Robot.load(path)).robot.to_yaml())
+    robot = cablecal.Robot.load(robot_yaml)  # the file's degrees have 12 digits: the CLI's robot, bit for bit
+    plan = cablecal.sample(robot, 25, seed=4)
+    plan_csv = tmp_path / "plan.csv"
+    plan_csv.write_text(plan.to_csv())
+    experiment = cablecal.simulate(robot, plan, geometry_sigma=0.003, seed=2, systematic_errors=True)
+    meas_csv, result_yaml = tmp_path / "m.csv", tmp_path / "result.yaml"
+    cli("simulate", "--robot", str(robot_yaml), "--plan", str(plan_csv), "--geometry-sigma", "0.003", "--seed", "2",
+        "--systematic-errors", "--out", str(meas_csv))
+    assert experiment.measurements.to_csv() == data_lines(meas_csv)
+    corrected = cablecal.identify(robot, experiment.measurements)
+    cli("identify", "--robot", str(robot_yaml), "--measurements", str(meas_csv), "--out", str(result_yaml))
+    assert yaml_without_provenance(corrected.to_yaml()) == yaml_without_provenance(open(result_yaml).read())
+    assert corrected.sensor_correction["laser_offset_m"] == robot.to_dict()["sensors"]["laser"]["offset"]
+    # As read (a robot file without the terms) the exit heights carry the laser's offset.
+    raw = cablecal.identify(cablecal.Robot.load(path), experiment.measurements)
+    assert raw.sensor_correction is None
+    truth = dict(zip(robot.geometry_names, experiment.truth.geometry))
+    for name in ("a1z", "a2z"):
+        k = corrected.geometry_names.index(name)
+        assert abs(corrected.geometry[k] - truth[name]) < 3 * corrected.std[k], name
+        assert abs(raw.geometry[k] - corrected.geometry[k] - corrected.sensor_correction["laser_offset_m"]) < 0.002, name
+
+
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(), "give inclinometer, laser or both"),
+        (dict(inclinometer=[[0.0, 0.0], [1.6, 1.6]]), "inclinometer: row 1: column 'reference_rad': 1.6 rad is at or beyond"),
+        (dict(inclinometer=[[0.0, 0.0], [0.1, float("nan")]]), "row 1, column 1 is not finite"),
+        (dict(inclinometer=[[0.1, 0.1]]), "1 reading of 1 reference value"),
+        (dict(inclinometer=np.zeros((4, 3))), "expected shape \\(n, 2\\)"),
+        (dict(inclinometer="abc"), "abc: cannot open the file"),
+        (dict(laser=[[1.0, 1.0], [-1.0, -1.0]]), "laser: row 1: column 'reference_m': -1 m is negative"),
+        (dict(laser=[[1.0, 1.0], [1.0, 1.001], [2.0, 2.0]], delimiter="|"), "--delimiter"),
+        (dict(laser=[[1.0, 1.0], [1.0, 1.001], [2.0, 2.0]], robot="wang2022"), "expected a cablecal.Robot"),
+    ],
+)
+def test_fit_sensors_hostile_input_raises_input_error(kwargs, message):
+    with pytest.raises(cablecal.InputError, match=message):
+        cablecal.fit_sensors(**kwargs)
+
+
+def test_systematic_errors_need_a_robot_that_has_them():
+    robot = cablecal.Robot.load(robot_file("asymmetric"))
+    plan = cablecal.sample(robot, 4)
+    with pytest.raises(cablecal.InputError, match="no systematic sensor errors to add"):
+        cablecal.simulate(robot, plan, systematic_errors=True)
+    with pytest.raises(cablecal.InputError, match="expected True or False"):
+        cablecal.simulate(robot, plan, systematic_errors="yes")
+
+
+def test_a_bench_short_of_the_range_warns():
+    narrow = [[r, r + e] for r in (-0.4, 0.0, 0.4) for e in (0.0001, -0.0001)]
+    with pytest.warns(UserWarning, match="the sec term is extrapolated"):
+        cablecal.fit_sensors(inclinometer=narrow, robot=cablecal.Robot.load(robot_file("asymmetric")))
 
 
 def test_montecarlo_equals_cli(tmp_path):
