@@ -993,6 +993,34 @@ TEST_F(Cli, ValidateComparesCalibratedAndNominalOnHeldOutPoses) {
   EXPECT_NEAR(z_summary["calibrated"]["z"]["rms_m"].as<double>(), summary["calibrated"]["z"]["rms_m"].as<double>(), 1e-12);
 }
 
+// A robot file with systematic sensor errors: validate compares the predictions with the
+// readings corrected for them, as identify fits them, and says so; a file without them leaves
+// the laser's offset in every z error.
+TEST_F(Cli, ValidateCorrectsTheReadingsForTheRobotFilesSystematicErrors) {
+  WriteRobot("sys.yaml", "laser: {accuracy: 0.006, repeatability: 0.0015}",
+             "laser: {accuracy: 0.006, repeatability: 0.0015, offset: 0.03}");
+  ASSERT_EQ(RunCablecal("sample --poses 12 --seed 4 --out " + Path("plan.csv")).exit_code, 0);
+  const RunResult sim = RunCablecal("simulate --robot " + Path("sys.yaml") + " --plan " + Path("plan.csv") +
+                                    " --systematic-errors --seed 5 --out " + Path("m.csv"));
+  ASSERT_EQ(sim.exit_code, 0) << sim.output;
+  const RunResult corrected = RunCablecal("validate --robot " + Path("sys.yaml") + " --measurements " + Path("m.csv") +
+                                          " --summary " + Path("c.yaml") + " --out " + Path("c.csv"));
+  ASSERT_EQ(corrected.exit_code, 0) << corrected.output;
+  EXPECT_NE(corrected.output.find("readings corrected for the robot file's systematic sensor errors: laser offset 0.03"),
+            std::string::npos)
+      << corrected.output;
+  const YAML::Node c = YAML::LoadFile(Path("c.yaml"));
+  EXPECT_EQ(c["sensor_correction"]["laser_offset_m"].as<double>(), 0.03);
+  EXPECT_LT(c["calibrated"]["z"]["rms_m"].as<double>(), 0.005);  // the laser's noise, 2 mm
+  const RunResult raw = RunCablecal("validate --robot " CABLECAL_SOURCE_DIR "/robots/wang2022.yaml --measurements " +
+                                    Path("m.csv") + " --summary " + Path("r.yaml") + " --out " + Path("r.csv"));
+  ASSERT_EQ(raw.exit_code, 0) << raw.output;
+  EXPECT_EQ(raw.output.find("corrected"), std::string::npos) << raw.output;
+  const YAML::Node r = YAML::LoadFile(Path("r.yaml"));
+  EXPECT_FALSE(r["sensor_correction"]);
+  EXPECT_GT(r["calibrated"]["z"]["rms_m"].as<double>(), 0.025);
+}
+
 // What validate cannot compare is exit 2 naming file, line and (where one is to blame) column,
 // and nothing is written.
 TEST_F(Cli, ValidateRefusesWhatItCannotCompareAndWritesNothing) {

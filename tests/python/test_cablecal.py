@@ -300,6 +300,23 @@ def test_validate_without_an_inclinometer_equals_cli(tmp_path):
         cablecal.validate(robot, cablecal.Measurements(robot, m.dl, None, None))
 
 
+def test_validate_corrects_for_systematic_errors_as_the_cli(tmp_path):
+    d = cablecal.Robot.load(robot_file("asymmetric")).to_dict()
+    d["sensors"]["laser"]["offset"] = 0.03
+    robot = cablecal.Robot.from_dict(d)
+    m = cablecal.simulate(robot, cablecal.sample(robot, 10, seed=6), seed=7, systematic_errors=True).measurements
+    v = cablecal.validate(robot, m)
+    assert v.robots["calibrated"]["z_rms"] < 0.005  # the laser's noise: the 30 mm offset corrected
+    path, csv, summary = tmp_path / "robot.yaml", tmp_path / "m.csv", tmp_path / "v.yaml"
+    path.write_text(robot.to_yaml())
+    csv.write_text(m.to_csv())
+    cli("validate", "--robot", str(path), "--measurements", str(csv), "--summary", str(summary), "--out",
+        str(tmp_path / "v.csv"))
+    ours = [l for l in yaml_without_provenance(v.to_yaml()) if "file:" not in l]
+    assert ours == [l for l in yaml_without_provenance(summary.read_text()) if "file:" not in l]
+    assert any(l.startswith("sensor_correction:") for l in ours)
+
+
 def test_validate_refuses_what_it_cannot_compare():
     r2 = cablecal.Robot.load(robot_file("asymmetric"))
     r3 = cablecal.Robot.load(robot_file("planar3_suspended"))
