@@ -323,12 +323,16 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     int sensor;   // 0 .. M - 1: encoders; M: laser; M + 1: inclinometer
   };
   const double length_sigma = ml ? s.encoder_sigma_m : std::max(s.laser_sigma_m(), s.encoder_sigma_m);
+  // The per-reading ReadingFits are for a person (the CLI, Python); the Monte Carlo, which asks
+  // for neither covariance nor identifiability, is spared their allocations.
+  const bool reading_fits = options.compute_covariance || options.compute_identifiability;
   const auto residuals_at = [&](const double* g, const PoseValues& q, const std::vector<char>& use, bool fits) {
     std::vector<Reading> readings;
     readings.reserve(static_cast<std::size_t>(values_per_reading) * num_readings);
     double sum_enc = 0.0, sum_laser = 0.0, sum_inc = 0.0;
+    const bool keep_fits = fits && reading_fits;
     if (fits) {
-      result.readings.assign(num_readings, ReadingFit{});
+      result.readings.assign(keep_fits ? num_readings : 0, ReadingFit{});
       result.poses.clear();
     }
     for (int j = 0; j < n; ++j) {
@@ -347,32 +351,36 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
       for (const int k : readings_of[j]) {
         const Measurement& m = measurements[k];
         const Eigen::Vector3d q_k = ml ? e.q : Eigen::Vector3d(q[j][0], m.z_m, m.theta_rad);
-        ReadingFit fit;
-        fit.pose_id = m.pose_id;
-        fit.where = m.where;
-        fit.encoder_sigmas.resize(M);
-        fit.encoder_weights.resize(M);
         double length_residuals[M];
         LengthResiduals<M, double>(nominal, g, q_k, m.dl_m.data(), length_residuals);
         for (int i = 0; i < M; ++i) {
           sum_enc += length_residuals[i] * length_residuals[i];
-          fit.encoder_sigmas(i) = length_residuals[i] / length_sigma;
-          fit.encoder_weights(i) = LossWeight(options.loss, fit.encoder_sigmas(i));
-          readings.push_back({std::abs(fit.encoder_sigmas(i)), k, i});
+          readings.push_back({std::abs(length_residuals[i]) / length_sigma, k, i});
         }
+        const double laser_sigmas = (q_k(1) - m.z_m) / s.laser_sigma_m();
+        const double inclinometer_sigmas = (q_k(2) - m.theta_rad) / s.inclinometer_sigma_rad();
         if (ml && laser) {
           sum_laser += (q_k(1) - m.z_m) * (q_k(1) - m.z_m);
-          fit.laser_sigmas = (q_k(1) - m.z_m) / s.laser_sigma_m();
-          fit.laser_weight = LossWeight(options.loss, *fit.laser_sigmas);
-          readings.push_back({std::abs(*fit.laser_sigmas), k, M});
+          readings.push_back({std::abs(laser_sigmas), k, M});
         }
         if (ml && inclinometer) {
           sum_inc += (q_k(2) - m.theta_rad) * (q_k(2) - m.theta_rad);
-          fit.inclinometer_sigmas = (q_k(2) - m.theta_rad) / s.inclinometer_sigma_rad();
-          fit.inclinometer_weight = LossWeight(options.loss, *fit.inclinometer_sigmas);
-          readings.push_back({std::abs(*fit.inclinometer_sigmas), k, M + 1});
+          readings.push_back({std::abs(inclinometer_sigmas), k, M + 1});
         }
-        if (fits) result.readings[k] = fit;
+        if (!keep_fits) continue;
+        ReadingFit& fit = result.readings[k];
+        fit.pose_id = m.pose_id;
+        fit.where = m.where;
+        fit.encoder_sigmas = Eigen::Map<const Eigen::Matrix<double, M, 1>>(length_residuals) / length_sigma;
+        fit.encoder_weights = fit.encoder_sigmas.unaryExpr([&](double r) { return LossWeight(options.loss, r); });
+        if (ml && laser) {
+          fit.laser_sigmas = laser_sigmas;
+          fit.laser_weight = LossWeight(options.loss, laser_sigmas);
+        }
+        if (ml && inclinometer) {
+          fit.inclinometer_sigmas = inclinometer_sigmas;
+          fit.inclinometer_weight = LossWeight(options.loss, inclinometer_sigmas);
+        }
       }
       if (fits) result.poses.push_back(e);
     }
@@ -403,7 +411,8 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     return (with_pose ? "pose " + std::to_string(m.pose_id) + ": " : std::string()) + sensor +
            (repeated ? " (" + m.where + ")" : "") + buffer;
   };
-  std::vector<Reading> tripped = beyond(residuals_at(geometry, poses, every_pose, false));
+  std::vector<Reading> readings = residuals_at(geometry, poses, every_pose, true);
+  std::vector<Reading> tripped = beyond(readings);
   const std::size_t few = std::max<std::size_t>(kFewOutliers, static_cast<std::size_t>(values_per_reading) * num_readings / 20);
 
   // A bad reading at a pose that decides part of the geometry (high leverage) is absorbed by
@@ -509,8 +518,10 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   result.final_cost = summary.final_cost;
   result.geometry = Eigen::Map<const GeometryVector>(geometry, kGeometry);
   result.status = IdentifyStatus::kConverged;
-  const std::vector<Reading> readings = residuals_at(geometry, poses, every_pose, true);
-  if (robust) tripped = beyond(readings);
+  if (robust) {
+    readings = residuals_at(geometry, poses, every_pose, true);
+    tripped = beyond(readings);
+  }
 
   // Goodness of fit. With the right model the whitened residuals have RMS near 1 (ml), and
   // the paper estimator's length residuals are of the order of the laser's noise, which
@@ -724,10 +735,45 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
 
   if (options.compute_covariance && static_cast<int>(analysis.null_vectors.size()) == expected_null) {
     // gauge none: the Moore-Penrose pseudo-inverse (identify/schur.h).
-    if (const std::optional<BlockCovariance> cov = CovarianceOf(blocks, analysis)) {
-      // paper: residuals are not whitened, so scale by the residual variance s^2.
+    if (std::optional<BlockCovariance> cov = CovarianceOf(blocks, analysis)) {
       double scale = 1.0;
-      if (!ml) {
+      if (!ml && expected_null == 0) {
+        // paper: its residuals f_ij = l_model^2 - (dl_ij + l_i0)^2 take z and theta as exact,
+        // yet the laser's and inclinometer's noise enters them through l_model, with the
+        // encoder's through dl_ij. The sandwich propagates all three: per reading,
+        // Sigma = diag(2 (dl + l0) sigma_enc)^2 + sigma_z^2 b_z b_z^T + sigma_theta^2 b_th b_th^T,
+        // b = 2 l_model dl_model/d(z, theta) (schur.h, SandwichCovariance).
+        using Jet2 = ceres::Jet<double, 2>;
+        Jet2 geometry_jets[kGeometry];
+        for (int k = 0; k < kGeometry; ++k) geometry_jets[k] = Jet2(geometry[k]);
+        std::vector<Eigen::MatrixXd> sigma(n);
+        for (int j = 0; j < n; ++j) {
+          const int count = static_cast<int>(readings_of[j].size());
+          sigma[j] = Eigen::MatrixXd::Zero(M * count, M * count);
+          for (int c = 0; c < count; ++c) {
+            const Measurement& m = measurements[readings_of[j][c]];
+            Jet2 r[M];
+            LengthResiduals<M, Jet2>(nominal, geometry_jets,
+                                     Pose<Jet2>(Jet2(poses[j][0]), Jet2(m.z_m, 0), Jet2(m.theta_rad, 1)),
+                                     m.dl_m.data(), r);
+            Eigen::Matrix<double, M, 1> b_z, b_theta, encoder;
+            for (int i = 0; i < M; ++i) {
+              const double measured = m.dl_m(i) + geometry[2 * M + i];
+              const double model = r[i].a + measured;
+              b_z(i) = 2.0 * model * r[i].v(0);
+              b_theta(i) = 2.0 * model * r[i].v(1);
+              encoder(i) = 2.0 * measured * s.encoder_sigma_m;
+            }
+            sigma[j].block<M, M>(M * c, M * c) = Eigen::Matrix<double, M, M>(encoder.cwiseAbs2().asDiagonal()) +
+                                                   s.laser_sigma_m() * s.laser_sigma_m() * b_z * b_z.transpose() +
+                                                   s.inclinometer_sigma_rad() * s.inclinometer_sigma_rad() * b_theta *
+                                                       b_theta.transpose();
+          }
+        }
+        cov = SandwichCovariance(blocks, analysis, *cov, sigma);
+      } else if (!ml) {
+        // gauge none: the covariance scaled by the residual variance s^2 (conservative: the
+        // sandwich above is not taken through the pseudo-inverse).
         const int dof = summary.num_residuals - (summary.num_effective_parameters - expected_null);
         scale = dof > 0 ? 2.0 * summary.final_cost / dof : std::numeric_limits<double>::quiet_NaN();
       }

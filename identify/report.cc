@@ -83,7 +83,11 @@ std::string IdentifyResultYaml(const IdentifyResult& r, const std::string& comma
     o << EndSeq;
   }
   if (r.estimator == Estimator::kPaper) {
-    o << Key << "std_note" << Value << YamlString{std::string("paper estimator: covariance scaled by the residual variance")};
+    o << Key << "std_note" << Value
+      << YamlString{std::string(r.gauge == Gauge::kNone
+                                    ? "paper estimator: covariance scaled by the residual variance (conservative)"
+                                    : "paper estimator: sandwich covariance, the encoder, laser and inclinometer "
+                                      "noise propagated through its Eq. (6) residuals")};
   }
   const int geometry_size = static_cast<int>(r.geometry.size());
   const std::vector<std::string> names = GeometryNames(geometry_size / 3);

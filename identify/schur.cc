@@ -192,4 +192,31 @@ std::optional<BlockCovariance> CovarianceOf(const BlockJacobian& jacobian, const
   return cov;
 }
 
+BlockCovariance SandwichCovariance(const BlockJacobian& jacobian, const BlockAnalysis& analysis,
+                                   const BlockCovariance& inverse,
+                                   const std::vector<Eigen::MatrixXd>& residual_covariance) {
+  const int n = static_cast<int>(jacobian.poses.size());
+  CABLECAL_CHECK(analysis.null_vectors.empty() && static_cast<int>(residual_covariance.size()) == n,
+                 "a sandwich for a full-rank problem, one residual covariance per pose");
+  const Eigen::MatrixXd& c_gg = inverse.geometry;
+  Eigen::MatrixXd meat = jacobian.prior.transpose() * jacobian.prior;
+  std::vector<Eigen::MatrixXd> r(n);
+  for (int j = 0; j < n; ++j) {
+    const PoseBlock& b = jacobian.poses[j];
+    r[j] = b.geometry - b.pose * analysis.poses[j].k;
+    meat.noalias() += r[j].transpose() * residual_covariance[j] * r[j];
+  }
+  BlockCovariance out;
+  out.geometry = c_gg * meat * c_gg;
+  out.poses.resize(n);
+  for (int j = 0; j < n; ++j) {
+    const PoseElimination& e = analysis.poses[j];
+    const Eigen::MatrixXd a = e.inverse_normal * jacobian.poses[j].pose.transpose();
+    const Eigen::MatrixXd cross = a * residual_covariance[j] * r[j] * c_gg * e.k.transpose();
+    out.poses[j] = e.k * out.geometry * e.k.transpose() + a * residual_covariance[j] * a.transpose() - cross -
+                   cross.transpose();
+  }
+  return out;
+}
+
 }  // namespace cablecal

@@ -66,4 +66,17 @@ struct BlockCovariance {
 // one confined to a pose's own unknowns.
 std::optional<BlockCovariance> CovarianceOf(const BlockJacobian& jacobian, const BlockAnalysis& analysis);
 
+// The sandwich covariance C M C of an estimator whose residuals are not whitened (the paper's
+// Eq. 6 residuals, which also carry the laser's and inclinometer's noise): C = (J^T J)^-1 as
+// `inverse` (CovarianceOf, no null direction), M = J^T Sigma J with Sigma the residuals'
+// covariance, block-diagonal by pose (`residual_covariance[j]`: pose j's rows) and the identity
+// on the prior rows (whitened). With R_j = J_gj - J_pj K_j (pose j's geometry columns once its
+// own unknowns are fitted) and a_j = (J_pj^T J_pj)^-1 J_pj^T:
+//   Cov(g)   = C_gg (sum_j R_j^T Sigma_j R_j + P^T P) C_gg
+//   Cov(p_j) = K_j Cov(g) K_j^T + a_j Sigma_j a_j^T - (a_j Sigma_j R_j C_gg K_j^T + its transpose).
+// Linear in the number of poses.
+BlockCovariance SandwichCovariance(const BlockJacobian& jacobian, const BlockAnalysis& analysis,
+                                   const BlockCovariance& inverse,
+                                   const std::vector<Eigen::MatrixXd>& residual_covariance);
+
 }  // namespace cablecal

@@ -139,40 +139,49 @@ TEST(Consistency, PredictedStdMatchesSpreadOver1000Experiments) {
   }
 }
 
-// The paper estimator's standard deviations (its covariance scaled by the residual variance,
-// since its residuals are not whitened) against the spread of its estimates over repeated
-// noisy experiments. They are conservative, not exact: the model takes z and theta as exact,
-// and the laser's and inclinometer's noise that enters every length residual inflates the
-// residual variance more than it moves the estimates (measured here: spread / reported std
-// 0.77 to 0.94 over a1z..l20; README, "identify").
+// The paper estimator's standard deviations against the spread of its estimates over repeated
+// noisy experiments, on the built-in robot, the asymmetric one and a random robot. Its
+// residuals take z and theta as exact, yet their noise enters every length residual: the
+// sandwich covariance propagates it (a covariance scaled by the residual variance, the
+// previous rule, ran 6-30 % high on the built-in robot and 16-20 % on an asymmetric one).
+// Within 10 %, as the ml estimator's (the spread's sampling error from 400 draws is 3.5 %).
+// The ml estimator is held to the same on the same robots.
 TEST(Consistency, PaperEstimatorStdMatchesItsSpread) {
-  const Robot& nominal = BuiltinRobot();
-  const auto plan = SampleFeasiblePoses(nominal, 20, 2022);
-  IdentifyOptions options;
-  options.estimator = Estimator::kPaper;
-  options.compute_identifiability = false;
-  const int kTrials = 400;
-  GeometryVector sum = GeometryVector::Zero(6), sum2 = GeometryVector::Zero(6), predicted = GeometryVector::Zero(6);
-  int ok = 0;
-  for (int t = 0; t < kTrials; ++t) {
-    Rng rng(StreamSeed(78, {static_cast<std::uint64_t>(t)}));
-    const SimulatedExperiment exp = SimulateExperiment(nominal, nominal, plan, SimulationOptions{}, rng);
-    const IdentifyResult r = Identify(nominal, exp.measurements, options);
-    if (!r.converged() || !r.has_covariance) continue;
-    ++ok;
-    const GeometryVector err = r.geometry - GeometryOf(nominal);
-    sum += err;
-    sum2 += err.cwiseProduct(err);
-    predicted += r.geometry_std;
-  }
-  ASSERT_GE(ok, kTrials - 4);
-  for (int k = 1; k < 6; ++k) {
-    const double mean = sum(k) / ok;
-    const double spread = std::sqrt((sum2(k) - ok * mean * mean) / (ok - 1));
-    std::printf("%s: predicted %.4g m, spread %.4g m\n", kNames2[k].c_str(), predicted(k) / ok, spread);
-    const double ratio = spread / (predicted(k) / ok);
-    EXPECT_GT(ratio, 0.65) << kNames2[k];  // not wildly pessimistic
-    EXPECT_LT(ratio, 1.05) << kNames2[k];  // never optimistic (5 %: the spread's sampling error is 3.5 %)
+  Rng draw(808);
+  const std::vector<Robot> robots = {BuiltinRobot(),
+                                     LoadRobotFile(std::string(CABLECAL_SOURCE_DIR) + "/robots/asymmetric.yaml"),
+                                     testing::RandomValidRobot(draw, "random")};
+  for (const Robot& nominal : robots) {
+    for (const Estimator estimator : {Estimator::kPaper, Estimator::kMaximumLikelihood}) {
+      const auto plan = SampleFeasiblePoses(nominal, 20, 2022);
+      IdentifyOptions options;
+      options.estimator = estimator;
+      options.compute_identifiability = false;
+      const IdentifyResult predicted = Identify(nominal, NoiseFree(nominal, nominal, plan).measurements, options);
+      ASSERT_TRUE(predicted.has_covariance) << nominal.name;
+      options.compute_covariance = false;
+      const int kTrials = 400;
+      GeometryVector sum = GeometryVector::Zero(6), sum2 = GeometryVector::Zero(6);
+      int ok = 0;
+      for (int t = 0; t < kTrials; ++t) {
+        Rng rng(StreamSeed(78, {static_cast<std::uint64_t>(t)}));
+        const SimulatedExperiment exp = SimulateExperiment(nominal, nominal, plan, SimulationOptions{}, rng);
+        const IdentifyResult r = Identify(nominal, exp.measurements, options);
+        if (!r.converged()) continue;
+        ++ok;
+        const GeometryVector err = r.geometry - GeometryOf(nominal);
+        sum += err;
+        sum2 += err.cwiseProduct(err);
+      }
+      ASSERT_GE(ok, kTrials - 4) << nominal.name;
+      for (int k = 1; k < 6; ++k) {
+        const double mean = sum(k) / ok;
+        const double spread = std::sqrt((sum2(k) - ok * mean * mean) / (ok - 1));
+        EXPECT_NEAR(spread / predicted.geometry_std(k), 1.0, 0.10)
+            << nominal.name << " " << ToString(estimator) << " " << kNames2[k] << ": predicted "
+            << predicted.geometry_std(k) << " m, spread " << spread;
+      }
+    }
   }
 }
 
