@@ -353,6 +353,27 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
     std::printf("  the data have %s: see identifiability in the result\n", MissingSensorsText(result.missing_sensors).c_str());
   }
   for (const std::string& d : result.down_weighted) std::printf("  down-weighted: %s\n", d.c_str());
+  // How large a single wrong reading must be before the other poses show it (median over the
+  // readings, per sensor; result.yaml has each reading's).
+  if (!result.readings.empty() && result.readings.front().min_detectable_sigmas.size() > 0) {
+    const int m = nominal.num_cables();
+    std::vector<std::vector<double>> by_sensor(3);
+    for (const ReadingFit& f : result.readings) {
+      for (int i = 0; i < m + 2; ++i) {
+        const bool read = i < m || (i == m ? bool(f.laser_sigmas) : bool(f.inclinometer_sigmas));
+        if (read) by_sensor[i < m ? 0 : i - m + 1].push_back(f.min_detectable_sigmas(i));
+      }
+    }
+    std::printf("  a single wrong reading shows beyond 4.5 sigma from (median):");
+    const char* sensor_names[] = {"encoders", "laser", "inclinometer"};
+    for (int k = 0; k < 3; ++k) {
+      std::vector<double>& v = by_sensor[k];
+      if (v.empty()) continue;
+      std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+      std::printf("%s %s %.3g sigma", k ? "," : "", sensor_names[k], v[v.size() / 2]);
+    }
+    std::printf("\n");
+  }
   if (!ctx.quiet) {
     for (const std::string& w : result.warnings) std::fprintf(stderr, "cablecal: warning: %s\n", w.c_str());
   }

@@ -153,7 +153,7 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   val_cmd->add_option("--delimiter", val.delimiter, "the measurement CSV's separator: ',', ';' or tab")
       ->capture_default_str();
-  val_cmd->add_option("--out", val.out_path, "per-pose CSV: measured and predicted z, theta and their errors (required unless --json)");
+  val_cmd->add_option("--out", val.out_path, "CSV, one row per reading: measured and predicted z, theta and their errors (required unless --json)");
   val_cmd->add_option("--summary", val.summary_path, "summary YAML: RMS and largest errors per robot");
   val_cmd->add_flag("--json", val.json, "print the summary and the per-pose rows as JSON on stdout");
 

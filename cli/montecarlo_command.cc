@@ -56,12 +56,10 @@ std::string RunYaml(const Robot& robot, const MonteCarloOptions& o, const std::s
   y << Key << "gauge" << Value << ToString(o.gauge);
   y << Key << "sensors" << Value << ToString(o.sensors);
   y << Key << "geometry_sigma_m" << Value << YamlNumber{o.geometry_sigma_m};
-  if (o.loss.kind != LossKind::kNone) y << Key << "loss" << Value << ToString(o.loss);
-  if (o.outliers.rate > 0.0) {
-    y << Key << "outliers" << Value << YAML::Flow << YAML::BeginMap << Key << "rate" << Value
-      << YamlNumber{o.outliers.rate} << Key << "size_sigmas" << Value << YamlNumber{o.outliers.size_sigmas}
-      << YAML::EndMap;
-  }
+  y << Key << "loss" << Value << ToString(o.loss);
+  y << Key << "outliers" << Value << YAML::Flow << YAML::BeginMap << Key << "rate" << Value
+    << YamlNumber{o.outliers.rate} << Key << "size_sigmas" << Value << YamlNumber{o.outliers.size_sigmas}
+    << YAML::EndMap;
   y << Key << "design_starts" << Value << o.design_starts;
   y << Key << "seed" << Value << o.seed;
   y << Key << "blas" << Value << YamlString{LoadedLibraryPath("libblas.so")};

@@ -40,8 +40,9 @@ RobustLoss ParseLoss(const std::string& text) {
   }
   if (colon != std::string::npos) {
     double scale = 0.0;
-    if (!ParseFiniteDouble(text.substr(colon + 1), &scale) || !(scale > 0.0)) {
-      throw InputError("--loss", "", "the scale after ':' must be a number > 0, in sigmas (got '" + text + "')");
+    // Below half a sigma every clean reading would count as an outlier.
+    if (!ParseFiniteDouble(text.substr(colon + 1), &scale) || !(scale >= 0.5) || !(scale <= 1e6)) {
+      throw InputError("--loss", "", "the scale after ':' must be a number from 0.5 to 1e6, in sigmas (got '" + text + "')");
     }
     loss.scale_sigmas = scale;
   }

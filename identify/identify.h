@@ -103,6 +103,11 @@ struct ReadingFit {
   std::optional<double> inclinometer_sigmas;
   Eigen::VectorXd encoder_weights;      // one per cable
   double laser_weight = 1.0, inclinometer_weight = 1.0;
+  // The smallest error of each value alone (encoders, then laser and inclinometer), in its
+  // sigmas, that the other poses would show beyond kOutlierSigmas (identify/schur.h,
+  // CheckPosesAgainstTheOthers); infinite where nothing checks it. Empty when not computed
+  // (paper, gauge none, a robust loss).
+  Eigen::VectorXd min_detectable_sigmas;
 };
 
 struct PoseEstimate {

@@ -4,6 +4,7 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "common/error.h"
 
@@ -190,6 +191,44 @@ std::optional<BlockCovariance> CovarianceOf(const BlockJacobian& jacobian, const
   project(cov.geometry, u_g, w_g);
   for (int j = 0; j < n; ++j) project(cov.poses[j], u_p[j], w_p[j]);
   return cov;
+}
+
+std::vector<PoseCheck> CheckPosesAgainstTheOthers(const BlockJacobian& jacobian, const BlockAnalysis& analysis,
+                                                  const Eigen::MatrixXd& cov_geometry,
+                                                  const std::vector<Eigen::VectorXd>& residuals, double sigmas) {
+  const int n = static_cast<int>(jacobian.poses.size());
+  CABLECAL_CHECK(static_cast<int>(residuals.size()) == n, "one residual vector per pose");
+  const double threshold = analysis.null_tolerance * analysis.scale;
+  constexpr double kNoLeft = 1e-12;  // 1 - leverage below this: the others do not see it at all
+  std::vector<PoseCheck> out(n);
+  for (int j = 0; j < n; ++j) {
+    const PoseBlock& b = jacobian.poses[j];
+    const int r = static_cast<int>(b.pose.rows());
+    PoseCheck& check = out[j];
+    check.min_detectable_sigmas = Eigen::VectorXd::Constant(r, std::numeric_limits<double>::infinity());
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(b.pose, Eigen::ComputeFullU);
+    const Eigen::VectorXd& s = svd.singularValues();
+    int rank = 0;
+    while (rank < s.size() && s(rank) >= threshold && s(rank) > 0.0) ++rank;
+    const int d = r - rank;
+    if (d == 0) continue;
+    const Eigen::MatrixXd u2 = svd.matrixU().rightCols(d);
+    const Eigen::MatrixXd g = u2.transpose() * b.geometry;
+    const Eigen::MatrixXd h = g * cov_geometry * g.transpose();
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(Eigen::MatrixXd::Identity(d, d) - h);
+    const Eigen::VectorXd lambda = eig.eigenvalues().cwiseMax(0.0);
+    const Eigen::VectorXd e = eig.eigenvectors().transpose() * (u2.transpose() * residuals[j]);
+    for (int k = 0; k < d; ++k) {
+      if (lambda(k) > kNoLeft) check.deleted_residual_sigmas = std::max(check.deleted_residual_sigmas, std::abs(e(k)) / std::sqrt(lambda(k)));
+    }
+    // (I - h)^1/2 U2^T, row by row of the block.
+    const Eigen::MatrixXd shown = lambda.cwiseSqrt().asDiagonal() * eig.eigenvectors().transpose() * u2.transpose();
+    for (int i = 0; i < r; ++i) {
+      const double gain = shown.col(i).norm();
+      if (gain > 0.0) check.min_detectable_sigmas(i) = sigmas / gain;
+    }
+  }
+  return out;
 }
 
 BlockCovariance SandwichCovariance(const BlockJacobian& jacobian, const BlockAnalysis& analysis,

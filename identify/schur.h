@@ -66,6 +66,23 @@ struct BlockCovariance {
 // one confined to a pose's own unknowns.
 std::optional<BlockCovariance> CovarianceOf(const BlockJacobian& jacobian, const BlockAnalysis& analysis);
 
+// How well the other poses check each pose's readings: deletion diagnostics of a whitened
+// least-squares fit, linearised at the solution. Each pose's own unknowns are profiled out
+// (U2, as in AnalyzeBlocks), leaving its d = r - p redundant combinations e~ = U2^T e and
+// their geometry rows G~ = U2^T J_g; h = G~ Cov(g) G~^T is the pose's leverage on them. With
+// I - h = V diag(lambda) V^T, z = diag(lambda)^-1/2 V^T e~ is the pose's residual against the
+// fit of the others, standardized: N(0, I) for clean readings. A bad reading that the fit
+// absorbed (a pose of high leverage: lambda small) leaves e~ small but z large. An error of
+// delta sigma in row i alone moves z by (I - h)^1/2 U2^T e_i delta: the smallest error that
+// shows beyond `sigmas` is sigmas / |(I - h)^1/2 U2^T e_i| (infinite where nothing checks it).
+struct PoseCheck {
+  double deleted_residual_sigmas = 0.0;  // max |z|
+  Eigen::VectorXd min_detectable_sigmas;  // per row of the pose's block
+};
+std::vector<PoseCheck> CheckPosesAgainstTheOthers(const BlockJacobian& jacobian, const BlockAnalysis& analysis,
+                                                  const Eigen::MatrixXd& cov_geometry,
+                                                  const std::vector<Eigen::VectorXd>& residuals, double sigmas);
+
 // The sandwich covariance C M C of an estimator whose residuals are not whitened (the paper's
 // Eq. 6 residuals, which also carry the laser's and inclinometer's noise): C = (J^T J)^-1 as
 // `inverse` (CovarianceOf, no null direction), M = J^T Sigma J with Sigma the residuals'

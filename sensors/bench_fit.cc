@@ -147,7 +147,7 @@ void CheckBenchReading(BenchSensor sensor, const BenchReading& r) {
                            (degrees ? " (degrees? angles are in radians)" : ""));
     }
     if (sensor == BenchSensor::kLaser && !(v >= 0.0)) {
-      throw InputError(r.where, column(k), FormatDouble(v) + " m is negative: a distance is not");
+      throw InputError(r.where, column(k), FormatDouble(v) + " m is negative: a distance cannot be");
     }
     if (sensor == BenchSensor::kLaser && !(v <= kMaxFrameSide_m)) {
       throw InputError(r.where, column(k),

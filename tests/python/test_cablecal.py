@@ -614,7 +614,7 @@ def test_montecarlo_releases_the_gil():
     done = threading.Event()
 
     def run():
-        cablecal.montecarlo(robot, [6, 10], 400, designs="random", seed=1)
+        cablecal.montecarlo(robot, [6, 10, 20], 1000, designs="random", seed=1)  # about 1 s
         done.set()
 
     worker = threading.Thread(target=run)
