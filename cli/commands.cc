@@ -25,6 +25,7 @@
 #include "common/yaml_writer.h"
 #include "common/version.h"
 #include "design/design.h"
+#include "identify/calibration_report.h"
 #include "identify/experiment.h"
 #include "identify/identify.h"
 #include "model/statics.h"
@@ -280,6 +281,15 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   CheckCommandPaths({{"--robot", options.robot_path}, {"--measurements", options.measurements_path}},
                     {{"--out", options.out_path}, {"--calibrated-robot", options.calibrated_robot_path}});
   if (options.out_path.empty() && !options.json) throw InputError("--out", "", "required (or print the result with --json)");
+  // The report's folder is checked before any work, and no other file may be one it writes.
+  std::unique_ptr<OutputFolder> report;
+  if (!options.report_dir.empty()) {
+    report = std::make_unique<OutputFolder>("--report", options.report_dir, ReportFileNames());
+    report->RefuseInputs({{"--robot", options.robot_path},
+                          {"--measurements", options.measurements_path},
+                          {"--out", options.out_path},
+                          {"--calibrated-robot", options.calibrated_robot_path}});
+  }
   const Robot nominal = LoadRobotOption(options.robot_path);
   IdentifyOptions id;
   id.estimator = ParseEstimator(options.estimator);
@@ -308,9 +318,29 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
                      ProvenanceComment(ctx.command_line) + "# calibrated: exit points and initial lengths identified (" +
                          ToString(id.estimator) + ", gauge " + ToString(id.gauge) + ")\n" + RobotToYaml(calibrated));
   }
+  std::string figure_error;
+  if (report) {
+    const SigintScope sigint;  // Ctrl-C while the figures are drawn: exit 130, nothing written
+    const ReportSources sources{ctx.command_line, options.measurements_path, options.holdout_path};
+    figure_error = StageReport(*report, nominal, result, result_yaml, nullptr, sources, [](const std::vector<std::string>& arguments) {
+      try {
+        RunPlotScript("plot_report.py", arguments);
+        return std::string();
+      } catch (const FigureFailure& e) {
+        return std::string(e.what());
+      }
+    });
+    if (SigintFlag()) throw Interrupted();
+  }
   output.Commit();
+  if (report) report->Commit();
+  if (!figure_error.empty()) {
+    // After the summary below: the results were written, the figures were not.
+    figure_error += "; the report (" + options.report_dir + "/report.md, without figures) and its data files were written";
+  }
   if (options.json) {
     std::printf("%s\n", ToJson(YAML::Load(result_yaml)).c_str());
+    if (!figure_error.empty()) throw FigureFailure(figure_error);
     return kExitOk;
   }
   // The console rounds to what a reader compares (3 significant digits, 0.1 um for lengths);
@@ -346,6 +376,8 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
     if (result.has_covariance) std::printf("  (std %.3g mm)", 1e3 * result.geometry_std(k));
     std::printf("\n");
   }
+  if (report) std::printf("  report: %s/report.md\n", options.report_dir.c_str());
+  if (!figure_error.empty()) throw FigureFailure(figure_error);
   return kExitOk;
 }
 
