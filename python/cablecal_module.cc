@@ -387,7 +387,7 @@ std::string PlotScriptsDir() {
 
 // Draws a report's figures with this interpreter (it has NumPy; matplotlib is its own to have):
 // "" or why not, as the CLI's runner says it.
-std::string DrawReportFigures(const std::vector<std::string>& arguments) {
+std::string DrawReportWithPython(const std::vector<std::string>& arguments) {
   const std::string script = PlotScriptsDir() + "/plot_report.py";
   py::list command;
   command.append(py::module_::import("sys").attr("executable"));
@@ -858,7 +858,7 @@ PYBIND11_MODULE(cablecal, m) {
         const ReportSources sources{CallText("report"), "the measurements given to cablecal.identify", ""};
         const std::string figure_error =
             StageReport(folder, nominal, r, IdentifyResultYaml(r, CallText("identify")), nullptr, sources,
-                        DrawReportFigures);
+                        DrawReportWithPython);
         folder.Commit();
         if (!figure_error.empty()) {
           throw FigureFailure(figure_error + "; the report (" + dir + "/report.md, without figures) and its data files were written");
