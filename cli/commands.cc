@@ -28,6 +28,7 @@
 #include "identify/calibration_report.h"
 #include "identify/experiment.h"
 #include "identify/identify.h"
+#include "identify/validate.h"
 #include "model/statics.h"
 #include "sensors/sensors.h"
 #include "workspace/workspace.h"
@@ -73,6 +74,34 @@ std::string PosePlanJsonYaml(const std::vector<PlanPose>& poses) {
   }
   o << YAML::EndSeq;
   return YamlText(o);
+}
+
+// "%.3g": the console's rounding of a number a reader compares.
+std::string Rounded(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g", value);
+  return text;
+}
+
+// The console's line for readings corrected for the robot file's systematic sensor errors.
+void PrintSensorCorrection(const SystematicSensorErrors& e) {
+  std::printf("  readings corrected for the robot file's systematic sensor errors: laser offset %.3g m, "
+              "inclinometer offset %.3g deg, sec coefficient %.3g deg\n",
+              e.laser_offset_m, e.inclinometer_offset_rad * 180.0 / M_PI, e.inclinometer_sec_coefficient_rad * 180.0 / M_PI);
+}
+
+// --measurements: the CSV read by column name for `robot` (the ignored columns noted on
+// stderr unless -q), then corrected for the robot file's systematic sensor errors and checked
+// against what its sensors can read (CorrectedReadings).
+std::vector<Measurement> ReadMeasurementsOption(const Context& ctx, const Robot& robot, const std::string& path,
+                                                const std::string& delimiter) {
+  const std::vector<Measurement> measurements =
+      ReadMeasurementsCsv(path, robot.num_cables(), ParseDelimiter(delimiter), [&](const std::vector<std::string>& ignored) {
+        if (ctx.quiet) return;
+        std::fprintf(stderr, "cablecal: note: %s: ignoring column%s %s\n", path.c_str(), ignored.size() > 1 ? "s" : "",
+                     QuotedList(ignored).c_str());
+      });
+  return CorrectedReadings(robot, measurements, path);
 }
 
 }  // namespace
@@ -297,16 +326,10 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   id.source = options.measurements_path;
   id.max_iterations = options.max_iterations;
   id.loss = ParseLoss(options.loss);
-  const std::vector<Measurement> measurements = ReadMeasurementsCsv(
-      options.measurements_path, nominal.num_cables(), ParseDelimiter(options.delimiter),
-      [&](const std::vector<std::string>& ignored) {
-        if (ctx.quiet) return;
-        std::fprintf(stderr, "cablecal: note: %s: ignoring column%s %s\n", options.measurements_path.c_str(),
-                     ignored.size() > 1 ? "s" : "", QuotedList(ignored).c_str());
-      });
   // A robot file with systematic sensor errors (sensors fit) has them removed before the solve.
-  const std::vector<Measurement> readings = CorrectedReadings(nominal, measurements, options.measurements_path);
-  IdentifyResult result = Identify(nominal, readings, id);
+  const std::vector<Measurement> measurements =
+      ReadMeasurementsOption(ctx, nominal, options.measurements_path, options.delimiter);
+  IdentifyResult result = Identify(nominal, measurements, id);
   if (nominal.sensors.systematic.any()) result.corrected_for = nominal.sensors.systematic;
   RequireUsableResult(result, options.measurements_path);
   const std::string result_yaml = IdentifyResultYaml(result, ctx.command_line);
@@ -363,13 +386,7 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   if (!ctx.quiet) {
     for (const std::string& w : result.warnings) std::fprintf(stderr, "cablecal: warning: %s\n", w.c_str());
   }
-  if (result.corrected_for) {
-    const SystematicSensorErrors& e = *result.corrected_for;
-    std::printf("  readings corrected for the robot file's systematic sensor errors: laser offset %.3g m, "
-                "inclinometer offset %.3g deg, sec coefficient %.3g deg\n",
-                e.laser_offset_m, e.inclinometer_offset_rad * 180.0 / M_PI,
-                e.inclinometer_sec_coefficient_rad * 180.0 / M_PI);
-  }
+  if (result.corrected_for) PrintSensorCorrection(*result.corrected_for);
   const std::vector<std::string> names = GeometryNames(nominal.num_cables());
   for (std::size_t k = 0; k < names.size(); ++k) {
     std::printf("  %s = %.7f m", names[k].c_str(), result.geometry(k));
@@ -378,6 +395,68 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   }
   if (report) std::printf("  report: %s/report.md\n", options.report_dir.c_str());
   if (!figure_error.empty()) throw FigureFailure(figure_error);
+  return kExitOk;
+}
+
+int RunValidate(const Context& ctx, const ValidateCommandOptions& options) {
+  CheckCommandPaths({{"--robot", options.robot_path},
+                     {"--nominal", options.nominal_path},
+                     {"--measurements", options.measurements_path}},
+                    {{"--out", options.out_path}, {"--summary", options.summary_path}});
+  if (options.out_path.empty() && !options.json) throw InputError("--out", "", "required (or print the result with --json)");
+  const Robot calibrated = LoadRobotFile(options.robot_path);
+  std::optional<Robot> nominal;
+  if (!options.nominal_path.empty()) nominal = LoadRobotFile(options.nominal_path);
+  const std::vector<Measurement> measurements =
+      ReadMeasurementsOption(ctx, calibrated, options.measurements_path, options.delimiter);
+  ValidationResult result = Validate(calibrated, nominal, measurements, options.measurements_path);
+  if (calibrated.sensors.systematic.any()) result.corrected_for = calibrated.sensors.systematic;
+  const std::string summary_yaml = ValidationSummaryYaml(result, ctx.command_line);
+  AtomicOutput output;
+  if (!options.out_path.empty()) {
+    output.WriteText(options.out_path, ValidationCsv(result, ProvenanceComment(ctx.command_line)));
+  }
+  if (!options.summary_path.empty()) output.WriteText(options.summary_path, summary_yaml);
+  output.Commit();
+  if (options.json) {
+    YAML::Node doc = YAML::Load(summary_yaml);
+    doc["rows"] = YAML::Load(ValidationRowsYaml(result));
+    std::printf("%s\n", ToJson(doc).c_str());
+    return kExitOk;
+  }
+  // Millimetres and milliradians, 3 significant digits: what a reader compares; the files keep
+  // every digit.
+  const std::string readings = result.num_poses == static_cast<int>(measurements.size())
+                                   ? std::to_string(measurements.size()) + " poses"
+                                   : std::to_string(measurements.size()) + " readings (" +
+                                         std::to_string(result.num_poses) + " poses)";
+  std::string noise;
+  if (result.has_laser) noise += "laser " + Rounded(1e3 * result.laser_sigma_m) + " mm";
+  if (result.has_inclinometer) {
+    noise += (noise.empty() ? "" : ", ") + std::string("inclinometer ") + Rounded(1e3 * result.inclinometer_sigma_rad) +
+             " mrad";
+  }
+  std::printf("validated on %s of %s (error = predicted - measured; sensor noise: %s)\n", readings.c_str(),
+              PrintableText(options.measurements_path).c_str(), noise.c_str());
+  for (const RobotPrediction& p : result.robots) {
+    std::string line;
+    if (p.z_m) line += "z rms " + Rounded(1e3 * p.z_m->rms) + " mm (max " + Rounded(1e3 * p.z_m->max_abs) + " mm)";
+    if (p.theta_rad) {
+      line += (line.empty() ? "" : ", ") + std::string("theta rms ") + Rounded(1e3 * p.theta_rad->rms) + " mrad (max " +
+              Rounded(1e3 * p.theta_rad->max_abs) + " mrad)";
+    }
+    std::printf("  %-10s %s  [%s]\n", p.name.c_str(), line.c_str(), PrintableText(p.source).c_str());
+  }
+  if (nominal) {
+    std::string ratios;
+    if (result.has_laser) ratios += "z " + Rounded(ZRmsRatio(result));
+    if (result.has_inclinometer) {
+      ratios += (ratios.empty() ? "" : ", ") + std::string("theta ") + Rounded(ThetaRmsRatio(result));
+    }
+    std::printf("  nominal / calibrated rms: %s (> 1: the calibration helped)\n", ratios.c_str());
+  }
+  if (!NotCompared(result).empty()) std::printf("  not compared: %s\n", NotCompared(result).c_str());
+  if (result.corrected_for) PrintSensorCorrection(*result.corrected_for);
   return kExitOk;
 }
 

@@ -65,6 +65,13 @@ struct IdentifyCommandOptions {
 };
 int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options);
 
+struct ValidateCommandOptions {
+  std::string robot_path, nominal_path, measurements_path, out_path, summary_path;
+  std::string delimiter = ",";  // of the measurement CSV
+  bool json = false;  // the summary and the per-pose rows on stdout as JSON (then --out is optional)
+};
+int RunValidate(const Context& ctx, const ValidateCommandOptions& options);
+
 struct SensorsFitOptions {
   std::string robot_path, inclinometer_path, laser_path, out_path;
   std::string delimiter = ",";  // of the bench CSVs

@@ -147,6 +147,23 @@ int main(int argc, char** argv) {
                      "with its laser and inclinometer readings (needs --report)")
       ->check(CLI::ExistingFile);
 
+  cablecal::cli::ValidateCommandOptions val;
+  CLI::App* val_cmd =
+      app.add_subcommand("validate", "compare a calibrated (and the nominal) robot's predictions with held-out poses");
+  val_cmd->add_option("--robot", val.robot_path, "the robot to validate (e.g. identify --calibrated-robot's file)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  val_cmd->add_option("--nominal", val.nominal_path, "the nominal robot file, validated beside it for comparison")
+      ->check(CLI::ExistingFile);
+  val_cmd->add_option("--measurements", val.measurements_path, "measurement CSV of poses not used to calibrate")
+      ->required()
+      ->check(CLI::ExistingFile);
+  val_cmd->add_option("--delimiter", val.delimiter, "the measurement CSV's separator: ',', ';' or tab")
+      ->capture_default_str();
+  val_cmd->add_option("--out", val.out_path, "per-pose CSV: measured and predicted z, theta and their errors (required unless --json)");
+  val_cmd->add_option("--summary", val.summary_path, "summary YAML: RMS and largest errors per robot");
+  val_cmd->add_flag("--json", val.json, "print the summary and the per-pose rows as JSON on stdout");
+
   cablecal::cli::SensorsFitOptions sfit;
   CLI::App* sensors_cmd = app.add_subcommand("sensors", "the laser's and inclinometer's error models");
   sensors_cmd->require_subcommand(1);
@@ -284,7 +301,7 @@ int main(int argc, char** argv) {
   FLAGS_minloglevel = verbose ? google::GLOG_INFO : google::GLOG_FATAL;
   google::InitGoogleLogging("cablecal");
   ctx.quiet = quiet;
-  const bool json = (id_cmd->parsed() && ident.json) || (des_cmd->parsed() && des.json);
+  const bool json = (id_cmd->parsed() && ident.json) || (des_cmd->parsed() && des.json) || (val_cmd->parsed() && val.json);
   if (quiet && !json && std::freopen("/dev/null", "w", stdout) == nullptr) {
     std::fprintf(stderr, "cablecal: error: --quiet: cannot silence the standard output\n");
     return cablecal::kExitInternal;
@@ -295,6 +312,7 @@ int main(int argc, char** argv) {
     if (sample_cmd->parsed()) return cablecal::cli::RunSample(ctx, sample);
     if (sim_cmd->parsed()) return cablecal::cli::RunSimulate(ctx, sim);
     if (id_cmd->parsed()) return cablecal::cli::RunIdentify(ctx, ident);
+    if (val_cmd->parsed()) return cablecal::cli::RunValidate(ctx, val);
     if (des_cmd->parsed()) return cablecal::cli::RunDesign(ctx, des);
     if (sfit_cmd->parsed()) return cablecal::cli::RunSensorsFit(ctx, sfit);
     if (mc_cmd->parsed()) return cablecal::cli::RunMonteCarloCommand(ctx, mc);

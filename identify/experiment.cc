@@ -71,6 +71,16 @@ const char* ToString(NoisySensors s) {
   return "unknown";
 }
 
+std::string CannotHoldReason(ForwardStatus status, const std::string& expected_pose) {
+  std::string why = ToString(status);
+  if (status == ForwardStatus::kOtherAssembly) {
+    why += ": only another assembly of the robot has these lengths, far from " + expected_pose;
+  } else if (status == ForwardStatus::kSlack) {
+    why += ": a cable would go slack";
+  }
+  return why;
+}
+
 SimulatedExperiment SimulateExperiment(const Robot& nominal, const Robot& truth,
                                        const std::vector<PlanPose>& plan, const SimulationOptions& options,
                                        Rng& rng) {
@@ -85,14 +95,8 @@ SimulatedExperiment SimulateExperiment(const Robot& nominal, const Robot& truth,
     // The commanded (nominal) pose is a good start: the true one is millimetres away.
     const ForwardResult fwd = SolveForwardGeometricoStatic(truth, lengths_true, &p.q);
     if (fwd.status != ForwardStatus::kConverged) {
-      std::string why = ToString(fwd.status);
-      if (fwd.status == ForwardStatus::kOtherAssembly) {
-        why += ": only another assembly of the robot has these lengths, far from the commanded pose";
-      } else if (fwd.status == ForwardStatus::kSlack) {
-        why += ": a cable would go slack";
-      }
       throw SolverFailure("pose " + std::to_string(j + 1) + ": the true robot cannot hold the commanded lengths (" +
-                          why + ")");
+                          CannotHoldReason(fwd.status, "the commanded pose") + ")");
     }
     if (options.require_feasible) {
       const Feasibility f = CheckFeasibility(truth, fwd.equilibrium.q, fwd.equilibrium.tensions_N);

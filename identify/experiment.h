@@ -24,6 +24,7 @@
 
 #include "common/random.h"
 #include "model/robot.h"
+#include "model/statics.h"
 #include "workspace/workspace.h"
 
 namespace cablecal {
@@ -93,6 +94,10 @@ struct SimulatedExperiment {
   std::vector<Measurement> measurements;
   std::vector<Eigen::Vector3d> true_poses;  // (x, z, theta) where the platform settled
 };
+
+// Why a robot cannot hold the lengths SolveForwardGeometricoStatic was given: the status and
+// what it means; `expected_pose` names where the platform was expected ("the commanded pose").
+std::string CannotHoldReason(ForwardStatus status, const std::string& expected_pose);
 
 // Throws SolverFailure naming the pose if the true robot cannot hold a commanded pose
 // (forward model not converged, slack cable, unstable, or the lengths met only by another

@@ -2,7 +2,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "common/error.h"
@@ -101,28 +103,47 @@ std::string FormatCoefficient(double c) {
   return buffer;
 }
 
-// The identification for M cables: identify_cables.h, instantiated for each M in its own
-// translation unit (generated from identify_cables.cc.in).
+// The identification for M cables and its per-pose start: identify_cables.h, instantiated
+// for each M in its own translation unit (generated from identify_cables.cc.in).
 template <int M>
 IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measurement>& measurements,
                                   const IdentifyOptions& options);
+template <int M>
+Eigen::Vector3d StartingPose(const Robot& robot, const GeometryVector& g, Measurement m);
+
+// f(std::integral_constant<int, M>{}) for the robot's cable count M: the one dispatch from a
+// run-time count to the compile-time instances.
+template <typename F>
+auto WithCableCount(int num_cables, F&& f) {
+  static_assert(kMinCables == 2 && kMaxCables == 8, "one instantiation per cable count below");
+  switch (num_cables) {
+    case 2: return f(std::integral_constant<int, 2>{});
+    case 3: return f(std::integral_constant<int, 3>{});
+    case 4: return f(std::integral_constant<int, 4>{});
+    case 5: return f(std::integral_constant<int, 5>{});
+    case 6: return f(std::integral_constant<int, 6>{});
+    case 7: return f(std::integral_constant<int, 7>{});
+    case 8: return f(std::integral_constant<int, 8>{});
+  }
+  CABLECAL_CHECK(false, "the robot loader keeps 2 to 8 cables");
+  std::abort();
+}
 
 }  // namespace internal
 
 IdentifyResult Identify(const Robot& nominal, const std::vector<Measurement>& measurements,
                         const IdentifyOptions& options) {
-  static_assert(kMinCables == 2 && kMaxCables == 8, "one instantiation per cable count below");
-  switch (nominal.num_cables()) {
-    case 2: return internal::IdentifyWithCables<2>(nominal, measurements, options);
-    case 3: return internal::IdentifyWithCables<3>(nominal, measurements, options);
-    case 4: return internal::IdentifyWithCables<4>(nominal, measurements, options);
-    case 5: return internal::IdentifyWithCables<5>(nominal, measurements, options);
-    case 6: return internal::IdentifyWithCables<6>(nominal, measurements, options);
-    case 7: return internal::IdentifyWithCables<7>(nominal, measurements, options);
-    case 8: return internal::IdentifyWithCables<8>(nominal, measurements, options);
-  }
-  CABLECAL_CHECK(false, "the robot loader keeps 2 to 8 cables");
-  return {};
+  return internal::WithCableCount(nominal.num_cables(), [&](auto m) {
+    return internal::IdentifyWithCables<decltype(m)::value>(nominal, measurements, options);
+  });
+}
+
+Eigen::Vector3d StartingPose(const Robot& robot, const GeometryVector& geometry, const Measurement& reading) {
+  CABLECAL_CHECK(reading.dl_m.size() == robot.num_cables() && geometry.size() == GeometrySize(robot.num_cables()),
+                 "one encoder reading and three geometry entries per cable");
+  return internal::WithCableCount(robot.num_cables(), [&](auto m) {
+    return internal::StartingPose<decltype(m)::value>(robot, geometry, reading);
+  });
 }
 
 void RequireUsableResult(const IdentifyResult& result, const std::string& source) {

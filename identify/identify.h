@@ -6,6 +6,7 @@
 //   experiment.h  simulated or measured readings, measurement CSV
 //   residuals.h   the templated residuals (shared with design/)
 //   identify.h    Identify(), its options and result, result YAML
+//   validate.h    Validate(): a robot's predictions of held-out poses against the readings
 // Depends on model/, workspace/ (pose plans) and common/.
 //
 // The gauge (README, "Identification"): encoders, a vertical laser and an inclinometer cannot see a
@@ -22,6 +23,10 @@
 
 #include "identify/experiment.h"
 #include "model/robot.h"
+
+namespace YAML {
+class Emitter;
+}
 
 namespace cablecal {
 
@@ -159,10 +164,21 @@ struct IdentifyResult {
 IdentifyResult Identify(const Robot& nominal, const std::vector<Measurement>& measurements,
                         const IdentifyOptions& options);
 
+// Where a reading's pose starts, for `robot` with `geometry` (GeometryOf(robot)): the measured z
+// and theta, with the x where the model best explains the encoder readings there; a missing z
+// or theta from where the robot settles with these lengths. Identify's start for each pose, and
+// Validate's start for the forward model (both need a start near the platform's real pose; home
+// is too far for some poses, and some lengths hold the platform in two places).
+Eigen::Vector3d StartingPose(const Robot& robot, const GeometryVector& geometry, const Measurement& reading);
+
 // What `identify` (the CLI and the Python module) makes of a result that is not one: a
 // rank-deficient or poor fit is an InputError naming `source` (the data cannot calibrate
 // this robot), a solve that did not converge a SolverFailure. Returns quietly otherwise.
 void RequireUsableResult(const IdentifyResult& result, const std::string& source);
+
+// The `sensor_correction` map of result.yaml and of validate's summary: the robot file's
+// systematic sensor errors the readings were corrected for, and `when` ("before the solve").
+void EmitSensorCorrection(YAML::Emitter& out, const SystematicSensorErrors& errors, const std::string& when);
 
 // result.yaml (README, "identify").
 std::string IdentifyResultYaml(const IdentifyResult& result, const std::string& command_line);

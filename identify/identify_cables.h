@@ -77,6 +77,23 @@ double StartingX(const Robot& nominal, const GeometryVector& g, const Measuremen
   return std::isfinite(x) ? x : nominal.p_F_home_m.x();
 }
 
+// Starting pose for one reading (identify's x_j, z_j, theta_j; validate's forward model): the
+// measured z and theta with StartingX's x. A missing z or theta starts where `robot` settles
+// with these lengths (a cold forward model; home, level, if it finds nothing).
+template <int M>
+Eigen::Vector3d StartingPose(const Robot& robot, const GeometryVector& g, Measurement m) {
+  if (!m.has_laser || !m.has_inclinometer) {
+    const Eigen::VectorXd lengths = g.tail<M>() + m.dl_m;
+    const ForwardResult fwd = SolveForwardGeometricoStatic(robot, lengths);
+    const Eigen::Vector3d q = fwd.status == ForwardStatus::kConverged
+                                  ? fwd.equilibrium.q
+                                  : Eigen::Vector3d(robot.p_F_home_m.x(), robot.p_F_home_m.y(), 0.0);
+    if (!m.has_laser) m.z_m = q(1);
+    if (!m.has_inclinometer) m.theta_rad = q(2);
+  }
+  return Eigen::Vector3d(StartingX<M>(robot, g, m), m.z_m, m.theta_rad);
+}
+
 // "%.4g" of a null direction's coefficient (identify.cc).
 std::string FormatCoefficient(double c);
 
@@ -186,18 +203,9 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   for (int k = 0; k < kGeometry; ++k) geometry[k] = nominal_geometry(k);
   std::vector<std::array<double, 3>> poses(n);
   for (int j = 0; j < n; ++j) {
-    Measurement start = measurements[readings_of[j].front()];
-    if (!laser || !inclinometer) {
-      // A missing z or theta starts where the nominal robot settles with these lengths.
-      const Eigen::VectorXd lengths = nominal_geometry.tail<M>() + start.dl_m;
-      const ForwardResult fwd = SolveForwardGeometricoStatic(nominal, lengths);
-      const Eigen::Vector3d q = fwd.status == ForwardStatus::kConverged
-                                    ? fwd.equilibrium.q
-                                    : Eigen::Vector3d(nominal.p_F_home_m.x(), nominal.p_F_home_m.y(), 0.0);
-      if (!laser) start.z_m = q(1);
-      if (!inclinometer) start.theta_rad = q(2);
-    }
-    poses[j] = {internal::StartingX<M>(nominal, nominal_geometry, start), start.z_m, start.theta_rad};
+    const Eigen::Vector3d start =
+        internal::StartingPose<M>(nominal, nominal_geometry, measurements[readings_of[j].front()]);
+    poses[j] = {start(0), start(1), start(2)};
   }
 
   ReadingWeights weights = ml ? WeightsOf(s) : ReadingWeights{};

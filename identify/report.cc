@@ -21,6 +21,15 @@ using YAML::Value;
 
 }  // namespace
 
+void EmitSensorCorrection(YAML::Emitter& o, const SystematicSensorErrors& e, const std::string& when) {
+  o << Key << "sensor_correction" << Value << BeginMap << Key << "note" << Value
+    << YamlString{"laser and inclinometer readings corrected for the robot file's systematic sensor errors " + when +
+                  " (README, \"Sensor error models\")"}
+    << Key << "laser_offset_m" << Value << YamlNumber{e.laser_offset_m} << Key << "inclinometer_offset_rad" << Value
+    << YamlNumber{e.inclinometer_offset_rad} << Key << "inclinometer_sec_coefficient_rad" << Value
+    << YamlNumber{e.inclinometer_sec_coefficient_rad} << EndMap;
+}
+
 std::string IdentifyResultYaml(const IdentifyResult& r, const std::string& command_line) {
   YAML::Emitter o;
   o << YAML::Comment("cablecal identification result (README, \"identify\"). SI units: m, rad.") << BeginMap;
@@ -41,16 +50,8 @@ std::string IdentifyResultYaml(const IdentifyResult& r, const std::string& comma
       break;
   }
   o << Key << "gauge_note" << Value << YamlString{note};
-  if (r.corrected_for) {
-    // Only when applied: a result from a robot file without systematic terms reads as before.
-    const SystematicSensorErrors& e = *r.corrected_for;
-    o << Key << "sensor_correction" << Value << BeginMap << Key << "note" << Value
-      << YamlString{std::string("laser and inclinometer readings corrected for the robot file's systematic sensor "
-                                "errors before the solve (README, \"Sensor error models\")")}
-      << Key << "laser_offset_m" << Value << YamlNumber{e.laser_offset_m} << Key << "inclinometer_offset_rad" << Value
-      << YamlNumber{e.inclinometer_offset_rad} << Key << "inclinometer_sec_coefficient_rad" << Value
-      << YamlNumber{e.inclinometer_sec_coefficient_rad} << EndMap;
-  }
+  // Only when applied: a result from a robot file without systematic terms reads as before.
+  if (r.corrected_for) EmitSensorCorrection(o, *r.corrected_for, "before the solve");
   o << Key << "iterations" << Value << r.iterations;
   o << Key << "final_cost" << Value << YamlNumber{r.final_cost}
     << YAML::Comment("half the sum of squared (whitened, for ml) residuals");

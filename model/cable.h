@@ -156,6 +156,13 @@ inline bool CableGeometryValid(const CableState<double>& s, double pulley_radius
 // tests/model/statics_test.cc checks with Jets. `p_F_exits_m[i]` is exit point i; the
 // overload without it takes the robot's nominal exit points (the design's robustness
 // differentiates W with respect to the exit points too).
+// One column of W: the cable's pull u and its moment (R b) x u about p, from the anchor's
+// lever r_F_anchor = R b and the cable's state there.
+template <typename T>
+Vec3<T> WrenchColumn(const Vec2<T>& r_F_anchor, const CableState<T>& s) {
+  return Vec3<T>(s.u_F_cable.x(), s.u_F_cable.y(), Cross2<T>(r_F_anchor, s.u_F_cable));
+}
+
 template <typename T>
 Eigen::Matrix<T, 3, Eigen::Dynamic> WrenchMatrix(const Robot& robot, const Pose<T>& q, const Vec2<T>* p_F_exits_m) {
   Eigen::Matrix<T, 3, Eigen::Dynamic> W(3, robot.num_cables());
@@ -164,10 +171,7 @@ Eigen::Matrix<T, 3, Eigen::Dynamic> WrenchMatrix(const Robot& robot, const Pose<
     const Cable& c = robot.cables[i];
     const Vec2<T> r_F_anchor = R * c.p_P_anchor_m.cast<T>();
     const Vec2<T> p_F_anchor = Vec2<T>(q(0), q(1)) + r_F_anchor;
-    const CableState<T> s = CableGeometry<T>(p_F_exits_m[i], T(c.pulley_radius_m), SignsOf(c), p_F_anchor);
-    W(0, i) = s.u_F_cable.x();
-    W(1, i) = s.u_F_cable.y();
-    W(2, i) = Cross2<T>(r_F_anchor, s.u_F_cable);
+    W.col(i) = WrenchColumn<T>(r_F_anchor, CableGeometry<T>(p_F_exits_m[i], T(c.pulley_radius_m), SignsOf(c), p_F_anchor));
   }
   return W;
 }
@@ -179,12 +183,16 @@ Eigen::Matrix<T, 3, Eigen::Dynamic> WrenchMatrix(const Robot& robot, const Pose<
   return WrenchMatrix<T>(robot, q, exits.data());
 }
 
-// Gravity wrench at p: [0; -m g; (R c) x (0, -m g)] = -grad V.
+// Gravity wrench at p: [0; -m g; (R c) x (0, -m g)] = -grad V, R = Rotation(theta).
+template <typename T>
+Vec3<T> GravityWrench(const Robot& robot, const Eigen::Matrix<T, 2, 2>& R) {
+  const T weight_N = T(robot.platform_mass_kg * robot.gravity_mps2);
+  const Vec2<T> r_F_com = R * robot.p_P_com_m.cast<T>();
+  return Vec3<T>(T(0.0), -weight_N, -weight_N * r_F_com.x());
+}
 template <typename T>
 Vec3<T> GravityWrench(const Robot& robot, const Pose<T>& q) {
-  const T weight_N = T(robot.platform_mass_kg * robot.gravity_mps2);
-  const Vec2<T> r_F_com = Rotation(q(2)) * robot.p_P_com_m.cast<T>();
-  return Vec3<T>(T(0.0), -weight_N, -weight_N * r_F_com.x());
+  return GravityWrench<T>(robot, Rotation(q(2)));
 }
 
 // Gravitational potential energy m g z_com (J); its minimum along the motion the cables

@@ -4,6 +4,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <vector>
@@ -34,14 +35,24 @@ struct MomentBalance {
   Eigen::Vector2d tensions_N = Eigen::Vector2d::Zero();
 };
 
-MomentBalance EvaluateMomentBalance(const Robot& robot, double x_m, double z_m, double theta_rad) {
+MomentBalance EvaluateMomentBalance(const Robot& robot, double x_m, double z_m, double theta_rad,
+                                    const Eigen::Matrix2d* rotation = nullptr) {
   MomentBalance b;
-  const Pose<double> q(x_m, z_m, theta_rad);
-  for (const Cable& c : robot.cables) {
-    if (!CableGeometryValid(CableAtPose<double>(c, q), c.pulley_radius_m)) return b;
+  // One rotation and one state per cable, shared by the validity test, W and the gravity
+  // wrench (the same arithmetic as CableAtPose, WrenchMatrix and GravityWrench, so the same
+  // bits): the sampler's theta scans call this some 50 times per pose, and computing each
+  // sine, cosine and arctangent once made sampling twice as fast.
+  const Eigen::Matrix2d R = rotation ? *rotation : Rotation(theta_rad);
+  const Eigen::Vector2d p(x_m, z_m);
+  Eigen::Matrix<double, 3, 2> W;
+  for (int i = 0; i < 2; ++i) {
+    const Cable& c = robot.cables[i];
+    const Eigen::Vector2d r_F_anchor = R * c.p_P_anchor_m;
+    const CableState<double> s = CableGeometry<double>(c.p_F_exit_m, c.pulley_radius_m, SignsOf(c), p + r_F_anchor);
+    if (!CableGeometryValid(s, c.pulley_radius_m)) return b;
+    W.col(i) = WrenchColumn<double>(r_F_anchor, s);
   }
-  const Eigen::Matrix<double, 3, Eigen::Dynamic> W = WrenchMatrix<double>(robot, q);
-  const Eigen::Vector3d w_g = GravityWrench<double>(robot, q);
+  const Eigen::Vector3d w_g = GravityWrench<double>(robot, R);
   const Eigen::Matrix2d F = W.topRows<2>();
   b.det = F.determinant();
   Eigen::Matrix2d adj;
@@ -152,12 +163,19 @@ EquilibriumResult SolveEquilibrium(const Robot& robot, double x_m, double z_m) {
   };
 
   const double step = 2.0 * kThetaSearchMax_rad / kThetaSearchSteps;
+  // The scan's angles are the same at every (x, z): their rotations once per process.
+  static const std::array<Eigen::Matrix2d, kThetaSearchSteps + 1> kScanRotations = [step] {
+    std::array<Eigen::Matrix2d, kThetaSearchSteps + 1> r;
+    r[0] = Rotation(-kThetaSearchMax_rad);
+    for (int k = 1; k <= kThetaSearchSteps; ++k) r[k] = Rotation(-kThetaSearchMax_rad + k * step);
+    return r;
+  }();
   double theta_prev = -kThetaSearchMax_rad;
-  MomentBalance prev = EvaluateMomentBalance(robot, x_m, z_m, theta_prev);
+  MomentBalance prev = EvaluateMomentBalance(robot, x_m, z_m, theta_prev, &kScanRotations[0]);
   any_valid = prev.valid;
   for (int k = 1; k <= kThetaSearchSteps; ++k) {
     const double theta = -kThetaSearchMax_rad + k * step;
-    const MomentBalance cur = EvaluateMomentBalance(robot, x_m, z_m, theta);
+    const MomentBalance cur = EvaluateMomentBalance(robot, x_m, z_m, theta, &kScanRotations[k]);
     any_valid = any_valid || cur.valid;
     if (prev.valid && cur.valid) {
       if (cur.scaled_moment == 0.0) {
@@ -449,9 +467,20 @@ ForwardResult ForwardNewton(const Robot& robot, const Eigen::VectorXd& lengths_m
     for (int k = 0; k < 5; ++k) yj(k) = Jet5(y(k), k);
     const Pose<Jet5> q = yj.head<3>();
     const Eigen::Matrix<Jet5, Eigen::Dynamic, 1> t = yj.tail<2>();
+    // [l(q) - L; W t + w_g] with one rotation and one state per cable, as in
+    // EvaluateMomentBalance (the same arithmetic as CableAtPose and EquilibriumResidual).
     Eigen::Matrix<Jet5, 5, 1> r;
-    for (int i = 0; i < 2; ++i) r(i) = CableAtPose<Jet5>(robot.cables[i], q).length_m - lengths_m(i);
-    r.tail<3>() = EquilibriumResidual<Jet5>(robot, q, t) / weight_N;
+    const Eigen::Matrix<Jet5, 2, 2> R = Rotation(q(2));
+    Eigen::Matrix<Jet5, 3, Eigen::Dynamic> W(3, 2);
+    for (int i = 0; i < 2; ++i) {
+      const Cable& c = robot.cables[i];
+      const Vec2<Jet5> r_F_anchor = R * c.p_P_anchor_m.cast<Jet5>();
+      const CableState<Jet5> s = CableGeometry<Jet5>(c.p_F_exit_m.cast<Jet5>(), Jet5(c.pulley_radius_m), SignsOf(c),
+                                                     Vec2<Jet5>(q(0), q(1)) + r_F_anchor);
+      r(i) = s.length_m - lengths_m(i);
+      W.col(i) = WrenchColumn<Jet5>(r_F_anchor, s);
+    }
+    r.tail<3>() = (W * t + GravityWrench<Jet5>(robot, R)) / weight_N;
     Vector5d value;
     for (int k = 0; k < 5; ++k) {
       value(k) = r(k).a;

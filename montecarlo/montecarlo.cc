@@ -235,8 +235,11 @@ std::vector<PlanPose> MakeDesignedSet(const Robot& nominal, const MonteCarloOpti
   }
 }
 
-ShareResult RunShare(const Robot& nominal, const MonteCarloOptions& o, const DesignedSets& designed,
+ShareResult RunShare(const Robot& robot, const MonteCarloOptions& o, const DesignedSets& designed,
                      const StudyShare& share) {
+  // The nominal initial lengths (the home equilibrium) once, not in every trial's sampling and
+  // identification: the same numbers, set in the robot.
+  const Robot nominal = WithGeometry(robot, GeometryOf(robot));
   const long total = StudyItems(o);
   std::vector<long> items;
   items.reserve(ItemsOwned(share, total));

@@ -33,6 +33,7 @@
 #include "identify/calibration_report.h"
 #include "identify/experiment.h"
 #include "identify/identify.h"
+#include "identify/validate.h"
 #include "model/robot.h"
 #include "model/statics.h"
 #include "montecarlo/montecarlo.h"
@@ -870,6 +871,75 @@ PYBIND11_MODULE(cablecal, m) {
       "and data files; the folder is created if new, its parent must exist) and returns report.md's path. holdout: "
       "held-out Measurements, validated with the calibrated and the nominal robot. The figures are drawn with this "
       "interpreter's matplotlib; if they cannot be, the rest is written and FigureError raised.");
+
+  // ---- validate
+  py::class_<ValidationResult>(m, "Validation",
+                               "Each robot's predictions of held-out poses against the readings (cablecal validate).")
+      .def_property_readonly("pose_ids", [](const ValidationResult& r) { return r.pose_ids; }, "one per reading")
+      .def_property_readonly("z_measured", [](const ValidationResult& r) -> py::object {
+        if (!r.has_laser) return py::none();
+        return Vector(Eigen::Map<const Eigen::VectorXd>(r.z_measured_m.data(), r.z_measured_m.size()));
+      }, "(n,), m; None without a laser")
+      .def_property_readonly("theta_measured", [](const ValidationResult& r) -> py::object {
+        if (!r.has_inclinometer) return py::none();
+        return Vector(Eigen::Map<const Eigen::VectorXd>(r.theta_measured_rad.data(), r.theta_measured_rad.size()));
+      }, "(n,), rad; None without an inclinometer")
+      .def_property_readonly("robots", [](const ValidationResult& r) {
+        const auto errors = [](const std::vector<double>& e, bool measured) -> py::object {
+          if (!measured) return py::none();
+          return Vector(Eigen::Map<const Eigen::VectorXd>(e.data(), e.size()));
+        };
+        py::dict d;
+        for (const RobotPrediction& p : r.robots) {
+          Eigen::MatrixXd q(p.q.size(), 3);
+          for (std::size_t j = 0; j < p.q.size(); ++j) q.row(j) = p.q[j].transpose();
+          py::dict e;
+          e["robot"] = p.robot;
+          e["poses"] = Array(q);
+          e["z_error"] = errors(p.z_error_m, r.has_laser);
+          e["theta_error"] = errors(p.theta_error_rad, r.has_inclinometer);
+          e["z_rms"] = p.z_m ? py::object(py::float_(p.z_m->rms)) : py::none();
+          e["z_max_abs"] = p.z_m ? py::object(py::float_(p.z_m->max_abs)) : py::none();
+          e["theta_rms"] = p.theta_rad ? py::object(py::float_(p.theta_rad->rms)) : py::none();
+          e["theta_max_abs"] = p.theta_rad ? py::object(py::float_(p.theta_rad->max_abs)) : py::none();
+          d[py::str(p.name)] = e;
+        }
+        return d;
+      }, "'calibrated' (and 'nominal'): poses (n, 3) predicted x, z, theta; z_error, theta_error (n,) = predicted - "
+         "measured; z_rms, z_max_abs (m), theta_rms, theta_max_abs (rad); None for a sensor the data lack")
+      .def_property_readonly("ratio", [](const ValidationResult& r) -> py::object {
+        if (r.robots.size() < 2) return py::none();
+        py::dict d;
+        d["z_rms"] = r.has_laser ? py::object(py::float_(ZRmsRatio(r))) : py::none();
+        d["theta_rms"] = r.has_inclinometer ? py::object(py::float_(ThetaRmsRatio(r))) : py::none();
+        return d;
+      }, "nominal / calibrated RMS errors (> 1: the calibration helped); None without a nominal robot")
+      .def_property_readonly("not_compared", [](const ValidationResult& r) { return NotCompared(r); },
+                             "what the data lack, e.g. \"no 'theta' column (inclinometer)\"; empty when both compared")
+      .def("to_csv", [](const ValidationResult& r) { return ValidationCsv(r, ""); },
+           "The CLI's per-reading CSV (no provenance lines).")
+      .def("to_yaml", [](const ValidationResult& r) { return ValidationSummaryYaml(r, CallText("validate")); },
+           "The CLI's summary YAML (the command line reads python: cablecal.validate).");
+  m.def(
+      "validate",
+      [](py::handle robot_arg, py::handle measurements_arg, py::handle nominal_arg) {
+        const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
+        const PyMeasurements& measurements = AsObject<PyMeasurements>(measurements_arg, "measurements", "Measurements");
+        if (measurements.num_cables != robot.num_cables()) Bad("measurements", "read for a robot with another number of cables");
+        std::optional<Robot> nominal;
+        if (!nominal_arg.is_none()) nominal = AsObject<Robot>(nominal_arg, "nominal", "Robot");
+        const std::vector<Measurement> readings = CorrectedReadings(robot, measurements.readings, "measurements");
+        ValidationResult r;
+        {
+          py::gil_scoped_release release;
+          r = Validate(robot, nominal, readings, "measurements");
+        }
+        if (robot.sensors.systematic.any()) r.corrected_for = robot.sensors.systematic;
+        return r;
+      },
+      py::arg("robot"), py::arg("measurements"), py::arg("nominal") = py::none(),
+      "Predicts every measured pose with `robot` (and `nominal`) and compares z and theta with the readings "
+      "(cablecal validate); InputError when a robot cannot hold a pose's lengths.");
 
   // ---- sensors fit
   py::class_<PySensorsFit>(m, "SensorsFit", "Sensor error models fitted from bench readings (cablecal sensors fit).")

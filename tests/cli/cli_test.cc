@@ -813,7 +813,7 @@ TEST_F(Cli, MisspeltCommandsVersionQuietAndJson) {
   const RunResult nonsense = RunCablecal("frobnicate");
   EXPECT_EQ(nonsense.exit_code, 2);
   EXPECT_EQ(nonsense.output.find("did you mean"), std::string::npos) << nonsense.output;
-  for (const char* command : {"workspace", "sample", "simulate", "identify", "design", "montecarlo", "reproduce"}) {
+  for (const char* command : {"workspace", "sample", "simulate", "identify", "validate", "design", "montecarlo", "reproduce"}) {
     const RunResult v = RunCablecal(std::string(command) + " --version");
     EXPECT_EQ(v.exit_code, 0) << command;
     EXPECT_EQ(v.output.rfind("cablecal ", 0), 0u) << command << ": " << v.output;
@@ -924,6 +924,140 @@ TEST_F(Cli, MeasurementsAreReadByColumnName) {
   EXPECT_EQ(comma.exit_code, 2);
   EXPECT_NE(comma.output.find("another separator?"), std::string::npos) << comma.output;
   EXPECT_FALSE(fs::exists(Path("c.yaml")));
+}
+
+// validate: identified on one experiment, validated on another of the same true robot with
+// the nominal robot beside it; the per-pose CSV, the summary YAML, the console and --json
+// agree, and the calibration wins on z by more than 3 times.
+TEST_F(Cli, ValidateComparesCalibratedAndNominalOnHeldOutPoses) {
+  const std::string nominal = CABLECAL_SOURCE_DIR "/robots/asymmetric.yaml";
+  const auto run = [](const std::string& args) {
+    const RunResult r = RunCablecal(args);
+    EXPECT_EQ(r.exit_code, 0) << args << "\n" << r.output;
+    return r;
+  };
+  run("sample --robot " + nominal + " --poses 16 --seed 2 --out " + Path("plan_a.csv"));
+  run("sample --robot " + nominal + " --poses 16 --seed 3 --out " + Path("plan_b.csv"));
+  run("simulate --robot " + nominal + " --plan " + Path("plan_a.csv") + " --geometry-sigma 0.015 --seed 5 --out " +
+      Path("a.csv") + " --truth-out " + Path("truth.yaml"));
+  run("simulate --robot " + nominal + " --plan " + Path("plan_b.csv") + " --truth " + Path("truth.yaml") +
+      " --seed 6 --out " + Path("b.csv"));
+  run("identify --robot " + nominal + " --measurements " + Path("a.csv") + " --out " + Path("r.yaml") +
+      " --calibrated-robot " + Path("cal.yaml"));
+  const std::string args = "validate --robot " + Path("cal.yaml") + " --nominal " + nominal + " --measurements " +
+                           Path("b.csv");
+  const RunResult r = run(args + " --out " + Path("v.csv") + " --summary " + Path("v.yaml"));
+  const std::string csv = Read("v.csv");
+  EXPECT_EQ(csv.rfind("# cablecal ", 0), 0u) << csv;
+  EXPECT_NE(csv.find("\npose,z_measured_m,theta_measured_rad,x_calibrated_m,z_calibrated_m,theta_calibrated_rad,"
+                     "z_error_calibrated_m,theta_error_calibrated_rad,x_nominal_m,z_nominal_m,theta_nominal_rad,"
+                     "z_error_nominal_m,theta_error_nominal_rad\n1,"),
+            std::string::npos)
+      << csv;
+  const YAML::Node summary = YAML::LoadFile(Path("v.yaml"));
+  EXPECT_EQ(summary["poses"].as<int>(), 16);
+  EXPECT_NE(summary["command"].as<std::string>().find("validate --robot"), std::string::npos);
+  EXPECT_GE(summary["nominal_over_calibrated"]["z_rms"].as<double>(), 3.0) << r.output;
+  EXPECT_EQ(summary["calibrated"]["file"].as<std::string>(), Path("cal.yaml"));
+  EXPECT_NE(r.output.find("validated on 16 poses of " + Path("b.csv")), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("  calibrated z rms "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("  nominal / calibrated rms: z "), std::string::npos) << r.output;
+  // --json: the summary's content and the CSV's rows, without --out.
+  const RunResult json = run(args + " --json");
+  const YAML::Node j = YAML::Load(json.output);
+  ASSERT_EQ(j["rows"].size(), 16u) << json.output;
+  EXPECT_EQ(j["nominal_over_calibrated"]["z_rms"].as<double>(), summary["nominal_over_calibrated"]["z_rms"].as<double>());
+  EXPECT_EQ(j["calibrated"]["z"]["max_abs_m"].as<double>(), summary["calibrated"]["z"]["max_abs_m"].as<double>());
+  EXPECT_EQ(j["rows"][15]["pose"].as<int>(), 16);
+  EXPECT_TRUE(j["rows"][0]["theta_error_nominal_rad"].IsScalar());
+  // Without the nominal robot: the calibrated columns only.
+  run("validate --robot " + Path("cal.yaml") + " --measurements " + Path("b.csv") + " --out " + Path("v2.csv") + " -q");
+  EXPECT_EQ(Read("v2.csv").find("nominal"), std::string::npos);
+  // A lab without an inclinometer: the theta comparison is left out, and said so.
+  std::ifstream in(Path("b.csv"));
+  std::ofstream out(Path("no_theta.csv"));
+  for (std::string line; std::getline(in, line);) {
+    out << (line[0] == '#' ? line : line.substr(0, line.rfind(','))) << "\n";
+  }
+  out.close();
+  const RunResult z_only = run("validate --robot " + Path("cal.yaml") + " --nominal " + nominal + " --measurements " +
+                               Path("no_theta.csv") + " --out " + Path("v3.csv") + " --summary " + Path("v3.yaml"));
+  EXPECT_NE(Read("v3.csv").find("\npose,z_measured_m,x_calibrated_m,z_calibrated_m,theta_calibrated_rad,"
+                                "z_error_calibrated_m,x_nominal_m,"),
+            std::string::npos)
+      << Read("v3.csv");
+  EXPECT_EQ(Read("v3.csv").find("theta_error"), std::string::npos);
+  EXPECT_NE(z_only.output.find("  not compared: no 'theta' column (inclinometer)\n"), std::string::npos) << z_only.output;
+  EXPECT_NE(z_only.output.find("nominal / calibrated rms: z "), std::string::npos) << z_only.output;
+  const YAML::Node z_summary = YAML::LoadFile(Path("v3.yaml"));
+  EXPECT_EQ(z_summary["not_compared"].as<std::string>(), "no 'theta' column (inclinometer)");
+  EXPECT_NEAR(z_summary["calibrated"]["z"]["rms_m"].as<double>(), summary["calibrated"]["z"]["rms_m"].as<double>(), 1e-12);
+}
+
+// A robot file with systematic sensor errors: validate compares the predictions with the
+// readings corrected for them, as identify fits them, and says so; a file without them leaves
+// the laser's offset in every z error.
+TEST_F(Cli, ValidateCorrectsTheReadingsForTheRobotFilesSystematicErrors) {
+  WriteRobot("sys.yaml", "laser: {accuracy: 0.006, repeatability: 0.0015}",
+             "laser: {accuracy: 0.006, repeatability: 0.0015, offset: 0.03}");
+  ASSERT_EQ(RunCablecal("sample --poses 12 --seed 4 --out " + Path("plan.csv")).exit_code, 0);
+  const RunResult sim = RunCablecal("simulate --robot " + Path("sys.yaml") + " --plan " + Path("plan.csv") +
+                                    " --systematic-errors --seed 5 --out " + Path("m.csv"));
+  ASSERT_EQ(sim.exit_code, 0) << sim.output;
+  const RunResult corrected = RunCablecal("validate --robot " + Path("sys.yaml") + " --measurements " + Path("m.csv") +
+                                          " --summary " + Path("c.yaml") + " --out " + Path("c.csv"));
+  ASSERT_EQ(corrected.exit_code, 0) << corrected.output;
+  EXPECT_NE(corrected.output.find("readings corrected for the robot file's systematic sensor errors: laser offset 0.03"),
+            std::string::npos)
+      << corrected.output;
+  const YAML::Node c = YAML::LoadFile(Path("c.yaml"));
+  EXPECT_EQ(c["sensor_correction"]["laser_offset_m"].as<double>(), 0.03);
+  EXPECT_LT(c["calibrated"]["z"]["rms_m"].as<double>(), 0.005);  // the laser's noise, 2 mm
+  const RunResult raw = RunCablecal("validate --robot " CABLECAL_SOURCE_DIR "/robots/wang2022.yaml --measurements " +
+                                    Path("m.csv") + " --summary " + Path("r.yaml") + " --out " + Path("r.csv"));
+  ASSERT_EQ(raw.exit_code, 0) << raw.output;
+  EXPECT_EQ(raw.output.find("corrected"), std::string::npos) << raw.output;
+  const YAML::Node r = YAML::LoadFile(Path("r.yaml"));
+  EXPECT_FALSE(r["sensor_correction"]);
+  EXPECT_GT(r["calibrated"]["z"]["rms_m"].as<double>(), 0.025);
+}
+
+// What validate cannot compare is exit 2 naming file, line and (where one is to blame) column,
+// and nothing is written.
+TEST_F(Cli, ValidateRefusesWhatItCannotCompareAndWritesNothing) {
+  ASSERT_EQ(RunCablecal("sample --poses 4 --seed 1 --out " + Path("plan.csv")).exit_code, 0);
+  ASSERT_EQ(RunCablecal("simulate --plan " + Path("plan.csv") + " --seed 2 --out " + Path("meas.csv")).exit_code, 0);
+  const std::string meas = Read("meas.csv");  // 2 provenance lines, the header, 4 rows
+  const auto write = [&](const std::string& name, const std::string& text) { std::ofstream(Path(name)) << text; };
+  write("slack.csv", meas + "9,3,0,1.4,0\n");
+  write("nan.csv", meas + "9,0,0,nan,0\n");
+  write("three.csv", "pose,dl1,dl2,dl3,z,theta\n1,0,0,0,1.4,0\n");
+  write("neither.csv", "pose,dl1,dl2\n1,0,0\n");
+  const std::string builtin = " --robot " CABLECAL_SOURCE_DIR "/robots/wang2022.yaml";
+  const std::string planar3 = CABLECAL_SOURCE_DIR "/robots/planar3_suspended.yaml";
+  const std::string outputs = " --out " + Path("v.csv") + " --summary " + Path("v.yaml");
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"--measurements " + Path("slack.csv") + builtin + outputs,
+       "slack.csv:8: the calibrated robot (" CABLECAL_SOURCE_DIR "/robots/wang2022.yaml) holds these lengths only at ("},
+      {"--measurements " + Path("slack.csv") + builtin + " --nominal " + planar3 + outputs,
+       "planar3_suspended.yaml: the nominal robot has 3 cables, the calibrated robot 2"},
+      {"--measurements " + Path("nan.csv") + builtin + outputs, "nan.csv:8: column 'z': must be a finite number"},
+      {"--measurements " + Path("three.csv") + builtin + outputs, "the file has columns for 3 cables, the robot has 2"},
+      {"--measurements " + Path("neither.csv") + builtin + outputs,
+       "neither.csv: nothing to compare the predictions with: the data have no 'z' column (laser) and no 'theta' column"},
+      {"--measurements " + Path("meas.csv") + builtin + " --summary " + Path("v.yaml"), "--out: required"},
+      {"--measurements " + Path("meas.csv") + outputs, "--robot is required"},
+      {"--measurements " + Path("meas.csv") + builtin + " --out " + Path("meas.csv"), "--out"},
+      {"--measurements " + Path("meas.csv") + builtin + outputs + " --delimiter '|'", "--delimiter"},
+  };
+  for (const auto& [args, message] : cases) {
+    const RunResult r = RunCablecal("validate " + args);
+    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
+    EXPECT_NE(r.output.find(message), std::string::npos) << "expected: " << message << "\ngot: " << r.output;
+    EXPECT_FALSE(fs::exists(Path("v.csv"))) << args;
+    EXPECT_FALSE(fs::exists(Path("v.yaml"))) << args;
+  }
+  EXPECT_EQ(Read("meas.csv"), meas);
 }
 
 // ---- sensors fit, simulate --systematic-errors, identify's correction ---------------------

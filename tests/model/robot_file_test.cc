@@ -11,6 +11,7 @@
 #include "model/robot.h"
 #include "model/statics.h"
 #include "tests/support/temp_dir.h"
+#include "tests/support/load_error.h"
 
 namespace cablecal {
 namespace {
@@ -22,15 +23,7 @@ std::string Replace(std::string text, const std::string& from, const std::string
   return text;
 }
 
-// Loads `yaml` and returns the InputError message ("" if it loaded).
-std::string LoadError(const std::string& yaml) {
-  try {
-    LoadRobotFromString(yaml, "bad.yaml");
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
+using testing::LoadError;
 
 TEST(RobotFile, BuiltinRobotHasTheDocumentedValues) {
   const Robot& r = BuiltinRobot();

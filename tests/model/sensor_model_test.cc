@@ -9,6 +9,7 @@
 #include "common/error.h"
 #include "model/robot.h"
 #include "model/sensor_model.h"
+#include "tests/support/load_error.h"
 
 namespace cablecal {
 namespace {
@@ -91,14 +92,7 @@ std::string WithSensors(const std::string& laser, const std::string& inclinomete
   return text;
 }
 
-std::string LoadError(const std::string& yaml) {
-  try {
-    LoadRobotFromString(yaml, "bad.yaml");
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
-}
+using testing::LoadError;
 
 TEST(SensorModelRobotFile, OptionalKeysReadWriteAndDefaultToZero) {
   EXPECT_FALSE(BuiltinRobot().sensors.systematic.any());

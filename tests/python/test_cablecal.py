@@ -243,6 +243,98 @@ def test_a_labs_log_is_read_by_column_name(tmp_path):
         cablecal.Measurements.load(robot, log)
 
 
+def test_validate_equals_cli_and_the_calibration_wins(tmp_path):
+    """Identified on one experiment, validated on another of the same true robot: the module's
+    CSV and summary are the CLI's, and the calibrated robot predicts z better than the nominal."""
+    path = robot_file("asymmetric")
+    robot = cablecal.Robot.load(path)
+    first = cablecal.simulate(robot, cablecal.sample(robot, 14, seed=2), geometry_sigma=0.015, seed=5)
+    truth = first.truth
+    holdout = cablecal.simulate(robot, cablecal.sample(robot, 12, seed=3), truth=truth, seed=6).measurements
+    calibrated = cablecal.calibrated_robot(robot, cablecal.identify(robot, first.measurements))
+    v = cablecal.validate(calibrated, holdout, nominal=robot)
+    assert set(v.robots) == {"calibrated", "nominal"}
+    cal, nom = v.robots["calibrated"], v.robots["nominal"]
+    assert cal["poses"].shape == (12, 3)
+    np.testing.assert_array_equal(cal["z_error"], cal["poses"][:, 1] - v.z_measured)
+    np.testing.assert_array_equal(nom["theta_error"], nom["poses"][:, 2] - v.theta_measured)
+    assert v.pose_ids == holdout.pose_ids
+    assert np.isclose(cal["z_rms"], np.sqrt(np.mean(cal["z_error"] ** 2)), rtol=1e-12)
+    assert v.ratio["z_rms"] == nom["z_rms"] / cal["z_rms"]
+    assert v.ratio["z_rms"] >= 3.0, v.ratio
+
+    # The CLI on the same files.
+    cal_yaml, meas_csv = tmp_path / "cal.yaml", tmp_path / "holdout.csv"
+    cal_yaml.write_text(calibrated.to_yaml())
+    meas_csv.write_text(holdout.to_csv())
+    out, summary = tmp_path / "v.csv", tmp_path / "v.yaml"
+    cli("validate", "--robot", str(cal_yaml), "--nominal", path, "--measurements", str(meas_csv),
+        "--out", str(out), "--summary", str(summary))
+    assert v.to_csv() == data_lines(out)
+    # The robot files' names differ: the module's calibrated robot was not loaded from cal.yaml.
+    ours = [l for l in yaml_without_provenance(v.to_yaml()) if "file:" not in l]
+    theirs = [l for l in yaml_without_provenance(summary.read_text()) if "file:" not in l]
+    assert ours == theirs
+
+    alone = cablecal.validate(truth, holdout)
+    assert alone.ratio is None and set(alone.robots) == {"calibrated"}
+
+
+def test_validate_without_an_inclinometer_equals_cli(tmp_path):
+    path = robot_file("planar3_suspended")
+    robot = cablecal.Robot.load(path)
+    m = cablecal.simulate(robot, cablecal.sample(robot, 8, seed=3), seed=4).measurements
+    no_theta = cablecal.Measurements(robot, m.dl, m.z, None, pose_ids=m.pose_ids)
+    v = cablecal.validate(robot, no_theta, nominal=robot)
+    assert v.theta_measured is None and v.not_compared == "no 'theta' column (inclinometer)"
+    cal = v.robots["calibrated"]
+    assert cal["theta_error"] is None and cal["theta_rms"] is None and cal["theta_max_abs"] is None
+    assert cal["z_rms"] < 0.02 and cal["poses"].shape == (8, 3)
+    assert v.ratio == {"z_rms": 1.0, "theta_rms": None}  # the same robot twice
+    csv, out = tmp_path / "m.csv", tmp_path / "v.csv"
+    csv.write_text(no_theta.to_csv())
+    cli("validate", "--robot", path, "--nominal", path, "--measurements", str(csv), "--out", str(out))
+    assert v.to_csv() == data_lines(out)
+    assert "theta_measured_rad" not in v.to_csv()
+    with pytest.raises(cablecal.InputError, match="nothing to compare the predictions with"):
+        cablecal.validate(robot, cablecal.Measurements(robot, m.dl, None, None))
+
+
+def test_validate_corrects_for_systematic_errors_as_the_cli(tmp_path):
+    d = cablecal.Robot.load(robot_file("asymmetric")).to_dict()
+    d["sensors"]["laser"]["offset"] = 0.03
+    robot = cablecal.Robot.from_dict(d)
+    m = cablecal.simulate(robot, cablecal.sample(robot, 10, seed=6), seed=7, systematic_errors=True).measurements
+    v = cablecal.validate(robot, m)
+    assert v.robots["calibrated"]["z_rms"] < 0.005  # the laser's noise: the 30 mm offset corrected
+    path, csv, summary = tmp_path / "robot.yaml", tmp_path / "m.csv", tmp_path / "v.yaml"
+    path.write_text(robot.to_yaml())
+    csv.write_text(m.to_csv())
+    cli("validate", "--robot", str(path), "--measurements", str(csv), "--summary", str(summary), "--out",
+        str(tmp_path / "v.csv"))
+    ours = [l for l in yaml_without_provenance(v.to_yaml()) if "file:" not in l]
+    assert ours == [l for l in yaml_without_provenance(summary.read_text()) if "file:" not in l]
+    assert any(l.startswith("sensor_correction:") for l in ours)
+
+
+def test_validate_refuses_what_it_cannot_compare():
+    r2 = cablecal.Robot.load(robot_file("asymmetric"))
+    r3 = cablecal.Robot.load(robot_file("planar3_suspended"))
+    m2 = cablecal.simulate(r2, cablecal.sample(r2, 4, seed=1), seed=2).measurements
+    m3 = cablecal.simulate(r3, cablecal.sample(r3, 4, seed=1), seed=2).measurements
+    slack = cablecal.Measurements(r2, np.vstack([m2.dl, [3.0, 0.0]]), np.append(m2.z, 1.2), np.append(m2.theta, 0.0))
+    for call, message in [
+        (lambda: cablecal.validate(r2, slack), "measurements: pose 5: the calibrated robot .* cannot hold"),
+        (lambda: cablecal.validate(r2, m3), "another number of cables"),
+        (lambda: cablecal.validate(r2, m2, nominal=r3), "the nominal robot has 3 cables"),
+        (lambda: cablecal.validate(r2, m2, nominal=robot_file("asymmetric")), "expected a cablecal.Robot"),
+        (lambda: cablecal.validate(r2.to_dict(), m2), "expected a cablecal.Robot"),
+        (lambda: cablecal.validate(r2, m2.dl), "expected a cablecal.Measurements"),
+    ]:
+        with pytest.raises(cablecal.InputError, match=message):
+            call()
+
+
 def test_repeated_readings_and_a_missing_inclinometer(tmp_path):
     robot = cablecal.Robot.load(robot_file("planar4_fully_constrained"))
     plan = cablecal.sample(robot, 12, seed=4)

@@ -1,0 +1,250 @@
+#include "identify/validate.h"
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <set>
+
+#include "common/error.h"
+#include "common/format.h"
+#include "common/version.h"
+#include "common/yaml_writer.h"
+#include "identify/identify.h"
+#include "model/statics.h"
+
+namespace cablecal {
+namespace {
+
+std::string Where(const Measurement& m, const std::string& source) {
+  return m.where.empty() ? source + ": pose " + std::to_string(m.pose_id) : m.where;
+}
+
+// A message's length in m (angle in rad) to the millimetre (milliradian): what a reader compares.
+std::string Millimetres(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3f", value);
+  return text;
+}
+
+// "the nominal robot (robots/x.yaml)": which model failed, for messages.
+std::string RobotLabel(const std::string& role, const Robot& robot) { return "the " + role + " robot (" + robot.source + ")"; }
+
+// Where `robot` holds the reading's lengths l_i0 + dl_i. The start is the pose the sensors saw
+// (StartingPose: the measured z and theta, with the x that best explains the encoders there).
+// The platform was within millimetres of it (a centimetre or two for an uncalibrated model),
+// so Newton lands on the equilibrium the lab's platform was in, not on another one a cold
+// start from home could reach; and a solution far from the readings means they are not this
+// robot's.
+Eigen::Vector3d PredictPose(const Robot& robot, const std::string& role, const GeometryVector& geometry,
+                            const Measurement& m, const std::string& source) {
+  const int cables = robot.num_cables();
+  const Eigen::Vector3d start = StartingPose(robot, geometry, m);
+  const Eigen::VectorXd lengths = geometry.tail(cables) + m.dl_m;  // l_i0 + dl_i
+  const ForwardResult fwd = SolveForwardGeometricoStatic(robot, lengths, &start);
+  const std::string where = Where(m, source);
+  const std::string hint = ": readings of another robot, or a pose outside its workspace?";
+  if (fwd.status != ForwardStatus::kConverged) {
+    throw InputError(where, "", RobotLabel(role, robot) + " cannot hold these lengths, its initial lengths + dl (" +
+                                    CannotHoldReason(fwd.status, "where the sensors saw the platform") + ")" + hint);
+  }
+  // With 2 cables the forward model falls back on cold starts and keeps any stable
+  // equilibrium: the bounds 3 or more cables get (kOtherAssembly) keep it honest. Only what
+  // was measured is compared: a missing reading's start came from the model itself.
+  const Eigen::Vector3d& q = fwd.equilibrium.q;
+  const double dz_m = q(1) - m.z_m, dtheta_rad = q(2) - m.theta_rad;
+  if ((m.has_laser && std::abs(dz_m) > kOtherAssemblyDistance_m) ||
+      (m.has_inclinometer && std::abs(dtheta_rad) > kOtherAssemblyAngle_rad)) {
+    std::string off = "(" + Millimetres(q(0)) + ", " + Millimetres(q(1)) + ") m, " + Millimetres(q(2)) + " rad:";
+    if (m.has_laser) off += " " + Millimetres(std::abs(dz_m)) + " m from the laser's z";
+    if (m.has_inclinometer) {
+      off += std::string(m.has_laser ? " and " : " ") + Millimetres(std::abs(dtheta_rad)) + " rad from the inclinometer's theta";
+    }
+    throw InputError(where, "", RobotLabel(role, robot) + " holds these lengths only at " + off + hint);
+  }
+  return q;
+}
+
+ErrorSummary Stats(const std::vector<double>& errors) {
+  ErrorSummary s;
+  double sum2 = 0.0;
+  for (const double e : errors) {
+    sum2 += e * e;
+    s.max_abs = std::max(s.max_abs, std::abs(e));
+  }
+  s.rms = errors.empty() ? 0.0 : std::sqrt(sum2 / errors.size());
+  return s;
+}
+
+RobotPrediction Predict(const Robot& robot, const std::string& role, const std::vector<Measurement>& measurements,
+                        const std::string& source) {
+  RobotPrediction p;
+  p.name = role;
+  p.robot = robot.name;
+  p.source = robot.source;
+  const GeometryVector geometry = GeometryOf(robot);
+  for (const Measurement& m : measurements) {
+    const Eigen::Vector3d q = PredictPose(robot, role, geometry, m, source);
+    p.q.push_back(q);
+    if (m.has_laser) p.z_error_m.push_back(q(1) - m.z_m);
+    if (m.has_inclinometer) p.theta_error_rad.push_back(q(2) - m.theta_rad);
+  }
+  if (measurements.front().has_laser) p.z_m = Stats(p.z_error_m);
+  if (measurements.front().has_inclinometer) p.theta_rad = Stats(p.theta_error_rad);
+  return p;
+}
+
+double Ratio(const ValidationResult& r, std::optional<ErrorSummary> RobotPrediction::*stats) {
+  if (r.robots.size() < 2 || !(r.robots[0].*stats)) return std::numeric_limits<double>::quiet_NaN();
+  return (r.robots[1].*stats)->rms / (r.robots[0].*stats)->rms;
+}
+
+// The CSV's columns, in order, and each row's values: one place for the CSV and the JSON.
+std::vector<std::string> Columns(const ValidationResult& r) {
+  std::vector<std::string> c = {"pose"};
+  if (r.has_laser) c.push_back("z_measured_m");
+  if (r.has_inclinometer) c.push_back("theta_measured_rad");
+  for (const RobotPrediction& p : r.robots) {
+    c.insert(c.end(), {"x_" + p.name + "_m", "z_" + p.name + "_m", "theta_" + p.name + "_rad"});
+    if (r.has_laser) c.push_back("z_error_" + p.name + "_m");
+    if (r.has_inclinometer) c.push_back("theta_error_" + p.name + "_rad");
+  }
+  return c;
+}
+std::vector<double> Row(const ValidationResult& r, std::size_t j) {
+  std::vector<double> v;
+  if (r.has_laser) v.push_back(r.z_measured_m[j]);
+  if (r.has_inclinometer) v.push_back(r.theta_measured_rad[j]);
+  for (const RobotPrediction& p : r.robots) {
+    v.insert(v.end(), {p.q[j](0), p.q[j](1), p.q[j](2)});
+    if (r.has_laser) v.push_back(p.z_error_m[j]);
+    if (r.has_inclinometer) v.push_back(p.theta_error_rad[j]);
+  }
+  return v;
+}
+
+void EmitStats(YAML::Emitter& o, const char* key, const char* unit, const std::optional<ErrorSummary>& s) {
+  if (!s) return;
+  o << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << std::string("rms_") + unit
+    << YAML::Value << YamlNumber{s->rms} << YAML::Key << std::string("max_abs_") + unit << YAML::Value
+    << YamlNumber{s->max_abs} << YAML::EndMap;
+}
+
+}  // namespace
+
+ValidationResult Validate(const Robot& calibrated, const std::optional<Robot>& nominal,
+                          const std::vector<Measurement>& measurements, const std::string& source) {
+  if (measurements.empty()) throw InputError(source, "", "no readings to validate on");
+  const int m = calibrated.num_cables();
+  if (nominal && nominal->num_cables() != m) {
+    throw InputError(nominal->source, "", "the nominal robot has " + std::to_string(nominal->num_cables()) +
+                                              " cables, the calibrated robot " + std::to_string(m) +
+                                              ": a file for another robot?");
+  }
+  ValidationResult result;
+  result.has_laser = measurements.front().has_laser;
+  result.has_inclinometer = measurements.front().has_inclinometer;
+  for (const Measurement& r : measurements) {
+    if (r.dl_m.size() != m) {
+      throw InputError(Where(r, source), "", std::to_string(r.dl_m.size()) + " encoder readings for a robot with " +
+                                                 std::to_string(m) + " cables");
+    }
+    if (r.has_laser != result.has_laser || r.has_inclinometer != result.has_inclinometer) {
+      throw InputError(Where(r, source), "", "a laser or inclinometer reading here but not in the first reading, or "
+                                             "the other way round: one set of readings has one set of sensors");
+    }
+  }
+  if (!result.has_laser && !result.has_inclinometer) {
+    throw InputError(source, "", "nothing to compare the predictions with: the data have " +
+                                     MissingSensorsText({"laser", "inclinometer"}) +
+                                     " (validate compares the predicted z and theta with those readings)");
+  }
+  for (const Measurement& r : measurements) {
+    result.pose_ids.push_back(r.pose_id);
+    if (r.has_laser) result.z_measured_m.push_back(r.z_m);
+    if (r.has_inclinometer) result.theta_measured_rad.push_back(r.theta_rad);
+  }
+  result.num_poses = static_cast<int>(std::set<int>(result.pose_ids.begin(), result.pose_ids.end()).size());
+  result.robots.push_back(Predict(calibrated, "calibrated", measurements, source));
+  if (nominal) result.robots.push_back(Predict(*nominal, "nominal", measurements, source));
+  result.laser_sigma_m = calibrated.sensors.laser_sigma_m();
+  result.inclinometer_sigma_rad = calibrated.sensors.inclinometer_sigma_rad();
+  return result;
+}
+
+double ZRmsRatio(const ValidationResult& result) { return Ratio(result, &RobotPrediction::z_m); }
+double ThetaRmsRatio(const ValidationResult& result) { return Ratio(result, &RobotPrediction::theta_rad); }
+
+std::string NotCompared(const ValidationResult& result) {
+  std::vector<std::string> missing;
+  if (!result.has_laser) missing.push_back("laser");
+  if (!result.has_inclinometer) missing.push_back("inclinometer");
+  return MissingSensorsText(missing);
+}
+
+std::string ValidationCsv(const ValidationResult& result, const std::string& provenance) {
+  std::string out = provenance;
+  const std::vector<std::string> columns = Columns(result);
+  for (std::size_t k = 0; k < columns.size(); ++k) out += (k ? "," : "") + columns[k];
+  out += "\n";
+  for (std::size_t j = 0; j < result.pose_ids.size(); ++j) {
+    out += std::to_string(result.pose_ids[j]);
+    for (const double v : Row(result, j)) out += "," + FormatDouble(v);
+    out += "\n";
+  }
+  return out;
+}
+
+std::string ValidationRowsYaml(const ValidationResult& result) {
+  const std::vector<std::string> columns = Columns(result);
+  YAML::Emitter o;
+  o << YAML::BeginSeq;
+  for (std::size_t j = 0; j < result.pose_ids.size(); ++j) {
+    o << YAML::Flow << YAML::BeginMap << YAML::Key << columns[0] << YAML::Value << result.pose_ids[j];
+    const std::vector<double> row = Row(result, j);
+    for (std::size_t k = 0; k < row.size(); ++k) o << YAML::Key << columns[k + 1] << YAML::Value << YamlNumber{row[k]};
+    o << YAML::EndMap;
+  }
+  o << YAML::EndSeq;
+  return YamlText(o);
+}
+
+std::string ValidationSummaryYaml(const ValidationResult& result, const std::string& command_line) {
+  YAML::Emitter o;
+  o << YAML::Comment("cablecal validation summary (README, \"Validation\"). SI units: m, rad. error = predicted - measured")
+    << YAML::BeginMap;
+  o << YAML::Key << "cablecal" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "version" << YAML::Value
+    << YamlString{Version()} << YAML::Key << "commit" << YAML::Value << YamlString{GitCommit()} << YAML::EndMap;
+  o << YAML::Key << "command" << YAML::Value << YamlString{command_line};
+  o << YAML::Key << "readings" << YAML::Value << result.pose_ids.size();
+  o << YAML::Key << "poses" << YAML::Value << result.num_poses;
+  o << YAML::Key << "compared" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+  if (result.has_laser) o << "z";
+  if (result.has_inclinometer) o << "theta";
+  o << YAML::EndSeq;
+  if (!NotCompared(result).empty()) o << YAML::Key << "not_compared" << YAML::Value << YamlString{NotCompared(result)};
+  o << YAML::Key << "sensor_noise" << YAML::Value << YAML::Flow << YAML::BeginMap;
+  if (result.has_laser) o << YAML::Key << "laser_sigma_m" << YAML::Value << YamlNumber{result.laser_sigma_m};
+  if (result.has_inclinometer) {
+    o << YAML::Key << "inclinometer_sigma_rad" << YAML::Value << YamlNumber{result.inclinometer_sigma_rad};
+  }
+  o << YAML::EndMap << YAML::Comment("the RMS errors a perfect model would show");
+  if (result.corrected_for) EmitSensorCorrection(o, *result.corrected_for, "before the comparison");
+  for (const RobotPrediction& p : result.robots) {
+    o << YAML::Key << p.name << YAML::Value << YAML::BeginMap;
+    o << YAML::Key << "robot" << YAML::Value << YamlString{p.robot};
+    o << YAML::Key << "file" << YAML::Value << YamlString{p.source};
+    EmitStats(o, "z", "m", p.z_m);
+    EmitStats(o, "theta", "rad", p.theta_rad);
+    o << YAML::EndMap;
+  }
+  if (result.robots.size() > 1) {
+    o << YAML::Key << "nominal_over_calibrated" << YAML::Value << YAML::Flow << YAML::BeginMap;
+    if (result.has_laser) o << YAML::Key << "z_rms" << YAML::Value << YamlNumber{ZRmsRatio(result)};
+    if (result.has_inclinometer) o << YAML::Key << "theta_rms" << YAML::Value << YamlNumber{ThetaRmsRatio(result)};
+    o << YAML::EndMap << YAML::Comment("> 1: the calibration helped");
+  }
+  o << YAML::EndMap;
+  return YamlText(o);
+}
+
+}  // namespace cablecal
