@@ -307,15 +307,21 @@ int RunSimulate(const Context& ctx, const SimulateOptions& options) {
 }
 
 int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
-  CheckCommandPaths({{"--robot", options.robot_path}, {"--measurements", options.measurements_path}},
+  CheckCommandPaths({{"--robot", options.robot_path},
+                     {"--measurements", options.measurements_path},
+                     {"--holdout", options.holdout_path}},
                     {{"--out", options.out_path}, {"--calibrated-robot", options.calibrated_robot_path}});
   if (options.out_path.empty() && !options.json) throw InputError("--out", "", "required (or print the result with --json)");
+  if (!options.holdout_path.empty() && options.report_dir.empty()) {
+    throw InputError("--holdout", "", "needs --report DIR: the held-out readings are compared in the report");
+  }
   // The report's folder is checked before any work, and no other file may be one it writes.
   std::unique_ptr<OutputFolder> report;
   if (!options.report_dir.empty()) {
     report = std::make_unique<OutputFolder>("--report", options.report_dir, ReportFileNames());
     report->RefuseInputs({{"--robot", options.robot_path},
                           {"--measurements", options.measurements_path},
+                          {"--holdout", options.holdout_path},
                           {"--out", options.out_path},
                           {"--calibrated-robot", options.calibrated_robot_path}});
   }
@@ -329,10 +335,18 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   // A robot file with systematic sensor errors (sensors fit) has them removed before the solve.
   const std::vector<Measurement> measurements =
       ReadMeasurementsOption(ctx, nominal, options.measurements_path, options.delimiter);
+  // Read before the solve: a bad held-out file is refused before any work.
+  const std::vector<Measurement> holdout =
+      options.holdout_path.empty() ? std::vector<Measurement>()
+                                   : ReadMeasurementsOption(ctx, nominal, options.holdout_path, options.delimiter);
   IdentifyResult result = Identify(nominal, measurements, id);
   if (nominal.sensors.systematic.any()) result.corrected_for = nominal.sensors.systematic;
   RequireUsableResult(result, options.measurements_path);
   const std::string result_yaml = IdentifyResultYaml(result, ctx.command_line);
+  std::optional<ValidationResult> validation;
+  if (!holdout.empty()) {
+    validation = ValidateCalibration(nominal, result, holdout, {ctx.command_line, options.measurements_path, options.holdout_path});
+  }
   AtomicOutput output;
   if (!options.out_path.empty()) output.WriteText(options.out_path, result_yaml);
   if (!options.calibrated_robot_path.empty()) {
@@ -345,14 +359,15 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   if (report) {
     const SigintScope sigint;  // Ctrl-C while the figures are drawn: exit 130, nothing written
     const ReportSources sources{ctx.command_line, options.measurements_path, options.holdout_path};
-    figure_error = StageReport(*report, nominal, result, result_yaml, nullptr, sources, [](const std::vector<std::string>& arguments) {
+    const auto draw = [](const std::vector<std::string>& arguments) {
       try {
         RunPlotScript("plot_report.py", arguments);
         return std::string();
       } catch (const FigureFailure& e) {
         return std::string(e.what());
       }
-    });
+    };
+    figure_error = StageReport(*report, nominal, result, result_yaml, validation ? &*validation : nullptr, sources, draw);
     if (SigintFlag()) throw Interrupted();
   }
   output.Commit();

@@ -316,6 +316,40 @@ std::string WarningsSection(const IdentifyResult& r) {
   return o.str();
 }
 
+std::string ValidationSection(const ValidationResult& v, const ReportSources& sources, const std::string& figure_error) {
+  std::ostringstream o;
+  o << "## Validation on held-out poses\n\n";
+  const std::size_t readings = v.pose_ids.size();
+  o << "The readings of " << Code(sources.holdout) << " (" << v.num_poses << " poses";
+  if (readings != static_cast<std::size_t>(v.num_poses)) o << ", " << readings << " readings";
+  o << "), which the identification did not see, predicted by the forward model of each robot (where its commanded "
+       "lengths hold the platform) and compared with the laser's z and the inclinometer's θ; error = predicted − "
+       "measured. The sensors' own noise, the RMS error even a perfect model would show:";
+  if (v.has_laser) o << " laser " << Rounded(1e3 * v.laser_sigma_m) << " mm";
+  if (v.has_inclinometer) o << (v.has_laser ? "," : "") << " inclinometer " << Rounded(1e3 * v.inclinometer_sigma_rad) << " mrad";
+  o << ".\n\n| robot |" << (v.has_laser ? " z RMS (mm) | z max (mm) |" : "")
+    << (v.has_inclinometer ? " θ RMS (mrad) | θ max (mrad) |" : "") << "\n|---|"
+    << (v.has_laser ? "---:|---:|" : "") << (v.has_inclinometer ? "---:|---:|" : "") << "\n";
+  for (const RobotPrediction& p : v.robots) {
+    o << "| " << p.name << " |";
+    for (const std::optional<ErrorSummary>& e : {p.z_m, p.theta_rad}) {
+      if (e) o << " " << Rounded(1e3 * e->rms) << " | " << Rounded(1e3 * e->max_abs) << " |";
+    }
+    o << "\n";
+  }
+  o << "\n";
+  if (v.robots.size() > 1) {
+    o << "Nominal / calibrated RMS error:";
+    if (v.has_laser) o << " z " << Rounded(ZRmsRatio(v));
+    if (v.has_inclinometer) o << (v.has_laser ? "," : "") << " θ " << Rounded(ThetaRmsRatio(v));
+    o << " (above 1: the calibration predicts the held-out poses better than the nominal robot).\n\n";
+  }
+  if (!NotCompared(v).empty()) o << "Not compared: the held-out readings have " << NotCompared(v) << ".\n\n";
+  o << Figure(kValidationFigure, "Held-out poses: predicted − measured, calibrated and nominal robots", figure_error);
+  o << "Per reading: `validation.csv`; the summary: `validation.yaml`.\n\n";
+  return o.str();
+}
+
 std::string ProvenanceSection(const ReportSources& sources) {
   std::ostringstream o;
   o << "## Provenance\n\n| | |\n|---|---|\n";
@@ -336,6 +370,16 @@ const std::vector<std::string>& ReportFileNames() {
   return names;
 }
 
+ValidationResult ValidateCalibration(const Robot& nominal, const IdentifyResult& result,
+                                     const std::vector<Measurement>& holdout, const ReportSources& sources) {
+  Robot calibrated = WithGeometry(nominal, result.geometry);
+  // Not the nominal file: the summary and any message name where its geometry came from.
+  calibrated.source = "identified from " + sources.measurements;
+  ValidationResult v = Validate(calibrated, nominal, holdout, sources.holdout);
+  if (nominal.sensors.systematic.any()) v.corrected_for = nominal.sensors.systematic;
+  return v;
+}
+
 std::vector<ReportFile> ReportDataFiles(const Robot& nominal, const IdentifyResult& result,
                                         const std::string& result_yaml, const ValidationResult* validation,
                                         const ReportSources& sources) {
@@ -347,7 +391,10 @@ std::vector<ReportFile> ReportDataFiles(const Robot& nominal, const IdentifyResu
   if (!result.identifiability.names.empty()) {
     files.push_back({"singular_values.csv", SingularValuesCsv(result, provenance)});
   }
-  (void)validation;
+  if (validation) {
+    files.push_back({"validation.csv", ValidationCsv(*validation, provenance)});
+    files.push_back({"validation.yaml", ValidationSummaryYaml(*validation, sources.command_line)});
+  }
   return files;
 }
 
@@ -362,10 +409,10 @@ std::vector<std::string> ReportFigures(const IdentifyResult& result, bool with_v
 
 std::string ReportMarkdown(const Robot& nominal, const IdentifyResult& result, const ValidationResult* validation,
                            const ReportSources& sources, const std::string& figure_error) {
-  (void)validation;
   return Heading(nominal, result, sources, figure_error) + EstimatesSection(nominal, result, figure_error) +
          CorrelationSection(result, figure_error) + ResidualsSection(result, figure_error) + LossSection(result) +
-         IdentifiabilitySection(result, figure_error) + WarningsSection(result) + ProvenanceSection(sources);
+         IdentifiabilitySection(result, figure_error) + WarningsSection(result) +
+         (validation ? ValidationSection(*validation, sources, figure_error) : "") + ProvenanceSection(sources);
 }
 
 std::string StageReport(const OutputFolder& folder, const Robot& nominal, const IdentifyResult& result,
@@ -377,6 +424,11 @@ std::string StageReport(const OutputFolder& folder, const Robot& nominal, const 
   const std::vector<std::string> figures = ReportFigures(result, validation != nullptr);
   std::vector<std::string> arguments = {folder.staging(), "--title=" + nominal.name};
   if (result.estimator == Estimator::kMaximumLikelihood) arguments.push_back("--whitened");
+  // The held-out errors are drawn against the sensors' noise.
+  if (validation && validation->has_laser) arguments.push_back("--laser-sigma=" + FormatDouble(validation->laser_sigma_m));
+  if (validation && validation->has_inclinometer) {
+    arguments.push_back("--inclinometer-sigma=" + FormatDouble(validation->inclinometer_sigma_rad));
+  }
   std::string figure_error = draw(arguments);
   for (const std::string& f : figures) {
     if (figure_error.empty() && !std::filesystem::exists(folder.Path(f))) {

@@ -13,11 +13,10 @@
 
 #include "common/atomic_output.h"
 #include "identify/identify.h"
+#include "identify/validate.h"
 #include "model/robot.h"
 
 namespace cablecal {
-
-struct ValidationResult;  // TEMP until validate lands
 
 // Every name a report may write into its folder, the figures and the validation's files
 // included: the folder's owned set, so that an earlier report's files (its validation, say)
@@ -30,6 +29,13 @@ struct ReportSources {
   std::string measurements;  // the identification's readings: a path, or what they were
   std::string holdout;       // the held-out readings' path; empty: none given
 };
+
+// The held-out readings (already corrected as the identification's were, for a robot file
+// with systematic sensor errors) predicted by the calibrated robot, the nominal one with the
+// identified geometry, and by the nominal one (identify/validate.h). Throws Validate's
+// InputError for readings a robot cannot hold.
+ValidationResult ValidateCalibration(const Robot& nominal, const IdentifyResult& result,
+                                     const std::vector<Measurement>& holdout, const ReportSources& sources);
 
 struct ReportFile {
   std::string name;  // in the report folder

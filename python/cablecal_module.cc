@@ -855,11 +855,20 @@ PYBIND11_MODULE(cablecal, m) {
         }
         const std::string dir = AsPath(directory, "directory");
         OutputFolder folder("directory", dir, ReportFileNames());
-        (void)holdout_arg;
-        const ReportSources sources{CallText("report"), "the measurements given to cablecal.identify", ""};
+        ReportSources sources{CallText("report"), "the measurements given to cablecal.identify", ""};
+        std::optional<ValidationResult> validation;
+        if (!holdout_arg.is_none()) {
+          const PyMeasurements& holdout = AsObject<PyMeasurements>(holdout_arg, "holdout", "Measurements");
+          if (holdout.num_cables != nominal.num_cables()) Bad("holdout", "read for a robot with another number of cables");
+          sources.holdout = SourceOf(holdout.readings, "the held-out Measurements given to cablecal.report");
+          // As identify's readings and the CLI's --holdout: corrected for the robot file's systematic errors.
+          const std::vector<Measurement> readings = CorrectedReadings(nominal, holdout.readings, sources.holdout);
+          py::gil_scoped_release release;
+          validation = ValidateCalibration(nominal, r, readings, sources);
+        }
         const std::string figure_error =
-            StageReport(folder, nominal, r, IdentifyResultYaml(r, CallText("identify")), nullptr, sources,
-                        DrawReportWithPython);
+            StageReport(folder, nominal, r, IdentifyResultYaml(r, CallText("identify")),
+                        validation ? &*validation : nullptr, sources, DrawReportWithPython);
         folder.Commit();
         if (!figure_error.empty()) {
           throw FigureFailure(figure_error + "; the report (" + dir + "/report.md, without figures) and its data files were written");

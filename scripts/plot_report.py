@@ -7,15 +7,15 @@ the report writes into DIR and written beside them:
                        line, down-weighted readings marked (residuals.csv)
   singular_values.png  the identifiability singular values, log scale (singular_values.csv)
   validation.png       held-out poses: predicted - measured z and theta, calibrated and nominal
-                       robots (validation.csv, validation.yaml; only when the report has them)
+                       robots, against the sensors' noise (validation.csv; only when the report has it)
 Each figure is drawn when its file is in DIR.
 Usage: /usr/bin/python3 scripts/plot_report.py DIR [--title ROBOT_NAME] [--whitened]
+           [--laser-sigma M --inclinometer-sigma RAD]
 """
 import argparse
 import csv
 import math
 import os
-import re
 import sys
 
 import matplotlib
@@ -221,24 +221,10 @@ def singular_values(folder, title, whitened):
     plt.close(fig)
 
 
-def yaml_number(path, key):
-    """A number from a `key: value` line of one of the report's YAML files, or None."""
-    try:
-        with open(path) as f:
-            for line in f:
-                m = re.match(rf"\s*{key}:\s*([-+0-9.eE]+)\s*$", line)
-                if m:
-                    return float(m.group(1))
-    except OSError:
-        pass
-    return None
-
-
-def validation(folder, title):
+def validation(folder, title, noise):
     rows = read_csv(os.path.join(folder, "validation.csv"))
     robots = [name for name in ("calibrated", "nominal") if f"x_{name}_m" in rows[0]]
-    panels = [(sensor, scale, unit, key) for sensor, scale, unit, key in
-              (("z", 1e3, "mm", "laser_sigma_m"), ("theta", 1e3, "mrad", "inclinometer_sigma_rad"))
+    panels = [(sensor, scale, unit) for sensor, scale, unit in (("z", 1e3, "mm"), ("theta", 1e3, "mrad"))
               if f"{sensor}_error_calibrated_{'m' if sensor == 'z' else 'rad'}" in rows[0]]
     pose_ids = list(dict.fromkeys(int(r["pose"]) for r in rows))
     slot = {p: k for k, p in enumerate(pose_ids)}
@@ -246,7 +232,7 @@ def validation(folder, title):
     fig, axes = plt.subplots(len(panels), 1, figsize=(float(np.clip(6.0 + 0.06 * n, 9.0, 16.0)), 1.2 + 2.8 * len(panels)),
                              sharex=True, squeeze=False)
     style = {"calibrated": ("tab:blue", "o"), "nominal": ("0.55", "s")}
-    for ax, (sensor, scale, unit, key) in zip(axes[:, 0], panels):
+    for ax, (sensor, scale, unit) in zip(axes[:, 0], panels):
         column_unit = "m" if sensor == "z" else "rad"
         for k, name in enumerate(robots):
             errors = np.array([scale * number(r[f"{sensor}_error_{name}_{column_unit}"]) for r in rows])
@@ -255,7 +241,7 @@ def validation(folder, title):
             colour, marker = style[name]
             ax.scatter(xs, errors, s=22, color=colour, marker=marker, zorder=3,
                        label=f"{name}: rms {rms:.3g} {unit}, max {np.abs(errors).max():.3g} {unit}")
-        sigma = yaml_number(os.path.join(folder, "validation.yaml"), key)
+        sigma = noise[sensor]
         if sigma:
             ax.axhspan(-scale * sigma, scale * sigma, color="0.9", zorder=0,
                        label=f"±1 σ of the sensor's noise ({scale * sigma:.3g} {unit})")
@@ -276,6 +262,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("folder")
     ap.add_argument("--title", default="calibration")
+    ap.add_argument("--laser-sigma", type=float, help="m: the held-out z errors are drawn against it")
+    ap.add_argument("--inclinometer-sigma", type=float, help="rad: the held-out theta errors are drawn against it")
     ap.add_argument("--whitened", action="store_true",
                     help="the singular values are of the whitened Jacobian (estimator ml): also show 1/s in mm")
     args = ap.parse_args()
@@ -289,7 +277,7 @@ def main():
     if have("singular_values.csv"):
         singular_values(args.folder, args.title, args.whitened)
     if have("validation.csv"):
-        validation(args.folder, args.title)
+        validation(args.folder, args.title, {"z": args.laser_sigma, "theta": args.inclinometer_sigma})
     return 0
 
 

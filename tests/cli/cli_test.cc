@@ -1415,6 +1415,62 @@ sensors:
   EXPECT_NE(report.find("None (`--loss none`, least squares)"), std::string::npos);
 }
 
+// Held-out readings of the same true robot: the report compares the calibrated and nominal
+// robots' predictions, its numbers those of validation.yaml; held-out data the report cannot
+// use are exit 2 with nothing written.
+TEST_F(Cli, IdentifyReportWithHoldoutSummarisesTheValidation) {
+  ASSERT_EQ(RunCablecal("sample --poses 12 --seed 3 --out " + Path("plan.csv")).exit_code, 0);
+  ASSERT_EQ(RunCablecal("simulate --plan " + Path("plan.csv") + " --geometry-sigma 0.005 --seed 5 --out " +
+                        Path("meas.csv") + " --truth-out " + Path("truth.yaml")).exit_code, 0);
+  ASSERT_EQ(RunCablecal("sample --poses 8 --seed 9 --out " + Path("plan2.csv")).exit_code, 0);
+  ASSERT_EQ(RunCablecal("simulate --plan " + Path("plan2.csv") + " --truth " + Path("truth.yaml") + " --seed 6 --out " +
+                        Path("holdout.csv")).exit_code, 0);
+  const std::string identify = "identify --measurements " + Path("meas.csv") + " --out " + Path("r.yaml");
+  const RunResult r = RunCablecal(identify + " --report " + Path("report") + " --holdout " + Path("holdout.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::vector<std::string> figures = kReportFigures;
+  figures.push_back("validation.png");
+  ExpectReportFolder(Path("report"), figures);
+  EXPECT_EQ(DataRows(Read("report/validation.csv")).size(), 8u);
+  const std::string report = Read("report/report.md");
+  ASSERT_NE(report.find("## Validation on held-out poses"), std::string::npos) << report;
+  EXPECT_NE(report.find("The readings of `" + Path("holdout.csv") + "` (8 poses)"), std::string::npos) << report;
+  EXPECT_NE(report.find("| held-out readings | `" + Path("holdout.csv") + "` |"), std::string::npos) << report;
+  const YAML::Node summary = YAML::LoadFile(Path("report/validation.yaml"));
+  EXPECT_EQ(summary["calibrated"]["file"].as<std::string>(), "identified from " + Path("meas.csv"));
+  for (const char* robot : {"calibrated", "nominal"}) {
+    const YAML::Node z = summary[robot]["z"], theta = summary[robot]["theta"];
+    const std::string row = std::string("| ") + robot + " | " + Printed("%.3g", 1e3 * z["rms_m"].as<double>()) + " | " +
+                            Printed("%.3g", 1e3 * z["max_abs_m"].as<double>()) + " | " +
+                            Printed("%.3g", 1e3 * theta["rms_rad"].as<double>()) + " | " +
+                            Printed("%.3g", 1e3 * theta["max_abs_rad"].as<double>()) + " |\n";
+    EXPECT_NE(report.find(row), std::string::npos) << row << report;
+  }
+  const double z_ratio = summary["nominal_over_calibrated"]["z_rms"].as<double>();
+  EXPECT_GT(z_ratio, 1.0);  // the calibration helps on poses it did not see
+  EXPECT_NE(report.find("Nominal / calibrated RMS error: z " + Printed("%.3g", z_ratio) + ", θ "), std::string::npos)
+      << report;
+
+  // --holdout alone, or readings of another robot: exit 2, nothing written.
+  tmp_.Write("three.csv", "pose,dl1,dl2,dl3,z,theta\n1,0,0,0,1,0\n");
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {identify + " --holdout " + Path("holdout.csv"), "--holdout: needs --report DIR"},
+      {identify + " --report " + Path("new") + " --holdout " + Path("three.csv"),
+       "three.csv:1: header: the file has columns for 3 cables, the robot has 2"},
+      {identify + " --report " + Path("report") + " --holdout " + Path("report/validation.csv"),
+       "--holdout: '" + Path("report/validation.csv") + "' is where --report writes its validation.csv"},
+  };
+  fs::remove(Path("r.yaml"));
+  for (const auto& [args, message] : cases) {
+    const RunResult bad = RunCablecal(args);
+    EXPECT_EQ(bad.exit_code, 2) << args << "\n" << bad.output;
+    EXPECT_NE(bad.output.find(message), std::string::npos) << args << "\n" << bad.output;
+    EXPECT_FALSE(fs::exists(Path("r.yaml"))) << args;
+    EXPECT_FALSE(fs::exists(Path("new"))) << args;
+    EXPECT_EQ(Read("report/report.md"), report) << args;
+  }
+}
+
 // The report folder is checked before any work: a file, a folder that cannot be written, a
 // missing parent, or a report that would overwrite --out are exit 2 and nothing is written.
 TEST_F(Cli, IdentifyReportFolderThatCannotBeWrittenIsExitTwo) {

@@ -414,6 +414,36 @@ def test_report_equals_the_clis(tmp_path):
     np.testing.assert_allclose([float(r[3]) for r in rows], result.geometry, atol=5.000001e-7)
 
 
+def test_report_with_holdout_equals_the_clis(tmp_path):
+    path = robot_file("asymmetric")
+    robot = cablecal.Robot.load(path)
+    calibration = cablecal.simulate(robot, cablecal.sample(robot, 14, seed=6), geometry_sigma=0.003, seed=2)
+    meas_csv, holdout_csv = tmp_path / "meas.csv", tmp_path / "holdout.csv"
+    meas_csv.write_text(calibration.measurements.to_csv())
+    holdout_csv.write_text(cablecal.simulate(robot, cablecal.sample(robot, 6, seed=7), truth=calibration.truth,
+                                             seed=3).measurements.to_csv())
+    result = cablecal.identify(robot, calibration.measurements)
+    holdout = cablecal.Measurements.load(robot, holdout_csv)
+    cablecal.report(robot, result, tmp_path / "py", holdout=holdout)
+    cli("identify", "--robot", path, "--measurements", str(meas_csv), "--out", str(tmp_path / "r.yaml"),
+        "--report", str(tmp_path / "cli"), "--holdout", str(holdout_csv))
+    assert data_lines(tmp_path / "py" / "validation.csv") == data_lines(tmp_path / "cli" / "validation.csv")
+    assert len(data_lines(tmp_path / "py" / "validation.csv").splitlines()) == 1 + 6
+    py_md, cli_md = (tmp_path / "py" / "report.md").read_text(), (tmp_path / "cli" / "report.md").read_text()
+    section = report_section(py_md, "Validation on held-out poses")
+    assert section == report_section(cli_md, "Validation on held-out poses")
+    assert f"The readings of `{holdout_csv}` (6 poses)" in section and "| calibrated | " in section
+    assert "| nominal | " in section and "Nominal / calibrated RMS error: z " in section
+    assert is_png(tmp_path / "py" / "validation.png") and "](validation.png)" in section
+    assert f"| held-out readings | `{holdout_csv}` |" in py_md
+    # The same numbers as validate() of the calibrated robot.
+    v = cablecal.validate(cablecal.calibrated_robot(robot, result), holdout, nominal=robot)
+    assert f"| calibrated | {1e3 * v.robots['calibrated']['z_rms']:.3g} | " in section
+    with pytest.raises(cablecal.InputError, match="holdout: expected a cablecal.Measurements"):
+        cablecal.report(robot, result, tmp_path / "bad", holdout=str(holdout_csv))
+    assert not (tmp_path / "bad").exists()
+
+
 def test_report_refuses_a_file_and_keeps_the_data_without_figures(tmp_path, monkeypatch):
     robot = cablecal.Robot.load(robot_file("asymmetric"))
     result = cablecal.identify(robot, cablecal.simulate(robot, cablecal.sample(robot, 8, seed=5), seed=1).measurements)
