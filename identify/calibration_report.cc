@@ -48,10 +48,28 @@ std::string Rounded(double value, int digits = 3) {
   return text;
 }
 
+// "%#.3g": three significant digits, trailing zeros kept (11.0 mm, not 11), for a column.
+std::string Significant3(double value) {
+  char text[64];
+  std::snprintf(text, sizeof text, "%#.3g", value);
+  return text;
+}
+
 // Inline code in markdown, whatever the text holds (a backtick in a path, a control character).
 std::string Code(const std::string& text) {
   const std::string printable = PrintableText(text);
   return printable.find('`') == std::string::npos ? "`" + printable + "`" : "`` " + printable + " ``";
+}
+
+// A name in running text: markdown's own characters (a robot called "arm_2 *new*") read as
+// typed, not as emphasis or a link.
+std::string Escaped(const std::string& text) {
+  std::string out;
+  for (const char c : PrintableText(text)) {
+    if (std::string("\\`*_[]<>|$#").find(c) != std::string::npos) out += '\\';
+    out += c;
+  }
+  return out;
 }
 
 // A table cell: a '|' would end it.
@@ -156,14 +174,15 @@ std::string Figure(const std::string& file, const std::string& caption, const st
 std::string Heading(const Robot& nominal, const IdentifyResult& r, const ReportSources& sources,
                     const std::string& figure_error) {
   std::ostringstream o;
-  o << "# Calibration report: " << PrintableText(nominal.name) << "\n\n";
+  o << "# Calibration report: " << Escaped(nominal.name) << "\n\n";
   const std::size_t readings = r.readings.size(), poses = r.poses.size();
-  o << "The exit points and initial lengths of " << PrintableText(nominal.name) << " (nominal robot: "
+  o << "The exit points and initial lengths of " << Escaped(nominal.name) << " (nominal robot: "
     << Code(nominal.source) << ") identified from " << poses << " poses";
   if (readings != poses) o << " (" << readings << " readings)";
   o << " of " << Code(sources.measurements) << ": estimator `" << ToString(r.estimator) << "`, gauge `"
     << ToString(r.gauge) << "`, loss `" << ToString(r.loss) << "`; " << ToString(r.status) << " after " << r.iterations
     << " iterations.";
+  if (!r.missing_sensors.empty()) o << " The data have " << MissingSensorsText(r.missing_sensors) << ".";
   if (r.corrected_for) {
     const SystematicSensorErrors& e = *r.corrected_for;
     o << " The laser and inclinometer readings were first corrected for the robot file's systematic sensor errors "
@@ -173,9 +192,9 @@ std::string Heading(const Robot& nominal, const IdentifyResult& r, const ReportS
   }
   o << "\n\nUnits: positions and lengths in m, their standard deviations (σ, one standard deviation) and changes "
        "in mm, angles in mrad. Every number comes from the files beside this one, which hold all digits: "
-       "`result.yaml` (the identification's result), `parameters.csv`, `correlation.csv`, `singular_values.csv` "
-       "and `residuals.csv`"
-    << (sources.holdout.empty() ? "" : ", `validation.csv` and `validation.yaml`") << ".\n\n";
+       "`result.yaml` (the identification's result), `parameters.csv`, `correlation.csv`, `singular_values.csv`"
+    << (sources.holdout.empty() ? " and `residuals.csv`" : ", `residuals.csv`, `validation.csv` and `validation.yaml`")
+    << ".\n\n";
   if (!figure_error.empty()) o << "**The figures could not be made:** " << PrintableText(figure_error) << "\n\n";
   return o.str();
 }
@@ -193,7 +212,8 @@ std::string EstimatesSection(const Robot& nominal, const IdentifyResult& r, cons
     const double change = r.geometry(i) - nominal_geometry(i);
     const bool has_std = r.has_covariance && r.geometry_std(i) > 0.0;
     o << "| " << names[k] << " | " << Fixed(nominal_geometry(i), 6) << " | " << Fixed(r.geometry(i), 6) << " | "
-      << (Held(r, i) ? std::string("held") : has_std ? Rounded(1e3 * r.geometry_std(i)) : std::string("–")) << " | "
+      << (Held(r, i) ? std::string("held") : has_std ? Significant3(1e3 * r.geometry_std(i)) : std::string("–"))
+      << " | "
       << SignedFixed(1e3 * change, 3) << " | " << (has_std ? SignedFixed(change / r.geometry_std(i), 2) : "–")
       << " |\n";
     if (has_std && std::abs(change / r.geometry_std(i)) > kNotableChangeSigmas) {
@@ -422,8 +442,11 @@ std::string StageReport(const OutputFolder& folder, const Robot& nominal, const 
     folder.WriteText(f.name, f.content);
   }
   const std::vector<std::string> figures = ReportFigures(result, validation != nullptr);
-  std::vector<std::string> arguments = {folder.staging(), "--title=" + nominal.name};
+  std::vector<std::string> arguments = {folder.staging(), "--title=" + PrintableText(nominal.name)};
   if (result.estimator == Estimator::kMaximumLikelihood) arguments.push_back("--whitened");
+  if (!result.identifiability.names.empty()) {
+    arguments.push_back("--condition-number=" + Rounded(result.identifiability.condition_number, 4));
+  }
   // The held-out errors are drawn against the sensors' noise.
   if (validation && validation->has_laser) arguments.push_back("--laser-sigma=" + FormatDouble(validation->laser_sigma_m));
   if (validation && validation->has_inclinometer) {

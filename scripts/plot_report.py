@@ -9,7 +9,7 @@ the report writes into DIR and written beside them:
   validation.png       held-out poses: predicted - measured z and theta, calibrated and nominal
                        robots, against the sensors' noise (validation.csv; only when the report has it)
 Each figure is drawn when its file is in DIR.
-Usage: /usr/bin/python3 scripts/plot_report.py DIR [--title ROBOT_NAME] [--whitened]
+Usage: /usr/bin/python3 scripts/plot_report.py DIR [--title ROBOT_NAME] [--whitened] [--condition-number K]
            [--laser-sigma M --inclinometer-sigma RAD]
 """
 import argparse
@@ -117,7 +117,7 @@ def correlation(folder, title):
     plt.close(fig)
 
 
-def residuals(folder, title):
+def residuals(folder, title, whitened):
     rows = read_csv(os.path.join(folder, "residuals.csv"))
     pose_ids = list(dict.fromkeys(int(r["pose"]) for r in rows))
     slot = {p: k for k, p in enumerate(pose_ids)}
@@ -174,7 +174,9 @@ def residuals(folder, title):
         ax.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.005, 1.0), frameon=False)
     pose_axis(axes[-1, 0], pose_ids)
     axes[-1, 0].set_xlabel("pose (in the order of the measurements; several readings of one pose share its place)")
-    fig.suptitle(f"{title}: each reading's residual, model − reading, over its sensor's σ (grey: ±1 σ)", fontsize=10)
+    what = ("each reading's residual, model − reading, over its sensor's σ" if whitened else
+            "each cable-length residual over the laser's σ (estimator paper)")
+    fig.suptitle(f"{title}: {what} (grey: ±1 σ)", fontsize=10)
     fig.tight_layout()
     fig.savefig(os.path.join(folder, "residuals.png"), dpi=DPI)
     plt.close(fig)
@@ -190,13 +192,12 @@ def short(v):
     return f"{v:.3g}"
 
 
-def singular_values(folder, title, whitened):
+def singular_values(folder, title, whitened, condition):
     values = np.array([number(r["singular_value"]) for r in read_csv(os.path.join(folder, "singular_values.csv"))])
     positive = values[values > 0]
     floor = positive.min() / 10 if positive.size else 1.0
     drawn = np.where(values > 0, values, floor)
     k = len(values)
-    condition = values.max() / values.min() if values.min() > 0 else math.inf
     fig, ax = plt.subplots(figsize=(max(6.0, 3.0 + 0.4 * k), 4.2))
     ax.bar(range(1, k + 1), drawn, color=["tab:blue" if v > 0 else "tab:red" for v in values])
     for x, v, d in zip(range(1, k + 1), values, drawn):
@@ -215,7 +216,7 @@ def singular_values(folder, title, whitened):
                                                        lambda v: 1e3 / np.maximum(v, 1e-300)))
         right.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
         right.set_ylabel("σ along its direction (mm) = 1000 / s")
-    ax.set_title(f"{title}: identifiability, condition number {condition:.4g}", fontsize=10)
+    ax.set_title(f"{title}: identifiability, condition number {condition}", fontsize=10)
     fig.tight_layout()
     fig.savefig(os.path.join(folder, "singular_values.png"), dpi=DPI)
     plt.close(fig)
@@ -265,19 +266,23 @@ def main():
     ap.add_argument("--laser-sigma", type=float, help="m: the held-out z errors are drawn against it")
     ap.add_argument("--inclinometer-sigma", type=float, help="rad: the held-out theta errors are drawn against it")
     ap.add_argument("--whitened", action="store_true",
-                    help="the singular values are of the whitened Jacobian (estimator ml): also show 1/s in mm")
+                    help="estimator ml: the singular values are of the whitened Jacobian (also show 1/s in mm), "
+                         "every sensor's residual over its own sigma")
+    ap.add_argument("--condition-number", default="n/a", help="as the result says it (inf with a null direction)")
     args = ap.parse_args()
     have = lambda name: os.path.exists(os.path.join(args.folder, name))  # noqa: E731
+    # A robot's name, not mathtext; shortened so that it leaves room for what the figure shows.
+    title = (args.title if len(args.title) <= 40 else args.title[:39] + "…").replace("$", r"\$")
     if have("parameters.csv"):
-        estimates(args.folder, args.title)
+        estimates(args.folder, title)
     if have("correlation.csv"):
-        correlation(args.folder, args.title)
+        correlation(args.folder, title)
     if have("residuals.csv"):
-        residuals(args.folder, args.title)
+        residuals(args.folder, title, args.whitened)
     if have("singular_values.csv"):
-        singular_values(args.folder, args.title, args.whitened)
+        singular_values(args.folder, title, args.whitened, args.condition_number)
     if have("validation.csv"):
-        validation(args.folder, args.title, {"z": args.laser_sigma, "theta": args.inclinometer_sigma})
+        validation(args.folder, title, {"z": args.laser_sigma, "theta": args.inclinometer_sigma})
     return 0
 
 

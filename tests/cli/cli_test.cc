@@ -1293,7 +1293,7 @@ void ExpectEstimatesTableMatches(const std::string& report, const YAML::Node& re
     if (p["held"]) {
       EXPECT_EQ(c[4], "held") << line;
     } else {
-      EXPECT_EQ(c[4], Printed("%.3g", 1e3 * p["std"].as<double>())) << line;
+      EXPECT_EQ(c[4], Printed("%#.3g", 1e3 * p["std"].as<double>())) << line;
     }
     EXPECT_NEAR(std::stod(c[5]), 1e3 * (value - std::stod(c[2])), 2e-3) << line;
   }
