@@ -1528,6 +1528,22 @@ TEST_F(Cli, IdentifyReportWithoutFiguresKeepsTheRestAndExitsFive) {
   EXPECT_TRUE(fs::exists(Path("r.yaml")));
 }
 
+// Ctrl-C while the report's figures are drawn (a slow plotting script here): exit 130, and
+// neither --out nor the report is written.
+TEST_F(Cli, IdentifyReportInterruptedWhileDrawingWritesNothing) {
+  ASSERT_EQ(RunCablecal("sample --poses 8 --seed 8 --out " + Path("plan.csv")).exit_code, 0);
+  ASSERT_EQ(RunCablecal("simulate --plan " + Path("plan.csv") + " --out " + Path("meas.csv")).exit_code, 0);
+  tmp_.Write("slow.sh", "#!/bin/sh\nsleep 4\n");
+  fs::permissions(Path("slow.sh"), fs::perms::owner_all);
+  const RunResult r = RunCablecal("env CABLECAL_PYTHON=" + Path("slow.sh") + " timeout --preserve-status -s INT 2 " +
+                                  CABLECAL_BINARY + " identify --measurements " + Path("meas.csv") + " --out " +
+                                  Path("r.yaml") + " --report " + Path("report"));
+  EXPECT_EQ(r.exit_code, 130) << r.output;
+  EXPECT_NE(r.output.find("interrupted: no output written"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(Path("r.yaml")));
+  EXPECT_FALSE(fs::exists(Path("report")));
+}
+
 }  // namespace
 
 // ---- Robots with more cables -------------------------------------------------------------
