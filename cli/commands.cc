@@ -343,10 +343,9 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   if (nominal.sensors.systematic.any()) result.corrected_for = nominal.sensors.systematic;
   RequireUsableResult(result, options.measurements_path);
   const std::string result_yaml = IdentifyResultYaml(result, ctx.command_line);
+  const ReportSources sources{ctx.command_line, options.measurements_path, options.holdout_path};
   std::optional<ValidationResult> validation;
-  if (!holdout.empty()) {
-    validation = ValidateCalibration(nominal, result, holdout, {ctx.command_line, options.measurements_path, options.holdout_path});
-  }
+  if (!holdout.empty()) validation = ValidateCalibration(nominal, result, holdout, sources);
   AtomicOutput output;
   if (!options.out_path.empty()) output.WriteText(options.out_path, result_yaml);
   if (!options.calibrated_robot_path.empty()) {
@@ -358,7 +357,6 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   std::string figure_error;
   if (report) {
     const SigintScope sigint;  // Ctrl-C while the figures are drawn: exit 130, nothing written
-    const ReportSources sources{ctx.command_line, options.measurements_path, options.holdout_path};
     const auto draw = [](const std::vector<std::string>& arguments) {
       try {
         RunPlotScript("plot_report.py", arguments);
@@ -372,10 +370,8 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   }
   output.Commit();
   if (report) report->Commit();
-  if (!figure_error.empty()) {
-    // After the summary below: the results were written, the figures were not.
-    figure_error += "; the report (" + options.report_dir + "/report.md, without figures) and its data files were written";
-  }
+  // Said after the summary below: the results were written, the figures were not.
+  if (!figure_error.empty()) figure_error = ReportWithoutFiguresMessage(options.report_dir, figure_error);
   if (options.json) {
     std::printf("%s\n", ToJson(YAML::Load(result_yaml)).c_str());
     if (!figure_error.empty()) throw FigureFailure(figure_error);

@@ -435,6 +435,10 @@ std::string ReportMarkdown(const Robot& nominal, const IdentifyResult& result, c
          (validation ? ValidationSection(*validation, sources, figure_error) : "") + ProvenanceSection(sources);
 }
 
+std::string ReportWithoutFiguresMessage(const std::string& dir, const std::string& figure_error) {
+  return figure_error + "; the report (" + dir + "/report.md, without figures) and its data files were written";
+}
+
 std::string StageReport(const OutputFolder& folder, const Robot& nominal, const IdentifyResult& result,
                         const std::string& result_yaml, const ValidationResult* validation,
                         const ReportSources& sources, const DrawReportFigures& draw) {

@@ -61,6 +61,9 @@ std::string ReportMarkdown(const Robot& nominal, const IdentifyResult& result, c
 // returns "" or why it failed.
 using DrawReportFigures = std::function<std::string(const std::vector<std::string>& script_arguments)>;
 
+// What a command says after committing a report whose figures failed (`figure_error`).
+std::string ReportWithoutFiguresMessage(const std::string& dir, const std::string& figure_error);
+
 // Stages the whole report in `folder` (the caller commits it): the data files, then the
 // figures through `draw` (a failure, or a figure it did not make, leaves none of them: the
 // report says why instead), then report.md. Returns "" or the figures' failure, which the

@@ -870,9 +870,7 @@ PYBIND11_MODULE(cablecal, m) {
             StageReport(folder, nominal, r, IdentifyResultYaml(r, CallText("identify")),
                         validation ? &*validation : nullptr, sources, DrawReportWithPython);
         folder.Commit();
-        if (!figure_error.empty()) {
-          throw FigureFailure(figure_error + "; the report (" + dir + "/report.md, without figures) and its data files were written");
-        }
+        if (!figure_error.empty()) throw FigureFailure(ReportWithoutFiguresMessage(dir, figure_error));
         return dir + "/report.md";
       },
       py::arg("nominal"), py::arg("result"), py::arg("directory"), py::arg("holdout") = py::none(),
