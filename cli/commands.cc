@@ -25,6 +25,7 @@
 #include "common/yaml_writer.h"
 #include "common/version.h"
 #include "design/design.h"
+#include "identify/calibration_report.h"
 #include "identify/experiment.h"
 #include "identify/identify.h"
 #include "identify/validate.h"
@@ -306,9 +307,24 @@ int RunSimulate(const Context& ctx, const SimulateOptions& options) {
 }
 
 int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
-  CheckCommandPaths({{"--robot", options.robot_path}, {"--measurements", options.measurements_path}},
+  CheckCommandPaths({{"--robot", options.robot_path},
+                     {"--measurements", options.measurements_path},
+                     {"--holdout", options.holdout_path}},
                     {{"--out", options.out_path}, {"--calibrated-robot", options.calibrated_robot_path}});
   if (options.out_path.empty() && !options.json) throw InputError("--out", "", "required (or print the result with --json)");
+  if (!options.holdout_path.empty() && options.report_dir.empty()) {
+    throw InputError("--holdout", "", "needs --report DIR: the held-out readings are compared in the report");
+  }
+  // The report's folder is checked before any work, and no other file may be one it writes.
+  std::unique_ptr<OutputFolder> report;
+  if (!options.report_dir.empty()) {
+    report = std::make_unique<OutputFolder>("--report", options.report_dir, ReportFileNames());
+    report->RefuseInputs({{"--robot", options.robot_path},
+                          {"--measurements", options.measurements_path},
+                          {"--holdout", options.holdout_path},
+                          {"--out", options.out_path},
+                          {"--calibrated-robot", options.calibrated_robot_path}});
+  }
   const Robot nominal = LoadRobotOption(options.robot_path);
   IdentifyOptions id;
   id.estimator = ParseEstimator(options.estimator);
@@ -319,10 +335,17 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   // A robot file with systematic sensor errors (sensors fit) has them removed before the solve.
   const std::vector<Measurement> measurements =
       ReadMeasurementsOption(ctx, nominal, options.measurements_path, options.delimiter);
+  // Read before the solve: a bad held-out file is refused before any work.
+  const std::vector<Measurement> holdout =
+      options.holdout_path.empty() ? std::vector<Measurement>()
+                                   : ReadMeasurementsOption(ctx, nominal, options.holdout_path, options.delimiter);
   IdentifyResult result = Identify(nominal, measurements, id);
   if (nominal.sensors.systematic.any()) result.corrected_for = nominal.sensors.systematic;
   RequireUsableResult(result, options.measurements_path);
   const std::string result_yaml = IdentifyResultYaml(result, ctx.command_line);
+  const ReportSources sources{ctx.command_line, options.measurements_path, options.holdout_path};
+  std::optional<ValidationResult> validation;
+  if (!holdout.empty()) validation = ValidateCalibration(nominal, result, holdout, sources);
   AtomicOutput output;
   if (!options.out_path.empty()) output.WriteText(options.out_path, result_yaml);
   if (!options.calibrated_robot_path.empty()) {
@@ -331,9 +354,27 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
                      ProvenanceComment(ctx.command_line) + "# calibrated: exit points and initial lengths identified (" +
                          ToString(id.estimator) + ", gauge " + ToString(id.gauge) + ")\n" + RobotToYaml(calibrated));
   }
+  std::string figure_error;
+  if (report) {
+    const SigintScope sigint;  // Ctrl-C while the figures are drawn: exit 130, nothing written
+    const auto draw = [](const std::vector<std::string>& arguments) {
+      try {
+        RunPlotScript("plot_report.py", arguments);
+        return std::string();
+      } catch (const FigureFailure& e) {
+        return std::string(e.what());
+      }
+    };
+    figure_error = StageReport(*report, nominal, result, result_yaml, validation ? &*validation : nullptr, sources, draw);
+    if (SigintFlag()) throw Interrupted();
+  }
   output.Commit();
+  if (report) report->Commit();
+  // Said after the summary below: the results were written, the figures were not.
+  if (!figure_error.empty()) figure_error = ReportWithoutFiguresMessage(options.report_dir, figure_error);
   if (options.json) {
     std::printf("%s\n", ToJson(YAML::Load(result_yaml)).c_str());
+    if (!figure_error.empty()) throw FigureFailure(figure_error);
     return kExitOk;
   }
   // The console rounds to what a reader compares (3 significant digits, 0.1 um for lengths);
@@ -384,6 +425,8 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
     if (result.has_covariance) std::printf("  (std %.3g mm)", 1e3 * result.geometry_std(k));
     std::printf("\n");
   }
+  if (report) std::printf("  report: %s/report.md\n", options.report_dir.c_str());
+  if (!figure_error.empty()) throw FigureFailure(figure_error);
   return kExitOk;
 }
 

@@ -60,6 +60,8 @@ struct IdentifyCommandOptions {
   bool json = false;  // the result on stdout as JSON (then --out is optional)
   std::string delimiter = ",";  // of the measurement CSV
   std::string loss = "none";     // ParseLoss
+  std::string report_dir;        // --report: the calibration report's folder (identify/calibration_report.h)
+  std::string holdout_path;      // --holdout: held-out readings the report validates the calibration on
 };
 int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options);
 

@@ -139,6 +139,13 @@ int main(int argc, char** argv) {
                      "robust loss on each reading: none, huber or cauchy, optionally :SCALE in sigmas "
                      "(defaults huber:3, cauchy:10; ml only)")
       ->capture_default_str();
+  id_cmd->add_option("--report", ident.report_dir,
+                     "folder for a calibration report: report.md with the estimates, figures and provenance, and the "
+                     "data files behind them (created if new; its parent must exist)");
+  id_cmd->add_option("--holdout", ident.holdout_path,
+                     "held-out measurement CSV: the report compares the calibrated and nominal robots' predictions "
+                     "with its laser and inclinometer readings (needs --report)")
+      ->check(CLI::ExistingFile);
 
   cablecal::cli::ValidateCommandOptions val;
   CLI::App* val_cmd =

@@ -7,6 +7,7 @@
 //   residuals.h   the templated residuals (shared with design/)
 //   identify.h    Identify(), its options and result, result YAML
 //   validate.h    Validate(): a robot's predictions of held-out poses against the readings
+//   calibration_report.h  identify --report: report.md and the data files of its figures
 // Depends on model/, workspace/ (pose plans) and common/.
 //
 // The gauge (README, "Identification"): encoders, a vertical laser and an inclinometer cannot see a

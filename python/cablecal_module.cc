@@ -25,10 +25,12 @@
 #include <thread>
 #include <vector>
 
+#include "common/atomic_output.h"
 #include "common/error.h"
 #include "common/format.h"
 #include "common/version.h"
 #include "design/design.h"
+#include "identify/calibration_report.h"
 #include "identify/experiment.h"
 #include "identify/identify.h"
 #include "identify/validate.h"
@@ -370,6 +372,46 @@ PyMeasurements MakeMeasurements(const Robot& robot, py::handle dl, py::handle z,
   return out;
 }
 
+// The plotting scripts: CABLECAL_SCRIPTS_DIR, else share/cablecal/scripts beside the module as
+// the build and an install place them (build/python/ and build/share/; lib/python3/dist-packages/
+// and share/ under the prefix), as the CLI finds them beside itself.
+std::string PlotScriptsDir() {
+  py::module_ os = py::module_::import("os");
+  py::object env = os.attr("environ").attr("get")("CABLECAL_SCRIPTS_DIR");
+  if (!env.is_none()) return env.cast<std::string>();
+  const std::string here = os.attr("path").attr("dirname")(py::module_::import("cablecal").attr("__file__")).cast<std::string>();
+  for (const std::string& dir : {here + "/../share/cablecal/scripts", here + "/../../../share/cablecal/scripts"}) {
+    if (os.attr("path").attr("isdir")(dir).cast<bool>()) return dir;
+  }
+  return here + "/../share/cablecal/scripts";  // named by the failure
+}
+
+// Draws a report's figures with this interpreter (it has NumPy; matplotlib is its own to have):
+// "" or why not, as the CLI's runner says it.
+std::string DrawReportWithPython(const std::vector<std::string>& arguments) {
+  const std::string script = PlotScriptsDir() + "/plot_report.py";
+  py::list command;
+  command.append(py::module_::import("sys").attr("executable"));
+  command.append(script);
+  for (const std::string& a : arguments) command.append(a);
+  py::object done = py::module_::import("subprocess")
+                        .attr("run")(command, py::arg("capture_output") = true, py::arg("text") = true);
+  const int status = done.attr("returncode").cast<int>();
+  if (status == 0) return "";
+  std::string why = done.attr("stderr").cast<std::string>();
+  while (!why.empty() && why.back() == '\n') why.pop_back();
+  why = why.substr(why.rfind('\n') + 1);  // the exception's line
+  return "the figure could not be made: the plotting script failed (exit status " + std::to_string(status) + "): " +
+         script + (why.empty() ? "" : ": " + why);
+}
+
+// Where readings came from: the file of their first reading ("file:line"), if read from one.
+std::string SourceOf(const std::vector<Measurement>& readings, const std::string& otherwise) {
+  if (readings.empty() || readings.front().where.empty()) return otherwise;
+  const std::string& where = readings.front().where;
+  return where.substr(0, where.rfind(':'));
+}
+
 }  // namespace
 }  // namespace cablecal::python
 
@@ -388,6 +430,7 @@ PYBIND11_MODULE(cablecal, m) {
 
   py::register_exception<InputError>(m, "InputError", PyExc_ValueError);
   py::register_exception<SolverFailure>(m, "SolverError", PyExc_RuntimeError);
+  py::register_exception<FigureFailure>(m, "FigureError", PyExc_RuntimeError);
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
@@ -801,6 +844,40 @@ PYBIND11_MODULE(cablecal, m) {
         return WithGeometry(nominal, r.geometry);
       },
         py::arg("nominal"), py::arg("result"), "The nominal robot with the identified geometry.");
+  m.def(
+      "report",
+      [](py::handle nominal_arg, py::handle result_arg, py::handle directory, py::handle holdout_arg) {
+        const Robot& nominal = AsObject<Robot>(nominal_arg, "nominal", "Robot");
+        const IdentifyResult& r = AsObject<IdentifyResult>(result_arg, "result", "IdentifyResult");
+        if (r.geometry.size() != GeometrySize(nominal.num_cables())) {
+          Bad("result", "identified for a robot with " + std::to_string(r.geometry.size() / 3) + " cables, the nominal robot has " +
+                            std::to_string(nominal.num_cables()));
+        }
+        const std::string dir = AsPath(directory, "directory");
+        OutputFolder folder("directory", dir, ReportFileNames());
+        ReportSources sources{CallText("report"), "the measurements given to cablecal.identify", ""};
+        std::optional<ValidationResult> validation;
+        if (!holdout_arg.is_none()) {
+          const PyMeasurements& holdout = AsObject<PyMeasurements>(holdout_arg, "holdout", "Measurements");
+          if (holdout.num_cables != nominal.num_cables()) Bad("holdout", "read for a robot with another number of cables");
+          sources.holdout = SourceOf(holdout.readings, "the held-out Measurements given to cablecal.report");
+          // As identify's readings and the CLI's --holdout: corrected for the robot file's systematic errors.
+          const std::vector<Measurement> readings = CorrectedReadings(nominal, holdout.readings, sources.holdout);
+          py::gil_scoped_release release;
+          validation = ValidateCalibration(nominal, r, readings, sources);
+        }
+        const std::string figure_error =
+            StageReport(folder, nominal, r, IdentifyResultYaml(r, CallText("identify")),
+                        validation ? &*validation : nullptr, sources, DrawReportWithPython);
+        folder.Commit();
+        if (!figure_error.empty()) throw FigureFailure(ReportWithoutFiguresMessage(dir, figure_error));
+        return dir + "/report.md";
+      },
+      py::arg("nominal"), py::arg("result"), py::arg("directory"), py::arg("holdout") = py::none(),
+      "Writes the calibration report of `result` into `directory` as identify --report does (report.md, its figures "
+      "and data files; the folder is created if new, its parent must exist) and returns report.md's path. holdout: "
+      "held-out Measurements, validated with the calibrated and the nominal robot. The figures are drawn with this "
+      "interpreter's matplotlib; if they cannot be, the rest is written and FigureError raised.");
 
   // ---- validate
   py::class_<ValidationResult>(m, "Validation",

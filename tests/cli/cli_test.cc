@@ -4,6 +4,7 @@
 
 #include <functional>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <array>
 #include <chrono>
@@ -1256,6 +1257,329 @@ TEST_F(Cli, SensorsFitRefusesHostileBenchFilesAndWritesNothing) {
     EXPECT_FALSE(fs::exists(Path("s.yaml"))) << args;
   }
   EXPECT_EQ(Read("good.csv"), good);
+}
+
+// ---- identify --report -------------------------------------------------------------------
+
+// A whole PNG of a readable size: the signature, the IHDR chunk first and IEND last.
+void ExpectPng(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  const std::string png = s.str();
+  ASSERT_GT(png.size(), 5000u) << path;
+  EXPECT_EQ(png.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8)) << path;
+  EXPECT_EQ(png.substr(12, 4), "IHDR") << path;
+  const auto be32 = [&](std::size_t at) {
+    return (static_cast<unsigned>(static_cast<unsigned char>(png[at])) << 24) |
+           (static_cast<unsigned>(static_cast<unsigned char>(png[at + 1])) << 16) |
+           (static_cast<unsigned>(static_cast<unsigned char>(png[at + 2])) << 8) |
+           static_cast<unsigned>(static_cast<unsigned char>(png[at + 3]));
+  };
+  EXPECT_GE(be32(16), 500u) << path << ": width";
+  EXPECT_GE(be32(20), 300u) << path << ": height";
+  EXPECT_EQ(png.substr(png.size() - 8, 4), "IEND") << path;
+}
+
+// A CSV's data rows: neither the provenance comments nor the header.
+std::vector<std::string> DataRows(const std::string& csv) {
+  std::vector<std::string> rows;
+  std::istringstream in(csv);
+  bool header = true;
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    if (!header) rows.push_back(line);
+    header = false;
+  }
+  return rows;
+}
+
+std::vector<std::string> Cells(const std::string& line, char separator) {
+  std::vector<std::string> cells;
+  std::istringstream in(line);
+  for (std::string cell; std::getline(in, cell, separator);) {
+    const std::size_t first = cell.find_first_not_of(' '), last = cell.find_last_not_of(' ');
+    cells.push_back(first == std::string::npos ? "" : cell.substr(first, last - first + 1));
+  }
+  return cells;
+}
+
+std::string Printed(const char* format, double value) {
+  char text[64];
+  std::snprintf(text, sizeof text, format, value);
+  return text;
+}
+
+// report.md's estimates table against result.yaml: every parameter of the robot, each value
+// as result.yaml's at the printed precision (m to 1 um, sigma in mm to 3 digits), the change
+// from nominal consistent with it.
+void ExpectEstimatesTableMatches(const std::string& report, const YAML::Node& result, int cables) {
+  const std::size_t table = report.find("| parameter | nominal (m) | identified (m) | σ (mm) |");
+  ASSERT_NE(table, std::string::npos) << report;
+  std::istringstream in(report.substr(table));
+  std::string line;
+  std::getline(in, line);
+  std::getline(in, line);  // |---|
+  int rows = 0;
+  for (; std::getline(in, line) && line.rfind("| ", 0) == 0; ++rows) {
+    const std::vector<std::string> c = Cells(line, '|');  // "", name, nominal, identified, sigma, mm, sigmas
+    ASSERT_EQ(c.size(), 7u) << line;
+    const YAML::Node p = result["parameters"][c[1]];
+    ASSERT_TRUE(p) << c[1];
+    const double value = p["value"].as<double>();
+    EXPECT_EQ(c[3], Printed("%.6f", value)) << line;
+    if (p["held"]) {
+      EXPECT_EQ(c[4], "held") << line;
+    } else {
+      EXPECT_EQ(c[4], Printed("%#.3g", 1e3 * p["std"].as<double>())) << line;
+    }
+    EXPECT_NEAR(std::stod(c[5]), 1e3 * (value - std::stod(c[2])), 2e-3) << line;
+  }
+  EXPECT_EQ(rows, 3 * cables);
+}
+
+// The report's own files, and its figures whole and named in report.md.
+void ExpectReportFolder(const fs::path& dir, const std::vector<std::string>& figures) {
+  for (const char* name : {"report.md", "result.yaml", "parameters.csv", "correlation.csv", "singular_values.csv",
+                           "residuals.csv"}) {
+    EXPECT_TRUE(fs::is_regular_file(dir / name)) << name;
+  }
+  std::ifstream in(dir / "report.md");
+  std::stringstream report;
+  report << in.rdbuf();
+  for (const std::string& f : figures) {
+    ExpectPng(dir / f);
+    EXPECT_NE(report.str().find("](" + f + ")"), std::string::npos) << f;
+  }
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    EXPECT_NE(entry.path().filename().string().rfind(".cablecal-", 0), 0u) << "left behind: " << entry.path();
+  }
+}
+
+const std::vector<std::string> kReportFigures = {"estimates.png", "correlation.png", "residuals.png",
+                                                 "singular_values.png"};
+
+// The asymmetric robot with one gross laser reading and --loss cauchy: the report holds the
+// result's numbers, one residual row per reading and sensor, and names the down-weighted reading.
+TEST_F(Cli, IdentifyReportOnTheAsymmetricRobotHoldsTheResult) {
+  const std::string robot = std::string(CABLECAL_SOURCE_DIR) + "/robots/asymmetric.yaml";
+  ASSERT_EQ(RunCablecal("sample --robot " + robot + " --poses 20 --seed 4 --out " + Path("plan.csv")).exit_code, 0);
+  ASSERT_EQ(RunCablecal("simulate --robot " + robot + " --plan " + Path("plan.csv") +
+                        " --geometry-sigma 0.005 --seed 2 --out " + Path("meas.csv")).exit_code, 0);
+  // Pose 7's laser 0.1 m off (about 50 sigma).
+  std::istringstream in(Read("meas.csv"));
+  std::string bad;
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("7,", 0) == 0) {
+      std::vector<std::string> c = Cells(line, ',');
+      c[3] = cablecal::FormatDouble(std::stod(c[3]) + 0.1);
+      line = c[0] + "," + c[1] + "," + c[2] + "," + c[3] + "," + c[4];
+    }
+    bad += line + "\n";
+  }
+  tmp_.Write("bad.csv", bad);
+  const RunResult r = RunCablecal("identify --robot " + robot + " --measurements " + Path("bad.csv") +
+                                  " --loss cauchy --out " + Path("result.yaml") + " --report " + Path("report"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("report: " + Path("report") + "/report.md"), std::string::npos) << r.output;
+  ExpectReportFolder(Path("report"), kReportFigures);
+  EXPECT_EQ(Read("report/result.yaml"), Read("result.yaml"));
+  const std::string report = Read("report/report.md");
+  ExpectEstimatesTableMatches(report, YAML::LoadFile(Path("result.yaml")), 2);
+  // 20 readings, each of two encoders, the laser and the inclinometer; only the bad one down-weighted.
+  const std::vector<std::string> rows = DataRows(Read("report/residuals.csv"));
+  EXPECT_EQ(rows.size(), 20u * 4u);
+  int down = 0;
+  for (const std::string& row : rows) {
+    if (row.back() != '1') continue;
+    ++down;
+    EXPECT_EQ(row.rfind("7,7,laser,", 0), 0u) << row;
+  }
+  EXPECT_EQ(down, 1);
+  for (const char* text : {"# Calibration report: asymmetric", "loss `cauchy:10`", "\n- pose 7: laser ",
+                           "| 7 | 7 | laser | -", "(down-weighted)", "- condition number (largest / smallest): ",
+                           "- weakest pose: pose ", "## Warnings", "| cablecal | ", "(commit "}) {
+    EXPECT_NE(report.find(text), std::string::npos) << text << "\n" << report;
+  }
+  EXPECT_NE(report.find("identify --robot " + robot + " --measurements " + Path("bad.csv")), std::string::npos) << report;
+}
+
+// A 3-cable robot written here (not one of robots/), each pose read twice: the report counts
+// readings and poses and names every cable's parameters.
+TEST_F(Cli, IdentifyReportOnAThreeCableRobotWrittenHere) {
+  tmp_.Write("three.yaml", R"(name: three_by_hand
+gravity: 9.81
+frame: {width: 2.4, height: 1.8}
+platform:
+  mass: 1.2
+  com: [0.02, -0.05]
+  anchors: [[-0.3, 0.0], [0.05, 0.2], [0.3, 0.0]]
+cables:
+  - {exit: [0.0, 1.8], pulley_radius: 0.015, side: left}
+  - {exit: [0.6, 1.75], pulley_radius: 0.02, side: left}
+  - {exit: [2.4, 1.7], pulley_radius: 0.03, side: right}
+tension: {min: 1.0, max: 60.0}
+limits: {theta_max_deg: 45, laser_range: 2.0, margin: 0.05}
+home: [1.2, 0.9]
+home_theta_deg: 15
+sensors:
+  laser: {accuracy: 0.006, repeatability: 0.0015}
+  inclinometer: {accuracy_deg: 0.1, repeatability_deg: 0.05}
+  encoder: {sigma: 0.00005}
+)");
+  const std::string robot = Path("three.yaml");
+  ASSERT_EQ(RunCablecal("sample --robot " + robot + " --poses 6 --seed 2 --out " + Path("plan.csv")).exit_code, 0);
+  for (const char* seed : {"2", "3"}) {
+    ASSERT_EQ(RunCablecal("simulate --robot " + robot + " --plan " + Path("plan.csv") + " --seed " + seed + " --out " +
+                          Path(std::string("m") + seed + ".csv")).exit_code, 0);
+  }
+  const std::vector<std::string> second = DataRows(Read("m3.csv"));
+  std::string twice = Read("m2.csv");
+  for (const std::string& row : second) twice += row + "\n";
+  tmp_.Write("twice.csv", twice);
+  const RunResult r = RunCablecal("identify --robot " + robot + " --measurements " + Path("twice.csv") + " --out " +
+                                  Path("result.yaml") + " --report " + Path("report"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  ExpectReportFolder(Path("report"), kReportFigures);
+  const std::string report = Read("report/report.md");
+  ExpectEstimatesTableMatches(report, YAML::LoadFile(Path("result.yaml")), 3);
+  EXPECT_NE(report.find("identified from 6 poses (12 readings) of "), std::string::npos) << report;
+  EXPECT_EQ(DataRows(Read("report/residuals.csv")).size(), 12u * 5u);
+  EXPECT_EQ(Read("report/correlation.csv").find("\nparameter,a1x,a1z,a2x,a2z,a3x,a3z,l10,l20,l30\n") == std::string::npos,
+            false)
+      << Read("report/correlation.csv");
+  EXPECT_EQ(DataRows(Read("report/parameters.csv")).size(), 9u);
+  EXPECT_NE(report.find("loss `none`"), std::string::npos);
+  EXPECT_NE(report.find("None (`--loss none`, least squares)"), std::string::npos);
+}
+
+// Held-out readings of the same true robot: the report compares the calibrated and nominal
+// robots' predictions, its numbers those of validation.yaml; held-out data the report cannot
+// use are exit 2 with nothing written.
+TEST_F(Cli, IdentifyReportWithHoldoutSummarisesTheValidation) {
+  ASSERT_EQ(RunCablecal("sample --poses 12 --seed 3 --out " + Path("plan.csv")).exit_code, 0);
+  ASSERT_EQ(RunCablecal("simulate --plan " + Path("plan.csv") + " --geometry-sigma 0.005 --seed 5 --out " +
+                        Path("meas.csv") + " --truth-out " + Path("truth.yaml")).exit_code, 0);
+  ASSERT_EQ(RunCablecal("sample --poses 8 --seed 9 --out " + Path("plan2.csv")).exit_code, 0);
+  ASSERT_EQ(RunCablecal("simulate --plan " + Path("plan2.csv") + " --truth " + Path("truth.yaml") + " --seed 6 --out " +
+                        Path("holdout.csv")).exit_code, 0);
+  const std::string identify = "identify --measurements " + Path("meas.csv") + " --out " + Path("r.yaml");
+  const RunResult r = RunCablecal(identify + " --report " + Path("report") + " --holdout " + Path("holdout.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::vector<std::string> figures = kReportFigures;
+  figures.push_back("validation.png");
+  ExpectReportFolder(Path("report"), figures);
+  EXPECT_EQ(DataRows(Read("report/validation.csv")).size(), 8u);
+  const std::string report = Read("report/report.md");
+  ASSERT_NE(report.find("## Validation on held-out poses"), std::string::npos) << report;
+  EXPECT_NE(report.find("The readings of `" + Path("holdout.csv") + "` (8 poses)"), std::string::npos) << report;
+  EXPECT_NE(report.find("| held-out readings | `" + Path("holdout.csv") + "` |"), std::string::npos) << report;
+  const YAML::Node summary = YAML::LoadFile(Path("report/validation.yaml"));
+  EXPECT_EQ(summary["calibrated"]["file"].as<std::string>(), "identified from " + Path("meas.csv"));
+  for (const char* robot : {"calibrated", "nominal"}) {
+    const YAML::Node z = summary[robot]["z"], theta = summary[robot]["theta"];
+    const std::string row = std::string("| ") + robot + " | " + Printed("%.3g", 1e3 * z["rms_m"].as<double>()) + " | " +
+                            Printed("%.3g", 1e3 * z["max_abs_m"].as<double>()) + " | " +
+                            Printed("%.3g", 1e3 * theta["rms_rad"].as<double>()) + " | " +
+                            Printed("%.3g", 1e3 * theta["max_abs_rad"].as<double>()) + " |\n";
+    EXPECT_NE(report.find(row), std::string::npos) << row << report;
+  }
+  const double z_ratio = summary["nominal_over_calibrated"]["z_rms"].as<double>();
+  EXPECT_GT(z_ratio, 1.0);  // the calibration helps on poses it did not see
+  EXPECT_NE(report.find("Nominal / calibrated RMS error: z " + Printed("%.3g", z_ratio) + ", θ "), std::string::npos)
+      << report;
+
+  // --holdout alone, or readings of another robot: exit 2, nothing written.
+  tmp_.Write("three.csv", "pose,dl1,dl2,dl3,z,theta\n1,0,0,0,1,0\n");
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {identify + " --holdout " + Path("holdout.csv"), "--holdout: needs --report DIR"},
+      {identify + " --report " + Path("new") + " --holdout " + Path("three.csv"),
+       "three.csv:1: header: the file has columns for 3 cables, the robot has 2"},
+      {identify + " --report " + Path("report") + " --holdout " + Path("report/validation.csv"),
+       "--holdout: '" + Path("report/validation.csv") + "' is where --report writes its validation.csv"},
+  };
+  fs::remove(Path("r.yaml"));
+  for (const auto& [args, message] : cases) {
+    const RunResult bad = RunCablecal(args);
+    EXPECT_EQ(bad.exit_code, 2) << args << "\n" << bad.output;
+    EXPECT_NE(bad.output.find(message), std::string::npos) << args << "\n" << bad.output;
+    EXPECT_FALSE(fs::exists(Path("r.yaml"))) << args;
+    EXPECT_FALSE(fs::exists(Path("new"))) << args;
+    EXPECT_EQ(Read("report/report.md"), report) << args;
+  }
+}
+
+// The report folder is checked before any work: a file, a folder that cannot be written, a
+// missing parent, or a report that would overwrite --out are exit 2 and nothing is written.
+TEST_F(Cli, IdentifyReportFolderThatCannotBeWrittenIsExitTwo) {
+  ASSERT_EQ(RunCablecal("sample --poses 8 --seed 8 --out " + Path("plan.csv")).exit_code, 0);
+  ASSERT_EQ(RunCablecal("simulate --plan " + Path("plan.csv") + " --out " + Path("meas.csv")).exit_code, 0);
+  tmp_.Write("file", "not a folder");
+  fs::create_directory(Path("locked"));
+  fs::permissions(Path("locked"), fs::perms::owner_read | fs::perms::owner_exec | fs::perms::group_read |
+                                      fs::perms::group_exec | fs::perms::others_read | fs::perms::others_exec);
+  // root writes anywhere: the locked folder is tried as nobody then.
+  const std::string as_user = ::geteuid() == 0 ? "env setpriv --reuid=65534 --regid=65534 --clear-groups " : "env ";
+  const std::string identify = std::string(CABLECAL_BINARY) + " identify --measurements " + Path("meas.csv") + " --out ";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"env " + identify + Path("r.yaml") + " --report " + Path("file"), "--report: '" + Path("file") + "' exists and is not a folder"},
+      {as_user + identify + Path("locked/r.yaml") + " --report " + Path("locked"), "--report: cannot write into '" + Path("locked") + "': Permission denied"},
+      {as_user + identify + Path("locked/r.yaml") + " --report " + Path("locked/new"), "--report: cannot write into '" + Path("locked") + "': Permission denied"},
+      {"env " + identify + Path("r.yaml") + " --report " + Path("nowhere/report"),
+       "--report: cannot write into '" + Path("nowhere/report") + "': folder '" + Path("nowhere") + "' does not exist"},
+      {"env " + identify + Path("rep/result.yaml") + " --report " + Path("rep"),
+       "--out: '" + Path("rep/result.yaml") + "' is where --report writes its result.yaml"},
+  };
+  fs::create_directory(Path("rep"));
+  for (const auto& [command, message] : cases) {
+    const RunResult r = RunCablecal(command);
+    EXPECT_EQ(r.exit_code, 2) << command << "\n" << r.output;
+    EXPECT_NE(r.output.find("cablecal: error: " + message), std::string::npos) << command << "\n" << r.output;
+  }
+  EXPECT_EQ(Read("file"), "not a folder");
+  EXPECT_FALSE(fs::exists(Path("r.yaml")));
+  EXPECT_TRUE(fs::is_empty(Path("locked")));
+  EXPECT_TRUE(fs::is_empty(Path("rep")));
+  EXPECT_FALSE(fs::exists(Path("nowhere")));
+}
+
+// A figure that cannot be made keeps the results (exit 5): report.md says why in the figures'
+// place, the data files are written, and an earlier report's figures are gone.
+TEST_F(Cli, IdentifyReportWithoutFiguresKeepsTheRestAndExitsFive) {
+  ASSERT_EQ(RunCablecal("sample --poses 8 --seed 8 --out " + Path("plan.csv")).exit_code, 0);
+  ASSERT_EQ(RunCablecal("simulate --plan " + Path("plan.csv") + " --out " + Path("meas.csv")).exit_code, 0);
+  const std::string args = " identify --measurements " + Path("meas.csv") + " --out " + Path("r.yaml") + " --report " +
+                           Path("report");
+  ASSERT_EQ(RunCablecal(args).exit_code, 0);
+  ExpectPng(Path("report/residuals.png"));
+  const RunResult r = RunCablecal("env CABLECAL_PYTHON=/bin/false " + std::string(CABLECAL_BINARY) + args);
+  EXPECT_EQ(r.exit_code, 5) << r.output;
+  EXPECT_NE(r.output.find("the figure could not be made"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("report.md, without figures) and its data files were written"), std::string::npos) << r.output;
+  const std::string report = Read("report/report.md");
+  EXPECT_NE(report.find("**The figures could not be made:** the figure could not be made: the plotting script failed"),
+            std::string::npos)
+      << report;
+  EXPECT_EQ(report.find(".png)"), std::string::npos) << report;
+  for (const std::string& f : kReportFigures) EXPECT_FALSE(fs::exists(Path("report/" + f))) << f;
+  EXPECT_EQ(DataRows(Read("report/residuals.csv")).size(), 8u * 4u);
+  EXPECT_TRUE(fs::exists(Path("r.yaml")));
+}
+
+// Ctrl-C while the report's figures are drawn (a slow plotting script here): exit 130, and
+// neither --out nor the report is written.
+TEST_F(Cli, IdentifyReportInterruptedWhileDrawingWritesNothing) {
+  ASSERT_EQ(RunCablecal("sample --poses 8 --seed 8 --out " + Path("plan.csv")).exit_code, 0);
+  ASSERT_EQ(RunCablecal("simulate --plan " + Path("plan.csv") + " --out " + Path("meas.csv")).exit_code, 0);
+  tmp_.Write("slow.sh", "#!/bin/sh\nsleep 4\n");
+  fs::permissions(Path("slow.sh"), fs::perms::owner_all);
+  const RunResult r = RunCablecal("env CABLECAL_PYTHON=" + Path("slow.sh") + " timeout --preserve-status -s INT 2 " +
+                                  CABLECAL_BINARY + " identify --measurements " + Path("meas.csv") + " --out " +
+                                  Path("r.yaml") + " --report " + Path("report"));
+  EXPECT_EQ(r.exit_code, 130) << r.output;
+  EXPECT_NE(r.output.find("interrupted: no output written"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(Path("r.yaml")));
+  EXPECT_FALSE(fs::exists(Path("report")));
 }
 
 }  // namespace

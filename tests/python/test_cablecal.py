@@ -376,6 +376,94 @@ def test_a_gross_laser_reading_is_named_and_rejected_by_cauchy():
         cablecal.identify(robot, m, loss="tukey")
 
 
+def report_section(text, heading):
+    """One `## heading` section of a report.md, up to the next section."""
+    return text.split("## " + heading + "\n", 1)[1].split("\n## ", 1)[0]
+
+
+def is_png(path):
+    data = path.read_bytes()
+    return data[:8] == b"\x89PNG\r\n\x1a\n" and data[12:16] == b"IHDR" and data[-8:-4] == b"IEND"
+
+
+def test_report_equals_the_clis(tmp_path):
+    path = robot_file("planar3_suspended")
+    robot = cablecal.Robot.load(path)
+    exp = cablecal.simulate(robot, cablecal.sample(robot, 10, seed=3), seed=2)
+    meas_csv = tmp_path / "meas.csv"
+    meas_csv.write_text(exp.measurements.to_csv())
+    result = cablecal.identify(robot, exp.measurements, loss="huber")
+    written = cablecal.report(robot, result, tmp_path / "py")
+    assert written == str(tmp_path / "py" / "report.md")
+    cli("identify", "--robot", path, "--measurements", str(meas_csv), "--loss", "huber", "--out",
+        str(tmp_path / "r.yaml"), "--report", str(tmp_path / "cli"))
+    for name in ("parameters.csv", "correlation.csv", "singular_values.csv", "residuals.csv"):
+        assert data_lines(tmp_path / "py" / name) == data_lines(tmp_path / "cli" / name), name
+    assert len(data_lines(tmp_path / "py" / "residuals.csv").splitlines()) == 1 + 10 * 5  # header, 3 encoders + 2
+    py_md, cli_md = (tmp_path / "py" / "report.md").read_text(), (tmp_path / "cli" / "report.md").read_text()
+    for heading in ("Estimates", "Correlations", "Residuals per pose", "Robust loss", "Identifiability", "Warnings"):
+        assert report_section(py_md, heading) == report_section(cli_md, heading), heading
+    assert "| command | `python: cablecal.report` |" in py_md
+    for figure in ("estimates.png", "correlation.png", "residuals.png", "singular_values.png"):
+        assert is_png(tmp_path / "py" / figure), figure
+        assert f"]({figure})" in py_md
+    # The table's values are the result's, m to 1 um.
+    rows = [line.split("|") for line in report_section(py_md, "Estimates").splitlines() if line.startswith("| a")
+            or line.startswith("| l")]
+    assert [r[1].strip() for r in rows] == result.geometry_names
+    np.testing.assert_allclose([float(r[3]) for r in rows], result.geometry, atol=5.000001e-7)
+
+
+def test_report_with_holdout_equals_the_clis(tmp_path):
+    path = robot_file("asymmetric")
+    robot = cablecal.Robot.load(path)
+    calibration = cablecal.simulate(robot, cablecal.sample(robot, 14, seed=6), geometry_sigma=0.003, seed=2)
+    meas_csv, holdout_csv = tmp_path / "meas.csv", tmp_path / "holdout.csv"
+    meas_csv.write_text(calibration.measurements.to_csv())
+    holdout_csv.write_text(cablecal.simulate(robot, cablecal.sample(robot, 6, seed=7), truth=calibration.truth,
+                                             seed=3).measurements.to_csv())
+    result = cablecal.identify(robot, calibration.measurements)
+    holdout = cablecal.Measurements.load(robot, holdout_csv)
+    cablecal.report(robot, result, tmp_path / "py", holdout=holdout)
+    cli("identify", "--robot", path, "--measurements", str(meas_csv), "--out", str(tmp_path / "r.yaml"),
+        "--report", str(tmp_path / "cli"), "--holdout", str(holdout_csv))
+    assert data_lines(tmp_path / "py" / "validation.csv") == data_lines(tmp_path / "cli" / "validation.csv")
+    assert len(data_lines(tmp_path / "py" / "validation.csv").splitlines()) == 1 + 6
+    py_md, cli_md = (tmp_path / "py" / "report.md").read_text(), (tmp_path / "cli" / "report.md").read_text()
+    section = report_section(py_md, "Validation on held-out poses")
+    assert section == report_section(cli_md, "Validation on held-out poses")
+    assert f"The readings of `{holdout_csv}` (6 poses)" in section and "| calibrated | " in section
+    assert "| nominal | " in section and "Nominal / calibrated RMS error: z " in section
+    assert is_png(tmp_path / "py" / "validation.png") and "](validation.png)" in section
+    assert f"| held-out readings | `{holdout_csv}` |" in py_md
+    # The same numbers as validate() of the calibrated robot.
+    v = cablecal.validate(cablecal.calibrated_robot(robot, result), holdout, nominal=robot)
+    assert f"| calibrated | {1e3 * v.robots['calibrated']['z_rms']:.3g} | " in section
+    with pytest.raises(cablecal.InputError, match="holdout: expected a cablecal.Measurements"):
+        cablecal.report(robot, result, tmp_path / "bad", holdout=str(holdout_csv))
+    assert not (tmp_path / "bad").exists()
+
+
+def test_report_refuses_a_file_and_keeps_the_data_without_figures(tmp_path, monkeypatch):
+    robot = cablecal.Robot.load(robot_file("asymmetric"))
+    result = cablecal.identify(robot, cablecal.simulate(robot, cablecal.sample(robot, 8, seed=5), seed=1).measurements)
+    (tmp_path / "file").write_text("not a folder")
+    with pytest.raises(cablecal.InputError, match="exists and is not a folder"):
+        cablecal.report(robot, result, tmp_path / "file")
+    with pytest.raises(cablecal.InputError, match="does not exist"):
+        cablecal.report(robot, result, tmp_path / "nowhere" / "report")
+    with pytest.raises(cablecal.InputError, match="3 cables, the nominal robot has 2|2 cables, the nominal robot has 3"):
+        cablecal.report(cablecal.Robot.load(robot_file("planar3_suspended")), result, tmp_path / "other")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["file"]
+    # No plotting script: the report and its data are written, then FigureError.
+    monkeypatch.setenv("CABLECAL_SCRIPTS_DIR", str(tmp_path / "no-scripts"))
+    with pytest.raises(cablecal.FigureError, match="the plotting script failed .*report.md, without figures"):
+        cablecal.report(robot, result, tmp_path / "report")
+    assert "**The figures could not be made:**" in (tmp_path / "report" / "report.md").read_text()
+    assert not list((tmp_path / "report").glob("*.png"))
+    assert (tmp_path / "report" / "residuals.csv").exists()
+
+
 def test_montecarlo_with_outliers_and_a_loss():
     robot = cablecal.Robot.builtin()
     clean = cablecal.montecarlo(robot, 12, 4, designs="random", seed=3, threads=1)
