@@ -21,6 +21,16 @@ constexpr double kDegToRad = M_PI / 180.0;
 // left out. Each bracket is then refined by the Illinois method.
 constexpr double kThetaSearchMax_rad = 89.0 * kDegToRad;
 constexpr int kThetaSearchSteps = 36;
+// The scan's angles are the same at every (x, z): their rotations once, when the program
+// starts (not a function-local static: its first-use lock could be held across a fork of the
+// design's child processes).
+const std::array<Eigen::Matrix2d, kThetaSearchSteps + 1> kScanRotations = [] {
+  const double step = 2.0 * kThetaSearchMax_rad / kThetaSearchSteps;
+  std::array<Eigen::Matrix2d, kThetaSearchSteps + 1> r;
+  r[0] = Rotation(-kThetaSearchMax_rad);
+  for (int k = 1; k <= kThetaSearchSteps; ++k) r[k] = Rotation(-kThetaSearchMax_rad + k * step);
+  return r;
+}();
 // A force matrix this close to singular means parallel cables: no equilibrium there.
 constexpr double kParallelCablesDet = 1e-12;
 // Root refinement stops at this bracket width (rad): double rounding near theta = O(1).
@@ -163,13 +173,6 @@ EquilibriumResult SolveEquilibrium(const Robot& robot, double x_m, double z_m) {
   };
 
   const double step = 2.0 * kThetaSearchMax_rad / kThetaSearchSteps;
-  // The scan's angles are the same at every (x, z): their rotations once per process.
-  static const std::array<Eigen::Matrix2d, kThetaSearchSteps + 1> kScanRotations = [step] {
-    std::array<Eigen::Matrix2d, kThetaSearchSteps + 1> r;
-    r[0] = Rotation(-kThetaSearchMax_rad);
-    for (int k = 1; k <= kThetaSearchSteps; ++k) r[k] = Rotation(-kThetaSearchMax_rad + k * step);
-    return r;
-  }();
   double theta_prev = -kThetaSearchMax_rad;
   MomentBalance prev = EvaluateMomentBalance(robot, x_m, z_m, theta_prev, &kScanRotations[0]);
   any_valid = prev.valid;
