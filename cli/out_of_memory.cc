@@ -21,6 +21,18 @@ void* operator new(std::size_t bytes) {
 }
 
 void* operator new[](std::size_t bytes) { return ::operator new(bytes); }
+// The nothrow forms too (std::stable_sort's buffer uses them): every replaced delete frees with
+// free(), so every new that it may free must come from malloc (AddressSanitizer checks it).
+void* operator new(std::size_t bytes, const std::nothrow_t&) noexcept {
+  try {
+    return ::operator new(bytes);
+  } catch (...) {
+    return nullptr;
+  }
+}
+void* operator new[](std::size_t bytes, const std::nothrow_t& tag) noexcept { return ::operator new(bytes, tag); }
+void operator delete(void* p, const std::nothrow_t&) noexcept { std::free(p); }
+void operator delete[](void* p, const std::nothrow_t&) noexcept { std::free(p); }
 
 void operator delete(void* p) noexcept { std::free(p); }
 void operator delete[](void* p) noexcept { std::free(p); }
