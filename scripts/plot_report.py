@@ -31,6 +31,13 @@ REFUSAL_SIGMAS = 4.5
 DPI = 110
 
 
+
+def save(fig, folder, name):
+    """Lays the figure out, writes it as folder/name and frees it."""
+    fig.tight_layout()
+    fig.savefig(os.path.join(folder, name), dpi=DPI)
+    plt.close(fig)
+
 def read_csv(path):
     with open(path, newline="") as f:
         return list(csv.DictReader(line for line in f if not line.startswith("#")))
@@ -112,9 +119,7 @@ def correlation(folder, title):
                         color="white" if abs(c[a, b]) > 0.6 else "black")
     note = f" ({', '.join(sorted(held))} held: not shown)" if held else ""
     ax.set_title(f"{title}: correlation of the identified parameters{note}", fontsize=10)
-    fig.tight_layout()
-    fig.savefig(os.path.join(folder, "correlation.png"), dpi=DPI)
-    plt.close(fig)
+    save(fig, folder, "correlation.png")
 
 
 def residuals(folder, title, whitened):
@@ -177,9 +182,7 @@ def residuals(folder, title, whitened):
     what = ("each reading's residual, model − reading, over its sensor's σ" if whitened else
             "each cable-length residual over the laser's σ (estimator paper)")
     fig.suptitle(f"{title}: {what} (grey: ±1 σ)", fontsize=10)
-    fig.tight_layout()
-    fig.savefig(os.path.join(folder, "residuals.png"), dpi=DPI)
-    plt.close(fig)
+    save(fig, folder, "residuals.png")
 
 
 def short(v):
@@ -217,9 +220,7 @@ def singular_values(folder, title, whitened, condition):
         right.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
         right.set_ylabel("σ along its direction (mm) = 1000 / s")
     ax.set_title(f"{title}: identifiability, condition number {condition}", fontsize=10)
-    fig.tight_layout()
-    fig.savefig(os.path.join(folder, "singular_values.png"), dpi=DPI)
-    plt.close(fig)
+    save(fig, folder, "singular_values.png")
 
 
 def validation(folder, title, noise):
@@ -254,9 +255,7 @@ def validation(folder, title, noise):
     axes[-1, 0].set_xlabel("held-out pose")
     fig.suptitle(f"{title}: held-out poses, the forward model's prediction against the laser and inclinometer",
                  fontsize=10)
-    fig.tight_layout()
-    fig.savefig(os.path.join(folder, "validation.png"), dpi=DPI)
-    plt.close(fig)
+    save(fig, folder, "validation.png")
 
 
 def main():
