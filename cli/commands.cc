@@ -401,8 +401,7 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
     std::vector<std::vector<double>> by_sensor(3);
     for (const ReadingFit& f : result.readings) {
       for (int i = 0; i < m + 2; ++i) {
-        const bool read = i < m || (i == m ? bool(f.laser_sigmas) : bool(f.inclinometer_sigmas));
-        if (read) by_sensor[i < m ? 0 : i - m + 1].push_back(f.min_detectable_sigmas(i));
+        if (f.HasValue(i)) by_sensor[i < m ? 0 : i - m + 1].push_back(f.min_detectable_sigmas(i));
       }
     }
     std::printf("  a single wrong reading shows beyond 4.5 sigma from (median):");

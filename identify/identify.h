@@ -109,6 +109,11 @@ struct ReadingFit {
   // CheckPosesAgainstTheOthers); infinite where nothing checks it. Empty when not computed
   // (paper, gauge none, a robust loss).
   Eigen::VectorXd min_detectable_sigmas;
+  // Whether value `row` (encoders, then laser, inclinometer) was read and fitted.
+  bool HasValue(int row) const {
+    const int m = static_cast<int>(encoder_sigmas.size());
+    return row < m || (row == m ? laser_sigmas.has_value() : inclinometer_sigmas.has_value());
+  }
 };
 
 struct PoseEstimate {

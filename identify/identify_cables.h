@@ -479,13 +479,17 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   // person's result or ahead of a robust loss, not in a plain Monte Carlo trial.
   std::vector<PoseCheck> checks;
   int flagged_pose = -1;  // the pose whose readings stand out most, if beyond kOutlierSigmas
+  // Least squares' Jacobian blocks and their analysis, kept for the result's covariance and
+  // identifiability when no robust fit follows (the same problem at the same values).
+  std::optional<BlockJacobian> ls_blocks;
+  std::optional<BlockAnalysis> ls_analysis;
   if (ml && options.gauge == Gauge::kA1x && (options.compute_covariance || robust)) {
     std::vector<Eigen::VectorXd> block_residuals;
-    const BlockJacobian ls_blocks = jacobian_blocks(*problem, false, &block_residuals);
-    const BlockAnalysis ls_analysis = AnalyzeBlocks(ls_blocks, 1e-9);
-    if (ls_analysis.null_vectors.empty()) {
-      if (const std::optional<BlockCovariance> cov = CovarianceOf(ls_blocks, ls_analysis)) {
-        checks = CheckPosesAgainstTheOthers(ls_blocks, ls_analysis, cov->geometry, block_residuals, kOutlierSigmas);
+    ls_blocks = jacobian_blocks(*problem, false, &block_residuals);
+    ls_analysis = AnalyzeBlocks(*ls_blocks, 1e-9);
+    if (ls_analysis->null_vectors.empty()) {
+      if (const std::optional<BlockCovariance> cov = CovarianceOf(*ls_blocks, *ls_analysis)) {
+        checks = CheckPosesAgainstTheOthers(*ls_blocks, *ls_analysis, cov->geometry, block_residuals, kOutlierSigmas);
         double worst = kOutlierSigmas;
         for (int j = 0; j < n; ++j) {
           if (checks[j].deleted_residual_sigmas > worst) {
@@ -569,11 +573,16 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     return std::nullopt;
   };
   const std::optional<LeftOut> left_out = leave_out();
-  const auto explain_left_out = [&](const LeftOut& l) {
+  // "7", "7 and 12", "3, 7 and 12"
+  const auto left_out_ids = [&](const LeftOut& l) {
     std::string names;
     for (std::size_t k = 0; k < l.poses.size(); ++k) {
       names += (k == 0 ? "" : k + 1 == l.poses.size() ? " and " : ", ") + std::to_string(pose_id_of(l.poses[k]));
     }
+    return names;
+  };
+  const auto explain_left_out = [&](const LeftOut& l) {
+    const std::string names = left_out_ids(l);
     std::string worst;
     for (std::size_t k = 0; k < std::min<std::size_t>(3, l.worst.size()); ++k) {
       worst += (k ? ", " : "") + describe(l.worst[k], l.poses.size() > 1);
@@ -727,9 +736,10 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   // pose (its readings one after another), then the prior. Covariance and identifiability from
   // it cost O(n) (identify/schur.h). With a robust loss Ceres scales each row by the square
   // root of its loss weight (apply_loss_function): a down-weighted reading informs less.
-  const BlockJacobian blocks = jacobian_blocks(*problem, robust, nullptr);
+  const bool reuse = !robust && ls_blocks.has_value();
+  const BlockJacobian blocks = reuse ? std::move(*ls_blocks) : jacobian_blocks(*problem, robust, nullptr);
   // A null direction: singular value below 1e-9 of the largest (rounding, not data).
-  const BlockAnalysis analysis = AnalyzeBlocks(blocks, 1e-9);
+  const BlockAnalysis analysis = reuse ? std::move(*ls_analysis) : AnalyzeBlocks(blocks, 1e-9);
 
   if (options.compute_identifiability) {
     Identifiability& id = result.identifiability;
@@ -869,10 +879,8 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
       if (result.geometry_std(k) > 0.0 && apart > 2.0 * result.geometry_std(k)) {
         char buffer[96];
         std::snprintf(buffer, sizeof(buffer), "%.3g sigma", apart / result.geometry_std(k));
-        std::string poses_left_out;
-        for (const int j : left_out->poses) poses_left_out += (poses_left_out.empty() ? "" : ", ") + std::to_string(pose_id_of(j));
         result.warnings.push_back("the " + ToString(options.loss) + " estimate of " + geometry_names[k] + " is " +
-                                  buffer + " from the fit without pose " + poses_left_out +
+                                  buffer + " from the fit without pose " + left_out_ids(*left_out) +
                                   " (readings that do not fit the others): " +
                                   (options.loss.kind == LossKind::kHuber
                                        ? "Huber's loss never ignores a reading and follows them; --loss cauchy rejects them"

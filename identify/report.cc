@@ -146,8 +146,7 @@ std::string IdentifyResultYaml(const IdentifyResult& r, const std::string& comma
         // Encoders, then the laser and inclinometer the data have (a missing sensor's row is 0).
         o << Key << "detectable_sigmas" << Value << Flow << BeginSeq;
         for (int i = 0; i < f.min_detectable_sigmas.size(); ++i) {
-          const bool read = i < f.encoder_sigmas.size() || (i == f.encoder_sigmas.size() ? bool(f.laser_sigmas) : bool(f.inclinometer_sigmas));
-          if (read) o << YamlNumber{f.min_detectable_sigmas(i)};
+          if (f.HasValue(i)) o << YamlNumber{f.min_detectable_sigmas(i)};
         }
         o << EndSeq;
       }

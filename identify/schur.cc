@@ -78,6 +78,7 @@ BlockAnalysis AnalyzeBlocks(const BlockJacobian& jacobian, double null_tolerance
     a.reduced.middleRows(row, r - rank).noalias() = u.rightCols(r - rank).transpose() * b.geometry;
     row += r - rank;
     PoseElimination& e = a.poses[j];
+    e.u2 = u.rightCols(r - rank);
     e.k.noalias() = v.leftCols(rank) * inv_s.asDiagonal() * (u.leftCols(rank).transpose() * b.geometry);
     e.inverse_normal.noalias() = v.leftCols(rank) * inv_s.cwiseAbs2().asDiagonal() * v.leftCols(rank).transpose();
     // A direction of this pose's own unknowns that its readings do not see is a null
@@ -198,7 +199,6 @@ std::vector<PoseCheck> CheckPosesAgainstTheOthers(const BlockJacobian& jacobian,
                                                   const std::vector<Eigen::VectorXd>& residuals, double sigmas) {
   const int n = static_cast<int>(jacobian.poses.size());
   CABLECAL_CHECK(static_cast<int>(residuals.size()) == n, "one residual vector per pose");
-  const double threshold = analysis.null_tolerance * analysis.scale;
   constexpr double kNoLeft = 1e-12;  // 1 - leverage below this: the others do not see it at all
   std::vector<PoseCheck> out(n);
   for (int j = 0; j < n; ++j) {
@@ -206,13 +206,9 @@ std::vector<PoseCheck> CheckPosesAgainstTheOthers(const BlockJacobian& jacobian,
     const int r = static_cast<int>(b.pose.rows());
     PoseCheck& check = out[j];
     check.min_detectable_sigmas = Eigen::VectorXd::Constant(r, std::numeric_limits<double>::infinity());
-    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(b.pose, Eigen::ComputeFullU);
-    const Eigen::VectorXd& s = svd.singularValues();
-    int rank = 0;
-    while (rank < s.size() && s(rank) >= threshold && s(rank) > 0.0) ++rank;
-    const int d = r - rank;
+    const Eigen::MatrixXd& u2 = analysis.poses[j].u2;  // AnalyzeBlocks' elimination of the pose's unknowns
+    const int d = static_cast<int>(u2.cols());
     if (d == 0) continue;
-    const Eigen::MatrixXd u2 = svd.matrixU().rightCols(d);
     const Eigen::MatrixXd g = u2.transpose() * b.geometry;
     const Eigen::MatrixXd h = g * cov_geometry * g.transpose();
     const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(Eigen::MatrixXd::Identity(d, d) - h);

@@ -37,6 +37,7 @@ struct BlockJacobian {
 struct PoseElimination {
   Eigen::MatrixXd inverse_normal;  // p x p: (J_p^T J_p)^-1 (pseudo-inverse if J_p is deficient)
   Eigen::MatrixXd k;               // p x G: J_p^+ J_g (how the pose estimate follows the geometry)
+  Eigen::MatrixXd u2;              // r x (r - rank): the pose's readings' directions outside J_p's range
   double min_singular_value = 0.0, max_singular_value = 0.0;  // of J_p
 };
 
