@@ -173,10 +173,6 @@ OutlierModel ParseOutliers(const std::string& text) {
   return model;
 }
 
-std::string ToString(const OutlierModel& model) {
-  return FormatDouble(model.rate) + ":" + FormatDouble(model.size_sigmas);
-}
-
 void AddOutliers(std::vector<Measurement>& readings, const SensorNoise& sensors, const OutlierModel& model, Rng& rng) {
   const auto perturb = [&](double& value, double sigma) {
     const double hit = rng.Uniform(), sign = rng.Uniform() < 0.5 ? -1.0 : 1.0;

@@ -130,7 +130,6 @@ struct OutlierModel {
   double size_sigmas = 100.0;
 };
 OutlierModel ParseOutliers(const std::string& text);  // "RATE[:SIZE]", 0 <= RATE <= 1, SIZE > 0; InputError naming --outliers
-std::string ToString(const OutlierModel& model);     // "0.01:100"
 // Draws two uniforms per reading value, used or not, so the stream does not depend on the rate.
 void AddOutliers(std::vector<Measurement>& readings, const SensorNoise& sensors, const OutlierModel& model, Rng& rng);
 
