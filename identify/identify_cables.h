@@ -25,6 +25,7 @@
 #include "common/format.h"
 #include "identify/cost_functors.h"
 #include "identify/identify.h"
+#include "identify/least_squares.h"
 #include "identify/residuals.h"
 #include "identify/schur.h"
 #include "model/statics.h"
@@ -293,21 +294,54 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     ceres::Solve(solver_options, &problem, &summary);
     return summary;
   };
+  const auto from_ceres = [](const ceres::Solver::Summary& sum) {
+    LeastSquaresSummary out;
+    out.converged = sum.termination_type == ceres::CONVERGENCE;
+    out.iterations = static_cast<int>(sum.iterations.size()) - 1;
+    out.final_cost = sum.final_cost;
+    out.message = sum.message;
+    return out;
+  };
+  // Least squares over the poses in `use`: for ml the block-arrow Levenberg-Marquardt written
+  // for it (least_squares.h: the same iterations as Ceres', without its set-up, which was half
+  // of every Monte Carlo trial's solve), for the paper's estimator Ceres.
+  MlLeastSquaresProblem<M> ml_problem;
+  ml_problem.robot = &nominal;
+  ml_problem.measurements = &measurements;
+  ml_problem.readings_of = &readings_of;
+  ml_problem.weights = weights;
+  ml_problem.hold_a1x = options.gauge == Gauge::kA1x;
+  if (options.gauge == Gauge::kPrior) {
+    ml_problem.prior_exits_m = nominal_geometry.head<2 * M>();
+    ml_problem.prior_inv_sigma = 1.0 / *s.tracker_sigma_m;
+  }
+  ml_problem.max_iterations = options.max_iterations;
+  const auto least_squares = [&](double* g, PoseValues& q, const std::vector<char>& use) {
+    if (ml) return SolveMlLeastSquares<M>(ml_problem, g, q, use);
+    std::unique_ptr<ceres::Problem> p = build(g, q, use, RobustLoss{});
+    return from_ceres(solve(*p, g, q, use, false));
+  };
   const std::vector<char> every_pose(n, 1);
   // Least squares first, also under a robust loss: its residuals say whether there is anything
   // to down-weight, and where to start (below).
-  std::unique_ptr<ceres::Problem> problem = build(geometry, poses, every_pose, RobustLoss{});
-  ceres::Solver::Summary summary = solve(*problem, geometry, poses, every_pose, false);
-  const auto converged = [&](const ceres::Solver::Summary& sum, const double* g, const PoseValues& q,
+  LeastSquaresSummary summary = least_squares(geometry, poses, every_pose);
+  // The Ceres problem at the estimate, for the Jacobian blocks of the covariance and the pose
+  // checks: built when first needed (the Monte Carlo needs none); a robust fit's replaces it.
+  std::unique_ptr<ceres::Problem> problem;
+  const auto problem_at_estimate = [&]() -> ceres::Problem& {
+    if (!problem) problem = build(geometry, poses, every_pose, RobustLoss{});
+    return *problem;
+  };
+  const auto converged = [&](const LeastSquaresSummary& sum, const double* g, const PoseValues& q,
                              const std::vector<char>& use) {
-    bool ok = sum.termination_type == ceres::CONVERGENCE;
+    bool ok = sum.converged;
     for (int k = 0; k < kGeometry; ++k) ok = ok && std::isfinite(g[k]);
     for (int j = 0; j < n; ++j) ok = ok && (!use[j] || (std::isfinite(q[j][0]) && std::isfinite(q[j][1]) && std::isfinite(q[j][2])));
     return ok;
   };
-  const auto not_converged = [&](const ceres::Solver::Summary& sum) {
+  const auto not_converged = [&](const LeastSquaresSummary& sum) {
     result.status = IdentifyStatus::kNotConverged;
-    result.iterations = static_cast<int>(sum.iterations.size()) - 1;
+    result.iterations = sum.iterations;
     result.message = "Levenberg-Marquardt did not converge after " + std::to_string(result.iterations) +
                      " iterations: " + sum.message +
                      " (a grossly wrong reading can do this: check the readings, or raise --max-iterations)";
@@ -485,7 +519,7 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   std::optional<BlockAnalysis> ls_analysis;
   if (ml && options.gauge == Gauge::kA1x && (options.compute_covariance || robust)) {
     std::vector<Eigen::VectorXd> block_residuals;
-    ls_blocks = jacobian_blocks(*problem, false, &block_residuals);
+    ls_blocks = jacobian_blocks(problem_at_estimate(), false, &block_residuals);
     ls_analysis = AnalyzeBlocks(*ls_blocks, 1e-9);
     if (ls_analysis->null_vectors.empty()) {
       if (const std::optional<BlockCovariance> cov = CovarianceOf(*ls_blocks, *ls_analysis)) {
@@ -541,8 +575,7 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
           double g[kGeometry];
           std::copy(out.geometry_values, out.geometry_values + kGeometry, g);
           PoseValues q = out.pose_values;
-          std::unique_ptr<ceres::Problem> trial = build(g, q, use, RobustLoss{});
-          const ceres::Solver::Summary sum = solve(*trial, g, q, use, false);
+          const LeastSquaresSummary sum = least_squares(g, q, use);
           if (converged(sum, g, q, use) && sum.final_cost < best_cost) {
             best_cost = sum.final_cost;
             best = j;
@@ -602,10 +635,10 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
       poses = left_out->pose_values;
     }
     problem = build(geometry, poses, every_pose, options.loss);
-    summary = solve(*problem, geometry, poses, every_pose, false);
+    summary = from_ceres(solve(*problem, geometry, poses, every_pose, false));
     if (!converged(summary, geometry, poses, every_pose)) return not_converged(summary);
   }
-  result.iterations = static_cast<int>(summary.iterations.size()) - 1;
+  result.iterations = summary.iterations;
   result.final_cost = summary.final_cost;
   result.geometry = Eigen::Map<const GeometryVector>(geometry, kGeometry);
   result.status = IdentifyStatus::kConverged;
@@ -737,7 +770,7 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   // it cost O(n) (identify/schur.h). With a robust loss Ceres scales each row by the square
   // root of its loss weight (apply_loss_function): a down-weighted reading informs less.
   const bool reuse = !robust && ls_blocks.has_value();
-  const BlockJacobian blocks = reuse ? std::move(*ls_blocks) : jacobian_blocks(*problem, robust, nullptr);
+  const BlockJacobian blocks = reuse ? std::move(*ls_blocks) : jacobian_blocks(problem_at_estimate(), robust, nullptr);
   // A null direction: singular value below 1e-9 of the largest (rounding, not data).
   const BlockAnalysis analysis = reuse ? std::move(*ls_analysis) : AnalyzeBlocks(blocks, 1e-9);
 
@@ -840,7 +873,9 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
       } else if (!ml) {
         // gauge none: the covariance scaled by the residual variance s^2 (conservative: the
         // sandwich above is not taken through the pseudo-inverse).
-        const int dof = summary.num_residuals - (summary.num_effective_parameters - expected_null);
+        // Ceres' rows and tangent-space unknowns of this problem (M rows per reading, no prior
+        // under gauge none, 3M + n unknowns).
+        const int dof = M * num_readings - (kGeometry + n - expected_null);
         scale = dof > 0 ? 2.0 * summary.final_cost / dof : std::numeric_limits<double>::quiet_NaN();
       }
       // Back from the tangent space: a held a1x has no variance.

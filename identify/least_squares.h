@@ -1,0 +1,337 @@
+// Internal to identify/: Levenberg-Marquardt written for the ml estimator's least squares
+// (no robust loss), the problem every Monte Carlo trial solves. Its Jacobian is block-arrow:
+// each reading's rows touch the geometry and its own pose's (x, z, theta) only, so each
+// step eliminates the poses' 3 x 3 blocks and solves a 3M x 3M Schur complement, as Ceres'
+// DENSE_SCHUR does, without Ceres' general machinery (building a Problem, preprocessing,
+// block-sparse bookkeeping), which was half of every 50-pose solve (bench/README.md, issue 15).
+//
+// The iterations are Ceres' Levenberg-Marquardt's (identify_cables.h's options): the damping
+// mu diag(J^T J) with mu = 1 / radius (diagonal clamped to [1e-6, 1e32]), the radius updated
+// from the step's quality as Ceres does, and its three convergence tests (gradient 1e-12,
+// step 1e-10, relative cost change 1e-10; the step that meets the last is not taken). The
+// estimates therefore agree with Ceres' to rounding (tests/identify/least_squares_test.cc).
+//
+// The residuals are identify/residuals.h's. The length rows' derivatives take CableResidual
+// with a 2-lane Jet on the anchor: a cable's length depends on its exit point and anchor
+// only through their difference (cable.h), so d r/d(exit) = -d r/d(anchor), d r/d l_i0 = -1,
+// and d r/d(pose) = d r/d(anchor) d(anchor)/d(pose), the anchor from a 3-lane Jet over the
+// pose (4 to 9 times fewer derivative lanes than a Jet over every column).
+#pragma once
+
+#include <ceres/jet.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "identify/experiment.h"
+#include "identify/residuals.h"
+#include "model/cable.h"
+#include "model/robot.h"
+
+namespace cablecal::internal {
+
+// The problem: readings grouped by pose (readings_of[j]: indices into measurements), the
+// weights that whiten them (a missing sensor's weight is 0), whether a1x is held (gauge a1x)
+// and the tracker prior on the exit points (gauge prior; prior_inv_sigma 0 without one).
+template <int M>
+struct MlLeastSquaresProblem {
+  const Robot* robot = nullptr;
+  const std::vector<Measurement>* measurements = nullptr;
+  const std::vector<std::vector<int>>* readings_of = nullptr;
+  ReadingWeights weights;
+  bool hold_a1x = true;
+  Eigen::Matrix<double, 2 * M, 1> prior_exits_m = Eigen::Matrix<double, 2 * M, 1>::Zero();
+  double prior_inv_sigma = 0.0;
+  int max_iterations = 100;
+};
+
+struct LeastSquaresSummary {
+  bool converged = false;
+  int iterations = 0;       // steps taken or rejected, as Ceres counts them
+  double final_cost = 0.0;  // 1/2 sum of squared whitened residuals, at the estimate
+  std::string message;      // why it stopped
+};
+
+namespace least_squares {
+
+using PoseValues = std::vector<std::array<double, 3>>;
+
+// One pose's share of the normal equations J^T J and J^T r: its own block A (3 x 3), its
+// coupling with the geometry B (3M x 3) and its gradient b (3).
+template <int M>
+struct PoseNormal {
+  Eigen::Matrix3d a;
+  Eigen::Matrix<double, 3 * M, 3> b;
+  Eigen::Vector3d gradient;
+  Eigen::Matrix3d damped_inverse;  // (A + mu D)^-1 of the current step
+};
+
+// 1/2 sum of squared whitened residuals over the poses in `use`; infinite where a residual is
+// not finite (an anchor inside its pulley).
+template <int M>
+double Cost(const MlLeastSquaresProblem<M>& p, const double* g, const PoseValues& q, const std::vector<char>& use) {
+  double sum = 0.0;
+  const int n = static_cast<int>(q.size());
+  for (int j = 0; j < n; ++j) {
+    if (!use[j]) continue;
+    for (const int k : (*p.readings_of)[j]) {
+      const Measurement& m = (*p.measurements)[k];
+      double r[M];
+      LengthResiduals<M, double>(*p.robot, g, Pose<double>(q[j][0], q[j][1], q[j][2]), m.dl_m.data(), r);
+      for (int i = 0; i < M; ++i) sum += r[i] * r[i] * (p.weights.inv_sigma_encoder * p.weights.inv_sigma_encoder);
+      const double laser = (q[j][1] - m.z_m) * p.weights.inv_sigma_laser;
+      const double inclinometer = (q[j][2] - m.theta_rad) * p.weights.inv_sigma_inclinometer;
+      sum += laser * laser + inclinometer * inclinometer;
+    }
+  }
+  if (p.prior_inv_sigma > 0.0) {
+    for (int k = 0; k < 2 * M; ++k) {
+      const double r = (g[k] - p.prior_exits_m(k)) * p.prior_inv_sigma;
+      sum += r * r;
+    }
+  }
+  return std::isfinite(sum) ? 0.5 * sum : std::numeric_limits<double>::infinity();
+}
+
+// The normal equations at (g, q): per pose A, B and its gradient; the geometry's H_gg and
+// gradient. Returns the cost (infinite if a residual is not finite).
+template <int M>
+double Normal(const MlLeastSquaresProblem<M>& p, const double* g, const PoseValues& q, const std::vector<char>& use,
+              std::vector<PoseNormal<M>>& poses, Eigen::Matrix<double, 3 * M, 3 * M>& h_gg,
+              Eigen::Matrix<double, 3 * M, 1>& gradient_g) {
+  using Jet2 = ceres::Jet<double, 2>;
+  using Jet3 = ceres::Jet<double, 3>;
+  const ReadingWeights& w = p.weights;
+  h_gg.setZero();
+  gradient_g.setZero();
+  double sum = 0.0;
+  const int n = static_cast<int>(q.size());
+  for (int j = 0; j < n; ++j) {
+    if (!use[j]) continue;
+    PoseNormal<M>& pose = poses[j];
+    pose.a.setZero();
+    pose.b.setZero();
+    pose.gradient.setZero();
+    // The anchors and their derivatives with respect to (x, z, theta): the same at every
+    // reading of this pose.
+    const Eigen::Matrix<Jet3, 2, 2> R = Rotation(Jet3(q[j][2], 2));
+    const Vec2<Jet3> position(Jet3(q[j][0], 0), Jet3(q[j][1], 1));
+    Vec2<double> anchor[M];
+    Eigen::Matrix<double, 2, 3> anchor_by_pose[M];
+    for (int i = 0; i < M; ++i) {
+      const Vec2<Jet3> b = position + R * p.robot->cables[i].p_P_anchor_m.template cast<Jet3>();
+      anchor[i] = Vec2<double>(b.x().a, b.y().a);
+      anchor_by_pose[i].row(0) = b.x().v.transpose();
+      anchor_by_pose[i].row(1) = b.y().v.transpose();
+    }
+    for (const int k : (*p.readings_of)[j]) {
+      const Measurement& m = (*p.measurements)[k];
+      for (int i = 0; i < M; ++i) {
+        const Cable& cable = p.robot->cables[i];
+        const Jet2 r = CableResidual<Jet2>(cable, Vec2<Jet2>(Jet2(g[2 * i]), Jet2(g[2 * i + 1])), Jet2(g[2 * M + i]),
+                                           Vec2<Jet2>(Jet2(anchor[i].x(), 0), Jet2(anchor[i].y(), 1)), m.dl_m(i));
+        const double residual = r.a * w.inv_sigma_encoder;
+        const Eigen::Vector2d by_anchor = r.v * w.inv_sigma_encoder;
+        const Eigen::Vector3d row_pose = anchor_by_pose[i].transpose() * by_anchor;
+        const Eigen::Vector3d row_cable(-by_anchor.x(), -by_anchor.y(), -w.inv_sigma_encoder);  // a_ix, a_iz, l_i0
+        const int cols[3] = {2 * i, 2 * i + 1, 2 * M + i};
+        sum += residual * residual;
+        pose.a.noalias() += row_pose * row_pose.transpose();
+        pose.gradient += row_pose * residual;
+        for (int c = 0; c < 3; ++c) {
+          pose.b.row(cols[c]) += row_cable(c) * row_pose.transpose();
+          gradient_g(cols[c]) += row_cable(c) * residual;
+          for (int d = 0; d < 3; ++d) h_gg(cols[c], cols[d]) += row_cable(c) * row_cable(d);
+        }
+      }
+      // MlSensorResiduals: the laser reads z, the inclinometer theta.
+      const double laser = (q[j][1] - m.z_m) * w.inv_sigma_laser;
+      const double inclinometer = (q[j][2] - m.theta_rad) * w.inv_sigma_inclinometer;
+      sum += laser * laser + inclinometer * inclinometer;
+      pose.a(1, 1) += w.inv_sigma_laser * w.inv_sigma_laser;
+      pose.a(2, 2) += w.inv_sigma_inclinometer * w.inv_sigma_inclinometer;
+      pose.gradient(1) += w.inv_sigma_laser * laser;
+      pose.gradient(2) += w.inv_sigma_inclinometer * inclinometer;
+    }
+  }
+  if (p.prior_inv_sigma > 0.0) {
+    for (int k = 0; k < 2 * M; ++k) {
+      const double r = (g[k] - p.prior_exits_m(k)) * p.prior_inv_sigma;
+      sum += r * r;
+      h_gg(k, k) += p.prior_inv_sigma * p.prior_inv_sigma;
+      gradient_g(k) += p.prior_inv_sigma * r;
+    }
+  }
+  if (p.hold_a1x) {  // a held a1x is no unknown: its column is out of J
+    h_gg.row(0).setZero();
+    h_gg.col(0).setZero();
+    gradient_g(0) = 0.0;
+    for (int j = 0; j < n; ++j) {
+      if (use[j]) poses[j].b.row(0).setZero();
+    }
+  }
+  return std::isfinite(sum) ? 0.5 * sum : std::numeric_limits<double>::infinity();
+}
+
+// Ceres' Levenberg-Marquardt diagonal: diag(J^T J) clamped to [1e-6, 1e32].
+template <typename Derived>
+auto LmDiagonal(const Eigen::MatrixBase<Derived>& normal) {
+  return normal.diagonal().cwiseMax(1e-6).cwiseMin(1e32);
+}
+
+}  // namespace least_squares
+
+// Minimises the ml estimator's cost over the geometry g (3M values: a1x a1z ... l10 ...) and
+// the poses in `use` (q[j] = x, z, theta), in place, from their values on entry.
+template <int M>
+LeastSquaresSummary SolveMlLeastSquares(const MlLeastSquaresProblem<M>& p, double* g,
+                                        std::vector<std::array<double, 3>>& q, const std::vector<char>& use) {
+  using namespace least_squares;
+  constexpr int G = 3 * M;
+  using MatrixG = Eigen::Matrix<double, G, G>;
+  using VectorG = Eigen::Matrix<double, G, 1>;
+  // Ceres' settings in identify_cables.h: tolerances, initial radius (nearly Gauss-Newton).
+  constexpr double kFunctionTolerance = 1e-10, kGradientTolerance = 1e-12, kParameterTolerance = 1e-10;
+  constexpr double kMinRelativeDecrease = 1e-3, kMaxRadius = 1e16, kMinRadius = 1e-32;
+  constexpr int kMaxConsecutiveInvalidSteps = 5;
+  double radius = 1e8, decrease_factor = 2.0;
+
+  const int n = static_cast<int>(q.size());
+  LeastSquaresSummary summary;
+  std::vector<PoseNormal<M>> poses(n);
+  MatrixG h_gg;
+  VectorG gradient_g;
+  double cost = Normal<M>(p, g, q, use, poses, h_gg, gradient_g);
+  if (!std::isfinite(cost)) {
+    summary.message = "a residual is not finite at the start (an anchor inside its pulley?)";
+    return summary;
+  }
+  const auto stop = [&](bool converged, const std::string& why) {
+    summary.converged = converged;
+    summary.final_cost = cost;
+    summary.message = why;
+    return summary;
+  };
+  // The gradient test, in Ceres' form: max |x - (x - gradient)|.
+  const auto gradient_small = [&]() {
+    double largest = gradient_g.cwiseAbs().maxCoeff();
+    for (int j = 0; j < n; ++j) {
+      if (use[j]) largest = std::max(largest, poses[j].gradient.cwiseAbs().maxCoeff());
+    }
+    return largest <= kGradientTolerance;
+  };
+  if (gradient_small()) return stop(true, "gradient tolerance reached");
+
+  PoseValues candidate_q = q;
+  std::vector<Eigen::Vector3d> step_q(n);
+  int invalid_steps = 0;
+  for (;;) {
+    if (summary.iterations >= p.max_iterations) {
+      return stop(false, "maximum number of iterations reached (" + std::to_string(p.max_iterations) + ")");
+    }
+    // The damped step: eliminate each pose's block, solve the geometry's Schur complement,
+    // back-substitute (a held a1x: its row and column of S the identity, its step 0).
+    const double mu = 1.0 / radius;
+    bool valid = true;
+    MatrixG s = h_gg;
+    s.diagonal() += mu * LmDiagonal(h_gg);
+    VectorG rhs = gradient_g;
+    for (int j = 0; j < n && valid; ++j) {
+      if (!use[j]) continue;
+      PoseNormal<M>& pose = poses[j];
+      Eigen::Matrix3d damped = pose.a;
+      damped.diagonal() += mu * LmDiagonal(pose.a);
+      const Eigen::LLT<Eigen::Matrix3d> llt(damped);
+      if (llt.info() != Eigen::Success) {
+        valid = false;
+        break;
+      }
+      pose.damped_inverse = llt.solve(Eigen::Matrix3d::Identity());
+      const Eigen::Matrix<double, G, 3> bc = pose.b * pose.damped_inverse;
+      s.noalias() -= bc * pose.b.transpose();
+      rhs.noalias() -= bc * pose.gradient;
+    }
+    VectorG step_g = VectorG::Zero();
+    if (valid) {
+      if (p.hold_a1x) {
+        s.row(0).setZero();
+        s.col(0).setZero();
+        s(0, 0) = 1.0;
+        rhs(0) = 0.0;
+      }
+      const Eigen::LDLT<MatrixG> ldlt(s);
+      step_g = -ldlt.solve(rhs);
+      valid = ldlt.info() == Eigen::Success && step_g.allFinite();
+    }
+    // The model's decrease: -gradient' step - 1/2 |J step|^2 (undamped J).
+    double model_decrease = 0.0, step_norm2 = step_g.squaredNorm(), x_norm2 = 0.0;
+    if (valid) {
+      double jstep2 = step_g.dot(h_gg * step_g);
+      model_decrease = -gradient_g.dot(step_g);
+      for (int j = 0; j < n; ++j) {
+        if (!use[j]) continue;
+        const PoseNormal<M>& pose = poses[j];
+        step_q[j] = -pose.damped_inverse * (pose.gradient + pose.b.transpose() * step_g);
+        jstep2 += step_q[j].dot(pose.a * step_q[j]) + 2.0 * step_g.dot(pose.b * step_q[j]);
+        model_decrease -= pose.gradient.dot(step_q[j]);
+        step_norm2 += step_q[j].squaredNorm();
+      }
+      model_decrease -= 0.5 * jstep2;
+      valid = std::isfinite(model_decrease) && model_decrease > 0.0;
+    }
+    if (!valid) {
+      ++summary.iterations;
+      if (++invalid_steps >= kMaxConsecutiveInvalidSteps) {
+        return stop(false, "the linear solve failed " + std::to_string(kMaxConsecutiveInvalidSteps) + " times in a row");
+      }
+      radius /= decrease_factor;
+      decrease_factor *= 2.0;
+      if (radius < kMinRadius) return stop(false, "the trust region became too small");
+      continue;
+    }
+    invalid_steps = 0;
+    // The step-size test: |step| <= tol (|x| + tol).
+    for (int k = 0; k < G; ++k) x_norm2 += g[k] * g[k];
+    for (int j = 0; j < n; ++j) {
+      if (use[j]) x_norm2 += q[j][0] * q[j][0] + q[j][1] * q[j][1] + q[j][2] * q[j][2];
+    }
+    if (std::sqrt(step_norm2) <= kParameterTolerance * (std::sqrt(x_norm2) + kParameterTolerance)) {
+      return stop(true, "parameter tolerance reached");
+    }
+    double candidate_g[G];
+    for (int k = 0; k < G; ++k) candidate_g[k] = g[k] + step_g(k);
+    for (int j = 0; j < n; ++j) {
+      if (!use[j]) continue;
+      for (int c = 0; c < 3; ++c) candidate_q[j][c] = q[j][c] + step_q[j](c);
+    }
+    const double candidate_cost = Cost<M>(p, candidate_g, candidate_q, use);
+    const double cost_change = cost - candidate_cost;
+    if (std::isfinite(candidate_cost) && std::abs(cost_change) <= kFunctionTolerance * cost) {
+      return stop(true, "function tolerance reached");
+    }
+    const double quality = cost_change / model_decrease;
+    ++summary.iterations;  // the step that meets a tolerance above is not counted, as in Ceres
+    if (!std::isfinite(candidate_cost) || !(quality > kMinRelativeDecrease)) {
+      radius /= decrease_factor;
+      decrease_factor *= 2.0;
+      if (radius < kMinRadius) return stop(false, "the trust region became too small");
+      continue;
+    }
+    // Accepted: move, widen the region by the step's quality, and take the new normal equations.
+    std::copy(candidate_g, candidate_g + G, g);
+    for (int j = 0; j < n; ++j) {
+      if (use[j]) q[j] = candidate_q[j];
+    }
+    radius = std::min(kMaxRadius, radius / std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * quality - 1.0, 3)));
+    decrease_factor = 2.0;
+    cost = Normal<M>(p, g, q, use, poses, h_gg, gradient_g);
+    if (gradient_small()) return stop(true, "gradient tolerance reached");
+  }
+}
+
+}  // namespace cablecal::internal
