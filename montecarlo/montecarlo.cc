@@ -5,12 +5,15 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <algorithm>
 #include <map>
+#include <numeric>
 #include <sstream>
 #include <stdexcept>
 
 #include "common/error.h"
 #include "common/format.h"
+#include "common/parallel.h"
 #include "common/random.h"
 #include "design/design.h"
 
@@ -235,6 +238,15 @@ std::vector<PlanPose> MakeDesignedSet(const Robot& nominal, const MonteCarloOpti
   }
 }
 
+void ForEachDesignedSet(const std::vector<DesignedSetKey>& keys, const std::function<void(std::size_t)>& make) {
+  // The largest sets first (their Ipopt solves take longest), so that no large one is left to
+  // finish alone at the end; chunks of one key, handed out as threads free up.
+  std::vector<std::size_t> order(keys.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return keys[a].n > keys[b].n; });
+  ParallelFor(static_cast<long>(order.size()), 1, [&](long k) { make(order[static_cast<std::size_t>(k)]); });
+}
+
 ShareResult RunShare(const Robot& robot, const MonteCarloOptions& o, const DesignedSets& designed,
                      const StudyShare& share) {
   // The nominal initial lengths (the home equilibrium) once, not in every trial's sampling and
@@ -295,15 +307,21 @@ MonteCarloResult RunMonteCarlo(const Robot& nominal, const MonteCarloOptions& o)
   const auto t0 = std::chrono::steady_clock::now();
   ValidateOptions(o, &nominal);
   MonteCarloResult result;
-  // Designed sets first: once per (n, criterion), each from its own seed stream.
-  DesignedSets designed;
-  for (const DesignedSetKey& key : DesignedSetKeys(o)) {
-    if (o.interrupted && o.interrupted->load()) {
-      result.interrupted = true;
-      return result;
-    }
-    designed[{key.n, static_cast<int>(key.design)}] = MakeDesignedSet(nominal, o, key);
+  // Designed sets first: once per (n, criterion), each from its own seed stream, several at once
+  // (each start's Ipopt solve in a process of its own, design.h), so that the threads stay
+  // busy while one set's starts take longer than another's.
+  const std::vector<DesignedSetKey> keys = DesignedSetKeys(o);
+  std::vector<std::vector<PlanPose>> sets(keys.size());
+  ForEachDesignedSet(keys, [&](std::size_t i) {
+    if (o.interrupted && o.interrupted->load()) return;
+    sets[i] = MakeDesignedSet(nominal, o, keys[i]);
+  });
+  if (o.interrupted && o.interrupted->load()) {
+    result.interrupted = true;
+    return result;
   }
+  DesignedSets designed;
+  for (std::size_t i = 0; i < keys.size(); ++i) designed[{keys[i].n, static_cast<int>(keys[i].design)}] = std::move(sets[i]);
   std::vector<ShareResult> shares(1);
   shares[0] = RunShare(nominal, o, designed, StudyShare{0, 1});
   if (shares[0].error) std::rethrow_exception(shares[0].error);  // out of memory: exit 2, as anywhere

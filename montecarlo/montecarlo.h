@@ -121,6 +121,10 @@ using DesignedSets = std::map<std::pair<int, int>, std::vector<PlanPose>>;  // (
 // goes to stderr, naming n and the criterion): that cell's trials then fail with cause "design".
 std::vector<PlanPose> MakeDesignedSet(const Robot& nominal, const MonteCarloOptions& options,
                                       const DesignedSetKey& key);
+// Calls make(i) for every key i on the OpenMP threads, the largest n first; each designed set
+// depends on its own seed stream only, so the order changes no number. An exception of any
+// call is rethrown once all have ended (common/parallel.h).
+void ForEachDesignedSet(const std::vector<DesignedSetKey>& keys, const std::function<void(std::size_t)>& make);
 
 struct ShareResult {
   std::vector<TrialOutcome> outcomes;  // one per owned item, in increasing item order

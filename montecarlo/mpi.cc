@@ -3,6 +3,7 @@
 #include <mpi.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <cstdlib>
@@ -125,11 +126,11 @@ void InjectTestFault(const MpiWorld& world) {
 DesignedSets MakeDesignedSets(const Robot& nominal, const MonteCarloOptions& o, const MpiWorld& world) {
   const std::vector<DesignedSetKey> keys = DesignedSetKeys(o);
   std::vector<std::string> messages(keys.size());
-  bool failed = false;
-  for (std::size_t i = 0; i < keys.size(); ++i) {
-    if (static_cast<int>(i % world.size) != world.rank) continue;
+  std::atomic<bool> failed{false};
+  ForEachDesignedSet(keys, [&](std::size_t i) {
+    if (static_cast<int>(i % world.size) != world.rank) return;
     Status s;
-    if (failed) {
+    if (failed.load()) {
       s.code = -1;  // skipped after an earlier failure of this rank
     } else if (o.interrupted && o.interrupted->load()) {
       s.code = kExitInterrupted;
@@ -142,7 +143,7 @@ DesignedSets MakeDesignedSets(const Robot& nominal, const MonteCarloOptions& o, 
       }
     }
     messages[i] = EncodeStatus(s);
-  }
+  });
   DesignedSets designed;
   Status first_failure, interrupted;
   for (std::size_t i = 0; i < keys.size(); ++i) {
