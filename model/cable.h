@@ -90,8 +90,12 @@ template <typename T>
 struct Wrap {
   Vec2<T> p_F_centre;
   Vec2<T> m;            // B - C
+  T m_squared;          // |m|^2
   T segment_length_m;   // sqrt(|m|^2 - r^2)
   T alpha_rad;          // tangent point's angle in the mirrored pulley frame, = psi + delta
+  // |m|^2 (cos alpha, sin alpha): alpha's atan2 arguments, whose length is |m| sqrt(r^2 +
+  // segment^2) = |m|^2, so the tangent point needs no sine or cosine (CableGeometry).
+  Vec2<T> alpha_direction;
 };
 
 template <typename T>
@@ -101,13 +105,15 @@ Wrap<T> ComputeWrap(const Vec2<T>& p_F_exit_m, const T& r, PulleySigns signs, co
   Wrap<T> w;
   w.p_F_centre = Vec2<T>(p_F_exit_m.x() + signs.side * r, p_F_exit_m.y());
   w.m = p_F_anchor_m - w.p_F_centre;
-  w.segment_length_m = sqrt(w.m.squaredNorm() - r * r);
+  w.m_squared = w.m.squaredNorm();
+  w.segment_length_m = sqrt(w.m_squared - r * r);
   // psi + delta in one atan2 (angle of the product of (s m_x, w m_z) and (r, segment)): a
   // third fewer transcendental calls in the identification's inner loop. It wraps only
   // where phi would leave [0, 3 pi / 2], which CableGeometryValid rejects.
   const T mx = signs.side * w.m.x();
   const T mz = signs.wrap * w.m.y();
-  w.alpha_rad = atan2(mz * r + mx * w.segment_length_m, mx * r - mz * w.segment_length_m);
+  w.alpha_direction = Vec2<T>(mx * r - mz * w.segment_length_m, mz * r + mx * w.segment_length_m);
+  w.alpha_rad = atan2(w.alpha_direction.y(), w.alpha_direction.x());
   return w;
 }
 
@@ -123,18 +129,20 @@ T CableLength(const Vec2<T>& p_F_exit_m, const T& pulley_radius_m, PulleySigns s
 template <typename T>
 CableState<T> CableGeometry(const Vec2<T>& p_F_exit_m, const T& pulley_radius_m,
                             PulleySigns signs, const Vec2<T>& p_F_anchor_m) {
-  using std::cos;
-  using std::sin;
   using std::sqrt;
   const T& r = pulley_radius_m;
   const internal::Wrap<T> w = internal::ComputeWrap<T>(p_F_exit_m, r, signs, p_F_anchor_m);
   CableState<T> s;
-  s.centre_distance_m = sqrt(w.m.squaredNorm());
+  s.centre_distance_m = sqrt(w.m_squared);
   s.segment_length_m = w.segment_length_m;
   s.wrap_angle_rad = T(M_PI) - w.alpha_rad;
   s.length_m = r * s.wrap_angle_rad + s.segment_length_m;
-  s.p_F_tangent_m = Vec2<T>(w.p_F_centre.x() + signs.side * r * cos(w.alpha_rad),
-                            w.p_F_centre.y() + signs.wrap * r * sin(w.alpha_rad));
+  // T = C + r (s_i cos alpha, w_i sin alpha), cos and sin from alpha's atan2 arguments: the
+  // sampler's equilibrium scans evaluate this ~100 times per pose, and a sine and cosine were
+  // a fifth of a Monte Carlo trial's instructions (bench/README.md).
+  const T r_over_m2 = r / w.m_squared;
+  s.p_F_tangent_m = Vec2<T>(w.p_F_centre.x() + signs.side * r_over_m2 * w.alpha_direction.x(),
+                            w.p_F_centre.y() + signs.wrap * r_over_m2 * w.alpha_direction.y());
   s.u_F_cable = (s.p_F_tangent_m - p_F_anchor_m) / s.segment_length_m;
   return s;
 }
