@@ -232,7 +232,7 @@ LeastSquaresSummary SolveMlLeastSquares(const MlLeastSquaresProblem<M>& p, doubl
   int invalid_steps = 0;
   for (;;) {
     if (summary.iterations >= p.max_iterations) {
-      return stop(false, "maximum number of iterations reached (" + std::to_string(p.max_iterations) + ")");
+      return stop(false, "the iteration limit was reached");
     }
     // The damped step: eliminate each pose's block, solve the geometry's Schur complement,
     // back-substitute (a held a1x: its row and column of S the identity, its step 0).
