@@ -208,6 +208,7 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
         internal::StartingPose<M>(nominal, nominal_geometry, measurements[readings_of[j].front()]);
     poses[j] = {start(0), start(1), start(2)};
   }
+  const std::vector<std::array<double, 3>> start_poses = poses;
 
   ReadingWeights weights = ml ? WeightsOf(s) : ReadingWeights{};
   // No reading, no weight: its row stays in the block (the same block shapes) but is zero.
@@ -260,6 +261,7 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     }
     return problem;
   };
+  int iteration_limit = options.max_iterations;  // raised for the diagnosis of a fit that did not converge
   // Levenberg-Marquardt; with the geometry held (one pose fitted to it alone) a plain QR step.
   const auto solve = [&](ceres::Problem& problem, double* g, PoseValues& q, const std::vector<char>& use,
                          bool hold_geometry) {
@@ -279,7 +281,7 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     }
     solver_options.minimizer_type = ceres::TRUST_REGION;
     solver_options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-    solver_options.max_num_iterations = options.max_iterations;
+    solver_options.max_num_iterations = iteration_limit;
     // Relative cost change 1e-10 at the minimum means parameter steps of ~1e-4 sigma: far below
     // any uncertainty reported, and noise-free data are still recovered to 1e-7 m (tested).
     solver_options.function_tolerance = 1e-10;
@@ -315,7 +317,7 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     ml_problem.prior_exits_m = nominal_geometry.head<2 * M>();
     ml_problem.prior_inv_sigma = 1.0 / *s.tracker_sigma_m;
   }
-  ml_problem.max_iterations = options.max_iterations;
+  ml_problem.max_iterations = iteration_limit;
   const auto least_squares = [&](double* g, PoseValues& q, const std::vector<char>& use) {
     if (ml) return SolveMlLeastSquares<M>(ml_problem, g, q, use);
     std::unique_ptr<ceres::Problem> p = build(g, q, use, RobustLoss{});
@@ -339,12 +341,62 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     for (int j = 0; j < n; ++j) ok = ok && (!use[j] || (std::isfinite(q[j][0]) && std::isfinite(q[j][1]) && std::isfinite(q[j][2])));
     return ok;
   };
+  // Why least squares did not converge, when one pose's readings say it: a reading that no
+  // position gives a valid cable length on the nominal robot at its laser height and
+  // inclinometer angle (the anchor inside or past its pulley), or poses without which the
+  // others converge (each left out in turn, from the same start; up to kMaxPosesLeftOutTest
+  // poses, as the outlier test below).
+  const auto why_not_converged = [&]() -> std::string {
+    for (int j = 0; j < n; ++j) {
+      for (const int k : readings_of[j]) {
+        double r[M];
+        const Measurement& m = measurements[k];
+        LengthResiduals<M, double>(nominal, nominal_geometry.data(),
+                                   Eigen::Vector3d(start_poses[j][0], start_poses[j][1], start_poses[j][2]),
+                                   m.dl_m.data(), r);
+        for (int i = 0; i < M; ++i) {
+          if (std::isfinite(r[i])) continue;
+          return "; pose " + std::to_string(m.pose_id) + (m.where.empty() ? "" : " (" + m.where + ")") +
+                 ": at its laser height and inclinometer angle no position gives cable " + std::to_string(i + 1) +
+                 " a valid length on the nominal robot (its anchor inside or past the pulley): check that reading";
+        }
+      }
+    }
+    if (n > 200) return "";
+    // At least Ceres' default limit: a user's low --max-iterations must not make a good pose
+    // look guilty because the fit without it happens to converge sooner.
+    iteration_limit = ml_problem.max_iterations = std::max(options.max_iterations, 100);
+    std::vector<int> culprits;
+    for (int j = 0; j < n && culprits.size() <= 3; ++j) {
+      std::vector<char> use(n, 1);
+      use[j] = 0;
+      int values = 0;
+      for (int p = 0; p < n; ++p) values += use[p] ? values_per_reading * static_cast<int>(readings_of[p].size()) : 0;
+      if (values + prior_rows < geometry_cols + per_pose_unknowns * (n - 1)) continue;  // too few poses to tell
+      double g[kGeometry];
+      for (int k = 0; k < kGeometry; ++k) g[k] = nominal_geometry(k);
+      PoseValues q = start_poses;
+      if (converged(least_squares(g, q, use), g, q, use)) culprits.push_back(j);
+    }
+    iteration_limit = ml_problem.max_iterations = options.max_iterations;
+    if (culprits.empty() || culprits.size() > 3) return "";
+    std::string names;
+    for (std::size_t c = 0; c < culprits.size(); ++c) {
+      names += (c == 0 ? "" : c + 1 == culprits.size() ? " or " : ", ") + std::to_string(pose_id_of(culprits[c]));
+    }
+    return "; without pose " + names + " the other poses converge: check " +
+           (culprits.size() == 1 ? "that pose's readings" : "those poses' readings");
+  };
   const auto not_converged = [&](const LeastSquaresSummary& sum) {
     result.status = IdentifyStatus::kNotConverged;
     result.iterations = sum.iterations;
+    const bool at_limit = sum.iterations >= options.max_iterations;
+    const std::string why = why_not_converged();
     result.message = "Levenberg-Marquardt did not converge after " + std::to_string(result.iterations) +
-                     " iterations: " + sum.message +
-                     " (a grossly wrong reading can do this: check the readings, or raise --max-iterations)";
+                     (result.iterations == 1 ? " iteration: " : " iterations: ") + sum.message +
+                     (!why.empty() ? why
+                      : at_limit   ? " (a grossly wrong reading can do this: check the readings, or raise --max-iterations)"
+                                   : " (a grossly wrong reading can do this: check the readings)");
     return result;
   };
   if (!converged(summary, geometry, poses, every_pose)) return not_converged(summary);

@@ -230,10 +230,12 @@ LeastSquaresSummary SolveMlLeastSquares(const MlLeastSquaresProblem<M>& p, doubl
   PoseValues candidate_q = q;
   std::vector<Eigen::Vector3d> step_q(n);
   int invalid_steps = 0;
+  // The limit counts the steps taken or rejected; a step that only finds the minimum reached
+  // (a tolerance met, not counted) is still computed at the limit, so that a solve that
+  // reports k iterations also converges with max_iterations = k.
+  const auto at_limit = [&]() { return summary.iterations >= p.max_iterations; };
+  const std::string limit_reached = "the iteration limit was reached";
   for (;;) {
-    if (summary.iterations >= p.max_iterations) {
-      return stop(false, "the iteration limit was reached");
-    }
     // The damped step: eliminate each pose's block, solve the geometry's Schur complement,
     // back-substitute (a held a1x: its row and column of S the identity, its step 0).
     const double mu = 1.0 / radius;
@@ -285,6 +287,7 @@ LeastSquaresSummary SolveMlLeastSquares(const MlLeastSquaresProblem<M>& p, doubl
       valid = std::isfinite(model_decrease) && model_decrease > 0.0;
     }
     if (!valid) {
+      if (at_limit()) return stop(false, limit_reached);
       ++summary.iterations;
       if (++invalid_steps >= kMaxConsecutiveInvalidSteps) {
         return stop(false, "the linear solve failed " + std::to_string(kMaxConsecutiveInvalidSteps) + " times in a row");
@@ -315,6 +318,7 @@ LeastSquaresSummary SolveMlLeastSquares(const MlLeastSquaresProblem<M>& p, doubl
       return stop(true, "function tolerance reached");
     }
     const double quality = cost_change / model_decrease;
+    if (at_limit()) return stop(false, limit_reached);
     ++summary.iterations;  // the step that meets a tolerance above is not counted, as in Ceres
     if (!std::isfinite(candidate_cost) || !(quality > kMinRelativeDecrease)) {
       radius /= decrease_factor;

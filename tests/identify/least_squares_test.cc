@@ -222,6 +222,27 @@ TEST(MlLeastSquares, SameAsCeresWithRepeatedReadingsAndAMissingSensor) {
   ExpectSame<4>(planar4, no_laser, Gauge::kA1x, "planar4 without its laser");
 }
 
+// The iteration limit counts what the summary reports: a solve that took k iterations also
+// converges with the limit k, and not with k - 1.
+TEST(MlLeastSquares, ConvergesWithTheLimitAtTheIterationsItReports) {
+  const Robot asymmetric = LoadRobotFile(std::string(CABLECAL_SOURCE_DIR) + "/robots/asymmetric.yaml");
+  for (const Robot* robot : {&BuiltinRobot(), &asymmetric}) {
+    const std::vector<Measurement> measurements = Experiment(*robot, 30, 0.01, 60);
+    const auto solve = [&](int limit) {
+      Start<2> s = MakeStart<2>(*robot, measurements, Gauge::kA1x);
+      s.problem.measurements = &measurements;
+      s.problem.max_iterations = limit;
+      return internal::SolveMlLeastSquares<2>(s.problem, s.geometry.data(), s.poses,
+                                              std::vector<char>(s.poses.size(), 1));
+    };
+    const LeastSquaresSummary free = solve(100);
+    ASSERT_TRUE(free.converged) << free.message;
+    ASSERT_GE(free.iterations, 2);
+    EXPECT_TRUE(solve(free.iterations).converged) << robot->name;
+    EXPECT_FALSE(solve(free.iterations - 1).converged) << robot->name;
+  }
+}
+
 // What it cannot do is said, not returned as an estimate: out of iterations, and a start where
 // a cable's anchor is inside its pulley (the length undefined).
 TEST(MlLeastSquares, ReportsFailureAsNotConverged) {

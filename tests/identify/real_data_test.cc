@@ -225,6 +225,64 @@ TEST(Outlier, NamedWithoutALossAndRejectedByCauchy) {
   EXPECT_GE(robots_checked, 4);  // the laser case on most robots at least
 }
 
+// A reading no robot near nominal can give can keep least squares from converging at all (a
+// new user's lab file: 20 simulated poses of a 2-cable robot with exit points at different
+// heights, and one reading near the top beam with lengths off by decimetres). The failure
+// names the pose without which the others converge, and a reading whose start has no valid
+// cable length is named as such.
+TEST(BadReading, NonConvergenceNamesThePoseWithoutWhichTheOthersConverge) {
+  const Robot lab = LoadRobotFromString(R"(# my lab's 2-cable robot
+name: lab2
+gravity: 9.81
+frame: {width: 3.5, height: 2.2}
+platform:
+  mass: 1.8
+  com: [0.07, -0.05]
+  anchors: [[-0.18, 0.02], [0.21, -0.01]]
+cables:
+  - {exit: [0.0, 2.1], pulley_radius: 0.015, side: left}
+  - {exit: [3.5, 1.85], pulley_radius: 0.03, side: right}
+tension: {min: 1.5, max: 90.0}
+limits: {theta_max_deg: 50, laser_range: 2.5, margin: 0.05}
+home: [1.7, 1.0]
+sensors:
+  laser: {accuracy: 0.005, repeatability: 0.001}
+  inclinometer: {accuracy_deg: 0.1, repeatability_deg: 0.05}
+  encoder: {sigma: 0.00005}
+  tracker: {sigma: 0.0004}
+)", "lab2.yaml");
+  std::istringstream csv(R"(pose,dl1,dl2,z,theta
+1,0.9223284783826285,-0.8174991047039589,1.022184525974094,0.26822239044637797
+2,0.8257412580555318,0.27950090985553594,0.19431971614685686,-0.03524523564569064
+3,0.7180318868927174,0.397143794721187,0.18395805503734916,-0.11789197074240852
+4,0.6131988445070441,-1.146737165004435,1.7562395943019828,0.05425980492110881
+5,0.571563301456309,-0.5398642381390014,1.014097315733242,0.0788337144095426
+6,0.06328252171821842,0.1341097850533794,0.8550796064601801,-0.16940825762493328
+7,1.2061227168739381,-1.4954334860851797,1.518569845737025,0.522293190413107
+8,0.06688278689492677,0.6753036644287485,0.48628435258177444,-0.38126307046655256
+9,1.1623155933271059,-1.5754362818956582,1.6333479824268615,0.3903674891944335
+10,1.2394451198346872,-0.6919065420219228,0.750474659960771,0.5078051022216011
+11,-0.17694912340091187,0.9316699510544063,0.5542294191793149,-0.5416811357134939
+12,-0.17970317271187472,0.9774602827219491,0.5352575641989544,-0.5678262067142991
+13,-1.514486277385106,1.1094311359882696,1.774036768583337,-0.45645975459353
+14,1.39723969092433,-0.0299764839810318,0.13332082978499568,0.4190074095096229
+15,0.7471067597633347,-0.2950347977274943,0.6785530301479216,0.10060823231392013
+16,1.5744894021734224,-0.5659846347537613,0.5256735664036594,0.8356903655297168
+17,-0.9855864594004535,1.1506297898539433,1.1968923605968318,-0.7180201821297313
+18,0.4276103800128968,-0.30074102154070964,0.9107003050723724,0.0006466768086870291
+19,0.975972850528423,-0.739641616322592,0.9199998964243862,0.2969123440795088
+20,0.5818235513079525,-0.8223840556943925,1.2937967632321516,0.1008207940734021
+21,-1.855,1.21,2.08,0.0
+)");
+  const std::vector<Measurement> readings = ReadMeasurementsCsv(csv, "lab2_meas.csv", 2);
+  const IdentifyResult r = Identify(lab, readings, IdentifyOptions{});
+  ASSERT_EQ(r.status, IdentifyStatus::kNotConverged) << r.message;
+  EXPECT_NE(r.message.find("without pose 21 the other poses converge"), std::string::npos) << r.message;
+  EXPECT_EQ(r.message.find("--max-iterations"), std::string::npos) << "raising the limit would not help: " << r.message;
+  const std::vector<Measurement> clean(readings.begin(), readings.end() - 1);
+  EXPECT_TRUE(Identify(lab, clean, IdentifyOptions{}).converged());
+}
+
 // A bad laser reading at the pose that decides most of the geometry (the weakest pose) is
 // absorbed by least squares: every residual stays small. Checked against the other poses'
 // fit it stands out, and the fit is refused naming it.
