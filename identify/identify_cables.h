@@ -658,6 +658,12 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     return std::nullopt;
   };
   const std::optional<LeftOut> left_out = leave_out();
+  // The check against the others is linear: it divides the pose's residual by how much of it
+  // the others see, and where they see little (few poses, centimetres of geometry error) the
+  // fit's curvature alone can make a clean pose look far off (measured: a 2-cable robot's 5
+  // clean poses, one at 98 sigma). A flag stands only if the refit without the pose confirms
+  // it: some pose's readings are then beyond kOutlierSigmas against the others' geometry.
+  if (tripped.empty() && flagged_pose >= 0 && (!left_out || left_out->worst.empty())) flagged_pose = -1;
   // "7", "7 and 12", "3, 7 and 12"
   const auto left_out_ids = [&](const LeftOut& l) {
     std::string names;
