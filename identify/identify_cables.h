@@ -966,20 +966,28 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   // Huber's loss never ignores a reading: at a pose of high leverage it can pull the estimate
   // back toward least squares' (measured on the built-in robot with a 0.3 m laser error). Say
   // so when its estimate strays from the fit without the poses found above.
+  // The parameter furthest from that fit, in its sigmas, is named.
   if (robust && left_out && result.has_covariance) {
+    int worst = -1;
+    double worst_sigmas = 2.0;
     for (int k = 0; k < kGeometry; ++k) {
-      const double apart = std::abs(result.geometry(k) - left_out->geometry_values[k]);
-      if (result.geometry_std(k) > 0.0 && apart > 2.0 * result.geometry_std(k)) {
-        char buffer[96];
-        std::snprintf(buffer, sizeof(buffer), "%.3g sigma", apart / result.geometry_std(k));
-        result.warnings.push_back("the " + ToString(options.loss) + " estimate of " + geometry_names[k] + " is " +
-                                  buffer + " from the fit without pose " + left_out_ids(*left_out) +
-                                  " (readings that do not fit the others): " +
-                                  (options.loss.kind == LossKind::kHuber
-                                       ? "Huber's loss never ignores a reading and follows them; --loss cauchy rejects them"
-                                       : "a smaller scale rejects them sooner"));
-        break;
+      if (!(result.geometry_std(k) > 0.0)) continue;
+      const double sigmas = std::abs(result.geometry(k) - left_out->geometry_values[k]) / result.geometry_std(k);
+      if (sigmas > worst_sigmas) {
+        worst_sigmas = sigmas;
+        worst = k;
       }
+    }
+    if (worst >= 0) {
+      char buffer[96];
+      std::snprintf(buffer, sizeof(buffer), "%.3g mm (%.3g sigma)",
+                    1e3 * std::abs(result.geometry(worst) - left_out->geometry_values[worst]), worst_sigmas);
+      result.warnings.push_back("the " + ToString(options.loss) + " estimate of " + geometry_names[worst] + " is " +
+                                buffer + " from the fit without pose " + left_out_ids(*left_out) +
+                                " (readings that do not fit the others): " +
+                                (options.loss.kind == LossKind::kHuber
+                                     ? "Huber's loss never ignores a reading and follows them; --loss cauchy rejects them"
+                                     : "a smaller scale rejects them sooner"));
     }
   }
   return result;
