@@ -500,6 +500,13 @@ DesignPrior LoadDesignPrior(const Robot& nominal, const std::string& path) {
   if (root["status"].as<std::string>("") != "converged") {
     throw InputError(path, "status", "the identification did not converge: it cannot be a prior");
   }
+  // Gauge none leaves x unfixed: its standard deviations are the pseudo-inverse's, which leave
+  // out the null direction, in a frame that floats along it; taken as information they make the
+  // next round's plan several times too confident (measured: 4x the covariance trace).
+  if (root["gauge"] && root["gauge"].as<std::string>("") == "none") {
+    throw InputError(path, "gauge", "a result identified with --gauge none cannot be a prior (its sigmas leave out the "
+                                    "direction it does not fix): identify the same data with --gauge a1x or prior");
+  }
   const int m = nominal.num_cables();
   const int np = 3 * m;  // a1x a1z .. amx amz l10 .. lm0
   if (!root["parameters"].IsMap() || static_cast<int>(root["parameters"].size()) != np) {

@@ -231,6 +231,17 @@ TEST(DesignPrior, AnyCableCount) {
   for (const char* n : {"a1x", "a1z", "a2x", "a2z", "l10", "l20"}) two += std::string("  ") + n + ": {value: 1.0, std: 0.001}\n";
   tmp.Write("two.yaml", two);
   EXPECT_THROW(LoadDesignPrior(robot, tmp.Path("two.yaml")), InputError);
+  // A gauge-none result (its sigmas leave out the null direction) is refused, naming the key.
+  tmp.Write("none.yaml", "gauge: none\n" + yaml.str());
+  try {
+    LoadDesignPrior(robot, tmp.Path("none.yaml"));
+    ADD_FAILURE() << "a gauge-none result accepted as a prior";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("gauge"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("--gauge a1x"), std::string::npos) << e.what();
+  }
+  tmp.Write("a1x.yaml", "gauge: a1x\n" + yaml.str());
+  EXPECT_NO_THROW(LoadDesignPrior(robot, tmp.Path("a1x.yaml")));
 }
 
 TEST(Surrogates, BoundTheExactCriteria) {
