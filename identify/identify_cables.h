@@ -952,6 +952,18 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
         }
       }
       result.has_covariance = true;
+      // A geometry the poses hardly determine is a result, but not one to use: say so, naming
+      // the worst-determined parameter (a new user's 5 random poses gave sigmas of kilometres
+      // and nothing said so). 0.1 m: far beyond any calibration's aim, far below such sigmas.
+      constexpr double kUndetermined_m = 0.1;
+      Eigen::Index worst = 0;
+      const double worst_std = result.geometry_std.maxCoeff(&worst);
+      if (worst_std > kUndetermined_m) {
+        char buffer[160];
+        std::snprintf(buffer, sizeof(buffer), "the poses hardly determine the geometry: the standard deviation of %s is "
+                      "%.3g m", geometry_names[worst].c_str(), worst_std);
+        result.warnings.push_back(std::string(buffer) + "; add poses, or plan better-spread ones (cablecal design)");
+      }
     }
   }
   // How well the others check each reading (least squares only: the checks are of its fit).

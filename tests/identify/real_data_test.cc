@@ -285,9 +285,10 @@ sensors:
 
 // At the fewest poses that determine the geometry (5 for 2 cables, 4 for 3), leaving one out
 // leaves the rest unable to check it: clean data must not be refused as a pose that does not
-// fit the others (a new user's 2-cable robot at 5 poses was, at 25 sigma, from rounding).
+// fit the others (a new user's 2-cable robot at 5 poses was, at 25 sigma, from the fit's
+// curvature). Such small random sets often determine the geometry barely: that is a warning.
 TEST(Outlier, CleanDataAtTheFewestPosesAreNotBlamedOnAPose) {
-  int fits = 0;
+  int fits = 0, undetermined = 0;
   for (const Robot& nominal : Robots()) {
     const int fewest = nominal.num_cables() == 2 ? 5 : 4;
     for (std::uint64_t seed = 1; seed <= 10; ++seed) {
@@ -296,8 +297,17 @@ TEST(Outlier, CleanDataAtTheFewestPosesAreNotBlamedOnAPose) {
       EXPECT_EQ(r.message.find("does not fit the others"), std::string::npos)
           << nominal.name << " seed " << seed << ": " << r.message;
       fits += r.converged();
+      // A geometry they hardly determine (sigmas beyond 0.1 m) is said to be one.
+      if (r.converged() && r.geometry_std.maxCoeff() > 0.1) {
+        ++undetermined;
+        const bool said = std::any_of(r.warnings.begin(), r.warnings.end(), [](const std::string& w) {
+          return w.find("hardly determine the geometry") != std::string::npos;
+        });
+        EXPECT_TRUE(said) << nominal.name << " seed " << seed << ": max sigma " << r.geometry_std.maxCoeff() << " m";
+      }
     }
   }
+  EXPECT_GE(undetermined, 5);  // 13 of the 22 fits here: the warning is exercised
   // The check runs on the fits that converge: 22 of these 60 (random sets this small often leave
   // the geometry undetermined or Levenberg-Marquardt lost, with 1 cm geometry errors).
   EXPECT_GE(fits, 15);
