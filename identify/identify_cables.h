@@ -705,6 +705,14 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     tripped = beyond(readings);
   }
 
+  // Under gauge prior, a tracker prior that disagrees with the readings (exit points further
+  // from nominal than sensors.tracker.sigma allows) strains every pose alike and shows as
+  // readings that do not fit: say that it may be the prior.
+  const std::string prior_note =
+      options.gauge == Gauge::kPrior
+          ? " (with --gauge prior this is also what a tracker prior that disagrees with the readings looks like: "
+            "are the exit points within a few sensors.tracker.sigma of the robot file's?)"
+          : "";
   // Goodness of fit. With the right model the whitened residuals have RMS near 1 (ml), and
   // the paper estimator's length residuals are of the order of the laser's noise, which
   // z_j carries into them. Ten times that is not noise: the result is flagged, not returned.
@@ -730,6 +738,7 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
                   "this robot", fit, kPoorFitFactor);
     result.message = buffer;
     if (!robust && left_out) result.message += "; " + explain_left_out(*left_out) + "; " + "drop " + (left_out->poses.size() == 1 ? "that pose" : "those poses") + " or identify with --loss cauchy";
+    result.message += prior_note;
     return result;
   }
 
@@ -744,7 +753,8 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   // of the same pose (more cables give more redundant directions).
   // With a robust loss a few such readings are what it down-weights; many point to wrong
   // units or another robot, which no loss mends.
-  const auto refuse_outliers = [&](const std::string& advice) {
+  const auto refuse_outliers = [&](const std::string& advice_without_note) {
+    const std::string advice = advice_without_note + prior_note;
     result.status = IdentifyStatus::kPoorFit;
     if (left_out && !robust) {
       result.message = "readings that do not fit this robot: " + explain_left_out(*left_out) + "; " + advice;
@@ -809,7 +819,8 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
                          " m is " + why + " (nominal " + FormatDouble(nominal_geometry(k)) +
                          " m): are the readings in the file's units (m, rad), and of this robot? A single wrong reading can "
                          "do this too (the fit absorbs it: one inclinometer angle of 0 among 20 poses does), so check "
-                         "for one";
+                         "for one; and few or bunched poses may not determine the geometry (plan them with cablecal "
+                         "design)";
         return result;
       }
     }

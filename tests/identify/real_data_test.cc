@@ -313,6 +313,25 @@ TEST(Outlier, CleanDataAtTheFewestPosesAreNotBlamedOnAPose) {
   EXPECT_GE(fits, 15);
 }
 
+// Under gauge prior, exit points 10 mm off nominal against a tracker sigma of 0.5 mm strain
+// every pose: a refusal then says it may be the prior, not only a pose.
+TEST(BadReading, ARefusalUnderGaugePriorMentionsThePrior) {
+  int refused = 0;
+  for (const Robot& nominal : Robots()) {
+    if (!nominal.sensors.tracker_sigma_m) continue;
+    const Experiment e = Simulated(nominal, 20, 31);
+    IdentifyOptions prior;
+    prior.gauge = Gauge::kPrior;
+    const IdentifyResult r = Identify(nominal, e.readings, prior);
+    if (r.status != IdentifyStatus::kPoorFit) continue;
+    ++refused;
+    EXPECT_NE(r.message.find("tracker prior that disagrees"), std::string::npos) << nominal.name << ": " << r.message;
+    const IdentifyResult a1x = Identify(nominal, e.readings, IdentifyOptions{});
+    EXPECT_EQ(a1x.message.find("tracker prior"), std::string::npos) << a1x.message;
+  }
+  EXPECT_GE(refused, 2);
+}
+
 // A bad laser reading at the pose that decides most of the geometry (the weakest pose) is
 // absorbed by least squares: every residual stays small. Checked against the other poses'
 // fit it stands out, and the fit is refused naming it.
