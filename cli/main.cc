@@ -14,6 +14,7 @@
 #include "cli/commands.h"
 #include "cli/processes.h"
 #include "common/error.h"
+#include "identify/identify.h"
 #include "common/format.h"
 #include "common/version.h"
 
@@ -129,7 +130,7 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"a1x", "prior", "none"}));
   id_cmd->add_option("--max-iterations", ident.max_iterations, "Levenberg-Marquardt iteration limit")
       ->capture_default_str()
-      ->check(kPositive);
+      ->check(WholeNumberIn(1, cablecal::kMaxIdentifyIterations));
   id_cmd->add_option("--out", ident.out_path, "result YAML (required unless --json)");
   id_cmd->add_flag("--json", ident.json, "print the result (the YAML's content) as JSON on stdout");
   id_cmd->add_option("--delimiter", ident.delimiter, "the measurement CSV's separator: ',', ';' or tab")

@@ -1,5 +1,7 @@
 #include "cli/processes.h"
 
+#include <unistd.h>
+
 #ifdef CABLECAL_WITH_MPI
 #include <mpi.h>
 
@@ -71,7 +73,8 @@ int ReportCurrentError(const Processes& processes) {
   // Messages quote file contents and names: escaped, so that they cannot drive the terminal.
   const std::string message = PrintableText(error.message);
   if (error.exit_code == kExitInterrupted) {
-    std::fprintf(stderr, "\ncablecal%s: %s\n", who.c_str(), message.c_str());
+    // On a terminal, off the line the shell's ^C echo left; elsewhere no blank line.
+    std::fprintf(stderr, "%scablecal%s: %s\n", ::isatty(2) ? "\n" : "", who.c_str(), message.c_str());
   } else {
     std::fprintf(stderr, "cablecal%s: %s: %s\n", who.c_str(), error.label, message.c_str());
   }

@@ -22,11 +22,48 @@ std::string FormatDouble(double value) {
   return text;
 }
 
+namespace {
+
+// Length of the well-formed UTF-8 sequence at text[i] (1 to 4), or 0 if it is not one: a
+// lead byte with its continuation bytes, no overlong form, no surrogate, at most U+10FFFF.
+std::size_t Utf8SequenceAt(const std::string& text, std::size_t i) {
+  const auto byte = [&](std::size_t k) { return k < text.size() ? static_cast<unsigned char>(text[k]) : 0u; };
+  const unsigned lead = byte(i);
+  const std::size_t length = lead >= 0xc2 && lead <= 0xdf ? 2 : lead >= 0xe0 && lead <= 0xef ? 3
+                             : lead >= 0xf0 && lead <= 0xf4                                   ? 4
+                                                                                              : 0;
+  if (length == 0) return 0;
+  for (std::size_t k = 1; k < length; ++k) {
+    if ((byte(i + k) & 0xc0) != 0x80) return 0;
+  }
+  const unsigned second = byte(i + 1);
+  if ((lead == 0xe0 && second < 0xa0) || (lead == 0xed && second > 0x9f) || (lead == 0xf0 && second < 0x90) ||
+      (lead == 0xf4 && second > 0x8f)) {
+    return 0;
+  }
+  return length;
+}
+
+}  // namespace
+
 std::string PrintableText(const std::string& text) {
   std::string out;
   out.reserve(text.size());
-  for (const char c : text) {
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
     const unsigned char u = static_cast<unsigned char>(c);
+    if (u >= 0x80) {  // a UTF-8 character passes whole; a byte that is not part of one is escaped
+      const std::size_t length = Utf8SequenceAt(text, i);
+      if (length > 0) {
+        out.append(text, i, length);
+        i += length - 1;
+      } else {
+        char buffer[8];
+        std::snprintf(buffer, sizeof(buffer), "\\x%02x", u);
+        out += buffer;
+      }
+      continue;
+    }
     if (c == '\n') {
       out += "\\n";
     } else if (c == '\r') {

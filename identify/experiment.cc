@@ -268,7 +268,8 @@ void CheckReadingsPlausible(const Robot& robot, const std::vector<Measurement>& 
       throw InputError(where, "column 'z'",
                        FormatDouble(m.z_m) + " m is outside what the laser can read here, [" + FormatDouble(z_min) +
                            ", " + FormatDouble(z_max) + "] m (the laser range and the frame height of " + robot.name +
-                           ", widened by 5 sigma of the laser's noise)");
+                           ", widened by 5 sigma of the laser's noise)" +
+                           (m.z_m > 10.0 * robot.frame_height_m ? " (millimetres? z is in m)" : ""));
     }
     if (m.has_inclinometer && !(std::abs(m.theta_rad) <= theta_max)) {
       throw InputError(where, "column 'theta'",

@@ -60,6 +60,10 @@ Gauge ParseGauge(const std::string& text);          // InputError naming --gauge
 const char* ToString(Estimator e);
 const char* ToString(Gauge g);
 
+// The largest Levenberg-Marquardt iteration limit accepted (--max-iterations, Python's
+// max_iterations): a fit that needs more is lost, not slow.
+constexpr int kMaxIdentifyIterations = 100000;
+
 struct IdentifyOptions {
   Estimator estimator = Estimator::kMaximumLikelihood;
   Gauge gauge = Gauge::kA1x;
@@ -69,7 +73,7 @@ struct IdentifyOptions {
   // more than 0.5 m from nominal) as poor_fit. Off in the Monte Carlo: there a wild estimate
   // from a poor pose set is a result to count, not a sign of wrong data.
   bool check_plausible_geometry = true;
-  int max_iterations = 100;
+  int max_iterations = 100;             // 1 .. kMaxIdentifyIterations
   RobustLoss loss;                      // ml only
   std::string source = "measurements";  // names the data in messages
 };

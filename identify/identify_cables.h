@@ -301,7 +301,8 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     out.converged = sum.termination_type == ceres::CONVERGENCE;
     out.iterations = static_cast<int>(sum.iterations.size()) - 1;
     out.final_cost = sum.final_cost;
-    out.message = sum.message;
+    // Ceres' own words for its iteration limit repeat the count the caller gives.
+    out.message = sum.termination_type == ceres::NO_CONVERGENCE ? "the iteration limit was reached" : sum.message;
     return out;
   };
   // Least squares over the poses in `use`: for ml the block-arrow Levenberg-Marquardt written

@@ -813,7 +813,7 @@ PYBIND11_MODULE(cablecal, m) {
         IdentifyOptions o;
         o.estimator = ParseEstimator(AsText(estimator, "estimator"));
         o.gauge = ParseGauge(AsText(gauge, "gauge"));
-        o.max_iterations = static_cast<int>(AsInteger(max_iterations, "max_iterations", 1, 100000));
+        o.max_iterations = static_cast<int>(AsInteger(max_iterations, "max_iterations", 1, kMaxIdentifyIterations));
         o.loss = ParseLoss(AsText(loss, "loss"));
         o.source = "measurements";
         // As the CLI: a robot with systematic sensor errors has them removed before the solve.

@@ -13,6 +13,7 @@ import collections
 import csv
 import os
 import re
+import signal
 import sys
 
 import matplotlib
@@ -211,4 +212,5 @@ def main():
 
 
 if __name__ == "__main__":
+    signal.signal(signal.SIGINT, signal.SIG_DFL)  # Ctrl-C stops it quietly: cablecal reports it
     sys.exit(main())

@@ -8,6 +8,7 @@ is not drawn). Called by `cablecal design --plot`; usable alone:
 import argparse
 import csv
 import math
+import signal
 import sys
 
 import matplotlib
@@ -108,4 +109,5 @@ def main():
 
 
 if __name__ == "__main__":
+    signal.signal(signal.SIGINT, signal.SIG_DFL)  # Ctrl-C stops it quietly: cablecal reports it
     sys.exit(main())

@@ -16,6 +16,7 @@ import argparse
 import csv
 import math
 import os
+import signal
 import sys
 
 import matplotlib
@@ -286,4 +287,5 @@ def main():
 
 
 if __name__ == "__main__":
+    signal.signal(signal.SIGINT, signal.SIG_DFL)  # Ctrl-C stops it quietly: cablecal reports it
     sys.exit(main())

@@ -8,6 +8,7 @@ Called by `cablecal workspace --plot`; usable alone:
 """
 import argparse
 import csv
+import signal
 import sys
 
 import matplotlib
@@ -112,4 +113,5 @@ def main():
 
 
 if __name__ == "__main__":
+    signal.signal(signal.SIGINT, signal.SIG_DFL)  # Ctrl-C stops it quietly: cablecal reports it
     sys.exit(main())

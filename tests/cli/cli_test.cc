@@ -332,6 +332,7 @@ TEST_F(Cli, ImpossibleAndOutlyingReadingsAreRefusedByName) {
     std::string message;
   } cases[] = {
       {7, 3, [](double) { return 5.0; }, ":10: column 'z': 5 m is outside what the laser can read"},
+      {0, 3, [](double z) { return 1000.0 * z; }, "(millimetres? z is in m)"},
       {0, 4, [](double t) { return t * 180 / M_PI; }, "column 'theta': "},
       {0, 4, [](double) { return 3.0; }, "rad is beyond the inclinometer range"},
       // One redundant reading per pose (4 readings, 3 pose unknowns): the pose is named

@@ -31,6 +31,20 @@ TEST(Format, ShortestRoundTrip) {
   EXPECT_EQ(FormatDouble(-0.0), "0");
 }
 
+// Messages quote file contents: control characters and bytes that are not UTF-8 are escaped,
+// UTF-8 characters (a lab's names, a sigma) pass whole.
+TEST(Format, PrintableTextEscapesControlsAndInvalidUtf8) {
+  EXPECT_EQ(PrintableText("a\tb\n"), "a\\tb\\n");
+  EXPECT_EQ(PrintableText("\x1b[31m"), "\\x1b[31m");
+  EXPECT_EQ(PrintableText("\xcf\x83 = 1 mm, M\xc3\xbcller, \xe2\x82\xac, \xf0\x9f\x99\x82"),
+            "\xcf\x83 = 1 mm, M\xc3\xbcller, \xe2\x82\xac, \xf0\x9f\x99\x82");
+  EXPECT_EQ(PrintableText("\xff\xfe"), "\\xff\\xfe");            // not UTF-8 at all
+  EXPECT_EQ(PrintableText("\xc3("), "\\xc3(");                    // a lead byte without its continuation
+  EXPECT_EQ(PrintableText("\xc0\xaf"), "\\xc0\\xaf");          // overlong
+  EXPECT_EQ(PrintableText("\xed\xa0\x80"), "\\xed\\xa0\\x80");  // a surrogate
+  EXPECT_EQ(PrintableText("\xe2\x82"), "\\xe2\\x82");          // cut short at the end
+}
+
 TEST(Format, ParseRejectsNonFinite) {
   double v = 0.0;
   for (const char* bad : {"", "nan", "NaN", "inf", "-inf", "1e400", "1.0x", " 1", "0x"}) {
