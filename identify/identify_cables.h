@@ -342,65 +342,6 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     for (int j = 0; j < n; ++j) ok = ok && (!use[j] || (std::isfinite(q[j][0]) && std::isfinite(q[j][1]) && std::isfinite(q[j][2])));
     return ok;
   };
-  // Why least squares did not converge, when one pose's readings say it: a reading that no
-  // position gives a valid cable length on the nominal robot at its laser height and
-  // inclinometer angle (the anchor inside or past its pulley), or poses without which the
-  // others converge (each left out in turn, from the same start; up to kMaxPosesLeftOutTest
-  // poses, as the outlier test below).
-  const auto why_not_converged = [&]() -> std::string {
-    for (int j = 0; j < n; ++j) {
-      for (const int k : readings_of[j]) {
-        double r[M];
-        const Measurement& m = measurements[k];
-        LengthResiduals<M, double>(nominal, nominal_geometry.data(),
-                                   Eigen::Vector3d(start_poses[j][0], start_poses[j][1], start_poses[j][2]),
-                                   m.dl_m.data(), r);
-        for (int i = 0; i < M; ++i) {
-          if (std::isfinite(r[i])) continue;
-          return "; pose " + std::to_string(m.pose_id) + (m.where.empty() ? "" : " (" + m.where + ")") +
-                 ": at its laser height and inclinometer angle no position gives cable " + std::to_string(i + 1) +
-                 " a valid length on the nominal robot (its anchor inside or past the pulley): check that reading";
-        }
-      }
-    }
-    if (n > 200) return "";
-    // At least Ceres' default limit: a user's low --max-iterations must not make a good pose
-    // look guilty because the fit without it happens to converge sooner.
-    iteration_limit = ml_problem.max_iterations = std::max(options.max_iterations, 100);
-    std::vector<int> culprits;
-    for (int j = 0; j < n && culprits.size() <= 3; ++j) {
-      std::vector<char> use(n, 1);
-      use[j] = 0;
-      int values = 0;
-      for (int p = 0; p < n; ++p) values += use[p] ? values_per_reading * static_cast<int>(readings_of[p].size()) : 0;
-      if (values + prior_rows < geometry_cols + per_pose_unknowns * (n - 1)) continue;  // too few poses to tell
-      double g[kGeometry];
-      for (int k = 0; k < kGeometry; ++k) g[k] = nominal_geometry(k);
-      PoseValues q = start_poses;
-      if (converged(least_squares(g, q, use), g, q, use)) culprits.push_back(j);
-    }
-    iteration_limit = ml_problem.max_iterations = options.max_iterations;
-    if (culprits.empty() || culprits.size() > 3) return "";
-    std::string names;
-    for (std::size_t c = 0; c < culprits.size(); ++c) {
-      names += (c == 0 ? "" : c + 1 == culprits.size() ? " or " : ", ") + std::to_string(pose_id_of(culprits[c]));
-    }
-    return "; without pose " + names + " the other poses converge: check " +
-           (culprits.size() == 1 ? "that pose's readings" : "those poses' readings");
-  };
-  const auto not_converged = [&](const LeastSquaresSummary& sum) {
-    result.status = IdentifyStatus::kNotConverged;
-    result.iterations = sum.iterations;
-    const bool at_limit = sum.iterations >= options.max_iterations;
-    const std::string why = why_not_converged();
-    result.message = "Levenberg-Marquardt did not converge after " + std::to_string(result.iterations) +
-                     (result.iterations == 1 ? " iteration: " : " iterations: ") + sum.message +
-                     (!why.empty() ? why
-                      : at_limit   ? " (a grossly wrong reading can do this: check the readings, or raise --max-iterations)"
-                                   : " (a grossly wrong reading can do this: check the readings)");
-    return result;
-  };
-  if (!converged(summary, geometry, poses, every_pose)) return not_converged(summary);
 
   // Every reading's whitened residual at (g, q) (ml: each value over its sigma; paper: each
   // length residual over the laser's sigma, as the global test), for the readings of the poses
@@ -499,6 +440,77 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     return (with_pose ? "pose " + std::to_string(m.pose_id) + ": " : std::string()) + sensor +
            (repeated ? " (" + m.where + ")" : "") + buffer;
   };
+  // Why least squares did not converge, when one pose's readings say it: a reading that no
+  // position gives a valid cable length on the nominal robot at its laser height and
+  // inclinometer angle (the anchor inside or past its pulley), or poses without which the
+  // others converge (each left out in turn, from the same start; up to kMaxPosesLeftOutTest
+  // poses, as the outlier test below).
+  const auto why_not_converged = [&]() -> std::string {
+    for (int j = 0; j < n; ++j) {
+      for (const int k : readings_of[j]) {
+        double r[M];
+        const Measurement& m = measurements[k];
+        LengthResiduals<M, double>(nominal, nominal_geometry.data(),
+                                   Eigen::Vector3d(start_poses[j][0], start_poses[j][1], start_poses[j][2]),
+                                   m.dl_m.data(), r);
+        for (int i = 0; i < M; ++i) {
+          if (std::isfinite(r[i])) continue;
+          return "; pose " + std::to_string(m.pose_id) + (m.where.empty() ? "" : " (" + m.where + ")") +
+                 ": at its laser height and inclinometer angle no position gives cable " + std::to_string(i + 1) +
+                 " a valid length on the nominal robot (its anchor inside or past the pulley): check that reading";
+        }
+      }
+    }
+    if (n > 200) return "";
+    // At least Ceres' default limit: a user's low --max-iterations must not make a good pose
+    // look guilty because the fit without it happens to converge sooner.
+    iteration_limit = ml_problem.max_iterations = std::max(options.max_iterations, 100);
+    std::vector<Reading> culprits;  // each named pose's worst reading against the others' fit
+    for (int j = 0; j < n && culprits.size() <= 3; ++j) {
+      std::vector<char> use(n, 1);
+      use[j] = 0;
+      int values = 0;
+      for (int p = 0; p < n; ++p) values += use[p] ? values_per_reading * static_cast<int>(readings_of[p].size()) : 0;
+      if (values + prior_rows < geometry_cols + per_pose_unknowns * (n - 1)) continue;  // too few poses to tell
+      double g[kGeometry];
+      for (int k = 0; k < kGeometry; ++k) g[k] = nominal_geometry(k);
+      PoseValues q = start_poses;
+      if (!converged(least_squares(g, q, use), g, q, use)) continue;
+      // Named only if its readings then do not fit the others' geometry (that pose alone fitted
+      // to it): with few poses the fit without any one may converge where all do not, and a
+      // clean pose must not be blamed for a set that is merely poorly spread.
+      std::vector<char> only(n, 0);
+      only[j] = 1;
+      std::unique_ptr<ceres::Problem> alone = build(g, q, only, RobustLoss{});
+      solve(*alone, g, q, only, true);
+      const std::vector<Reading> off = beyond(residuals_at(g, q, only, false));
+      if (!off.empty()) culprits.push_back(off.front());
+    }
+    iteration_limit = ml_problem.max_iterations = options.max_iterations;
+    if (culprits.empty() || culprits.size() > 3) return "";
+    if (culprits.size() == 1) {
+      return "; without pose " + std::to_string(measurements[culprits[0].reading].pose_id) +
+             " the other poses converge, and against their fit its readings are off by " +
+             describe(culprits[0], false) + ": check that pose";
+    }
+    std::string text;
+    for (std::size_t c = 0; c < culprits.size(); ++c) text += (c == 0 ? "" : ", ") + describe(culprits[c]);
+    return "; the other poses converge without any one of these, whose readings are then off by " + text +
+           ": check those poses";
+  };
+  const auto not_converged = [&](const LeastSquaresSummary& sum) {
+    result.status = IdentifyStatus::kNotConverged;
+    result.iterations = sum.iterations;
+    const bool at_limit = sum.iterations >= options.max_iterations;
+    const std::string why = why_not_converged();
+    result.message = "Levenberg-Marquardt did not converge after " + std::to_string(result.iterations) +
+                     (result.iterations == 1 ? " iteration: " : " iterations: ") + sum.message +
+                     (!why.empty() ? why
+                      : at_limit   ? " (a grossly wrong reading can do this: check the readings, or raise --max-iterations)"
+                                   : " (a grossly wrong reading can do this: check the readings)");
+    return result;
+  };
+  if (!converged(summary, geometry, poses, every_pose)) return not_converged(summary);
   std::vector<Reading> readings = residuals_at(geometry, poses, every_pose, true);
   std::vector<Reading> tripped = beyond(readings);
   const std::size_t few = std::max<std::size_t>(kFewOutliers, static_cast<std::size_t>(values_per_reading) * num_readings / 20);
