@@ -465,8 +465,13 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     // At least Ceres' default limit: a user's low --max-iterations must not make a good pose
     // look guilty because the fit without it happens to converge sooner.
     iteration_limit = ml_problem.max_iterations = std::max(options.max_iterations, 100);
-    std::vector<Reading> culprits;  // each named pose's worst reading against the others' fit
-    for (int j = 0; j < n && culprits.size() <= 3; ++j) {
+    // Named only if the fit converges without that pose and without no other, and the pose's
+    // readings are then off against the others' geometry (that pose alone fitted to it): with
+    // few poses, leaving out any of several poses may let a merely poorly spread set converge,
+    // and a clean pose must not be blamed for it (measured on 6-pose Monte Carlo trials).
+    int converging = 0;
+    std::optional<Reading> culprit;
+    for (int j = 0; j < n && converging <= 1; ++j) {
       std::vector<char> use(n, 1);
       use[j] = 0;
       int values = 0;
@@ -476,27 +481,19 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
       for (int k = 0; k < kGeometry; ++k) g[k] = nominal_geometry(k);
       PoseValues q = start_poses;
       if (!converged(least_squares(g, q, use), g, q, use)) continue;
-      // Named only if its readings then do not fit the others' geometry (that pose alone fitted
-      // to it): with few poses the fit without any one may converge where all do not, and a
-      // clean pose must not be blamed for a set that is merely poorly spread.
+      ++converging;
       std::vector<char> only(n, 0);
       only[j] = 1;
       std::unique_ptr<ceres::Problem> alone = build(g, q, only, RobustLoss{});
       solve(*alone, g, q, only, true);
       const std::vector<Reading> off = beyond(residuals_at(g, q, only, false));
-      if (!off.empty()) culprits.push_back(off.front());
+      if (!off.empty()) culprit = off.front();
     }
     iteration_limit = ml_problem.max_iterations = options.max_iterations;
-    if (culprits.empty() || culprits.size() > 3) return "";
-    if (culprits.size() == 1) {
-      return "; without pose " + std::to_string(measurements[culprits[0].reading].pose_id) +
-             " the other poses converge, and against their fit its readings are off by " +
-             describe(culprits[0], false) + ": check that pose";
-    }
-    std::string text;
-    for (std::size_t c = 0; c < culprits.size(); ++c) text += (c == 0 ? "" : ", ") + describe(culprits[c]);
-    return "; the other poses converge without any one of these, whose readings are then off by " + text +
-           ": check those poses";
+    if (converging != 1 || !culprit) return "";
+    return "; only without pose " + std::to_string(measurements[culprit->reading].pose_id) +
+           " do the other poses converge, and against their fit its readings are off by " +
+           describe(*culprit, false) + ": check that pose";
   };
   const auto not_converged = [&](const LeastSquaresSummary& sum) {
     result.status = IdentifyStatus::kNotConverged;
