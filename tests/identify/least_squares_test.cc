@@ -1,7 +1,7 @@
 // The ml estimator's own Levenberg-Marquardt (identify/least_squares.h) against Ceres solving
 // the same problem with the same settings (its cost functors, DENSE_SCHUR, the tolerances and
 // initial radius identify used before it): the same estimates to 1e-9 m and the same
-// iteration count, on the built-in robot, the asymmetric robot file, random robots of 2 to 6
+// iteration count, on the built-in robot, the asymmetric robot file, random robots of 2 and 4
 // cables (suspended and fully constrained) and every gauge; repeated readings of a pose and a
 // missing laser; and a problem it cannot solve, reported as not converged.
 #include <gtest/gtest.h>
@@ -185,7 +185,7 @@ TEST(MlLeastSquares, SameAsCeresOnTheRobotFiles) {
   ExpectSameEveryGauge<4>(planar4, Experiment(planar4, 50, 0.001, 4), "planar4");
 }
 
-// Property test: random robots of 2 to 6 cables (random_robot.h), suspended and fully
+// Property test: random robots of 2 and 4 cables (random_robot.h), suspended and fully
 // constrained, fixed seed.
 TEST(MlLeastSquares, SameAsCeresOnRandomRobots) {
   Rng rng(2026);
@@ -193,12 +193,12 @@ TEST(MlLeastSquares, SameAsCeresOnRandomRobots) {
     const Robot r2 = testing::RandomValidRobot(rng, "random2");
     ExpectSameEveryGauge<2>(r2, Experiment(r2, 30, 0.003, 10 + draw), "random 2-cable robot " + std::to_string(draw));
   }
-  const Robot r3 = testing::RandomRobotWithCables(rng, "random3", 3, false);
-  ExpectSameEveryGauge<3>(r3, Experiment(r3, 30, 0.001, 20), "random 3-cable robot");
-  const Robot r4 = testing::RandomRobotWithCables(rng, "random4", 4, true);
-  ExpectSameEveryGauge<4>(r4, Experiment(r4, 30, 0.001, 21), "random 4-cable robot");
-  const Robot r6 = testing::RandomRobotWithCables(rng, "random6", 6, true);
-  ExpectSameEveryGauge<6>(r6, Experiment(r6, 30, 0.001, 22), "random 6-cable robot");
+  // More cables: the same code on M (each M a compile-time instance of this test's Ceres
+  // reference, 10 s of compilation each, so two: suspended and fully constrained).
+  for (int draw = 0; draw < 2; ++draw) {
+    const Robot r4 = testing::RandomRobotWithCables(rng, "random4", 4, draw == 1);
+    ExpectSameEveryGauge<4>(r4, Experiment(r4, 30, 0.001, 21 + draw), "random 4-cable robot " + std::to_string(draw));
+  }
 }
 
 // Three readings of each pose (one set of pose unknowns each), and a file without the laser
