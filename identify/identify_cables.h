@@ -261,10 +261,9 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     }
     return problem;
   };
-  int iteration_limit = options.max_iterations;  // raised for the diagnosis of a fit that did not converge
   // Levenberg-Marquardt; with the geometry held (one pose fitted to it alone) a plain QR step.
   const auto solve = [&](ceres::Problem& problem, double* g, PoseValues& q, const std::vector<char>& use,
-                         bool hold_geometry) {
+                         bool hold_geometry, int max_iterations) {
     ceres::Solver::Options solver_options;
     if (hold_geometry) {
       problem.SetParameterBlockConstant(g);
@@ -281,7 +280,7 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     }
     solver_options.minimizer_type = ceres::TRUST_REGION;
     solver_options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-    solver_options.max_num_iterations = iteration_limit;
+    solver_options.max_num_iterations = max_iterations;
     // Relative cost change 1e-10 at the minimum means parameter steps of ~1e-4 sigma: far below
     // any uncertainty reported, and noise-free data are still recovered to 1e-7 m (tested).
     solver_options.function_tolerance = 1e-10;
@@ -318,16 +317,39 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     ml_problem.prior_exits_m = nominal_geometry.head<2 * M>();
     ml_problem.prior_inv_sigma = 1.0 / *s.tracker_sigma_m;
   }
-  ml_problem.max_iterations = iteration_limit;
-  const auto least_squares = [&](double* g, PoseValues& q, const std::vector<char>& use) {
-    if (ml) return SolveMlLeastSquares<M>(ml_problem, g, q, use);
+  const auto least_squares = [&](double* g, PoseValues& q, const std::vector<char>& use, int max_iterations) {
+    if (ml) {
+      MlLeastSquaresProblem<M> limited = ml_problem;
+      limited.max_iterations = max_iterations;
+      return SolveMlLeastSquares<M>(limited, g, q, use);
+    }
     std::unique_ptr<ceres::Problem> p = build(g, q, use, RobustLoss{});
-    return from_ceres(solve(*p, g, q, use, false));
+    return from_ceres(solve(*p, g, q, use, false, max_iterations));
   };
+  // The poses in `use` alone have enough equations for their unknowns and the geometry's.
+  const auto enough_equations = [&](const std::vector<char>& use) {
+    int values = 0, poses_used = 0;
+    for (int p = 0; p < n; ++p) {
+      if (!use[p]) continue;
+      ++poses_used;
+      values += values_per_reading * static_cast<int>(readings_of[p].size());
+    }
+    return values + prior_rows >= geometry_cols + per_pose_unknowns * poses_used;
+  };
+  // Pose j alone fitted to the geometry g (held), from q[j].
+  const auto fit_to_geometry = [&](double* g, PoseValues& q, int j, int max_iterations) {
+    std::vector<char> only(n, 0);
+    only[j] = 1;
+    std::unique_ptr<ceres::Problem> alone = build(g, q, only, RobustLoss{});
+    solve(*alone, g, q, only, true, max_iterations);
+  };
+  // Each pose left out in turn, for the outlier test and the diagnosis of a fit that did not
+  // converge: beyond this many poses it would cost too much (n refits per round).
+  constexpr int kMaxPosesLeftOutTest = 200;
   const std::vector<char> every_pose(n, 1);
   // Least squares first, also under a robust loss: its residuals say whether there is anything
   // to down-weight, and where to start (below).
-  LeastSquaresSummary summary = least_squares(geometry, poses, every_pose);
+  LeastSquaresSummary summary = least_squares(geometry, poses, every_pose, options.max_iterations);
   // The Ceres problem at the estimate, for the Jacobian blocks of the covariance and the pose
   // checks: built when first needed (the Monte Carlo needs none); a robust fit's replaces it.
   std::unique_ptr<ceres::Problem> problem;
@@ -461,10 +483,10 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
         }
       }
     }
-    if (n > 200) return "";
+    if (n > kMaxPosesLeftOutTest) return "";
     // At least Ceres' default limit: a user's low --max-iterations must not make a good pose
     // look guilty because the fit without it happens to converge sooner.
-    iteration_limit = ml_problem.max_iterations = std::max(options.max_iterations, 100);
+    const int diagnosis_limit = std::max(options.max_iterations, 100);
     // Named only if the fit converges without that pose and without no other, and the pose's
     // readings are then off against the others' geometry (that pose alone fitted to it): with
     // few poses, leaving out any of several poses may let a merely poorly spread set converge,
@@ -474,22 +496,18 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     for (int j = 0; j < n && converging <= 1; ++j) {
       std::vector<char> use(n, 1);
       use[j] = 0;
-      int values = 0;
-      for (int p = 0; p < n; ++p) values += use[p] ? values_per_reading * static_cast<int>(readings_of[p].size()) : 0;
-      if (values + prior_rows < geometry_cols + per_pose_unknowns * (n - 1)) continue;  // too few poses to tell
+      if (!enough_equations(use)) continue;  // too few poses to tell
       double g[kGeometry];
       for (int k = 0; k < kGeometry; ++k) g[k] = nominal_geometry(k);
       PoseValues q = start_poses;
-      if (!converged(least_squares(g, q, use), g, q, use)) continue;
+      if (!converged(least_squares(g, q, use, diagnosis_limit), g, q, use)) continue;
       ++converging;
+      fit_to_geometry(g, q, j, diagnosis_limit);
       std::vector<char> only(n, 0);
       only[j] = 1;
-      std::unique_ptr<ceres::Problem> alone = build(g, q, only, RobustLoss{});
-      solve(*alone, g, q, only, true);
       const std::vector<Reading> off = beyond(residuals_at(g, q, only, false));
       if (!off.empty()) culprit = off.front();
     }
-    iteration_limit = ml_problem.max_iterations = options.max_iterations;
     if (converging != 1 || !culprit) return "";
     return "; only without pose " + std::to_string(measurements[culprit->reading].pose_id) +
            " do the other poses converge, and against their fit its readings are off by " +
@@ -606,7 +624,6 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   // a refit per pose and round (warm-started: a few iterations each); skipped beyond
   // kMaxPosesLeftOutTest poses, where the largest residuals are named instead.
   constexpr int kMaxLeftOut = 3;
-  constexpr int kMaxPosesLeftOutTest = 200;
   struct LeftOut {
     std::vector<int> poses;                 // indices into readings_of
     double geometry_values[kGeometry];      // the fit without them
@@ -627,17 +644,11 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
       for (int j = 0; j < n; ++j) {
         if (!use[j]) continue;
         use[j] = 0;
-        int left_values = 0, left_poses = 0;
-        for (int p = 0; p < n; ++p) {
-          if (!use[p]) continue;
-          ++left_poses;
-          left_values += values_per_reading * static_cast<int>(readings_of[p].size());
-        }
-        if (left_values + prior_rows >= geometry_cols + per_pose_unknowns * left_poses) {
+        if (enough_equations(use)) {
           double g[kGeometry];
           std::copy(out.geometry_values, out.geometry_values + kGeometry, g);
           PoseValues q = out.pose_values;
-          const LeastSquaresSummary sum = least_squares(g, q, use);
+          const LeastSquaresSummary sum = least_squares(g, q, use, options.max_iterations);
           if (converged(sum, g, q, use) && sum.final_cost < best_cost) {
             best_cost = sum.final_cost;
             best = j;
@@ -656,10 +667,8 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
         // The rest fit: fit each left-out pose to their geometry alone, and read its residuals.
         std::vector<char> left(n, 0);
         for (const int j : out.poses) {
-          std::vector<char> only(n, 0);
-          only[j] = left[j] = 1;
-          std::unique_ptr<ceres::Problem> alone = build(out.geometry_values, out.pose_values, only, RobustLoss{});
-          solve(*alone, out.geometry_values, out.pose_values, only, true);
+          left[j] = 1;
+          fit_to_geometry(out.geometry_values, out.pose_values, j, options.max_iterations);
         }
         out.worst = beyond(residuals_at(out.geometry_values, out.pose_values, left, false));
         return out;
@@ -703,7 +712,7 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
       poses = left_out->pose_values;
     }
     problem = build(geometry, poses, every_pose, options.loss);
-    summary = from_ceres(solve(*problem, geometry, poses, every_pose, false));
+    summary = from_ceres(solve(*problem, geometry, poses, every_pose, false, options.max_iterations));
     if (!converged(summary, geometry, poses, every_pose)) return not_converged(summary);
   }
   result.iterations = summary.iterations;

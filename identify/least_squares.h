@@ -71,6 +71,23 @@ struct PoseNormal {
   Eigen::Matrix3d damped_inverse;  // (A + mu D)^-1 of the current step
 };
 
+// A reading's laser and inclinometer residuals at pose q (residuals.h, MlSensorResiduals).
+template <int M>
+Eigen::Vector2d SensorResiduals(const MlLeastSquaresProblem<M>& p, const Measurement& m, const std::array<double, 3>& q) {
+  PoseReadings<M> readings;
+  readings.z_m = m.z_m;
+  readings.theta_rad = m.theta_rad;
+  Eigen::Vector2d r;
+  MlSensorResiduals<M, double>(readings, p.weights, q.data(), r.data());
+  return r;
+}
+
+// The tracker prior's residual on exit coordinate k (cost_functors.h, ExitPointPriorCost).
+template <int M>
+double PriorResidual(const MlLeastSquaresProblem<M>& p, const double* g, int k) {
+  return (g[k] - p.prior_exits_m(k)) * p.prior_inv_sigma;
+}
+
 // 1/2 sum of squared whitened residuals over the poses in `use`; infinite where a residual is
 // not finite (an anchor inside its pulley).
 template <int M>
@@ -84,16 +101,11 @@ double Cost(const MlLeastSquaresProblem<M>& p, const double* g, const PoseValues
       double r[M];
       LengthResiduals<M, double>(*p.robot, g, Pose<double>(q[j][0], q[j][1], q[j][2]), m.dl_m.data(), r);
       for (int i = 0; i < M; ++i) sum += r[i] * r[i] * (p.weights.inv_sigma_encoder * p.weights.inv_sigma_encoder);
-      const double laser = (q[j][1] - m.z_m) * p.weights.inv_sigma_laser;
-      const double inclinometer = (q[j][2] - m.theta_rad) * p.weights.inv_sigma_inclinometer;
-      sum += laser * laser + inclinometer * inclinometer;
+      sum += SensorResiduals<M>(p, m, q[j]).squaredNorm();
     }
   }
   if (p.prior_inv_sigma > 0.0) {
-    for (int k = 0; k < 2 * M; ++k) {
-      const double r = (g[k] - p.prior_exits_m(k)) * p.prior_inv_sigma;
-      sum += r * r;
-    }
+    for (int k = 0; k < 2 * M; ++k) sum += PriorResidual<M>(p, g, k) * PriorResidual<M>(p, g, k);
   }
   return std::isfinite(sum) ? 0.5 * sum : std::numeric_limits<double>::infinity();
 }
@@ -149,19 +161,18 @@ double Normal(const MlLeastSquaresProblem<M>& p, const double* g, const PoseValu
           for (int d = 0; d < 3; ++d) h_gg(cols[c], cols[d]) += row_cable(c) * row_cable(d);
         }
       }
-      // MlSensorResiduals: the laser reads z, the inclinometer theta.
-      const double laser = (q[j][1] - m.z_m) * w.inv_sigma_laser;
-      const double inclinometer = (q[j][2] - m.theta_rad) * w.inv_sigma_inclinometer;
-      sum += laser * laser + inclinometer * inclinometer;
+      // The laser reads z and the inclinometer theta: rows w e_z and w e_theta.
+      const Eigen::Vector2d sensors = SensorResiduals<M>(p, m, q[j]);
+      sum += sensors.squaredNorm();
       pose.a(1, 1) += w.inv_sigma_laser * w.inv_sigma_laser;
       pose.a(2, 2) += w.inv_sigma_inclinometer * w.inv_sigma_inclinometer;
-      pose.gradient(1) += w.inv_sigma_laser * laser;
-      pose.gradient(2) += w.inv_sigma_inclinometer * inclinometer;
+      pose.gradient(1) += w.inv_sigma_laser * sensors(0);
+      pose.gradient(2) += w.inv_sigma_inclinometer * sensors(1);
     }
   }
   if (p.prior_inv_sigma > 0.0) {
     for (int k = 0; k < 2 * M; ++k) {
-      const double r = (g[k] - p.prior_exits_m(k)) * p.prior_inv_sigma;
+      const double r = PriorResidual<M>(p, g, k);
       sum += r * r;
       h_gg(k, k) += p.prior_inv_sigma * p.prior_inv_sigma;
       gradient_g(k) += p.prior_inv_sigma * r;
