@@ -332,6 +332,7 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   id.source = options.measurements_path;
   id.max_iterations = options.max_iterations;
   id.loss = ParseLoss(options.loss);
+  id.geometry_prior_sigma_m = options.geometry_prior_sigma_m;
   // A robot file with systematic sensor errors (sensors fit) has them removed before the solve.
   const std::vector<Measurement> measurements =
       ReadMeasurementsOption(ctx, nominal, options.measurements_path, options.delimiter);
@@ -394,6 +395,7 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
     std::printf("  the data have %s: see identifiability in the result\n", MissingSensorsText(result.missing_sensors).c_str());
   }
   for (const std::string& d : result.down_weighted) std::printf("  down-weighted: %s\n", d.c_str());
+  for (const int id : result.dropped_pose_ids) std::printf("  dropped: pose %d (see the warning)\n", id);
   // How large a single wrong reading must be before the other poses show it (median over the
   // readings, per sensor; result.yaml has each reading's).
   if (!result.readings.empty() && result.readings.front().min_detectable_sigmas.size() > 0) {
@@ -612,7 +614,7 @@ int RunDesign(const Context& ctx, const DesignCommandOptions& options) {
               DescribeCriterion(design.criterion, result.criteria).c_str());
   if (design.random_sets > 0) {
     const double factor = Improvement(design.criterion, result.criteria, result.random_median);
-    std::printf(", %.3g x the median of %d random sets (> 1 is better)", factor, design.random_sets);
+    std::printf(", %s", ImprovementText(factor, design.random_sets).c_str());
     if (!(factor > 1.0) && !ctx.quiet) {
       std::fprintf(stderr, "cablecal: warning: %s\n", NoBetterThanRandomWarning(design, "--geometry-sigma").c_str());
     }

@@ -62,6 +62,7 @@ struct IdentifyCommandOptions {
   std::string loss = "none";     // ParseLoss
   std::string report_dir;        // --report: the calibration report's folder (identify/calibration_report.h)
   std::string holdout_path;      // --holdout: held-out readings the report validates the calibration on
+  double geometry_prior_sigma_m = 0.0;  // --geometry-prior (0: none)
 };
 int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options);
 
@@ -97,6 +98,7 @@ struct MonteCarloCommandOptions {
   double geometry_sigma_m = 0.01;
   unsigned long long seed = 1;
   bool plot = true;
+  bool geometry_prior = false;  // --geometry-prior: identify every trial with geometry_sigma_m as a prior
 };
 int RunMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptions& options);
 

@@ -140,6 +140,9 @@ int main(int argc, char** argv) {
                      "robust loss on each reading: none, huber or cauchy, optionally :SCALE in sigmas "
                      "(defaults huber:3, cauchy:10; ml only)")
       ->capture_default_str();
+  id_cmd->add_option("--geometry-prior", ident.geometry_prior_sigma_m,
+                     "standard deviation of the nominal exit points and initial lengths, m: a prior, so that the "
+                     "result knows at least what the robot file did (ml only; default none)");
   id_cmd->add_option("--report", ident.report_dir,
                      "folder for a calibration report: report.md with the estimates, figures and provenance, and the "
                      "data files behind them (created if new; its parent must exist)");
@@ -223,6 +226,8 @@ int main(int argc, char** argv) {
   mc_cmd->add_option("--geometry-sigma", mc.geometry_sigma_m, "true geometry's deviation from nominal, m")
       ->capture_default_str()
       ->check(kNonNegative);
+  mc_cmd->add_flag("--geometry-prior", mc.geometry_prior,
+                   "identify every trial with a prior of --geometry-sigma on the geometry (identify --geometry-prior)");
   mc_cmd->add_option("--loss", mc.loss, "robust loss of every identification, as identify --loss")
       ->capture_default_str();
   mc_cmd->add_option("--outliers", mc.outliers,

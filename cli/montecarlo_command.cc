@@ -56,6 +56,7 @@ std::string RunYaml(const Robot& robot, const MonteCarloOptions& o, const std::s
   y << Key << "gauge" << Value << ToString(o.gauge);
   y << Key << "sensors" << Value << ToString(o.sensors);
   y << Key << "geometry_sigma_m" << Value << YamlNumber{o.geometry_sigma_m};
+  y << Key << "geometry_prior" << Value << o.geometry_prior;
   y << Key << "loss" << Value << ToString(o.loss);
   y << Key << "outliers" << Value << YAML::Flow << YAML::BeginMap << Key << "rate" << Value
     << YamlNumber{o.outliers.rate} << Key << "size_sigmas" << Value << YamlNumber{o.outliers.size_sigmas}
@@ -134,6 +135,7 @@ int RunMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptions& opt
     o.sensors = ParseNoisySensors(options.sensors);
     o.geometry_sigma_m = options.geometry_sigma_m;
     o.loss = ParseLoss(options.loss);
+    o.geometry_prior = options.geometry_prior;
     o.outliers = ParseOutliers(options.outliers);
     o.seed = options.seed;
     o.design_starts = options.design_starts;
@@ -163,6 +165,15 @@ int RunMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptions& opt
   std::printf("ran %zu cells x %d trials in %.1f s on %d process%s x %d threads (%d failed trials); wrote %s/\n",
               r.cells.size(), o.trials, r.wall_time_s, ctx.processes.count, ctx.processes.count > 1 ? "es" : "",
               threads, failures, options.out_dir.c_str());
+  const std::vector<std::string> worse = CellsThatAddLittle(r, true);
+  if (!worse.empty() && !ctx.quiet) {
+    std::fprintf(stderr,
+                 "cablecal: warning: in %zu cell%s the calibration knows a geometric parameter less well than the %.3g mm "
+                 "known before measuring (%s%s); see summary.md%s\n",
+                 worse.size(), worse.size() == 1 ? "" : "s", 1e3 * o.geometry_sigma_m, worse.front().c_str(),
+                 worse.size() > 1 ? "; ..." : "",
+                 o.geometry_prior ? "" : "; --geometry-prior identifies with that knowledge as a prior");
+  }
   if (!figure_error.empty()) throw FigureFailure(figure_error + "; the study's data were written to " + options.out_dir);
   return kExitOk;
 }

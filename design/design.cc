@@ -6,6 +6,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <sstream>
 
@@ -553,6 +554,16 @@ DesignPrior LoadDesignPrior(const Robot& nominal, const std::string& path) {
   return prior;
 }
 
+std::string ImprovementText(double factor, int random_sets) {
+  const std::string median = "the median of " + std::to_string(random_sets) + " random set" + (random_sets == 1 ? "" : "s");
+  char buffer[64];
+  if (!(factor > 0.0) || !std::isfinite(factor)) return "not comparable with " + median;
+  if (std::abs(factor - 1.0) < 0.01) return "as good as " + median;
+  std::snprintf(buffer, sizeof(buffer), "%.3g x %s than ", factor > 1.0 ? factor : 1.0 / factor,
+                factor > 1.0 ? "better" : "worse");
+  return buffer + median;
+}
+
 std::string NoBetterThanRandomWarning(const DesignOptions& options, const std::string& sigma_option) {
   return "the designed set is no better than the median random set on its criterion: the poses that stay holdable "
          "for geometry errors of " + FormatDouble(options.robust_sigmas) + " x " + FormatDouble(options.geometry_sigma_m) +
@@ -603,6 +614,9 @@ std::string DesignSummaryYaml(const DesignResult& r, const DesignOptions& option
       o << Key << ToString(c) << Value << YamlNumber{Improvement(c, r.criteria, r.random_median)};
     }
     o << EndMap;
+    o << Key << "comparison" << Value
+      << YamlString{"on its criterion (" + std::string(ToString(options.criterion)) + "), the designed set is " +
+                    ImprovementText(Improvement(options.criterion, r.criteria, r.random_median), options.random_sets)};
   } else {
     o << Key << "random_sets" << Value << Flow << BeginMap << Key << "count" << Value << 0 << EndMap
       << YAML::Comment("no random reference (--random-sets 0)");

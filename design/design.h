@@ -63,6 +63,10 @@ DesignPrior LoadDesignPrior(const Robot& nominal, const std::string& result_yaml
 // kappa_ref / kappa; (det S / det S_ref)^(1/(3m - 1)) (per-eigenvalue geometric mean);
 // trace_ref / trace; lambda_min / lambda_min_ref.
 double Improvement(Criterion c, const CriteriaValues& set, const CriteriaValues& reference);
+// The improvement factor in words that cannot be misread: "3.2 x better than the median of
+// 100 random sets", "29 x worse than the median of 100 random sets" (a factor 0.0341 printed
+// as such read as an improvement), "as good as ..." within 1 %.
+std::string ImprovementText(double factor, int random_sets);
 
 // A geometry error beyond this is not a calibration problem (the robot file is wrong).
 constexpr double kMaxGeometrySigma_m = 0.5;

@@ -301,6 +301,12 @@ std::string LossSection(const IdentifyResult& r) {
     << Rounded(kOutlierSigmas) << " σ kept at a reduced weight" << (r.down_weighted.empty() ? ": none.\n\n" : ":\n\n");
   for (const std::string& d : r.down_weighted) o << "- " << PrintableText(d) << "\n";
   if (!r.down_weighted.empty()) o << "\n";
+  if (!r.dropped_pose_ids.empty()) {
+    o << "Dropped: pose" << (r.dropped_pose_ids.size() == 1 ? "" : "s");
+    for (std::size_t k = 0; k < r.dropped_pose_ids.size(); ++k) o << (k ? ", " : " ") << r.dropped_pose_ids[k];
+    o << ". Their readings do not fit the others, and the robust estimate followed them too far: the estimates "
+         "are the fit without them (their readings are shown at weight 0).\n\n";
+  }
   return o.str();
 }
 

@@ -116,6 +116,20 @@ struct PaperPoseCost {
   }
 };
 
+// A prior on every geometric parameter (identify --geometry-prior, with the tracker's on the
+// exit points when both are given): (g_k - nominal_k) / sigma_k, a zero row where
+// inv_sigma_k = 0 (a coordinate without one).
+template <int M>
+struct GeometryPriorCost {
+  Eigen::Matrix<double, 3 * M, 1> nominal;
+  Eigen::Matrix<double, 3 * M, 1> inv_sigma;
+  template <typename T>
+  bool operator()(const T* geometry, T* residual) const {
+    for (int k = 0; k < 3 * M; ++k) residual[k] = (geometry[k] - nominal(k)) * inv_sigma(k);
+    return true;
+  }
+};
+
 // Laser-tracker prior on the exit points (gauge `prior`): a1x a1z ... aMx aMz.
 template <int M>
 struct ExitPointPriorCost {

@@ -75,11 +75,23 @@ struct IdentifyOptions {
   bool check_plausible_geometry = true;
   int max_iterations = 100;             // 1 .. kMaxIdentifyIterations
   RobustLoss loss;                      // ml only
+  // A Gaussian prior on every geometric parameter about its nominal value with this standard
+  // deviation (m; 0: none; ml only): what the lab knew before measuring, so that the result is
+  // never less informed than that (identify --geometry-prior, README "Identification").
+  double geometry_prior_sigma_m = 0.0;
   std::string source = "measurements";  // names the data in messages
 };
 
 // "no 'z' column (laser) and no 'theta' column (inclinometer)" for IdentifyResult::missing_sensors.
 std::string MissingSensorsText(const std::vector<std::string>& missing_sensors);
+
+// --geometry-prior's accepted range, m: below a micrometre no lab knows its geometry; beyond
+// 0.5 m the robot file is wrong, not uncertain (design's kMaxGeometrySigma_m).
+constexpr double kMinGeometryPriorSigma_m = 1e-6;
+constexpr double kMaxGeometryPriorSigma_m = 0.5;
+// With a geometry prior, a parameter whose standard deviation stays above this share of the
+// prior's (more than half its variance left) is one the data add little to.
+constexpr double kDataAddLittle = 0.7;
 
 // A reading whose whitened residual exceeds this many sigma refuses the fit (poor_fit).
 constexpr double kOutlierSigmas = 4.5;
@@ -162,6 +174,11 @@ struct IdentifyResult {
   // Readings beyond kOutlierSigmas that the robust loss kept (down-weighted) rather than
   // refusing the fit: "pose 7: laser 199 sigma (weight 0.015)".
   std::vector<std::string> down_weighted;
+  // Poses whose readings do not fit the others and that a robust fit followed too far: the
+  // result is the fit without them (their readings stay in `readings`, at weight 0).
+  std::vector<int> dropped_pose_ids;
+  double geometry_prior_sigma_m = 0.0;  // the options' (0: no geometry prior)
+  int data_add_little = 0;  // parameters whose sigma stays above kDataAddLittle x the prior's
   std::vector<std::string> missing_sensors;  // "laser", "inclinometer": no such column in the data
   std::vector<std::string> warnings;         // a result, but one to read with care
   Identifiability identifiability;

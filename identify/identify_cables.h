@@ -130,6 +130,16 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   if (robust && !ml) {
     throw InputError("--loss", "", "needs --estimator ml (the paper estimator's residuals are not in sigmas)");
   }
+  if (options.geometry_prior_sigma_m != 0.0 && !ml) {
+    throw InputError("--geometry-prior", "", "needs --estimator ml (the paper estimator's residuals are not in sigmas)");
+  }
+  if (options.geometry_prior_sigma_m != 0.0 &&
+      !(options.geometry_prior_sigma_m >= kMinGeometryPriorSigma_m && options.geometry_prior_sigma_m <= kMaxGeometryPriorSigma_m)) {
+    throw InputError("--geometry-prior", "",
+                     "must be between " + FormatDouble(kMinGeometryPriorSigma_m) + " and " +
+                         FormatDouble(kMaxGeometryPriorSigma_m) + " m (the standard deviation of the nominal geometry), not " +
+                         FormatDouble(options.geometry_prior_sigma_m));
+  }
 
   // Repeated readings of one pose share its unknowns: group them by pose id, poses in the order
   // of their first reading.
@@ -144,17 +154,44 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   }
   const int n = static_cast<int>(readings_of.size());
   const auto pose_id_of = [&](int j) { return measurements[readings_of[j].front()].pose_id; };
+  // Two poses never read alike to the last digit (every sensor has noise): a reading identical
+  // in every value to another pose's is a copied row, and counts that pose's information twice
+  // (a new user's 5 poses copied under 30 ids fitted exactly, 172 mm off, and nothing said so).
+  std::vector<std::string> copied;  // "pose 6 (lab.csv:7) = pose 1 (lab.csv:2)"
+  int copied_count = 0;
+  {
+    std::map<std::vector<double>, int> first_with;
+    for (int k = 0; k < num_readings; ++k) {
+      const Measurement& m = measurements[k];
+      std::vector<double> key(m.dl_m.data(), m.dl_m.data() + m.dl_m.size());
+      key.push_back(m.has_laser ? m.z_m : 0.0);
+      key.push_back(m.has_inclinometer ? m.theta_rad : 0.0);
+      const auto [it, inserted] = first_with.emplace(std::move(key), k);
+      if (inserted || measurements[it->second].pose_id == m.pose_id) continue;
+      ++copied_count;
+      const auto name = [](const Measurement& r) {
+        return "pose " + std::to_string(r.pose_id) + (r.where.empty() ? "" : " (" + r.where + ")");
+      };
+      if (copied.size() < 3) copied.push_back(name(m) + " = " + name(measurements[it->second]));
+    }
+  }
 
   // Enough equations for the unknowns (paper, Eq. 7; the gauge removes one unknown): per
   // reading M encoder values, plus the laser's and the inclinometer's for ml; per pose 3
-  // unknowns (ml) or 1 (paper); 3M geometric unknowns, 3M - 1 with a1x held; the prior adds 2M
+  // unknowns (ml) or 1 (paper); 3M geometric unknowns, 3M - 1 with a1x held; the tracker prior
+  // adds 2M equations, the geometry prior one per geometric unknown (any pose count is then
+  // determined).
   // equations. Repeated readings add equations, not information on other poses: the rank test
   // below judges them.
   const int per_pose_unknowns = ml ? 3 : 1;
   const int values_per_reading = ml ? M + (laser ? 1 : 0) + (inclinometer ? 1 : 0) : M;
-  const int prior_rows = options.gauge == Gauge::kPrior ? 2 * M : 0;
+  const bool geometry_prior = options.geometry_prior_sigma_m > 0.0;
   const int geometry_cols = options.gauge == Gauge::kA1x ? kGeometry - 1 : kGeometry;
-  const int equations = values_per_reading * num_readings + prior_rows;
+  // Ceres' prior rows (GeometryPriorCost: all 3M; ExitPointPriorCost: the exits) and the
+  // equations they add (a held a1x's row is zero).
+  const int prior_rows = geometry_prior ? kGeometry : options.gauge == Gauge::kPrior ? 2 * M : 0;
+  const int prior_equations = geometry_prior ? geometry_cols : prior_rows;
+  const int equations = values_per_reading * num_readings + prior_equations;
   const int unknowns = geometry_cols + per_pose_unknowns * n;
   if (equations < unknowns) {
     std::string advice;
@@ -164,7 +201,7 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
                (missing_text.empty() ? "" : " (the data have " + missing_text + ")");
     } else {
       int needed = n;
-      while (values_per_reading * needed + prior_rows < geometry_cols + per_pose_unknowns * needed) ++needed;
+      while (values_per_reading * needed + prior_equations < geometry_cols + per_pose_unknowns * needed) ++needed;
       advice = "at least " + std::to_string(needed) + " poses are needed";
     }
     throw InputError(options.source, "",
@@ -200,6 +237,17 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
 
   const GeometryVector nominal_geometry = GeometryOf(nominal);
   const std::vector<std::string> geometry_names = GeometryNames(M);
+  result.geometry_prior_sigma_m = options.geometry_prior_sigma_m;
+  // The priors' inverse sigma per geometric coordinate: the tracker's on the exit points
+  // (gauge prior) and the geometry prior's on every one, combined as independent Gaussians
+  // about the same nominal value (their precisions add); 0 where there is none.
+  Eigen::Matrix<double, kGeometry, 1> prior_inv_sigma = Eigen::Matrix<double, kGeometry, 1>::Zero();
+  {
+    Eigen::Matrix<double, kGeometry, 1> precision = Eigen::Matrix<double, kGeometry, 1>::Zero();
+    if (options.gauge == Gauge::kPrior) precision.template head<2 * M>().setConstant(1.0 / (*s.tracker_sigma_m * *s.tracker_sigma_m));
+    if (geometry_prior) precision.array() += 1.0 / (options.geometry_prior_sigma_m * options.geometry_prior_sigma_m);
+    prior_inv_sigma = precision.cwiseSqrt();
+  }
   double geometry[kGeometry];
   for (int k = 0; k < kGeometry; ++k) geometry[k] = nominal_geometry(k);
   std::vector<std::array<double, 3>> poses(n);
@@ -254,7 +302,11 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
         }
       }
     }
-    if (options.gauge == Gauge::kPrior) {
+    if (geometry_prior) {
+      auto* prior = new ceres::AutoDiffCostFunction<internal::GeometryPriorCost<M>, kGeometry, kGeometry>(
+          new internal::GeometryPriorCost<M>{nominal_geometry, prior_inv_sigma});
+      problem->AddResidualBlock(prior, nullptr, g);
+    } else if (options.gauge == Gauge::kPrior) {
       auto* prior = new ceres::AutoDiffCostFunction<internal::ExitPointPriorCost<M>, 2 * M, kGeometry>(
           new internal::ExitPointPriorCost<M>{nominal_geometry.head<2 * M>(), 1.0 / *s.tracker_sigma_m});
       problem->AddResidualBlock(prior, nullptr, g);
@@ -313,10 +365,8 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   ml_problem.readings_of = &readings_of;
   ml_problem.weights = weights;
   ml_problem.hold_a1x = options.gauge == Gauge::kA1x;
-  if (options.gauge == Gauge::kPrior) {
-    ml_problem.prior_exits_m = nominal_geometry.head<2 * M>();
-    ml_problem.prior_inv_sigma = 1.0 / *s.tracker_sigma_m;
-  }
+  ml_problem.prior_geometry = nominal_geometry;
+  ml_problem.prior_inv_sigma = prior_inv_sigma;
   const auto least_squares = [&](double* g, PoseValues& q, const std::vector<char>& use, int max_iterations) {
     if (ml) {
       MlLeastSquaresProblem<M> limited = ml_problem;
@@ -334,7 +384,7 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
       ++poses_used;
       values += values_per_reading * static_cast<int>(readings_of[p].size());
     }
-    return values + prior_rows >= geometry_cols + per_pose_unknowns * poses_used;
+    return values + prior_equations >= geometry_cols + per_pose_unknowns * poses_used;
   };
   // Pose j alone fitted to the geometry g (held), from q[j].
   const auto fit_to_geometry = [&](double* g, PoseValues& q, int j, int max_iterations) {
@@ -487,9 +537,9 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     // At least Ceres' default limit: a user's low --max-iterations must not make a good pose
     // look guilty because the fit without it happens to converge sooner.
     const int diagnosis_limit = std::max(options.max_iterations, 100);
-    // Named only if the fit converges without that pose and without no other, and the pose's
-    // readings are then off against the others' geometry (that pose alone fitted to it): with
-    // few poses, leaving out any of several poses may let a merely poorly spread set converge,
+    // Named only if the fit converges, every reading within kOutlierSigmas, without that pose
+    // and without no other, and the pose's readings are then off against the others' geometry
+    // (that pose alone fitted to it): with few poses, leaving out any of several poses may let a merely poorly spread set converge,
     // and a clean pose must not be blamed for it (measured on 6-pose Monte Carlo trials).
     int converging = 0;
     std::optional<Reading> culprit;
@@ -501,6 +551,10 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
       for (int k = 0; k < kGeometry; ++k) g[k] = nominal_geometry(k);
       PoseValues q = start_poses;
       if (!converged(least_squares(g, q, use, diagnosis_limit), g, q, use)) continue;
+      // A fit that converges only to readings that do not fit (the bad one still in: a 0.3 m
+      // laser error at one of 30 poses let 8 such leave-outs converge, to poor fits, and so
+      // hid the one whose absence lets the rest fit) explains nothing.
+      if (!beyond(residuals_at(g, q, use, false)).empty()) continue;
       ++converging;
       fit_to_geometry(g, q, j, diagnosis_limit);
       std::vector<char> only(n, 0);
@@ -703,6 +757,80 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
            (l.poses.size() == 1 ? "its" : "their") + " readings are then off by " + worst;
   };
 
+  // A robust loss can follow the readings the leave-out test found bad: Huber's never ignores
+  // a reading, and Cauchy's, at a pose of high leverage, can settle back on them (a new user's
+  // 2-cable robot, 30 poses, one laser reading 0.3 m off: l20 28 sigma from the truth, 29.9
+  // sigma from the fit without that pose). An estimate the tool knows is that far from the fit
+  // without the poses whose readings do not fit the others is not returned: when it is more
+  // than kRobustStraySigmas (of that fit's own sigmas) from it, that fit is the result, the
+  // poses named as dropped, their readings reported against it at weight 0.
+  constexpr double kRobustStraySigmas = 2.0;
+  const auto fit_without_left_out = [&](const LeftOut& l) -> std::optional<IdentifyResult> {
+    std::vector<char> dropped_reading(num_readings, 0);
+    for (const int j : l.poses) {
+      for (const int k : readings_of[j]) dropped_reading[k] = 1;
+    }
+    std::vector<Measurement> kept;
+    std::vector<int> row_of_kept;  // each kept reading's index in `measurements`
+    for (int k = 0; k < num_readings; ++k) {
+      if (dropped_reading[k]) continue;
+      kept.push_back(measurements[k]);
+      row_of_kept.push_back(k);
+    }
+    IdentifyOptions least_squares_options = options;
+    least_squares_options.loss = RobustLoss{};
+    least_squares_options.compute_covariance = true;  // its sigmas measure the stray
+    IdentifyResult without = IdentifyWithCables<M>(nominal, kept, least_squares_options);
+    if (!without.converged() || !without.has_covariance) return std::nullopt;
+    int worst = -1;
+    double worst_sigmas = kRobustStraySigmas;
+    for (int k = 0; k < kGeometry; ++k) {
+      if (!(without.geometry_std(k) > 0.0)) continue;
+      const double sigmas = std::abs(geometry[k] - without.geometry(k)) / without.geometry_std(k);
+      if (sigmas > worst_sigmas) {
+        worst_sigmas = sigmas;
+        worst = k;
+      }
+    }
+    if (worst < 0) return std::nullopt;
+    // The dropped poses' readings against the returned geometry, each pose fitted to it alone.
+    double g[kGeometry];
+    for (int k = 0; k < kGeometry; ++k) g[k] = without.geometry(k);
+    PoseValues q = l.pose_values;
+    std::vector<char> left(n, 0);
+    for (const int j : l.poses) {
+      left[j] = 1;
+      fit_to_geometry(g, q, j, options.max_iterations);
+    }
+    residuals_at(g, q, left, true);  // into result.readings, at the dropped readings' rows
+    if (reading_fits) {
+      std::vector<ReadingFit> all = std::move(result.readings);
+      for (std::size_t i = 0; i < row_of_kept.size(); ++i) all[row_of_kept[i]] = std::move(without.readings[i]);
+      for (int k = 0; k < num_readings; ++k) {
+        if (!dropped_reading[k]) continue;
+        all[k].encoder_weights.setZero();
+        all[k].laser_weight = all[k].inclinometer_weight = 0.0;
+        all[k].min_detectable_sigmas.resize(0);
+      }
+      without.readings = std::move(all);
+    } else {
+      without.readings.clear();
+    }
+    without.loss = options.loss;
+    for (const int j : l.poses) without.dropped_pose_ids.push_back(pose_id_of(j));
+    char buffer[96];
+    std::snprintf(buffer, sizeof(buffer), "%.3g sigma (%.3g mm in %s)", worst_sigmas,
+                  1e3 * std::abs(geometry[worst] - without.geometry(worst)), geometry_names[worst].c_str());
+    const bool one = l.poses.size() == 1;
+    without.warnings.insert(
+        without.warnings.begin(),
+        std::string(one ? "pose " : "poses ") + left_out_ids(l) + " dropped: " + explain_left_out(l) + "; the " +
+            ToString(options.loss) + " estimate with " + (one ? "it" : "them") + " was " + buffer +
+            " from the fit without " + (one ? "it" : "them") + ", which is returned" +
+            (options.loss.kind == LossKind::kHuber ? " (Huber's loss never ignores a reading)" : ""));
+    return without;
+  };
+
   if (robust) {
     // Start the robust fit where it should end: from the fit without the culprits when least
     // squares found any (a redescending loss such as Cauchy's then stays there; Huber's, which
@@ -714,6 +842,9 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     problem = build(geometry, poses, every_pose, options.loss);
     summary = from_ceres(solve(*problem, geometry, poses, every_pose, false, options.max_iterations));
     if (!converged(summary, geometry, poses, every_pose)) return not_converged(summary);
+    if (left_out && !left_out->worst.empty()) {
+      if (std::optional<IdentifyResult> without = fit_without_left_out(*left_out)) return *without;
+    }
   }
   result.iterations = summary.iterations;
   result.final_cost = summary.final_cost;
@@ -731,6 +862,9 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
       options.gauge == Gauge::kPrior
           ? " (with --gauge prior this is also what a tracker prior that disagrees with the readings looks like: "
             "are the exit points within a few sensors.tracker.sigma of the robot file's?)"
+      : geometry_prior
+          ? " (with --geometry-prior this is also what a nominal geometry further from the real one than the prior's "
+            "sigma allows looks like: is " + FormatDouble(options.geometry_prior_sigma_m) + " m too small?)"
           : "";
   // Goodness of fit. With the right model the whitened residuals have RMS near 1 (ml), and
   // the paper estimator's length residuals are of the order of the laser's noise, which
@@ -848,6 +982,40 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   if (!robust && (!tripped.empty() || flagged_pose >= 0)) {
     refuse_outliers(drop_or_loss);
     return result;
+  }
+
+  if (copied_count > 0) {
+    std::string list;
+    for (std::size_t k = 0; k < copied.size(); ++k) list += (k ? ", " : "") + copied[k];
+    if (copied_count > static_cast<int>(copied.size())) list += ", ...";
+    result.warnings.push_back(std::to_string(copied_count) + (copied_count == 1 ? " reading is" : " readings are") +
+                              " identical in every value to another pose's (" + list +
+                              "): copied rows? Real readings of two poses always differ by their noise; a copy "
+                              "counts one pose twice and makes the standard deviations too small. If it is the "
+                              "same pose read again, give it the same pose id");
+  }
+  // Residuals far below the sensors' noise are as suspect as residuals far above it: copied
+  // readings, data simulated without noise, or sigmas in the robot file far larger than the
+  // sensors' (then every standard deviation is too large). With the right sigmas the sum of
+  // squared whitened residuals is about chi-square with `dof` degrees of freedom; a mean square
+  // below its 5-sigma lower bound (Wilson-Hilferty: ((1 - 2/9k) - 5 sqrt(2/9k))^3) happens in
+  // fewer than one clean experiment in a million.
+  if (ml && !robust) {
+    const int dof = values_per_reading * num_readings - unknowns;
+    const double h = 2.0 / (9.0 * dof);
+    const double lower = std::pow(std::max(0.0, 1.0 - h - 5.0 * std::sqrt(h)), 3);
+    double sum = 0.0;
+    for (const Reading& r : readings) sum += r.sigmas * r.sigmas;
+    if (dof >= 10 && sum / dof < lower) {
+      char buffer[256];
+      std::snprintf(buffer, sizeof(buffer),
+                    "the residuals are far below the sensors' noise: their RMS is %.3g of the robot file's sigmas, "
+                    "where clean readings give about 1 (and below %.3g in fewer than one experiment in a million)",
+                    std::sqrt(sum / dof), std::sqrt(lower));
+      result.warnings.push_back(std::string(buffer) +
+                                ": readings copied from other poses, simulated without noise, or sensor sigmas far "
+                                "larger than the sensors' (the standard deviations are then too large)");
+    }
   }
 
   if (!options.compute_identifiability && !options.compute_covariance) return result;
@@ -993,6 +1161,30 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
         std::snprintf(buffer, sizeof(buffer), "the poses hardly determine the geometry: the standard deviation of %s is "
                       "%.3g m", geometry_names[worst].c_str(), worst_std);
         result.warnings.push_back(std::string(buffer) + "; add poses, or plan better-spread ones (cablecal design)");
+      }
+      // With a geometry prior the result is never less informed than the prior, but it may be
+      // hardly more: say which parameters the data leave nearly where the prior had them
+      // (the posterior keeps more than half the prior's variance).
+      if (geometry_prior) {
+        std::string little;
+        int count = 0;
+        for (int k = 0; k < kGeometry; ++k) {
+          if (!(result.geometry_std(k) > kDataAddLittle * options.geometry_prior_sigma_m)) continue;
+          if (++count <= 4) {
+            char buffer[64];
+            std::snprintf(buffer, sizeof(buffer), "%s%s (%.3g mm)", count > 1 ? ", " : "", geometry_names[k].c_str(),
+                          1e3 * result.geometry_std(k));
+            little += buffer;
+          }
+        }
+        if (count > 4) little += ", ...";
+        if (count > 0) {
+          result.data_add_little = count;
+          result.warnings.push_back(
+              "the data add little to the geometry prior (" + FormatDouble(1e3 * options.geometry_prior_sigma_m) +
+              " mm) for " + std::to_string(count) + " of " + std::to_string(geometry_cols) + " parameters: " + little +
+              "; they are known about as well as before measuring: add poses, or plan ones that see them (cablecal design)");
+        }
       }
     }
   }

@@ -37,7 +37,8 @@ namespace cablecal::internal {
 
 // The problem: readings grouped by pose (readings_of[j]: indices into measurements), the
 // weights that whiten them (a missing sensor's weight is 0), whether a1x is held (gauge a1x)
-// and the tracker prior on the exit points (gauge prior; prior_inv_sigma 0 without one).
+// and the priors on the geometry: the tracker's on the exit points (gauge prior) and
+// --geometry-prior's on every parameter, as one inverse sigma per coordinate (0: none).
 template <int M>
 struct MlLeastSquaresProblem {
   const Robot* robot = nullptr;
@@ -45,8 +46,8 @@ struct MlLeastSquaresProblem {
   const std::vector<std::vector<int>>* readings_of = nullptr;
   ReadingWeights weights;
   bool hold_a1x = true;
-  Eigen::Matrix<double, 2 * M, 1> prior_exits_m = Eigen::Matrix<double, 2 * M, 1>::Zero();
-  double prior_inv_sigma = 0.0;
+  Eigen::Matrix<double, 3 * M, 1> prior_geometry = Eigen::Matrix<double, 3 * M, 1>::Zero();
+  Eigen::Matrix<double, 3 * M, 1> prior_inv_sigma = Eigen::Matrix<double, 3 * M, 1>::Zero();
   int max_iterations = 100;
 };
 
@@ -82,10 +83,10 @@ Eigen::Vector2d SensorResiduals(const MlLeastSquaresProblem<M>& p, const Measure
   return r;
 }
 
-// The tracker prior's residual on exit coordinate k (cost_functors.h, ExitPointPriorCost).
+// The priors' residual on geometry coordinate k (cost_functors.h, GeometryPriorCost).
 template <int M>
 double PriorResidual(const MlLeastSquaresProblem<M>& p, const double* g, int k) {
-  return (g[k] - p.prior_exits_m(k)) * p.prior_inv_sigma;
+  return (g[k] - p.prior_geometry(k)) * p.prior_inv_sigma(k);
 }
 
 // 1/2 sum of squared whitened residuals over the poses in `use`; infinite where a residual is
@@ -104,8 +105,8 @@ double Cost(const MlLeastSquaresProblem<M>& p, const double* g, const PoseValues
       sum += SensorResiduals<M>(p, m, q[j]).squaredNorm();
     }
   }
-  if (p.prior_inv_sigma > 0.0) {
-    for (int k = 0; k < 2 * M; ++k) sum += PriorResidual<M>(p, g, k) * PriorResidual<M>(p, g, k);
+  for (int k = 0; k < 3 * M; ++k) {
+    if (p.prior_inv_sigma(k) > 0.0) sum += PriorResidual<M>(p, g, k) * PriorResidual<M>(p, g, k);
   }
   return std::isfinite(sum) ? 0.5 * sum : std::numeric_limits<double>::infinity();
 }
@@ -170,13 +171,12 @@ double Normal(const MlLeastSquaresProblem<M>& p, const double* g, const PoseValu
       pose.gradient(2) += w.inv_sigma_inclinometer * sensors(1);
     }
   }
-  if (p.prior_inv_sigma > 0.0) {
-    for (int k = 0; k < 2 * M; ++k) {
-      const double r = PriorResidual<M>(p, g, k);
-      sum += r * r;
-      h_gg(k, k) += p.prior_inv_sigma * p.prior_inv_sigma;
-      gradient_g(k) += p.prior_inv_sigma * r;
-    }
+  for (int k = 0; k < 3 * M; ++k) {
+    if (!(p.prior_inv_sigma(k) > 0.0)) continue;
+    const double r = PriorResidual<M>(p, g, k);
+    sum += r * r;
+    h_gg(k, k) += p.prior_inv_sigma(k) * p.prior_inv_sigma(k);
+    gradient_g(k) += p.prior_inv_sigma(k) * r;
   }
   if (p.hold_a1x) {  // a held a1x is no unknown: its column is out of J
     h_gg.row(0).setZero();

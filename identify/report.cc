@@ -50,6 +50,10 @@ std::string IdentifyResultYaml(const IdentifyResult& r, const std::string& comma
       break;
   }
   o << Key << "gauge_note" << Value << YamlString{note};
+  if (r.geometry_prior_sigma_m > 0.0) {  // only when given: a result without one reads as before
+    o << Key << "geometry_prior_sigma_m" << Value << YamlNumber{r.geometry_prior_sigma_m}
+      << YAML::Comment("a Gaussian prior on every geometric parameter about its nominal value");
+  }
   // Only when applied: a result from a robot file without systematic terms reads as before.
   if (r.corrected_for) EmitSensorCorrection(o, *r.corrected_for, "before the solve");
   o << Key << "iterations" << Value << r.iterations;
@@ -81,6 +85,12 @@ std::string IdentifyResultYaml(const IdentifyResult& r, const std::string& comma
     o << BeginSeq;
     for (const std::string& d : r.down_weighted) o << YamlString{d};
     o << EndSeq;
+    if (!r.dropped_pose_ids.empty()) {
+      o << Key << "dropped_poses" << Value << Flow << BeginSeq;
+      for (const int id : r.dropped_pose_ids) o << id;
+      o << EndSeq
+        << YAML::Comment("readings that do not fit the others, which the loss followed: the fit without them");
+    }
   }
   if (r.estimator == Estimator::kPaper) {
     o << Key << "std_note" << Value

@@ -138,6 +138,7 @@ TrialOutcome RunTrial(const Robot& nominal, const MonteCarloOptions& o, int n, P
     id.estimator = o.estimator;
     id.gauge = o.gauge;
     id.loss = o.loss;
+    if (o.geometry_prior) id.geometry_prior_sigma_m = o.geometry_sigma_m;
     id.compute_covariance = false;
     id.compute_identifiability = false;
     id.check_plausible_geometry = false;  // a wild estimate from a poor pose set is counted, not refused
@@ -479,7 +480,54 @@ std::string SummaryMarkdown(const MonteCarloResult& r, const std::string& title)
     if (!causes.empty()) o << " (" << causes << ")";
     o << " |\n";
   }
+  // Before measuring, the lab knew every parameter to geometry_sigma_m (the true geometry is
+  // drawn so): a calibration that knows less, or hardly more, is said to be one.
+  const std::vector<std::string> worse = CellsThatAddLittle(r, true), little = CellsThatAddLittle(r, false);
+  if (r.geometry_sigma_m > 0.0 && !little.empty()) {
+    std::snprintf(buf, sizeof(buf), "%.3g mm", 1e3 * r.geometry_sigma_m);
+    o << "\nBefore measuring, every geometric parameter was known to " << buf
+      << " (the true geometry is drawn so). ";
+    if (!worse.empty()) {
+      o << "In these cells the calibration knows some parameters **less** well than that:\n\n";
+      for (const std::string& c : worse) o << "- " << c << "\n";
+      o << "\n";
+    }
+    if (little.size() > worse.size()) {
+      o << "In these cells the measurements add little to it (a sigma above "
+        << FormatDouble(kDataAddLittle) << " x that" << (worse.empty() ? "" : ", the cells above included") << "):\n\n";
+      for (const std::string& c : little) o << "- " << c << "\n";
+      o << "\n";
+    }
+    o << (r.geometry_prior ? "The trials were identified with that knowledge as a prior (--geometry-prior).\n"
+                           : "Identify with that knowledge as a prior (--geometry-prior) so that a calibration never "
+                             "knows less than the lab did.\n");
+  }
   return o.str();
+}
+
+std::vector<std::string> CellsThatAddLittle(const MonteCarloResult& r, bool worse) {
+  std::vector<std::string> out;
+  if (!(r.geometry_sigma_m > 0.0)) return out;
+  const double bound = worse ? r.geometry_sigma_m : kDataAddLittle * r.geometry_sigma_m;
+  const std::vector<std::string> names = GeometryNames(r.num_cables);
+  for (const MonteCarloCell& c : r.cells) {
+    std::vector<std::pair<double, std::string>> over;
+    for (std::size_t k = 1; k < names.size(); ++k) {  // a1x is held: the frame's origin, not an estimate
+      const ErrorStats s = Summarise(c, r.num_cables, names[k]);
+      if (s.count > 1 && s.std > bound) over.emplace_back(s.std, names[k]);
+    }
+    if (over.empty()) continue;
+    std::stable_sort(over.begin(), over.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    std::string text = "n=" + std::to_string(c.n) + " " + ToString(c.design) + ":";
+    char buf[48];
+    for (std::size_t k = 0; k < over.size() && k < 4; ++k) {
+      std::snprintf(buf, sizeof(buf), "%s %s %.3g mm", k ? "," : "", over[k].second.c_str(), 1e3 * over[k].first);
+      text += buf;
+    }
+    if (over.size() > 4) text += ", ...";
+    out.push_back(text);
+  }
+  return out;
 }
 
 }  // namespace cablecal

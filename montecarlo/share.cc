@@ -49,6 +49,8 @@ MonteCarloResult AssembleShares(const MonteCarloOptions& o, std::vector<ShareRes
                    "share " + std::to_string(k) + " has " + std::to_string(shares[k].outcomes.size()) + " outcomes");
   }
   MonteCarloResult result;
+  result.geometry_sigma_m = o.geometry_sigma_m;
+  result.geometry_prior = o.geometry_prior;
   for (int n : o.pose_counts) {
     for (PoseSetDesign d : o.designs) {
       MonteCarloCell cell;

@@ -623,6 +623,11 @@ PYBIND11_MODULE(cablecal, m) {
       .def_property_readonly("plan", [](const PyDesign& d) { return PyPlan{d.result.poses, d.result.num_cables}; })
       .def_property_readonly("criteria", [](const PyDesign& d) { return CriteriaDict(d.result.criteria); })
       .def_property_readonly("random_median", [](const PyDesign& d) { return CriteriaDict(d.result.random_median); })
+      .def_property_readonly("comparison", [](const PyDesign& d) -> py::object {
+        if (d.options.random_sets == 0) return py::none();
+        return py::str(ImprovementText(Improvement(d.options.criterion, d.result.criteria, d.result.random_median),
+                                       d.options.random_sets));
+      }, "\"3.2 x better than the median of 100 random sets\" (or worse) on the criterion; None without random sets")
       .def_property_readonly("best_start", [](const PyDesign& d) { return d.result.best_start; })
       .def_property_readonly("converged_starts", [](const PyDesign& d) { return d.result.converged_starts; })
       .def_property_readonly("wall_time_s", [](const PyDesign& d) { return d.result.wall_time_s; })
@@ -752,6 +757,8 @@ PYBIND11_MODULE(cablecal, m) {
       }, "(3m, 3m), m^2")
       .def_property_readonly("loss", [](const IdentifyResult& r) { return ToString(r.loss); })
       .def_readonly("down_weighted", &IdentifyResult::down_weighted)
+      .def_readonly("dropped_pose_ids", &IdentifyResult::dropped_pose_ids)
+      .def_readonly("geometry_prior_sigma_m", &IdentifyResult::geometry_prior_sigma_m)
       .def_readonly("warnings", &IdentifyResult::warnings)
       .def_readonly("missing_sensors", &IdentifyResult::missing_sensors)
       .def_property_readonly("readings", [](const IdentifyResult& r) {
@@ -806,7 +813,7 @@ PYBIND11_MODULE(cablecal, m) {
   m.def(
       "identify",
       [](py::handle robot_arg, py::handle measurements_arg, py::handle estimator, py::handle gauge,
-         py::handle max_iterations, py::handle loss) {
+         py::handle max_iterations, py::handle loss, py::handle geometry_prior) {
         const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
         const PyMeasurements& measurements = AsObject<PyMeasurements>(measurements_arg, "measurements", "Measurements");
         if (measurements.num_cables != robot.num_cables()) Bad("measurements", "read for a robot with another number of cables");
@@ -815,6 +822,7 @@ PYBIND11_MODULE(cablecal, m) {
         o.gauge = ParseGauge(AsText(gauge, "gauge"));
         o.max_iterations = static_cast<int>(AsInteger(max_iterations, "max_iterations", 1, kMaxIdentifyIterations));
         o.loss = ParseLoss(AsText(loss, "loss"));
+        if (!geometry_prior.is_none()) o.geometry_prior_sigma_m = AsNumber(geometry_prior, "geometry_prior");
         o.source = "measurements";
         // As the CLI: a robot with systematic sensor errors has them removed before the solve.
         const std::vector<Measurement> readings = CorrectedReadings(robot, measurements.readings, "measurements");
@@ -831,9 +839,10 @@ PYBIND11_MODULE(cablecal, m) {
         return r;
       },
       py::arg("robot"), py::arg("measurements"), py::arg("estimator") = "ml", py::arg("gauge") = "a1x",
-      py::arg("max_iterations") = 100, py::arg("loss") = "none",
+      py::arg("max_iterations") = 100, py::arg("loss") = "none", py::arg("geometry_prior") = py::none(),
       "Identifies exit points and initial lengths (cablecal identify); InputError when the data cannot "
-      "calibrate this robot, SolverError when the solve does not converge.");
+      "calibrate this robot, SolverError when the solve does not converge. geometry_prior: the standard "
+      "deviation (m) of the nominal geometry, a prior as identify --geometry-prior (None: none).");
   m.def("calibrated_robot", [](py::handle nominal_arg, py::handle result_arg) {
         const Robot& nominal = AsObject<Robot>(nominal_arg, "nominal", "Robot");
         const IdentifyResult& r = AsObject<IdentifyResult>(result_arg, "result", "IdentifyResult");
@@ -1043,7 +1052,7 @@ PYBIND11_MODULE(cablecal, m) {
       "montecarlo",
       [](py::handle robot_arg, py::handle poses, py::handle trials, py::handle designs, py::handle estimator,
          py::handle gauge, py::handle sensors, py::handle geometry_sigma, py::handle seed, py::handle design_starts,
-         py::handle threads, py::handle progress, py::handle loss, py::handle outliers) {
+         py::handle threads, py::handle progress, py::handle loss, py::handle outliers, py::handle geometry_prior) {
         const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
         MonteCarloOptions o;
         if (py::isinstance<py::str>(poses)) {
@@ -1064,6 +1073,8 @@ PYBIND11_MODULE(cablecal, m) {
         o.design_starts = static_cast<int>(AsInteger(design_starts, "design_starts", 1, 1000));
         o.loss = ParseLoss(AsText(loss, "loss"));
         o.outliers = ParseOutliers(AsText(outliers, "outliers"));
+        if (!py::isinstance<py::bool_>(geometry_prior)) Bad("geometry_prior", "expected True or False");
+        o.geometry_prior = geometry_prior.cast<bool>();
         o.design_in_child_processes = false;  // as design() above
         ValidateOptions(o, &robot);
         if (!progress.is_none() && !PyCallable_Check(progress.ptr())) Bad("progress", "expected a callable or None");
@@ -1098,9 +1109,10 @@ PYBIND11_MODULE(cablecal, m) {
       py::arg("estimator") = "ml", py::arg("gauge") = "a1x", py::arg("sensors") = "both",
       py::arg("geometry_sigma") = 0.01, py::arg("seed") = 1, py::arg("design_starts") = 2,
       py::arg("threads") = py::none(), py::arg("progress") = py::none(), py::arg("loss") = "none",
-      py::arg("outliers") = "0",
+      py::arg("outliers") = "0", py::arg("geometry_prior") = false,
       "The Monte Carlo study (cablecal montecarlo); Ctrl-C raises KeyboardInterrupt. progress(done, total), if "
-      "given, is called now and then with the trials done.");
+      "given, is called now and then with the trials done. geometry_prior: identify every trial with "
+      "geometry_sigma as a prior (montecarlo --geometry-prior).");
 
   m.def("loaded_blas", [] { return LoadedLibraryPath("libblas.so"); },
         "The BLAS this process uses: designs equal the CLI's bit for bit with the reference BLAS (README, \"Python\").");

@@ -110,6 +110,14 @@ INSTANTIATE_TEST_SUITE_P(Robots, ManyCablesNlp,
                          ::testing::Values("planar3_suspended.yaml", "planar4_fully_constrained.yaml"),
                          [](const auto& info) { return std::string(info.param).substr(0, 7); });
 
+// A factor below 1 printed as "0.0341 x the median (> 1 is better)" read as an improvement.
+TEST(Design, ComparisonWithTheRandomMedianSaysBetterOrWorse) {
+  EXPECT_EQ(ImprovementText(0.0341, 100), "29.3 x worse than the median of 100 random sets");
+  EXPECT_EQ(ImprovementText(3.2, 20), "3.2 x better than the median of 20 random sets");
+  EXPECT_EQ(ImprovementText(1.004, 1), "as good as the median of 1 random set");
+  EXPECT_EQ(ImprovementText(std::nan(""), 5), "not comparable with the median of 5 random sets");
+}
+
 TEST(Design, FewestPosesFollowTheCableCount) {
   // n (m - 1) net equations against 3m - 1 gauge-fixed parameters.
   EXPECT_EQ(MinDesignPoses(2), 5);

@@ -88,8 +88,8 @@ Start<M> MakeStart(const Robot& nominal, const std::vector<Measurement>& measure
   if (!measurements.front().has_laser) s.problem.weights.inv_sigma_laser = 0.0;
   s.problem.hold_a1x = gauge == Gauge::kA1x;
   if (gauge == Gauge::kPrior) {
-    s.problem.prior_exits_m = g.head<2 * M>();
-    s.problem.prior_inv_sigma = 1.0 / *nominal.sensors.tracker_sigma_m;
+    s.problem.prior_geometry = g;
+    s.problem.prior_inv_sigma.template head<2 * M>().setConstant(1.0 / *nominal.sensors.tracker_sigma_m);
   }
   return s;
 }
@@ -129,7 +129,7 @@ Solution SolveCeres(const Robot& nominal, const std::vector<Measurement>& measur
   ordering->AddElementToGroup(g, 1);
   if (gauge == Gauge::kPrior) {
     problem.AddResidualBlock(new ceres::AutoDiffCostFunction<internal::ExitPointPriorCost<M>, 2 * M, 3 * M>(
-                                 new internal::ExitPointPriorCost<M>{s.problem.prior_exits_m, s.problem.prior_inv_sigma}),
+                                 new internal::ExitPointPriorCost<M>{s.problem.prior_geometry.template head<2 * M>(), s.problem.prior_inv_sigma(0)}),
                              nullptr, g);
   }
   ceres::Solver::Options options;

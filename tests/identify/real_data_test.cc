@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <sstream>
 #include <string>
@@ -47,6 +48,16 @@ Experiment Simulated(const Robot& nominal, int n, std::uint64_t seed, bool noise
       if (attempt == 200) throw;
     }
   }
+}
+
+// "pose 7" in `text`, not followed by a digit (pose 1 is not pose 13).
+bool NamesPose(const std::string& text, int id) {
+  const std::string word = "pose " + std::to_string(id);
+  for (std::size_t at = text.find(word); at != std::string::npos; at = text.find(word, at + 1)) {
+    const std::size_t end = at + word.size();
+    if (end == text.size() || !std::isdigit(static_cast<unsigned char>(text[end]))) return true;
+  }
+  return false;
 }
 
 double MaxSigmasApart(const IdentifyResult& a, const GeometryVector& b, const IdentifyResult& sigmas) {
@@ -394,6 +405,10 @@ TEST(Outlier, HuberEitherHoldsOrWarns) {
     huber.loss = ParseLoss("huber");
     const IdentifyResult r = Identify(nominal, readings, huber);
     ASSERT_TRUE(r.converged()) << nominal.name << ": " << r.message;
+    if (!r.dropped_pose_ids.empty()) {  // strayed: the fit without the bad pose is returned
+      EXPECT_LT(MaxSigmasApart(r, reference.geometry, reference), 1e-3) << nominal.name;
+      continue;
+    }
     if (MaxSigmasApart(r, reference.geometry, r) > 2.0) {
       ASSERT_FALSE(r.warnings.empty()) << nominal.name << ": Huber strayed without a warning";
       // It names the parameter furthest from that fit (or one within 10 % of it: the warning
@@ -410,6 +425,174 @@ TEST(Outlier, HuberEitherHoldsOrWarns) {
       EXPECT_GE(named_sigmas, 0.9 * MaxSigmasApart(r, reference.geometry, r)) << nominal.name << ": " << w;
     }
   }
+}
+
+// A robust fit the tool itself knows is wrong must not be returned (issue's case: a 2-cable
+// robot of a new user's, 30 poses, one laser reading +0.3 m at pose 7 or 4; Cauchy returned l20
+// 28 sigma from the truth while its own warning put it 29.9 sigma from the fit without pose
+// 7). On robots drawn for this test (none tuned on), Cauchy and Huber each return an estimate
+// within 3 sigma of the truth and within 2 sigma of the fit without the bad pose; where the
+// robust estimate strayed, the bad pose is named as dropped and the fit without it returned.
+TEST(Outlier, ARobustFitFarFromTheFitWithoutTheNamedPosesIsNotReturned) {
+  Rng draw(777);
+  int dropped = 0, found = 0, cases = 0;
+  for (int k = 0; k < 12; ++k) {
+    const Robot nominal = testing::RandomValidRobot(draw, "r" + std::to_string(k));
+    const Experiment e = Simulated(nominal, 30, 100 + k);
+    for (const int bad : {7, 4}) {
+      std::vector<Measurement> readings = e.readings;
+      readings[bad - 1].z_m += 0.3;
+      std::vector<Measurement> without = e.readings;
+      without.erase(without.begin() + (bad - 1));
+      const IdentifyResult reference = Identify(nominal, without, IdentifyOptions{});
+      ASSERT_TRUE(reference.converged()) << nominal.name << ": " << reference.message;
+      // Whether least squares found the bad pose: where it absorbed the reading unseen (a pose
+      // of high leverage, far beyond the linear check's reach), the robust loss sees nothing
+      // either and its estimate is least squares' (README, "Bad readings").
+      const IdentifyResult ls = Identify(nominal, readings, IdentifyOptions{});
+      const bool named = !ls.converged() && NamesPose(ls.message, bad);
+      found += named;
+      for (const char* loss : {"cauchy", "huber"}) {
+        IdentifyOptions o;
+        o.loss = ParseLoss(loss);
+        const IdentifyResult r = Identify(nominal, readings, o);
+        const std::string label = nominal.name + " pose " + std::to_string(bad) + " " + loss;
+        ASSERT_TRUE(r.converged()) << label << ": " << r.message;
+        ++cases;
+        EXPECT_EQ(r.readings.size(), readings.size()) << label;
+        if (!named) continue;
+        EXPECT_LT(MaxSigmasApart(r, reference.geometry, reference), 2.0) << label;
+        // No more than 2 sigma further from the truth than the fit without the bad pose.
+        EXPECT_LT(MaxSigmasApart(r, GeometryOf(e.truth), reference),
+                  MaxSigmasApart(reference, GeometryOf(e.truth), reference) + 2.0) << label;
+        if (!r.dropped_pose_ids.empty()) {
+          ++dropped;
+          EXPECT_EQ(r.dropped_pose_ids, std::vector<int>{bad}) << label;
+          EXPECT_LT(MaxSigmasApart(r, reference.geometry, reference), 1e-3) << label;
+          ASSERT_FALSE(r.warnings.empty()) << label;
+          EXPECT_NE(r.warnings.front().find("pose " + std::to_string(bad) + " dropped"), std::string::npos)
+              << r.warnings.front();
+          // The dropped pose's readings are still reported, against the returned geometry.
+          EXPECT_GT(std::abs(*r.readings[bad - 1].laser_sigmas), kOutlierSigmas) << label;
+          EXPECT_EQ(r.readings[bad - 1].laser_weight, 0.0) << label;
+          EXPECT_NE(IdentifyResultYaml(r, "test").find("dropped_poses: [" + std::to_string(bad) + "]"),
+                    std::string::npos);
+        }
+      }
+    }
+  }
+  EXPECT_EQ(cases, 48);
+  EXPECT_GE(found, 18);   // measured: least squares names the bad pose in 21 of the 24 experiments
+  EXPECT_GE(dropped, 3);  // measured: 4 (the case is exercised)
+}
+
+// A 0.3 m laser error at one of 30 poses could leave least squares lost within the default 100
+// iterations (exit 3, no pose named) while 2000 iterations found and named it: within the
+// default budget the result names the pose, whether it is refused or not converged.
+TEST(BadReading, AGrossLaserErrorIsNamedWithinTheDefaultIterations) {
+  Rng draw(5150);
+  int refused = 0, lost = 0, cases = 0;
+  for (int k = 0; k < 4; ++k) {
+    const Robot nominal = testing::RandomValidRobot(draw, "gross" + std::to_string(k));
+    const Experiment e = Simulated(nominal, 30, 1300 + k);
+    for (int bad = 1; bad <= 30; bad += 4) {
+      std::vector<Measurement> readings = e.readings;
+      readings[bad - 1].z_m += 0.3;
+      const IdentifyResult r = Identify(nominal, readings, IdentifyOptions{});
+      const std::string label = nominal.name + " pose " + std::to_string(bad);
+      ++cases;
+      if (r.converged()) continue;  // absorbed unseen at a pose of high leverage: counted below
+      refused += r.status == IdentifyStatus::kPoorFit;
+      lost += r.status == IdentifyStatus::kNotConverged;
+      EXPECT_TRUE(NamesPose(r.message, bad)) << label << ": " << r.message;
+    }
+  }
+  EXPECT_EQ(cases, 32);
+  EXPECT_GE(lost, 1);              // the case is exercised
+  EXPECT_GE(refused + lost, 28);   // measured: 30 of 32 found; 2 absorbed unseen (README, "Bad readings")
+}
+
+// A new user's 5 poses copied under 30 pose ids fitted exactly (residual RMS 1e-15) and
+// returned a geometry 172 mm off with no word: copies and residuals far below the sensors'
+// noise are both said. Clean experiments (noisy readings) say neither.
+TEST(Diagnostics, CopiedReadingsAndResidualsBelowTheNoiseAreFlagged) {
+  const auto has = [](const IdentifyResult& r, const std::string& text) {
+    return std::any_of(r.warnings.begin(), r.warnings.end(),
+                       [&](const std::string& w) { return w.find(text) != std::string::npos; });
+  };
+  int flagged = 0;
+  for (const Robot& nominal : Robots()) {
+    const Experiment e = Simulated(nominal, 30, 808);
+    const IdentifyResult clean = Identify(nominal, e.readings, IdentifyOptions{});
+    ASSERT_TRUE(clean.converged()) << nominal.name << ": " << clean.message;
+    EXPECT_FALSE(has(clean, "identical in every value")) << nominal.name;
+    EXPECT_FALSE(has(clean, "far below the sensors' noise")) << nominal.name;
+
+    std::vector<Measurement> copies;
+    for (int id = 1; id <= 30; ++id) {
+      Measurement m = e.readings[(id - 1) % 5];
+      m.pose_id = id;
+      copies.push_back(m);
+    }
+    const IdentifyResult r = Identify(nominal, copies, IdentifyOptions{});
+    if (!r.converged()) continue;  // refused is fine too: nothing wrong was returned quietly
+    ++flagged;
+    EXPECT_TRUE(has(r, "25 readings are identical in every value to another pose's (pose 6 = pose 1"))
+        << nominal.name << ": " << (r.warnings.empty() ? "" : r.warnings.front());
+    EXPECT_TRUE(has(r, "far below the sensors' noise")) << nominal.name;
+  }
+  EXPECT_GE(flagged, 3);
+}
+
+// --geometry-prior: what the lab knew before measuring (every parameter to 10 mm) is never
+// lost. A new user's 3-cable robot calibrated at sigmas of 13-33 mm, worse than the 10 mm known
+// before. With the prior every sigma is at most the prior's, the estimate stays within 4 sigma
+// of a true robot drawn from it, the data may be fewer than the unknowns, and the result says
+// which parameters the data add little to, exactly when their sigma stays above 0.7 x the prior's.
+TEST(GeometryPrior, NeverLessInformedThanThePriorAndSaysWhenTheDataAddLittle) {
+  constexpr double kPrior_m = 0.01;
+  std::vector<Robot> robots = Robots();
+  Rng draw(2418);
+  for (int k = 0; k < 3; ++k) robots.push_back(testing::RandomRobotWithCables(draw, "prior3_" + std::to_string(k), 3, false));
+  int said = 0, runs = 0;
+  for (const Robot& nominal : robots) {
+    for (const int n : {3, 5, 30}) {
+      Experiment e;
+      try {
+        e = Simulated(nominal, n, 900 + n);
+      } catch (const SolverFailure&) {
+        continue;  // this robot holds no random plan of n poses 1 cm off nominal: not this test's concern
+      }
+      IdentifyOptions o;
+      o.geometry_prior_sigma_m = kPrior_m;
+      const IdentifyResult r = Identify(nominal, e.readings, o);
+      const std::string label = nominal.name + " n=" + std::to_string(n);
+      if (!r.converged()) continue;  // 3 poses may leave Levenberg-Marquardt lost: not a result
+      ++runs;
+      ASSERT_TRUE(r.has_covariance) << label;
+      bool little = false;
+      for (int k = 1; k < r.geometry.size(); ++k) {
+        EXPECT_LE(r.geometry_std(k), kPrior_m * (1.0 + 1e-9)) << label << " " << k;
+        little = little || r.geometry_std(k) > kDataAddLittle * kPrior_m;
+      }
+      const bool warned = std::any_of(r.warnings.begin(), r.warnings.end(), [](const std::string& w) {
+        return w.find("the data add little to the geometry prior") != std::string::npos;
+      });
+      EXPECT_EQ(warned, little) << label;
+      said += warned;
+      EXPECT_LT(MaxSigmasApart(r, GeometryOf(e.truth), r), 4.0) << label;
+      EXPECT_NE(IdentifyResultYaml(r, "test").find("geometry_prior_sigma_m: 0.01"), std::string::npos);
+    }
+  }
+  EXPECT_GE(runs, 15);
+  EXPECT_GE(said, 5);  // the few-pose runs leave parameters near the prior
+  IdentifyOptions paper;
+  paper.estimator = Estimator::kPaper;
+  paper.geometry_prior_sigma_m = kPrior_m;
+  EXPECT_THROW(Identify(BuiltinRobot(), Simulated(BuiltinRobot(), 10, 1).readings, paper), InputError);
+  IdentifyOptions huge;
+  huge.geometry_prior_sigma_m = 2.0;
+  EXPECT_THROW(Identify(BuiltinRobot(), Simulated(BuiltinRobot(), 10, 1).readings, huge), InputError);
 }
 
 // Without outliers the robust losses are least squares to within 0.1 sigma (their defaults
