@@ -243,6 +243,22 @@ def test_a_labs_log_is_read_by_column_name(tmp_path):
         cablecal.Measurements.load(robot, log)
 
 
+def test_a_labs_log_gets_the_likely_cause_of_its_mistakes(tmp_path):
+    robot = cablecal.Robot.load(robot_file("asymmetric"))
+    m = cablecal.simulate(robot, cablecal.sample(robot, 9, seed=1), seed=2).measurements
+    header, *rows = [l for l in m.to_csv().splitlines() if l]
+    log = tmp_path / "log.csv"
+    log.write_text("\n".join([header.replace("pose", "Pose")] + rows) + "\n")
+    with pytest.raises(cablecal.InputError, match="did you mean 'pose' for 'Pose'"):
+        cablecal.Measurements.load(robot, log)
+    log.write_text("\n".join([header.replace("theta", "theta_deg")] + rows) + "\n")
+    with pytest.warns(UserWarning, match="column 'theta_deg' ignored: theta is read from a column 'theta' in rad"):
+        cablecal.Measurements.load(robot, log)
+    log.write_text("\n".join([header] + rows + [rows[0]]) + "\n")
+    with pytest.warns(UserWarning, match=r"log.csv:11: pose 1 read again after other poses \(first at .*log.csv:2\)"):
+        assert len(cablecal.Measurements.load(robot, log)) == 10
+
+
 def test_validate_equals_cli_and_the_calibration_wins(tmp_path):
     """Identified on one experiment, validated on another of the same true robot: the module's
     CSV and summary are the CLI's, and the calibrated robot predicts z better than the nominal."""
@@ -688,6 +704,7 @@ def test_a_result_is_refused_beside_another_robot_of_the_same_cable_count(tmp_pa
     result = cablecal.identify(asymmetric, cablecal.simulate(asymmetric, cablecal.sample(asymmetric, 8, seed=5),
                                                              seed=1).measurements)
     assert "robot: {name: \"asymmetric\", cables: 2}" in result.to_yaml()
+    assert result.held == ["a1x"] and result.std[0] == 0.0
     other = cablecal.Robot.builtin()
     message = "result: identified for robot 'asymmetric', but <built-in wang2022> is robot 'wang2022' with 2 cables"
     with pytest.raises(ValueError, match=message):
