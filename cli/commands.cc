@@ -1,5 +1,6 @@
 #include "cli/commands.h"
 
+#include <fcntl.h>
 #include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -11,6 +12,7 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -96,12 +98,34 @@ void PrintSensorCorrection(const SystematicSensorErrors& e) {
 std::vector<Measurement> ReadMeasurementsOption(const Context& ctx, const Robot& robot, const std::string& path,
                                                 const std::string& delimiter) {
   const std::vector<Measurement> measurements =
-      ReadMeasurementsCsv(path, robot.num_cables(), ParseDelimiter(delimiter), [&](const std::vector<std::string>& ignored) {
-        if (ctx.quiet) return;
-        std::fprintf(stderr, "cablecal: note: %s: ignoring column%s %s\n", path.c_str(), ignored.size() > 1 ? "s" : "",
-                     QuotedList(ignored).c_str());
-      });
+      ReadMeasurementsCsv(
+          path, robot.num_cables(), ParseDelimiter(delimiter),
+          [&](const std::vector<std::string>& ignored) {
+            if (ctx.quiet) return;
+            std::fprintf(stderr, "cablecal: note: %s: ignoring column%s %s\n", path.c_str(), ignored.size() > 1 ? "s" : "",
+                         QuotedList(ignored).c_str());
+          },
+          [&](const std::string& warning) {
+            if (!ctx.quiet) std::fprintf(stderr, "cablecal: warning: %s\n", PrintableText(warning).c_str());
+          });
   return CorrectedReadings(robot, measurements, path);
+}
+
+// Whether two paths name one file (the same device and inode: another spelling of the path, a
+// symbolic or a hard link); false when either does not exist.
+bool SameFile(const std::string& a, const std::string& b) {
+  std::error_code ec;
+  return std::filesystem::equivalent(a, b, ec) && !ec;
+}
+
+// identify --holdout: the report's validation is its main evidence that the calibration
+// predicts poses it did not see, so the held-out readings cannot be the training readings.
+void RefuseHoldoutThatIsTheMeasurements(const std::string& holdout_path, const std::string& measurements_path) {
+  if (holdout_path.empty() || !SameFile(holdout_path, measurements_path)) return;
+  throw InputError("--holdout", "",
+                   "'" + holdout_path + "' is the --measurements file ('" + measurements_path +
+                       "'): held-out readings must not have been used to calibrate, or the report's validation "
+                       "only repeats the fit; give the readings of other poses");
 }
 
 }  // namespace
@@ -172,6 +196,63 @@ std::string PlotScriptsDir() {
   return (exe.parent_path().parent_path() / "share/cablecal/scripts").string();  // named by the failure
 }
 
+namespace {
+
+// The plotting scripts exit with this status when matplotlib or numpy cannot be imported
+// (scripts/plot_*.py): a missing library, not a failed figure.
+constexpr int kMissingPlotLibraryExit = 3;
+
+// What to do when the figures' python or its libraries are missing.
+std::string InstallAdvice() {
+  return "install them with scripts/setup.sh or apt-get install python3-matplotlib, or set CABLECAL_PYTHON to a "
+         "python3 that has matplotlib";
+}
+
+// Starts argv in a child process that dies with cablecal; returns its pid. An exec that fails
+// (no such python) is told apart from the script's own failure through a close-on-exec pipe:
+// the child writes its errno there only when exec failed. Throws FigureFailure then.
+pid_t StartPlotProcess(std::vector<std::string>& argv) {
+  std::vector<char*> c_argv;
+  for (std::string& a : argv) c_argv.push_back(a.data());
+  c_argv.push_back(nullptr);
+  int exec_error[2];
+  if (::pipe2(exec_error, O_CLOEXEC) != 0) {
+    throw FigureFailure(std::string("the figure could not be made: cannot start ") + argv[0]);
+  }
+  const pid_t parent = ::getpid();
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::close(exec_error[0]);
+    // The script dies with cablecal: a killed run leaves no orphan writing figures.
+    ::prctl(PR_SET_PDEATHSIG, SIGKILL);
+    if (::getppid() != parent) ::_exit(127);
+    ::execvp(c_argv[0], c_argv.data());
+    const int error = errno;
+    [[maybe_unused]] const ssize_t written = ::write(exec_error[1], &error, sizeof error);
+    ::_exit(127);
+  }
+  ::close(exec_error[1]);
+  int error = 0;
+  ssize_t got = 0;
+  if (pid > 0) {
+    do {
+      got = ::read(exec_error[0], &error, sizeof error);
+    } while (got < 0 && errno == EINTR);
+  }
+  ::close(exec_error[0]);
+  if (pid < 0) throw FigureFailure(std::string("the figure could not be made: cannot start ") + argv[0]);
+  if (got == static_cast<ssize_t>(sizeof error)) {
+    int status = 0;
+    while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
+    throw FigureFailure("the figure could not be made: cannot run " + argv[0] + " (" + std::strerror(error) +
+                        "): the figures need python3 with matplotlib; " + InstallAdvice());
+  }
+  return pid;
+}
+
+}  // namespace
+
 void RunPlotScript(const std::string& script, const std::vector<std::string>& args) {
   const std::string scripts_dir = PlotScriptsDir();
   const char* python_env = std::getenv("CABLECAL_PYTHON");
@@ -185,19 +266,7 @@ void RunPlotScript(const std::string& script, const std::vector<std::string>& ar
   // fork and exec, not std::system: system() ignores SIGINT in cablecal while the script runs,
   // so a Ctrl-C then reached only the script and looked like a failed figure (exit 5, results
   // written) instead of an interruption (exit 130, nothing written).
-  std::vector<char*> c_argv;
-  for (std::string& a : argv) c_argv.push_back(a.data());
-  c_argv.push_back(nullptr);
-  const pid_t parent = ::getpid();
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    // The script dies with cablecal: a killed run leaves no orphan writing figures.
-    ::prctl(PR_SET_PDEATHSIG, SIGKILL);
-    if (::getppid() != parent) ::_exit(127);
-    ::execvp(c_argv[0], c_argv.data());
-    ::_exit(127);
-  }
-  if (pid < 0) throw FigureFailure(std::string("the figure could not be made: cannot start ") + argv[0]);
+  const pid_t pid = StartPlotProcess(argv);
   int status = 0;
   while (::waitpid(pid, &status, 0) < 0) {
     if (errno != EINTR) throw FigureFailure("the figure could not be made: lost the plotting script: " + command);
@@ -205,6 +274,9 @@ void RunPlotScript(const std::string& script, const std::vector<std::string>& ar
   // Ctrl-C reaches the script too (one process group): the script's failure, or its figures,
   // are then an interruption, not a failed figure (SigintFlag is set only inside a SigintScope).
   if (SigintFlag()) throw Interrupted();
+  if (WIFEXITED(status) && WEXITSTATUS(status) == kMissingPlotLibraryExit) {
+    throw FigureFailure("the figure could not be made: " + python + " has no matplotlib (or numpy); " + InstallAdvice());
+  }
   if (!(WIFEXITED(status) && WEXITSTATUS(status) == 0)) {
     const std::string how = WIFEXITED(status) ? "exit status " + std::to_string(WEXITSTATUS(status))
                                               : "signal " + std::to_string(WIFSIGNALED(status) ? WTERMSIG(status) : 0);
@@ -315,6 +387,7 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   if (!options.holdout_path.empty() && options.report_dir.empty()) {
     throw InputError("--holdout", "", "needs --report DIR: the held-out readings are compared in the report");
   }
+  RefuseHoldoutThatIsTheMeasurements(options.holdout_path, options.measurements_path);
   // The report's folder is checked before any work, and no other file may be one it writes.
   std::unique_ptr<OutputFolder> report;
   if (!options.report_dir.empty()) {
@@ -423,7 +496,13 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   const std::vector<std::string> names = GeometryNames(nominal.num_cables());
   for (std::size_t k = 0; k < names.size(); ++k) {
     std::printf("  %s = %.7f m", names[k].c_str(), result.geometry(k));
-    if (result.has_covariance) std::printf("  (std %.3g mm)", 1e3 * result.geometry_std(k));
+    // A held parameter's std is 0 by construction: "held" says why (the gauge), "std 0" would
+    // read as a perfectly known value.
+    if (IsHeld(result, static_cast<int>(k))) {
+      std::printf("  (held: the gauge)");
+    } else if (result.has_covariance) {
+      std::printf("  (std %.3g mm)", 1e3 * result.geometry_std(k));
+    }
     std::printf("\n");
   }
   if (report) std::printf("  report: %s/report.md\n", options.report_dir.c_str());
@@ -497,7 +576,7 @@ int RunSensorsFit(const Context& ctx, const SensorsFitOptions& options) {
   CheckCommandPaths({{"--robot", options.robot_path},
                      {"--inclinometer", options.inclinometer_path},
                      {"--laser", options.laser_path}},
-                    {{"--out", options.out_path}});
+                    {{"--out", options.out_path}, {"--robot-out", options.robot_out_path}});
   if (options.inclinometer_path.empty() && options.laser_path.empty()) {
     throw InputError("--inclinometer", "", "give --inclinometer, --laser or both: the bench readings to fit");
   }
@@ -510,17 +589,26 @@ int RunSensorsFit(const Context& ctx, const SensorsFitOptions& options) {
                    QuotedList(ignored).c_str());
     };
   };
+  // Every reading is checked against its reference's others before the fit takes it in.
+  const auto read = [&](BenchSensor sensor, const std::string& path) {
+    const std::vector<BenchReading> readings = ReadBenchCsv(sensor, path, delimiter, note_ignored(path));
+    CheckReadingsAgainstTheirReference(sensor, readings);
+    return readings;
+  };
   SensorsFit fit;
   if (!options.inclinometer_path.empty()) {
     const std::string& path = options.inclinometer_path;
-    fit.inclinometer = FitInclinometer(ReadBenchCsv(BenchSensor::kInclinometer, path, delimiter, note_ignored(path)), path);
+    fit.inclinometer = FitInclinometer(read(BenchSensor::kInclinometer, path), path);
   }
   if (!options.laser_path.empty()) {
     const std::string& path = options.laser_path;
-    fit.laser = FitLaser(ReadBenchCsv(BenchSensor::kLaser, path, delimiter, note_ignored(path)), path);
+    fit.laser = FitLaser(read(BenchSensor::kLaser, path), path);
   }
   AtomicOutput output;
   output.WriteText(options.out_path, SensorsFitYaml(robot, fit, ctx.command_line));
+  if (!options.robot_out_path.empty()) {
+    output.WriteText(options.robot_out_path, FittedRobotYaml(robot, fit, ctx.command_line));
+  }
   output.Commit();
   if (!ctx.quiet) {
     for (const std::string& w : FitWarnings(robot, fit)) std::fprintf(stderr, "cablecal: warning: %s\n", w.c_str());
@@ -541,6 +629,10 @@ int RunSensorsFit(const Context& ctx, const SensorsFitOptions& options) {
                 f.bench.readings, f.bench.references, f.offset_m, f.offset_se_m, f.accuracy_m, f.repeatability_m);
   }
   std::printf("wrote the sensors block for a robot file to %s\n", options.out_path.c_str());
+  if (!options.robot_out_path.empty()) {
+    std::printf("wrote the robot file of %s with the fitted sensors to %s\n", PrintableText(robot.name).c_str(),
+                options.robot_out_path.c_str());
+  }
   return kExitOk;
 }
 

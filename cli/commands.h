@@ -75,6 +75,7 @@ int RunValidate(const Context& ctx, const ValidateCommandOptions& options);
 
 struct SensorsFitOptions {
   std::string robot_path, inclinometer_path, laser_path, out_path;
+  std::string robot_out_path;  // --robot-out: the robot file with the fitted sensors block
   std::string delimiter = ",";  // of the bench CSVs
 };
 int RunSensorsFit(const Context& ctx, const SensorsFitOptions& options);

@@ -6,6 +6,8 @@
 #include <glog/logging.h>
 
 #include <algorithm>
+#include <charconv>
+#include <cstdint>
 #include <cstdio>
 #include <exception>
 #include <string>
@@ -39,10 +41,14 @@ CLI::Validator NumberAbove(double lowest, bool inclusive) {
 const CLI::Validator kPositive = NumberAbove(0.0, false);
 const CLI::Validator kNonNegative = NumberAbove(0.0, true);
 constexpr int kMaxThreads = 1024;
-// Seeds are unsigned 64-bit integers; CLI11 would wrap "-1" to 18446744073709551615.
+// Seeds are unsigned 64-bit integers; CLI11 would wrap "-1" to 18446744073709551615 and
+// saturate 18446744073709551616 to it: a seed out of range is refused, never another run's.
 const CLI::Validator kSeed(
     [](std::string& text) -> std::string {
-      if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos || text.size() > 20) {
+      std::uint64_t value = 0;
+      const char* end = text.data() + text.size();
+      const bool digits = !text.empty() && text.find_first_not_of("0123456789") == std::string::npos;
+      if (!digits || std::from_chars(text.data(), end, value).ec != std::errc()) {
         return "must be a whole number from 0 to 18446744073709551615 (got '" + text + "')";
       }
       return "";
@@ -179,6 +185,9 @@ int main(int argc, char** argv) {
   sfit_cmd->add_option("--laser", sfit.laser_path, "laser bench CSV (reference_m,reading_m)")->check(CLI::ExistingFile);
   sfit_cmd->add_option("--delimiter", sfit.delimiter, "the bench CSVs' separator: ',', ';' or tab")->capture_default_str();
   sfit_cmd->add_option("--out", sfit.out_path, "the sensors: block (YAML) for a robot file")->required();
+  sfit_cmd->add_option("--robot-out", sfit.robot_out_path,
+                       "also write the whole robot file (--robot's, or the built-in one) with the fitted sensors block "
+                       "in place of its own");
 
   cablecal::cli::DesignCommandOptions des;
   CLI::App* des_cmd = app.add_subcommand("design", "choose optimal measurement poses (Ipopt)");

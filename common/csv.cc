@@ -1,6 +1,7 @@
 #include "common/csv.h"
 
 #include <algorithm>
+#include <cctype>
 #include <fstream>
 #include <vector>
 
@@ -112,15 +113,37 @@ void ForEachCsvLine(std::istream& in, const std::string& path, char delimiter,
 // differ in number from the robot's is a file for a robot with another cable count. The
 // message part that says so, or "" when the counts agree or either has none.
 std::string OtherCableCount(const std::vector<std::string>& wanted, const std::vector<std::string>& got) {
+  // In any case: 'DL1' is a cable's column typed in capitals (refused with a hint), not another robot's.
   const auto cable_columns = [](const std::vector<std::string>& names) {
     return std::count_if(names.begin(), names.end(), [](const std::string& c) {
-      return c.size() > 2 && c.compare(0, 2, "dl") == 0 && c.find_first_not_of("0123456789", 2) == std::string::npos;
+      return c.size() > 2 && (c[0] == 'd' || c[0] == 'D') && (c[1] == 'l' || c[1] == 'L') &&
+             c.find_first_not_of("0123456789", 2) == std::string::npos;
     });
   };
   const auto want = cable_columns(wanted), have = cable_columns(got);
   if (want == 0 || have == 0 || want == have) return "";
   return "the file has columns for " + std::to_string(have) + " cables, the robot has " + std::to_string(want) +
          ": a file for another robot?";
+}
+
+std::string Lower(std::string text) {
+  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return text;
+}
+
+// Header cells that name a missing column in another case ('Pose' for 'pose'): names are
+// compared exactly, so the likely cause is said. "" when none does.
+std::string CaseHint(const std::vector<std::string>& missing, const std::vector<std::string>& cells) {
+  std::string pairs;
+  for (const std::string& name : missing) {
+    for (const std::string& cell : cells) {
+      if (cell != name && Lower(cell) == Lower(name)) {
+        pairs += (pairs.empty() ? "" : ", ") + std::string("'") + name + "' for '" + cell + "'";
+        break;
+      }
+    }
+  }
+  return pairs.empty() ? "" : " (column names are lower case: did you mean " + pairs + "?)";
 }
 
 }  // namespace
@@ -199,7 +222,7 @@ void ForEachCsvRowByName(std::istream& in, const std::string& path, char delimit
         throw InputError(where, "header",
                          "no column " + QuotedList(missing) + " (the columns needed are '" + JoinCsv(required) + "'" +
                              (optional.empty() ? std::string() : ", optionally '" + JoinCsv(optional) + "'") +
-                             ", in any order; got '" + trimmed + "')" +
+                             ", in any order; got '" + trimmed + "')" + CaseHint(missing, cells) +
                              (other_separator ? " (another separator? give it with --delimiter)" : ""));
       }
       if (!ignored.empty() && on_ignored) on_ignored(ignored);

@@ -24,6 +24,7 @@
 #include "design/objective.h"
 #include "design/robust.h"
 #include "identify/experiment.h"
+#include "identify/identify.h"
 #include "model/cable.h"
 #include "model/statics.h"
 
@@ -507,6 +508,13 @@ DesignPrior LoadDesignPrior(const Robot& nominal, const std::string& path) {
   if (root["gauge"] && root["gauge"].as<std::string>("") == "none") {
     throw InputError(path, "gauge", "a result identified with --gauge none cannot be a prior (its sigmas leave out the "
                                     "direction it does not fix): identify the same data with --gauge a1x or prior");
+  }
+  // The robot it was identified for (result.yaml records it since this check; older ones are
+  // checked by their parameter count below): a prior of another robot would plan around the
+  // wrong geometry with confidence.
+  const YAML::Node of = root["robot"];
+  if (of.IsMap() && of["name"] && of["cables"]) {
+    RequireResultOfRobot(path, of["name"].as<std::string>(""), of["cables"].as<int>(0), nominal);
   }
   const int m = nominal.num_cables();
   const int np = 3 * m;  // a1x a1z .. amx amz l10 .. lm0

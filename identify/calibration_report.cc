@@ -79,8 +79,6 @@ std::string Cell(const std::string& text) {
   return out;
 }
 
-bool Held(const IdentifyResult& r, int k) { return k == 0 && r.gauge == Gauge::kA1x; }
-
 bool Missing(const IdentifyResult& r, const char* sensor) {
   return std::find(r.missing_sensors.begin(), r.missing_sensors.end(), sensor) != r.missing_sensors.end();
 }
@@ -124,7 +122,7 @@ std::string ParametersCsv(const Robot& nominal, const IdentifyResult& r, const s
     const bool has_std = r.has_covariance && r.geometry_std(i) > 0.0;
     o << names[k] << "," << FormatDouble(nominal_geometry(i)) << "," << FormatDouble(r.geometry(i)) << ","
       << (r.has_covariance ? FormatDouble(r.geometry_std(i)) : "") << "," << FormatDouble(change) << ","
-      << (has_std ? FormatDouble(change / r.geometry_std(i)) : "") << "," << (Held(r, i) ? 1 : 0) << "\n";
+      << (has_std ? FormatDouble(change / r.geometry_std(i)) : "") << "," << (IsHeld(r, i) ? 1 : 0) << "\n";
   }
   return o.str();
 }
@@ -212,7 +210,7 @@ std::string EstimatesSection(const Robot& nominal, const IdentifyResult& r, cons
     const double change = r.geometry(i) - nominal_geometry(i);
     const bool has_std = r.has_covariance && r.geometry_std(i) > 0.0;
     o << "| " << names[k] << " | " << Fixed(nominal_geometry(i), 6) << " | " << Fixed(r.geometry(i), 6) << " | "
-      << (Held(r, i) ? std::string("held") : has_std ? Significant3(1e3 * r.geometry_std(i)) : std::string("–"))
+      << (IsHeld(r, i) ? std::string("held") : has_std ? Significant3(1e3 * r.geometry_std(i)) : std::string("–"))
       << " | "
       << SignedFixed(1e3 * change, 3) << " | " << (has_std ? SignedFixed(change / r.geometry_std(i), 2) : "–")
       << " |\n";
@@ -253,7 +251,7 @@ std::string CorrelationSection(const IdentifyResult& r, const std::string& figur
   std::vector<std::pair<double, std::string>> pairs;
   for (int a = 0; a < static_cast<int>(names.size()); ++a) {
     for (int b = a + 1; b < static_cast<int>(names.size()); ++b) {
-      if (Held(r, a)) continue;
+      if (IsHeld(r, a)) continue;
       const double c = r.geometry_correlation(a, b);
       pairs.emplace_back(std::abs(c), names[a] + " and " + names[b] + ": " + SignedFixed(c, 3));
     }

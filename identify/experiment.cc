@@ -1,6 +1,9 @@
 #include "identify/experiment.h"
 
+#include <cctype>
 #include <fstream>
+#include <optional>
+#include <unordered_map>
 
 #include "common/csv.h"
 #include "common/error.h"
@@ -204,10 +207,66 @@ std::string MeasurementsCsv(const std::vector<Measurement>& measurements, const 
 }
 
 std::vector<Measurement> ReadMeasurementsCsv(const std::string& path, int num_cables, char delimiter,
-                                             const std::function<void(const std::vector<std::string>&)>& on_ignored) {
+                                             const std::function<void(const std::vector<std::string>&)>& on_ignored,
+                                             const std::function<void(const std::string&)>& on_warning) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "", "cannot open the file");
-  return ReadMeasurementsCsv(in, path, num_cables, delimiter, on_ignored);
+  return ReadMeasurementsCsv(in, path, num_cables, delimiter, on_ignored, on_warning);
+}
+
+namespace {
+
+// Whether an ignored column `column` looks like sensor column `name` in other units or case:
+// the name itself in another case, or followed by a separator ("theta_deg", "z (mm)", "Z[m]").
+bool LooksLikeColumn(const std::string& column, const std::string& name) {
+  std::string lower = column;
+  for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (lower.compare(0, name.size(), name) != 0) return false;
+  return lower.size() == name.size() || !std::isalnum(static_cast<unsigned char>(lower[name.size()]));
+}
+
+// A pose id that comes again after other poses (1, 2, 3, 1): the first such reading, and how many.
+std::optional<std::string> ReusedPoseIdWarning(const std::string& source, const std::vector<Measurement>& readings) {
+  std::unordered_map<int, std::size_t> first;  // pose id -> index of its first reading
+  std::size_t reused = 0, first_reused = 0;
+  for (std::size_t k = 0; k < readings.size(); ++k) {
+    const int id = readings[k].pose_id;
+    const auto [at, fresh] = first.emplace(id, k);
+    if (fresh || readings[k - 1].pose_id == id) continue;  // a new pose, or a repeat in a row
+    if (reused++ == 0) first_reused = k;
+  }
+  if (reused == 0) return std::nullopt;
+  const Measurement& m = readings[first_reused];
+  const Measurement& earlier = readings[first.at(m.pose_id)];
+  const std::string where = m.where.empty() ? source + ": reading " + std::to_string(first_reused + 1) : m.where;
+  return where + ": pose " + std::to_string(m.pose_id) + " read again after other poses (first at " +
+         (earlier.where.empty() ? "reading " + std::to_string(first.at(m.pose_id) + 1) : earlier.where) +
+         "): taken as a repeated reading of the same pose; if it is another pose give it its own id" +
+         (reused > 1 ? " (" + std::to_string(reused) + " readings in all repeat a pose id after other poses)" : "");
+}
+
+}  // namespace
+
+std::vector<std::string> MeasurementWarnings(const std::string& source, const std::vector<std::string>& ignored,
+                                             const std::vector<Measurement>& readings) {
+  std::vector<std::string> warnings;
+  if (readings.empty()) return warnings;
+  const struct {
+    const char* name;
+    bool present;
+    const char* unit;
+    const char* sensor;
+  } sensors[] = {{"z", readings.front().has_laser, "m", "laser"},
+                 {"theta", readings.front().has_inclinometer, "rad", "inclinometer"}};
+  for (const std::string& column : ignored) {
+    for (const auto& s : sensors) {
+      if (s.present || !LooksLikeColumn(column, s.name)) continue;
+      warnings.push_back(source + ": column '" + column + "' ignored: " + s.name + " is read from a column '" + s.name +
+                         "' in " + s.unit + ", and without one the " + s.sensor + " is taken as missing");
+    }
+  }
+  if (const std::optional<std::string> reused = ReusedPoseIdWarning(source, readings)) warnings.push_back(*reused);
+  return warnings;
 }
 
 char ParseDelimiter(const std::string& text) {
@@ -219,13 +278,19 @@ char ParseDelimiter(const std::string& text) {
 
 std::vector<Measurement> ReadMeasurementsCsv(std::istream& in, const std::string& path, int num_cables,
                                              char delimiter,
-                                             const std::function<void(const std::vector<std::string>&)>& on_ignored) {
+                                             const std::function<void(const std::vector<std::string>&)>& on_ignored,
+                                             const std::function<void(const std::string&)>& on_warning) {
   std::vector<std::string> header = {"pose"};
   for (int i = 1; i <= num_cables; ++i) header.push_back("dl" + std::to_string(i));
   std::vector<Measurement> out;
   // z and theta may be absent (no laser, no inclinometer): Identify then says what the data
   // can no longer determine. The encoders are what is calibrated and always needed.
-  ForEachCsvRowByName(in, path, delimiter, header, {"z", "theta"}, on_ignored, [&](const CsvRow& row) {
+  std::vector<std::string> ignored;
+  const auto note_ignored = [&](const std::vector<std::string>& names) {
+    ignored = names;
+    if (on_ignored) on_ignored(names);
+  };
+  ForEachCsvRowByName(in, path, delimiter, header, {"z", "theta"}, note_ignored, [&](const CsvRow& row) {
     if (static_cast<int>(out.size()) >= kMaxMeasuredPoses) {
       throw InputError(row.Where(), "", "more than " + std::to_string(kMaxMeasuredPoses) + " readings");
     }
@@ -240,6 +305,9 @@ std::vector<Measurement> ReadMeasurementsCsv(std::istream& in, const std::string
     if (m.has_inclinometer) m.theta_rad = row.Number(2 + num_cables);
     out.push_back(m);
   });
+  if (on_warning) {
+    for (const std::string& w : MeasurementWarnings(path, ignored, out)) on_warning(w);
+  }
   return out;
 }
 

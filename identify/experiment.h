@@ -144,11 +144,22 @@ std::string MeasurementsCsv(const std::vector<Measurement>& measurements, const 
 // The file is read by column name (a lab's log): pose, dl1..dlm, z and theta in any order,
 // other columns (a timestamp, a temperature) ignored and named once to `on_ignored`; cells
 // split at `delimiter` (',', ';' or '\t'); an empty cell is refused with line and column.
+// `on_warning` hears what is read but likely not meant (MeasurementWarnings below), once each.
 std::vector<Measurement> ReadMeasurementsCsv(const std::string& path, int num_cables, char delimiter = ',',
-                                             const std::function<void(const std::vector<std::string>&)>& on_ignored = {});
+                                             const std::function<void(const std::vector<std::string>&)>& on_ignored = {},
+                                             const std::function<void(const std::string&)>& on_warning = {});
 std::vector<Measurement> ReadMeasurementsCsv(std::istream& in, const std::string& name, int num_cables,
                                              char delimiter = ',',
-                                             const std::function<void(const std::vector<std::string>&)>& on_ignored = {});
+                                             const std::function<void(const std::vector<std::string>&)>& on_ignored = {},
+                                             const std::function<void(const std::string&)>& on_warning = {});
+
+// What a measurement file says that its author likely did not mean, as warnings naming the file:
+// an ignored column that looks like the laser's or the inclinometer's in other units or case
+// ('theta_deg', 'z_mm', 'Theta') while the file has no 'z' or 'theta' column (that sensor is
+// then taken as missing); a pose id that comes again after other poses (1, 2, 3, 1), which is
+// read as a repeated reading of that pose, not as another pose (a reused id). `readings` as read.
+std::vector<std::string> MeasurementWarnings(const std::string& source, const std::vector<std::string>& ignored,
+                                             const std::vector<Measurement>& readings);
 // The delimiter of --delimiter: ",", ";", "tab" (or a tab character); InputError otherwise.
 char ParseDelimiter(const std::string& text);
 constexpr int kMaxMeasuredPoses = 100000;

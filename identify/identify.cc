@@ -134,9 +134,11 @@ auto WithCableCount(int num_cables, F&& f) {
 
 IdentifyResult Identify(const Robot& nominal, const std::vector<Measurement>& measurements,
                         const IdentifyOptions& options) {
-  return internal::WithCableCount(nominal.num_cables(), [&](auto m) {
+  IdentifyResult result = internal::WithCableCount(nominal.num_cables(), [&](auto m) {
     return internal::IdentifyWithCables<decltype(m)::value>(nominal, measurements, options);
   });
+  result.robot_name = nominal.name;  // so that the result is never combined with another robot's file
+  return result;
 }
 
 Eigen::Vector3d StartingPose(const Robot& robot, const GeometryVector& geometry, const Measurement& reading) {
@@ -145,6 +147,22 @@ Eigen::Vector3d StartingPose(const Robot& robot, const GeometryVector& geometry,
   return internal::WithCableCount(robot.num_cables(), [&](auto m) {
     return internal::StartingPose<decltype(m)::value>(robot, geometry, reading);
   });
+}
+
+void RequireResultOfRobot(const std::string& result_source, const std::string& result_robot_name,
+                          int result_cables, const Robot& robot) {
+  const std::string result_robot = result_robot_name.empty() ? "a robot" : "robot '" + PrintableText(result_robot_name) + "'";
+  const std::string against = PrintableText(robot.source) + " is robot '" + PrintableText(robot.name) + "' with " +
+                              std::to_string(robot.num_cables()) + " cables";
+  if (result_cables != robot.num_cables()) {
+    throw InputError(result_source, "", "identified for " + result_robot + " with " + std::to_string(result_cables) +
+                                            " cables, but " + against + ": a result of another robot");
+  }
+  if (!result_robot_name.empty() && result_robot_name != robot.name) {
+    throw InputError(result_source, "", "identified for " + result_robot + ", but " + against +
+                                            ": a result of another robot (its changes from nominal would be the "
+                                            "difference between two robots)");
+  }
 }
 
 void RequireUsableResult(const IdentifyResult& result, const std::string& source) {

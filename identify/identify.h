@@ -155,6 +155,9 @@ struct Identifiability {
 };
 
 struct IdentifyResult {
+  // The nominal robot's name (its file's `name`): result.yaml records it, and a result is
+  // refused beside a robot of another name (RequireResultOfRobot).
+  std::string robot_name;
   IdentifyStatus status = IdentifyStatus::kNotConverged;
   std::string message;
   Estimator estimator = Estimator::kMaximumLikelihood;
@@ -211,6 +214,17 @@ void RequireUsableResult(const IdentifyResult& result, const std::string& source
 // The `sensor_correction` map of result.yaml and of validate's summary: the robot file's
 // systematic sensor errors the readings were corrected for, and `when` ("before the solve").
 void EmitSensorCorrection(YAML::Emitter& out, const SystematicSensorErrors& errors, const std::string& when);
+
+// A result (`result_source` names it: a file, or "result") may be combined only with the robot it
+// was identified for: InputError naming both robots (and robot.source) when the cable counts
+// differ, or when the names differ and both are known (`result_robot_name` empty: a
+// result.yaml of an older version, which did not record it).
+void RequireResultOfRobot(const std::string& result_source, const std::string& result_robot_name,
+                          int result_cables, const Robot& robot);
+
+// Whether geometric parameter k was held rather than estimated (a1x under gauge a1x): its std
+// is then 0 by construction, and what a person reads says "held", not "std 0".
+bool IsHeld(const IdentifyResult& result, int k);
 
 // result.yaml (README, "identify").
 std::string IdentifyResultYaml(const IdentifyResult& result, const std::string& command_line);

@@ -30,12 +30,20 @@ void EmitSensorCorrection(YAML::Emitter& o, const SystematicSensorErrors& e, con
     << YamlNumber{e.inclinometer_sec_coefficient_rad} << EndMap;
 }
 
+bool IsHeld(const IdentifyResult& r, int k) { return k == 0 && r.gauge == Gauge::kA1x; }
+
 std::string IdentifyResultYaml(const IdentifyResult& r, const std::string& command_line) {
   YAML::Emitter o;
   o << YAML::Comment("cablecal identification result (README, \"identify\"). SI units: m, rad.") << BeginMap;
   o << Key << "cablecal" << Value << Flow << BeginMap << Key << "version" << Value << YamlString{Version()} << Key
     << "commit" << Value << YamlString{GitCommit()} << EndMap;
   o << Key << "command" << Value << YamlString{command_line};
+  // The robot it was identified for: design --prior and Python refuse the result beside a robot
+  // of another name or cable count.
+  if (!r.robot_name.empty()) {
+    o << Key << "robot" << Value << Flow << BeginMap << Key << "name" << Value << YamlString{r.robot_name} << Key
+      << "cables" << Value << static_cast<int>(r.geometry.size()) / 3 << EndMap;
+  }
   o << Key << "status" << Value << ToString(r.status);
   if (!r.message.empty()) o << Key << "message" << Value << YamlString{r.message};
   o << Key << "estimator" << Value << ToString(r.estimator);
@@ -105,7 +113,7 @@ std::string IdentifyResultYaml(const IdentifyResult& r, const std::string& comma
   for (int k = 0; k < geometry_size; ++k) {
     o << Key << names[k] << Value << Flow << BeginMap << Key << "value" << Value << YamlNumber{r.geometry(k)};
     if (r.has_covariance) o << Key << "std" << Value << YamlNumber{r.geometry_std(k)};
-    if (k == 0 && r.gauge == Gauge::kA1x) o << Key << "held" << Value << true;
+    if (IsHeld(r, k)) o << Key << "held" << Value << true;
     o << EndMap;
   }
   o << EndMap;

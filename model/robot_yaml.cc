@@ -103,6 +103,15 @@ class Reader {
   std::string source_;
 };
 
+// The node of a key of the sensors block ("sensors.laser" or "sensors.laser.accuracy"), for the
+// line of a message.
+YAML::Node SensorsNode(const YAML::Node& sensors, const std::string& key) {
+  const std::string rest = key.substr(key.find('.') + 1);  // after "sensors."
+  const std::size_t dot = rest.find('.');
+  const YAML::Node sensor = sensors[rest.substr(0, dot)];
+  return dot == std::string::npos ? sensor : sensor[rest.substr(dot + 1)];
+}
+
 Robot Parse(const YAML::Node& root, const Reader& rd) {
   Robot robot;
   robot.source = rd.source();
@@ -273,21 +282,19 @@ Robot Parse(const YAML::Node& root, const Reader& rd) {
   const double inc_acc_deg = rd.Number(sensors["inclinometer"], "sensors.inclinometer", "accuracy_deg");
   const double inc_rep_deg = rd.Number(sensors["inclinometer"], "sensors.inclinometer", "repeatability_deg");
   s.encoder_sigma_m = rd.Number(sensors["encoder"], "sensors.encoder", "sigma");
-  rd.NonNegative(sensors["laser"]["accuracy"], "sensors.laser.accuracy", s.laser_accuracy_m);
-  rd.NonNegative(sensors["laser"]["repeatability"], "sensors.laser.repeatability", s.laser_repeatability_m);
-  rd.NonNegative(sensors["inclinometer"]["accuracy_deg"], "sensors.inclinometer.accuracy_deg", inc_acc_deg);
-  rd.NonNegative(sensors["inclinometer"]["repeatability_deg"], "sensors.inclinometer.repeatability_deg", inc_rep_deg);
-  rd.NonNegative(sensors["encoder"]["sigma"], "sensors.encoder.sigma", s.encoder_sigma_m);
   if (sensors["tracker"]) {
     rd.ExpectMap(sensors["tracker"], "sensors.tracker", {"sigma"}, {});
     s.tracker_sigma_m = rd.Number(sensors["tracker"], "sensors.tracker", "sigma");
-    rd.Positive(sensors["tracker"]["sigma"], "sensors.tracker.sigma", *s.tracker_sigma_m);
   }
   if (root["true_poses"] && !root["true_poses"].IsSequence()) {
     rd.Fail(root["true_poses"], "true_poses", "must be a list (it is written by cablecal simulate --truth-out)");
   }
   s.inclinometer_accuracy_rad = inc_acc_deg * kDegToRad;
   s.inclinometer_repeatability_rad = inc_rep_deg * kDegToRad;
+  // Every sigma and range within the bounds of model/sensor_model.h, named at its own line.
+  if (const std::optional<SensorModelProblem> problem = CheckSensorNoise(s)) {
+    rd.Fail(SensorsNode(sensors, problem->key), problem->key, problem->problem);
+  }
   // The systematic errors a bench test fitted (cablecal sensors fit); absent means none.
   SystematicSensorErrors& sys = s.systematic;
   if (sensors["laser"]["offset"]) sys.laser_offset_m = rd.Number(sensors["laser"], "sensors.laser", "offset");

@@ -54,4 +54,28 @@ struct SensorModelProblem {
 };
 std::optional<SensorModelProblem> CheckSystematicErrors(const SystematicSensorErrors& e, double theta_max_rad);
 
+// Bounds on the sensors' noise (README, "Robot file"). Every reading is weighed by 1/sigma of its
+// sensor: a sigma of 0 (or 1e-300) turns residuals and Jacobians into infinities, which failed
+// deep inside the solvers (Ipopt's Invalid_Number_Detected, "an anchor inside its pulley?"). A
+// micrometre or a microradian is finer than any sensor of a cable robot (its cables stretch
+// more than that under a newton), and the identification still converges there: the built-in
+// robot with an encoder sigma of 1e-6 m took 15 iterations, 1e-7 m 321 (beyond the default
+// limit of 100), and 1e-8 m failed, the encoders weighing 10^5 times the laser.
+constexpr double kMinSensorSigma_m = 1e-6;
+constexpr double kMinSensorSigma_rad = 1e-6;
+// The most a length key of the sensors block may be (encoder and tracker sigma, laser accuracy
+// and repeatability ranges): frames are a few metres (at most kMaxFrameSide_m), the
+// identification refuses estimates 0.5 m from nominal, so a metre of sensor noise measures
+// nothing; more is a unit slip (6 typed for 6 mm).
+constexpr double kMaxSensorLength_m = 1.0;
+// The most an inclinometer range may be: the range of angles is below 89 degrees, and an
+// inclinometer wrong by 30 degrees measures nothing in it.
+constexpr double kMaxInclinometerRange_deg = 30.0;
+
+// Why `s` is no sensor (the robot-file key, "sensors.encoder.sigma", or "sensors.laser" for
+// the sigma its two ranges give, and the problem), nullopt if it is one: each range in [0, its
+// maximum], each sigma (encoder, tracker, and hypot(accuracy, repeatability) / 3 of the laser and
+// the inclinometer) at least the minimum above. The robot file and the bench fit check with it.
+std::optional<SensorModelProblem> CheckSensorNoise(const SensorNoise& s);
+
 }  // namespace cablecal

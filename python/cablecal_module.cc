@@ -73,10 +73,11 @@ long long AsInteger(py::handle h, const std::string& name, long long lo, long lo
 
 std::uint64_t AsSeed(py::handle h) {
   if (!IsInteger(h)) Bad("seed", "expected an integer, got " + TypeName(h));
+  // As the CLI's --seed: a seed out of range is refused, never wrapped or saturated to another.
   try {
     return py::int_(Obj(h)).cast<std::uint64_t>();
   } catch (const py::cast_error&) {
-    Bad("seed", "expected an integer from 0 to 2^64 - 1");
+    Bad("seed", "must be a whole number from 0 to 18446744073709551615 (got " + py::str(Obj(h)).cast<std::string>() + ")");
   }
 }
 
@@ -300,6 +301,7 @@ std::vector<BenchReading> BenchReadings(BenchSensor sensor, py::handle h, const 
         throw py::error_already_set();
       }
     }
+    CheckReadingsAgainstTheirReference(sensor, readings);  // as the CLI's sensors fit
     return readings;
   }
   const Eigen::MatrixXd a = AsMatrix(h, name, -1, 2);
@@ -309,6 +311,7 @@ std::vector<BenchReading> BenchReadings(BenchSensor sensor, py::handle h, const 
     CheckBenchReading(sensor, r);
     readings.push_back(std::move(r));
   }
+  CheckReadingsAgainstTheirReference(sensor, readings);
   return readings;
 }
 
@@ -398,6 +401,12 @@ std::string DrawReportWithPython(const std::vector<std::string>& arguments) {
                         .attr("run")(command, py::arg("capture_output") = true, py::arg("text") = true);
   const int status = done.attr("returncode").cast<int>();
   if (status == 0) return "";
+  // Exit status 3: the script could not import matplotlib or numpy (scripts/plot_report.py).
+  if (status == 3) {
+    return "the figure could not be made: this interpreter (" + command[0].cast<std::string>() +
+           ") has no matplotlib (or numpy): install it (pip install matplotlib, or apt-get install "
+           "python3-matplotlib for Debian's /usr/bin/python3)";
+  }
   std::string why = done.attr("stderr").cast<std::string>();
   while (!why.empty() && why.back() == '\n') why.pop_back();
   why = why.substr(why.rfind('\n') + 1);  // the exception's line
@@ -524,15 +533,15 @@ PYBIND11_MODULE(cablecal, m) {
           "load",
           [](py::handle robot_arg, py::handle path, py::handle delimiter) {
             const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
-            std::vector<std::string> ignored;
+            std::vector<std::string> ignored, warnings;
             PyMeasurements m{ReadMeasurementsCsv(AsPath(path, "path"), robot.num_cables(),
                                                  ParseDelimiter(AsText(delimiter, "delimiter")),
-                                                 [&](const std::vector<std::string>& names) { ignored = names; }),
+                                                 [&](const std::vector<std::string>& names) { ignored = names; },
+                                                 [&](const std::string& w) { warnings.push_back(w); }),
                              robot.num_cables()};
-            if (!ignored.empty()) {
-              if (PyErr_WarnEx(PyExc_UserWarning, ("ignoring columns " + QuotedList(ignored)).c_str(), 1) < 0) {
-                throw py::error_already_set();
-              }
+            if (!ignored.empty()) warnings.insert(warnings.begin(), "ignoring columns " + QuotedList(ignored));
+            for (const std::string& w : warnings) {
+              if (PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 1) < 0) throw py::error_already_set();
             }
             return m;
           },
@@ -776,6 +785,14 @@ PYBIND11_MODULE(cablecal, m) {
         }
         return out;
       }, "per reading: each sensor's residual (model - reading) over its sigma, and the loss's weights")
+      .def_property_readonly("held", [](const IdentifyResult& r) {
+        std::vector<std::string> held;
+        const std::vector<std::string> names = GeometryNames(static_cast<int>(r.geometry.size()) / 3);
+        for (int k = 0; k < r.geometry.size(); ++k) {
+          if (IsHeld(r, k)) held.push_back(names[k]);
+        }
+        return held;
+      }, "the geometric parameters held rather than estimated (a1x under gauge a1x): their std is 0 by construction")
       .def_property_readonly("pose_ids", [](const IdentifyResult& r) {
         std::vector<int> ids;
         for (const PoseEstimate& p : r.poses) ids.push_back(p.pose_id);
@@ -846,10 +863,7 @@ PYBIND11_MODULE(cablecal, m) {
   m.def("calibrated_robot", [](py::handle nominal_arg, py::handle result_arg) {
         const Robot& nominal = AsObject<Robot>(nominal_arg, "nominal", "Robot");
         const IdentifyResult& r = AsObject<IdentifyResult>(result_arg, "result", "IdentifyResult");
-        if (r.geometry.size() != GeometrySize(nominal.num_cables())) {
-          Bad("result", "identified for a robot with " + std::to_string(r.geometry.size() / 3) + " cables, the nominal robot has " +
-                            std::to_string(nominal.num_cables()));
-        }
+        RequireResultOfRobot("result", r.robot_name, static_cast<int>(r.geometry.size()) / 3, nominal);
         return WithGeometry(nominal, r.geometry);
       },
         py::arg("nominal"), py::arg("result"), "The nominal robot with the identified geometry.");
@@ -858,10 +872,7 @@ PYBIND11_MODULE(cablecal, m) {
       [](py::handle nominal_arg, py::handle result_arg, py::handle directory, py::handle holdout_arg) {
         const Robot& nominal = AsObject<Robot>(nominal_arg, "nominal", "Robot");
         const IdentifyResult& r = AsObject<IdentifyResult>(result_arg, "result", "IdentifyResult");
-        if (r.geometry.size() != GeometrySize(nominal.num_cables())) {
-          Bad("result", "identified for a robot with " + std::to_string(r.geometry.size() / 3) + " cables, the nominal robot has " +
-                            std::to_string(nominal.num_cables()));
-        }
+        RequireResultOfRobot("result", r.robot_name, static_cast<int>(r.geometry.size()) / 3, nominal);
         const std::string dir = AsPath(directory, "directory");
         OutputFolder folder("directory", dir, ReportFileNames());
         ReportSources sources{CallText("report"), "the measurements given to cablecal.identify", ""};

@@ -11,7 +11,14 @@ import csv
 import signal
 import sys
 
-import matplotlib
+try:
+    import matplotlib
+    import numpy  # noqa: F401
+except ImportError as missing:
+    # Exit status 3 tells cablecal that a library is missing, not that the figure failed
+    # (cli/commands.cc, kMissingPlotLibraryExit): it then says what to install.
+    sys.stderr.write(f"{sys.executable}: {missing}: the figures need matplotlib and numpy\n")
+    sys.exit(3)
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402

@@ -188,6 +188,71 @@ std::vector<BenchReading> ReadBenchCsv(BenchSensor sensor, std::istream& in, con
   return out;
 }
 
+namespace {
+
+// A reading's deviation from the mean of its reference's other readings, in sigmas of the
+// repeatability pooled without it (the externally studentized residual of the one-way layout).
+struct RepeatCheck {
+  std::size_t index = 0;
+  double sigmas = 0.0, others_mean = 0.0, sigma = 0.0;
+};
+
+std::vector<RepeatCheck> RepeatsBeyond(const std::vector<BenchReading>& readings, double bound) {
+  std::map<double, std::vector<std::size_t>> by_reference;
+  for (std::size_t k = 0; k < readings.size(); ++k) by_reference[readings[k].reference].push_back(k);
+  const auto error = [&](std::size_t k) { return readings[k].reading - readings[k].reference; };
+  double within = 0.0;  // sum of squares of the errors about their reference's mean
+  std::map<double, double> mean;
+  for (const auto& [reference, members] : by_reference) {
+    double sum = 0.0;
+    for (std::size_t k : members) sum += error(k);
+    mean[reference] = sum / members.size();
+    for (std::size_t k : members) within += std::pow(error(k) - mean[reference], 2);
+  }
+  // Leaving one reading of a repeated reference out keeps every reference: N - G - 1 degrees.
+  const int degrees = static_cast<int>(readings.size()) - static_cast<int>(by_reference.size()) - 1;
+  std::vector<RepeatCheck> beyond;
+  if (degrees < kBenchOutlierMinDegrees) return beyond;
+  for (const auto& [reference, members] : by_reference) {
+    const double n = static_cast<double>(members.size());
+    if (n < 2) continue;
+    for (std::size_t k : members) {
+      const double d = error(k) - mean[reference];
+      const double within_without = std::max(0.0, within - n / (n - 1.0) * d * d);
+      const double sigma = std::sqrt(within_without / degrees);
+      if (!(sigma > 0.0)) continue;  // the others read their references exactly
+      // e - mean(others) = n/(n-1) d, whose variance is sigma^2 n/(n-1).
+      const double sigmas = d * std::sqrt(n / (n - 1.0)) / sigma;
+      if (std::abs(sigmas) > bound) {
+        beyond.push_back({k, sigmas, (n * mean[reference] - error(k)) / (n - 1.0) + reference, sigma});
+      }
+    }
+  }
+  return beyond;
+}
+
+}  // namespace
+
+void CheckReadingsAgainstTheirReference(BenchSensor sensor, const std::vector<BenchReading>& readings) {
+  const std::vector<RepeatCheck> beyond = RepeatsBeyond(readings, kBenchOutlierSigmas);
+  if (beyond.empty()) return;
+  const RepeatCheck& worst = *std::max_element(beyond.begin(), beyond.end(), [](const RepeatCheck& a, const RepeatCheck& b) {
+    return std::abs(a.sigmas) < std::abs(b.sigmas);
+  });
+  const BenchReading& r = readings[worst.index];
+  const char* unit = sensor == BenchSensor::kInclinometer ? " rad" : " m";
+  throw InputError(r.where, "column '" + BenchColumns(sensor)[1] + "'",
+                   FormatDouble(r.reading) + unit + " is " + Short(std::abs(worst.sigmas)) +
+                       " sigma from the other readings of its reference " + FormatDouble(r.reference) + unit +
+                       " (their mean " + Short(worst.others_mean) + unit + "; sigma " + Short(worst.sigma) + unit +
+                       ", the repeatability of the bench without it), beyond " + FormatDouble(kBenchOutlierSigmas) +
+                       " sigma: a misread or mistyped reading, which would inflate the fitted repeatability; check it, or "
+                       "drop that row" +
+                       (beyond.size() > 1 ? " (" + std::to_string(beyond.size()) + " readings in all are beyond " +
+                                                FormatDouble(kBenchOutlierSigmas) + " sigma)"
+                                          : ""));
+}
+
 InclinometerFit FitInclinometer(const std::vector<BenchReading>& readings, const std::string& source) {
   const GroupedBench bench = Group(readings);
   const int g = bench.summary.references;
@@ -246,7 +311,16 @@ SensorNoise FittedSensors(const Robot& robot, const SensorsFit& fit) {
     s.laser_repeatability_m = fit.laser->repeatability_m;
     s.systematic.laser_offset_m = fit.laser->offset_m;
   }
-  // The block must load as written: the same check as the robot file's.
+  // The block must load as written: the same checks as the robot file's.
+  if (std::optional<SensorModelProblem> problem = CheckSensorNoise(s)) {
+    const bool laser = problem->key.find(".laser") != std::string::npos;
+    const bool fitted = laser ? fit.laser.has_value() : fit.inclinometer.has_value();
+    if (fitted) {
+      throw InputError(laser ? fit.laser->source : fit.inclinometer->source, "",
+                       "the fitted " + problem->key + " would be refused by the robot file of " + robot.name + ": " +
+                           problem->problem + " (readings that repeat their reference exactly, or rounded coarsely?)");
+    }
+  }
   if (const std::optional<SensorModelProblem> problem = CheckSystematicErrors(s.systematic, robot.theta_max_rad)) {
     const bool laser = problem->key.find(".laser.") != std::string::npos;
     throw InputError(laser ? fit.laser->source : fit.inclinometer->source, "",
@@ -276,6 +350,16 @@ std::vector<std::string> FitWarnings(const Robot& robot, const SensorsFit& fit) 
     }
   }
   return warnings;
+}
+
+std::string FittedRobotYaml(const Robot& robot, const SensorsFit& fit, const std::string& command_line) {
+  Robot fitted = robot;
+  fitted.sensors = FittedSensors(robot, fit);
+  const std::string text = ProvenanceComment(command_line) + "# " + PrintableText(robot.name) +
+                           "'s robot file with the sensors block fitted from bench readings (README, \"Sensor error "
+                           "models\")\n" + RobotToYaml(fitted);
+  LoadRobotFromString(text, "the fitted robot file");  // it loads as written, or nothing is written
+  return text;
 }
 
 std::string SensorsFitYaml(const Robot& robot, const SensorsFit& fit, const std::string& command_line) {

@@ -55,6 +55,19 @@ std::vector<BenchReading> ReadBenchCsv(BenchSensor sensor, std::istream& in, con
                                        char delimiter = ',',
                                        const std::function<void(const std::vector<std::string>&)>& on_ignored = {});
 
+// Each reading against the other readings of its reference, as identify checks each pose
+// against the others: the reading's deviation from their mean, over the repeatability sigma
+// pooled from every other repeat of the bench (the reading itself left out, so that a gross
+// one cannot hide by inflating it). Beyond kBenchOutlierSigmas (identify's 4.5) the reading is
+// refused (InputError naming its place and column, with the advice to check or drop it): least
+// squares would take it in whole, and a 40-sigma reading made the fitted repeatability 9 to
+// 18 times too large. Readings of a reference read once cannot be checked; nor can any when the
+// pooled repeats leave fewer than kBenchOutlierMinDegrees degrees of freedom (a t test on fewer
+// would refuse clean readings often) or read their references exactly (no spread to compare).
+constexpr double kBenchOutlierSigmas = 4.5;
+constexpr int kBenchOutlierMinDegrees = 10;
+void CheckReadingsAgainstTheirReference(BenchSensor sensor, const std::vector<BenchReading>& readings);
+
 // What the bench held: readings, distinct reference values, those read more than once, and
 // the references' span (rad or m).
 struct BenchSummary {
@@ -107,5 +120,9 @@ std::vector<std::string> FitWarnings(const Robot& robot, const SensorsFit& fit);
 // bench sizes) as comments, and the `sensors:` block of FittedSensors, which replaces a robot
 // file's own as it is.
 std::string SensorsFitYaml(const Robot& robot, const SensorsFit& fit, const std::string& command_line);
+
+// sensors fit --robot-out: `robot`'s whole robot file with the fitted sensors block in place of
+// its own (FittedSensors), provenance as comment lines, loadable as a robot file (checked).
+std::string FittedRobotYaml(const Robot& robot, const SensorsFit& fit, const std::string& command_line);
 
 }  // namespace cablecal

@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -41,6 +42,8 @@ RunResult RunCablecal(const std::string& args) {
   const int status = pclose(pipe);
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
 }
+
+std::vector<std::string> DataRows(const std::string& csv);  // a CSV's lines but comments and header
 
 class Cli : public ::testing::Test {
  protected:
@@ -88,6 +91,31 @@ TEST_F(Cli, BadRobotFileExitsTwoWithKeyAndWritesNothing) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.output.find("bad.yaml:10: platform.mass: must be > 0 (got 0)"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(Path("ws.csv")));
+}
+
+// A sensor without noise (or with 1e-300 of it) failed deep in the solvers (design: exit 3,
+// "Invalid_Number_Detected"; identify: "an anchor inside its pulley?"): it is refused when the
+// robot file is loaded, by every command, naming the file, line and key.
+TEST_F(Cli, ANoiselessSensorIsRefusedWhenTheRobotLoads) {
+  WriteRobot("zero.yaml", "encoder: {sigma: 0.00005}", "encoder: {sigma: 0}");
+  WriteRobot("tiny.yaml", "encoder: {sigma: 0.00005}", "encoder: {sigma: 1e-300}");
+  ASSERT_EQ(RunCablecal("sample --poses 8 --seed 8 --out " + Path("plan.csv")).exit_code, 0);
+  ASSERT_EQ(RunCablecal("simulate --plan " + Path("plan.csv") + " --out " + Path("meas.csv")).exit_code, 0);
+  for (const char* robot : {"zero.yaml", "tiny.yaml"}) {
+    for (const std::string& command :
+         {"design --poses 6 --starts 1 --random-sets 0 --out " + Path("p.csv"),
+          "identify --measurements " + Path("meas.csv") + " --out " + Path("r.yaml"),
+          "simulate --plan " + Path("plan.csv") + " --out " + Path("m.csv")}) {
+      const RunResult r = RunCablecal(command + " --robot " + Path(robot));
+      EXPECT_EQ(r.exit_code, 2) << command << "\n" << r.output;
+      EXPECT_TRUE(std::regex_search(r.output, std::regex("^cablecal: error: " + Path(robot) +
+                                                         ":[0-9]+: sensors\\.encoder\\.sigma: must be from 1e-06 to 1 m, "
+                                                         "one standard deviation \\(got [0-9e-]+\\)")))
+          << r.output;
+      EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+    }
+  }
+  for (const char* name : {"p.csv", "r.yaml", "m.csv"}) EXPECT_FALSE(fs::exists(Path(name))) << name;
 }
 
 TEST_F(Cli, HomeOutsideWorkspaceExitsTwo) {
@@ -138,6 +166,12 @@ TEST_F(Cli, SampleSimulateIdentifyRoundTrip) {
                           "correlation:", "poses:", "condition_number:", "null_directions: []"}) {
     EXPECT_NE(result.find(key), std::string::npos) << key << "\n" << result;
   }
+  // The held a1x reads "held" where a person reads it, never "std 0"; the YAML keeps std: 0
+  // (a number, as before) beside held: true.
+  EXPECT_TRUE(std::regex_search(id.output, std::regex("\n  a1x = [-0-9.]+ m  \\(held: the gauge\\)\n"))) << id.output;
+  EXPECT_EQ(id.output.find("(std 0 mm)"), std::string::npos) << id.output;
+  EXPECT_TRUE(std::regex_search(id.output, std::regex("\n  a1z = [-0-9.]+ m  \\(std [0-9.e-]+ mm\\)\n"))) << id.output;
+  EXPECT_NE(result.find("a1x: {value: 0, std: 0, held: true}"), std::string::npos) << result;
   // The calibrated robot loads and is usable.
   EXPECT_EQ(RunCablecal("sample --poses 2 --robot " + Path("cal.yaml") + " --out " + Path("p3.csv")).exit_code, 0);
   const RunResult none = RunCablecal("identify --gauge none --estimator paper --measurements " + Path("meas.csv") +
@@ -245,6 +279,23 @@ TEST_F(Cli, DesignRoundsAndRobustnessFlags) {
   const RunResult missing = RunCablecal("design --prior " + Path("nope.yaml") + " --poses 8 --out " + Path("p3.csv"));
   EXPECT_EQ(missing.exit_code, 2) << missing.output;
   EXPECT_NE(missing.output.find("nope.yaml: cannot open the file"), std::string::npos) << missing.output;
+  // A result of another robot with as many cables (asymmetric's beside the built-in one) would
+  // plan around the wrong geometry: refused by name, both robots named. An older result.yaml
+  // (no robot: key) is still taken, checked by its cable count.
+  const std::string asymmetric = std::string(CABLECAL_SOURCE_DIR) + "/robots/asymmetric.yaml";
+  const RunResult other = RunCablecal("design --robot " + asymmetric + " --prior " + Path("r.yaml") +
+                                      " --poses 8 --starts 1 --random-sets 0 --out " + Path("p3.csv"));
+  EXPECT_EQ(other.exit_code, 2) << other.output;
+  EXPECT_NE(other.output.find("cablecal: error: " + Path("r.yaml") + ": identified for robot 'wang2022', but " +
+                              asymmetric + " is robot 'asymmetric' with 2 cables: a result of another robot"),
+            std::string::npos)
+      << other.output;
+  std::string old_result = Read("r.yaml");
+  old_result.erase(old_result.find("robot: "), old_result.find('\n', old_result.find("robot: ")) - old_result.find("robot: ") + 1);
+  tmp_.Write("old.yaml", old_result);
+  EXPECT_EQ(RunCablecal("design --prior " + Path("old.yaml") + " --poses 8 --starts 1 --random-sets 0 --out " +
+                        Path("p5.csv")).exit_code, 0);
+  fs::remove(Path("p5.csv"));
   for (const char* bad : {"--geometry-sigma -1", "--geometry-sigma 1e300", "--robust-sigmas 100", "--random-sets -1"}) {
     const RunResult r = RunCablecal(std::string("design --poses 8 ") + bad + " --out " + Path("p3.csv"));
     EXPECT_EQ(r.exit_code, 2) << bad << "\n" << r.output;
@@ -443,6 +494,29 @@ TEST_F(Cli, CountFlagsBeyondTheirCapsAreRefused) {
   const RunResult seed = RunCablecal("sample --poses 5 --seed -1 --out " + Path("p.csv"));
   EXPECT_NE(seed.output.find("--seed: must be a whole number from 0"), std::string::npos) << seed.output;
   EXPECT_TRUE(DirIsEmpty());
+}
+
+// Seeds are unsigned 64-bit: one past the largest is refused by every command that takes one
+// (it used to saturate silently to the largest, another run's seed); the largest is a seed.
+TEST_F(Cli, SeedsBeyondSixtyFourBitsAreRefusedByEveryCommand) {
+  ASSERT_EQ(RunCablecal("sample --poses 6 --out " + Path("plan.csv")).exit_code, 0);
+  const std::string beyond = " --seed 18446744073709551616";
+  for (const std::string& args : std::vector<std::string>{
+           "sample --poses 5 --out " + Path("p.csv") + beyond,
+           "simulate --plan " + Path("plan.csv") + " --out " + Path("m.csv") + beyond,
+           "design --poses 6 --out " + Path("p.csv") + beyond,
+           "montecarlo --poses 6 --trials 5 --out " + Path("mc") + beyond,
+           "reproduce --trials 1 --out " + Path("rep") + beyond}) {
+    const RunResult r = RunCablecal(args);
+    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
+    EXPECT_NE(r.output.find("--seed: must be a whole number from 0 to 18446744073709551615 (got "
+                            "'18446744073709551616')"),
+              std::string::npos)
+        << args << "\n" << r.output;
+  }
+  for (const char* name : {"p.csv", "m.csv", "mc", "rep"}) EXPECT_FALSE(fs::exists(Path(name))) << name;
+  const RunResult largest = RunCablecal("sample --poses 2 --seed 18446744073709551615 --out " + Path("p.csv"));
+  EXPECT_EQ(largest.exit_code, 0) << largest.output;
 }
 
 // A plan must be one of the robot's: poses off its equilibrium, beyond the inclinometer, or
@@ -654,6 +728,32 @@ TEST_F(Cli, AFailedFigureKeepsTheResultsAndExitsFive) {
   EXPECT_FALSE(fs::exists(Path("mc/sigma_vs_n.png")));
   for (const auto& entry : fs::directory_iterator(dir_)) {
     EXPECT_EQ(entry.path().string().find(".tmp."), std::string::npos) << "left behind: " << entry.path();
+  }
+}
+
+// No python3, or one without matplotlib: the message says what is missing and how to install
+// it (not "exit status 127"), the exit code is still 5 and the other outputs are written.
+TEST_F(Cli, AMissingPythonOrMatplotlibIsNamedWithHowToInstallIt) {
+  tmp_.Write("bare-python", "#!/bin/sh\nexec /usr/bin/python3 -S \"$@\"\n");  // -S: no dist-packages
+  fs::permissions(Path("bare-python"), fs::perms::owner_all);
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {Path("no/python3"), "the figure could not be made: cannot run " + Path("no/python3") +
+                               " (No such file or directory): the figures need python3 with matplotlib; "},
+      {Path("bare-python"), "the figure could not be made: " + Path("bare-python") + " has no matplotlib (or numpy); "},
+  };
+  for (const auto& [python, message] : cases) {
+    const RunResult r = RunCablecal("env CABLECAL_PYTHON=" + python + " " + std::string(CABLECAL_BINARY) +
+                                    " workspace --step 0.2 --out " + Path("ws.csv") + " --plot " + Path("ws.png"));
+    EXPECT_EQ(r.exit_code, 5) << r.output;
+    EXPECT_NE(r.output.find("cablecal: error: " + message + "install them with scripts/setup.sh or apt-get install "
+                            "python3-matplotlib, or set CABLECAL_PYTHON to a python3 that has matplotlib; " +
+                            Path("ws.csv") + " was written"),
+              std::string::npos)
+        << r.output;
+    EXPECT_EQ(r.output.find("exit status"), std::string::npos) << r.output;
+    EXPECT_TRUE(fs::exists(Path("ws.csv")));
+    EXPECT_FALSE(fs::exists(Path("ws.png")));
+    fs::remove(Path("ws.csv"));
   }
 }
 
@@ -965,6 +1065,75 @@ TEST_F(Cli, MeasurementsAreReadByColumnName) {
   EXPECT_FALSE(fs::exists(Path("c.yaml")));
 }
 
+// A lab's file whose columns or ids are not what cablecal reads gets the likely cause: a header
+// in another case, a sensor column in other units (then ignored, the sensor taken as missing),
+// a pose id reused after other poses (read as a repeated reading of that pose).
+TEST_F(Cli, MeasurementMessagesNameTheLikelyCause) {
+  ASSERT_EQ(RunCablecal("sample --poses 10 --seed 3 --out " + Path("plan.csv")).exit_code, 0);
+  ASSERT_EQ(RunCablecal("simulate --plan " + Path("plan.csv") + " --seed 4 --out " + Path("meas.csv")).exit_code, 0);
+  std::vector<std::string> rows;  // the data rows, header first
+  {
+    std::ifstream in(Path("meas.csv"));
+    for (std::string line; std::getline(in, line);) {
+      if (!line.empty() && line[0] != '#') rows.push_back(line);
+    }
+  }
+  ASSERT_EQ(rows.size(), 11u);
+  const auto write = [&](const std::string& name, const std::string& header, const std::vector<std::string>& data) {
+    std::ofstream out(Path(name));
+    out << header << "\n";
+    for (const std::string& r : data) out << r << "\n";
+  };
+  const std::vector<std::string> data(rows.begin() + 1, rows.end());
+  const std::string identify = "identify --out " + Path("r.yaml") + " --measurements ";
+
+  write("case.csv", "Pose,DL1,dl2,z,theta", data);
+  const RunResult cased = RunCablecal(identify + Path("case.csv"));
+  EXPECT_EQ(cased.exit_code, 2) << cased.output;
+  EXPECT_NE(cased.output.find(Path("case.csv") + ":1: header: no column 'pose', 'dl1' ("), std::string::npos)
+      << cased.output;
+  EXPECT_NE(cased.output.find("(column names are lower case: did you mean 'pose' for 'Pose', 'dl1' for 'DL1'?)"),
+            std::string::npos)
+      << cased.output;
+
+  // theta in degrees under another name: ignored, and the 2-cable robot cannot do without it.
+  std::vector<std::string> degrees;
+  for (const std::string& r : data) {
+    const std::size_t comma = r.rfind(',');
+    degrees.push_back(r.substr(0, comma + 1) + cablecal::FormatDouble(std::stod(r.substr(comma + 1)) * 180.0 / M_PI));
+  }
+  write("deg.csv", "pose,dl1,dl2,z,theta_deg", degrees);
+  const RunResult deg = RunCablecal(identify + Path("deg.csv"));
+  EXPECT_EQ(deg.exit_code, 2) << deg.output;
+  EXPECT_NE(deg.output.find("cablecal: warning: " + Path("deg.csv") + ": column 'theta_deg' ignored: theta is read "
+                            "from a column 'theta' in rad, and without one the inclinometer is taken as missing\n"),
+            std::string::npos)
+      << deg.output;
+  write("mm.csv", "pose,dl1,dl2,z_mm,theta", data);
+  EXPECT_NE(RunCablecal(identify + Path("mm.csv")).output.find("column 'z_mm' ignored: z is read from a column 'z' in m"),
+            std::string::npos);
+  EXPECT_FALSE(fs::exists(Path("r.yaml")));
+
+  // Pose 1 read again at the end (line 12): a repeated reading, said once; in a row, nothing.
+  std::vector<std::string> again = data;
+  again.push_back(data.front());
+  write("again.csv", rows.front(), again);
+  const RunResult reused = RunCablecal(identify + Path("again.csv"));
+  EXPECT_EQ(reused.exit_code, 0) << reused.output;
+  EXPECT_NE(reused.output.find("cablecal: warning: " + Path("again.csv") + ":12: pose 1 read again after other poses "
+                               "(first at " + Path("again.csv") + ":2): taken as a repeated reading of the same pose; "
+                               "if it is another pose give it its own id\n"),
+            std::string::npos)
+      << reused.output;
+  std::vector<std::string> in_a_row = data;
+  in_a_row.insert(in_a_row.begin() + 1, data.front());
+  write("row.csv", rows.front(), in_a_row);
+  const RunResult repeated = RunCablecal(identify + Path("row.csv"));
+  EXPECT_EQ(repeated.exit_code, 0) << repeated.output;
+  EXPECT_EQ(repeated.output.find("warning"), std::string::npos) << repeated.output;
+  EXPECT_EQ(RunCablecal("-q " + identify + Path("again.csv")).output, "");
+}
+
 // validate: identified on one experiment, validated on another of the same true robot with
 // the nominal robot beside it; the per-pose CSV, the summary YAML, the console and --json
 // agree, and the calibration wins on z by more than 3 times.
@@ -1196,6 +1365,64 @@ TEST_F(Cli, SensorsFitBlockPastesAndIdentifyCorrectsWhatSimulateAdds) {
             std::string::npos)
       << nothing.output;
   EXPECT_FALSE(fs::exists(Path("n.csv")));
+}
+
+// --robot-out: the whole robot file (--robot's, or the built-in one) with the fitted block in
+// place of its own, which loads as a robot file and keeps everything else.
+TEST_F(Cli, SensorsFitWritesTheRobotFileWithTheFittedSensors) {
+  tmp_.Write("laser.csv", LaserBench(0.02, 5, 2));
+  const std::string asymmetric = std::string(CABLECAL_SOURCE_DIR) + "/robots/asymmetric.yaml";
+  for (const std::string& robot : {std::string(), asymmetric}) {
+    const RunResult fit = RunCablecal("sensors fit --laser " + Path("laser.csv") + " --out " + Path("sensors.yaml") +
+                                      " --robot-out " + Path("robot.yaml") + (robot.empty() ? "" : " --robot " + robot));
+    ASSERT_EQ(fit.exit_code, 0) << fit.output;
+    EXPECT_NE(fit.output.find("with the fitted sensors to " + Path("robot.yaml")), std::string::npos) << fit.output;
+    const std::string written = Read("robot.yaml");
+    EXPECT_EQ(written.rfind("# cablecal ", 0), 0u) << written;
+    // Loads as a robot file: a command runs on it.
+    const RunResult use = RunCablecal("sample --poses 2 --robot " + Path("robot.yaml") + " --out " + Path("p.csv"));
+    EXPECT_EQ(use.exit_code, 0) << use.output;
+    const YAML::Node out = YAML::Load(written), block = YAML::LoadFile(Path("sensors.yaml"));
+    const YAML::Node original = YAML::LoadFile(robot.empty() ? std::string(CABLECAL_SOURCE_DIR) + "/robots/wang2022.yaml" : robot);
+    EXPECT_EQ(YAML::Dump(out["sensors"]), YAML::Dump(block["sensors"]));
+    EXPECT_EQ(out["name"].as<std::string>(), original["name"].as<std::string>());
+    // Everything but the sensors is the robot's: the same workspace, cell for cell.
+    const std::string robot_flag = robot.empty() ? "" : " --robot " + robot;
+    ASSERT_EQ(RunCablecal("workspace --step 0.25 --out " + Path("a.csv") + robot_flag).exit_code, 0);
+    ASSERT_EQ(RunCablecal("workspace --step 0.25 --out " + Path("b.csv") + " --robot " + Path("robot.yaml")).exit_code, 0);
+    EXPECT_EQ(DataRows(Read("a.csv")), DataRows(Read("b.csv")));
+    fs::remove(Path("p.csv"));
+  }
+}
+
+// A bench reading 40 sigma from its reference's other readings (a misread) used to be taken in
+// whole, the repeatability inflated 9-18 times: it is refused by its line, nothing written.
+TEST_F(Cli, SensorsFitRefusesAReadingFarFromItsReferencesOthers) {
+  const std::string clean = LaserBench(0.0, 5, 3);
+  tmp_.Write("clean.csv", clean);
+  ASSERT_EQ(RunCablecal("sensors fit --laser " + Path("clean.csv") + " --out " + Path("s.yaml")).exit_code, 0);
+  fs::remove(Path("s.yaml"));
+  std::vector<std::string> lines;
+  std::stringstream in(clean);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  const std::size_t bad = 11;  // file line 12: the 11th reading, of reference 0.4 m
+  const std::size_t comma = lines[bad].find(',');
+  const double reading = std::stod(lines[bad].substr(comma + 1));
+  lines[bad] = lines[bad].substr(0, comma + 1) + cablecal::FormatDouble(reading + 40.0 * 0.0015 / 3.0);
+  std::string text;
+  for (const std::string& line : lines) text += line + "\n";
+  tmp_.Write("bad.csv", text);
+  const RunResult r = RunCablecal("sensors fit --laser " + Path("bad.csv") + " --out " + Path("s.yaml") +
+                                  " --robot-out " + Path("robot.yaml"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_TRUE(std::regex_search(r.output, std::regex("cablecal: error: " + Path("bad.csv") +
+                                                     ":12: column 'reading_m': [0-9.]+ m is ([2-4][0-9])[0-9.]* sigma "
+                                                     "from the other readings of its reference 0\\.4 m .*beyond 4\\.5 sigma: "
+                                                     "a misread or mistyped reading, which would inflate the fitted "
+                                                     "repeatability; check it, or drop that row\n")))
+      << r.output;
+  EXPECT_FALSE(fs::exists(Path("s.yaml")));
+  EXPECT_FALSE(fs::exists(Path("robot.yaml")));
 }
 
 TEST_F(Cli, SensorsFitWarnsWhereTheBenchDoesNotReachTheRobotsRange) {
@@ -1507,6 +1734,29 @@ TEST_F(Cli, IdentifyReportWithHoldoutSummarisesTheValidation) {
     EXPECT_FALSE(fs::exists(Path("r.yaml"))) << args;
     EXPECT_FALSE(fs::exists(Path("new"))) << args;
     EXPECT_EQ(Read("report/report.md"), report) << args;
+  }
+}
+
+// The report's validation is its evidence that the calibration predicts poses it did not see:
+// the training file given again as --holdout (by its path, another spelling of it, a symbolic
+// or a hard link) is refused before any work, naming the reason.
+TEST_F(Cli, IdentifyRefusesTheTrainingFileAsHoldout) {
+  ASSERT_EQ(RunCablecal("sample --poses 8 --seed 8 --out " + Path("plan.csv")).exit_code, 0);
+  ASSERT_EQ(RunCablecal("simulate --plan " + Path("plan.csv") + " --out " + Path("meas.csv")).exit_code, 0);
+  fs::create_directory(Path("sub"));
+  fs::create_symlink(Path("meas.csv"), Path("link.csv"));
+  fs::create_hard_link(Path("meas.csv"), Path("hard.csv"));
+  const std::string identify = "identify --measurements " + Path("meas.csv") + " --out " + Path("r.yaml") +
+                               " --report " + Path("report") + " --holdout ";
+  for (const std::string& holdout : {Path("meas.csv"), Path("sub/../meas.csv"), Path("link.csv"), Path("hard.csv")}) {
+    const RunResult r = RunCablecal(identify + holdout);
+    EXPECT_EQ(r.exit_code, 2) << holdout << "\n" << r.output;
+    EXPECT_NE(r.output.find("cablecal: error: --holdout: '" + holdout + "' is the --measurements file"), std::string::npos)
+        << r.output;
+    EXPECT_NE(r.output.find("held-out readings must not have been used to calibrate"), std::string::npos) << r.output;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;  // one message
+    EXPECT_FALSE(fs::exists(Path("r.yaml")));
+    EXPECT_FALSE(fs::exists(Path("report")));
   }
 }
 

@@ -1,6 +1,7 @@
 // Robot files: the built-in robot, and every rejection with its message.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <regex>
@@ -40,6 +41,21 @@ TEST(RobotFile, BuiltinRobotHasTheDocumentedValues) {
   EXPECT_NEAR(r.theta_max_rad, M_PI / 3, 1e-15);
   EXPECT_NEAR(r.sensors.inclinometer_accuracy_rad, 0.1 * M_PI / 180, 1e-18);
   EXPECT_EQ(r.sensors.encoder_sigma_m, 5e-5);
+}
+
+// The noise bounds' edges load: a range of 0 beside another (a bench fit floors its accuracy at
+// 0), the least sigma (a micrometre), the largest length and angle.
+TEST(RobotFile, SensorNoiseAtItsBoundsLoads) {
+  std::string text = Replace(BuiltinRobotYaml(), "{accuracy: 0.006, repeatability: 0.0015}", "{accuracy: 0, repeatability: 1}");
+  text = Replace(text, "{accuracy_deg: 0.1, repeatability_deg: 0.05}", "{accuracy_deg: 30, repeatability_deg: 0}");
+  text = Replace(text, "encoder: {sigma: 0.00005}", "encoder: {sigma: 1e-6}");
+  text = Replace(text, "tracker: {sigma: 0.0005}", "tracker: {sigma: 1}");
+  const Robot robot = LoadRobotFromString(text, "edges.yaml");
+  EXPECT_EQ(robot.sensors.encoder_sigma_m, 1e-6);
+  EXPECT_EQ(robot.sensors.laser_sigma_m(), 1.0 / 3.0);
+  EXPECT_NEAR(robot.sensors.inclinometer_sigma_rad(), 10.0 * M_PI / 180.0, 1e-15);
+  // And the file written from it reads back the same.
+  EXPECT_EQ(RobotToYaml(LoadRobotFromString(RobotToYaml(robot), "again.yaml")), RobotToYaml(robot));
 }
 
 TEST(RobotFile, FileOnDiskEqualsBuiltin) {
@@ -112,7 +128,32 @@ INSTANTIATE_TEST_SUITE_P(
                 "home_theta_deg: is for robots with 3 or more cables"},
         BadCase{"ShortVector", "com: [0.0, 0.0]", "com: [0.0]", "platform\\.com: must be a list of two numbers"},
         BadCase{"NegativeNoise", "encoder: {sigma: 0.00005}", "encoder: {sigma: -0.00005}",
-                "sensors\\.encoder\\.sigma: must be >= 0"},
+                "sensors\\.encoder\\.sigma: must be from 1e-06 to 1 m, one standard deviation \\(got -5e-05\\)"},
+        // Every reading is weighed by 1/sigma: a noiseless sensor failed inside the solvers.
+        BadCase{"ZeroEncoderSigma", "encoder: {sigma: 0.00005}", "encoder: {sigma: 0}",
+                "sensors\\.encoder\\.sigma: must be from 1e-06 to 1 m, one standard deviation \\(got 0\\): every "
+                "reading is weighed by 1/sigma"},
+        BadCase{"TinyEncoderSigma", "encoder: {sigma: 0.00005}", "encoder: {sigma: 1e-300}",
+                "sensors\\.encoder\\.sigma: must be from 1e-06 to 1 m, one standard deviation \\(got 1e-300\\)"},
+        BadCase{"EncoderSigmaBelowAMicrometre", "encoder: {sigma: 0.00005}", "encoder: {sigma: 1e-7}",
+                "sensors\\.encoder\\.sigma: must be from 1e-06 to 1 m, one standard deviation \\(got 1e-07\\)"},
+        BadCase{"EncoderSigmaInMillimetres", "encoder: {sigma: 0.00005}", "encoder: {sigma: 50}",
+                "sensors\\.encoder\\.sigma: must be from 1e-06 to 1 m.*\\(got 50\\): units\\?"},
+        BadCase{"ZeroTrackerSigma", "tracker: {sigma: 0.0005}", "tracker: {sigma: 0}",
+                "sensors\\.tracker\\.sigma: must be from 1e-06 to 1 m"},
+        BadCase{"NoiselessLaser", "{accuracy: 0.006, repeatability: 0.0015}", "{accuracy: 0, repeatability: 1e-300}",
+                "sensors\\.laser: accuracy and repeatability give a sigma of 3\\.33333e-301 m \\(hypot\\(accuracy, "
+                "repeatability\\) / 3\\), below 1e-06 m"},
+        BadCase{"LaserRangeInMillimetres", "{accuracy: 0.006, repeatability: 0.0015}", "{accuracy: 6, repeatability: 0.0015}",
+                "sensors\\.laser\\.accuracy: must be from 0 to 1 m, a \\+- range taken as 3 sigma \\(got 6\\): units\\?"},
+        BadCase{"NegativeLaserRange", "{accuracy: 0.006, repeatability: 0.0015}", "{accuracy: 0.006, repeatability: -1}",
+                "sensors\\.laser\\.repeatability: must be from 0 to 1 m"},
+        BadCase{"NoiselessInclinometer", "{accuracy_deg: 0.1, repeatability_deg: 0.05}",
+                "{accuracy_deg: 0, repeatability_deg: 0}",
+                "sensors\\.inclinometer: accuracy and repeatability give a sigma of 0 rad"},
+        BadCase{"InclinometerRangeBeyondThirtyDegrees", "{accuracy_deg: 0.1, repeatability_deg: 0.05}",
+                "{accuracy_deg: 45, repeatability_deg: 0.05}",
+                "sensors\\.inclinometer\\.accuracy_deg: must be from 0 to 30 degrees"},
         BadCase{"ExitOutsideTheFrame", "exit: [5.209, 2.8]", "exit: [7.0, 2.8]",
                 "cables\\[1\\]\\.exit: \\(7, 2\\.8\\) m is outside the frame"},
         BadCase{"ExitAboveTheFrame", "exit: [0.0, 2.8]", "exit: [0.0, 3.5]",

@@ -243,6 +243,22 @@ def test_a_labs_log_is_read_by_column_name(tmp_path):
         cablecal.Measurements.load(robot, log)
 
 
+def test_a_labs_log_gets_the_likely_cause_of_its_mistakes(tmp_path):
+    robot = cablecal.Robot.load(robot_file("asymmetric"))
+    m = cablecal.simulate(robot, cablecal.sample(robot, 9, seed=1), seed=2).measurements
+    header, *rows = [l for l in m.to_csv().splitlines() if l]
+    log = tmp_path / "log.csv"
+    log.write_text("\n".join([header.replace("pose", "Pose")] + rows) + "\n")
+    with pytest.raises(cablecal.InputError, match="did you mean 'pose' for 'Pose'"):
+        cablecal.Measurements.load(robot, log)
+    log.write_text("\n".join([header.replace("theta", "theta_deg")] + rows) + "\n")
+    with pytest.warns(UserWarning, match="column 'theta_deg' ignored: theta is read from a column 'theta' in rad"):
+        cablecal.Measurements.load(robot, log)
+    log.write_text("\n".join([header] + rows + [rows[0]]) + "\n")
+    with pytest.warns(UserWarning, match=r"log.csv:11: pose 1 read again after other poses \(first at .*log.csv:2\)"):
+        assert len(cablecal.Measurements.load(robot, log)) == 10
+
+
 def test_validate_equals_cli_and_the_calibration_wins(tmp_path):
     """Identified on one experiment, validated on another of the same true robot: the module's
     CSV and summary are the CLI's, and the calibrated robot predicts z better than the nominal."""
@@ -452,7 +468,8 @@ def test_report_refuses_a_file_and_keeps_the_data_without_figures(tmp_path, monk
         cablecal.report(robot, result, tmp_path / "file")
     with pytest.raises(cablecal.InputError, match="does not exist"):
         cablecal.report(robot, result, tmp_path / "nowhere" / "report")
-    with pytest.raises(cablecal.InputError, match="3 cables, the nominal robot has 2|2 cables, the nominal robot has 3"):
+    with pytest.raises(cablecal.InputError, match="robot 'asymmetric' with 2 cables, but .* is robot "
+                                                  "'planar3_suspended' with 3 cables: a result of another robot"):
         cablecal.report(cablecal.Robot.load(robot_file("planar3_suspended")), result, tmp_path / "other")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["file"]
     # No plotting script: the report and its data are written, then FigureError.
@@ -644,6 +661,22 @@ def test_hostile_input_raises_input_error(call):
         call(robot)
 
 
+@pytest.mark.parametrize("seed", [2**64, -1, 2**70])
+def test_seeds_beyond_sixty_four_bits_are_refused_by_every_call(seed):
+    robot = cablecal.Robot.load(robot_file("asymmetric"))
+    plan = cablecal.sample(robot, 6, seed=1)
+    for call in [
+        lambda: cablecal.sample(robot, 3, seed=seed),
+        lambda: cablecal.simulate(robot, plan, seed=seed),
+        lambda: cablecal.design(robot, 6, starts=1, random_sets=0, seed=seed),
+        lambda: cablecal.montecarlo(robot, 6, 2, designs="random", seed=seed),
+    ]:
+        with pytest.raises(cablecal.InputError, match=r"seed: must be a whole number from 0 to "
+                                                      r"18446744073709551615 \(got " + str(seed) + r"\)"):
+            call()
+    assert len(cablecal.sample(robot, 2, seed=2**64 - 1)) == 2  # the largest is a seed
+
+
 def test_objects_of_the_wrong_kind_and_other_robots_raise_input_error(tmp_path):
     r2 = cablecal.Robot.load(robot_file("asymmetric"))
     r3 = cablecal.Robot.load(robot_file("planar3_suspended"))
@@ -662,6 +695,25 @@ def test_objects_of_the_wrong_kind_and_other_robots_raise_input_error(tmp_path):
     result3 = cablecal.identify(r3, cablecal.simulate(r3, plan3, seed=2).measurements)
     with pytest.raises(cablecal.InputError, match="cables"):
         cablecal.calibrated_robot(r2, result3)
+
+
+def test_a_result_is_refused_beside_another_robot_of_the_same_cable_count(tmp_path):
+    # The asymmetric robot's result beside the built-in robot (2 cables each) would report the
+    # difference between the two robots as the calibration's changes.
+    asymmetric = cablecal.Robot.load(robot_file("asymmetric"))
+    result = cablecal.identify(asymmetric, cablecal.simulate(asymmetric, cablecal.sample(asymmetric, 8, seed=5),
+                                                             seed=1).measurements)
+    assert "robot: {name: \"asymmetric\", cables: 2}" in result.to_yaml()
+    assert result.held == ["a1x"] and result.std[0] == 0.0
+    other = cablecal.Robot.builtin()
+    message = "result: identified for robot 'asymmetric', but <built-in wang2022> is robot 'wang2022' with 2 cables"
+    with pytest.raises(ValueError, match=message):
+        cablecal.calibrated_robot(other, result)
+    with pytest.raises(ValueError, match=message):
+        cablecal.report(other, result, tmp_path / "report")
+    assert not (tmp_path / "report").exists()
+    # A robot of the same name (the calibrated file, a copy) is the same robot.
+    assert cablecal.calibrated_robot(cablecal.Robot.from_dict(asymmetric.to_dict()), result).name == "asymmetric"
 
 
 def test_paths_numpy_integers_and_dict_messages():

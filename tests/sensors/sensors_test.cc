@@ -161,6 +161,45 @@ TEST(BenchFit, BenchesThatCannotDetermineTheModelAreRefused) {
   EXPECT_EQ(FitError(BenchSensor::kLaser, {{1.0, 1.0, ""}, {1.0, 1.001, ""}, {2.0, 2.0, ""}}), "");
 }
 
+std::string RepeatError(BenchSensor sensor, const std::vector<BenchReading>& readings) {
+  try {
+    CheckReadingsAgainstTheirReference(sensor, readings);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// One reading 40 sigma of the repeatability from its reference's other readings: least squares
+// takes it in whole and the fitted repeatability grows several times, so the check refuses it
+// by its place and column; clean benches of the paper's size pass, and so does a bench too small
+// to judge (fewer than kBenchOutlierMinDegrees degrees of freedom).
+TEST(BenchFit, AReadingFarFromItsReferencesOthersIsRefused) {
+  for (const BenchSensor sensor : {BenchSensor::kLaser, BenchSensor::kInclinometer}) {
+    const bool laser = sensor == BenchSensor::kLaser;
+    const BenchTruth truth = laser ? PaperLaser() : PaperInclinometer();
+    const std::vector<double> references = laser ? DistanceReferences() : AngleReferences();
+    for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+      EXPECT_EQ(RepeatError(sensor, MakeBench(sensor, truth, references, 4, seed)), "") << seed;
+    }
+    std::vector<BenchReading> bench = MakeBench(sensor, truth, references, 4, 7);
+    for (std::size_t k = 0; k < bench.size(); ++k) bench[k].where = "bench.csv:" + std::to_string(k + 2);
+    const double clean = laser ? FitLaser(bench, "b").repeatability_m : FitInclinometer(bench, "b").repeatability_rad;
+    bench[9].reading += 40.0 * truth.repeatability / 3.0;
+    const double inflated = laser ? FitLaser(bench, "b").repeatability_m : FitInclinometer(bench, "b").repeatability_rad;
+    EXPECT_GT(inflated / clean, 3.0);  // what the check prevents
+    const std::string message = RepeatError(sensor, bench);
+    const std::string column = laser ? "reading_m" : "reading_rad";
+    EXPECT_TRUE(std::regex_search(message, std::regex("^bench\\.csv:11: column '" + column +
+                                                      "': \\S+ (m|rad) is ([2-4][0-9])[0-9.]* sigma from the other "
+                                                      "readings of its reference .* check it, or drop that row$")))
+        << message;
+    // Too few repeats to judge a reading by the others: not refused.
+    const std::vector<BenchReading> small(bench.begin(), bench.begin() + 8);
+    EXPECT_EQ(RepeatError(sensor, small), "");
+  }
+}
+
 std::string ReadError(BenchSensor sensor, const std::string& csv) {
   std::istringstream in(csv);
   try {
