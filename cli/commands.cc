@@ -346,6 +346,7 @@ int RunSimulate(const Context& ctx, const SimulateOptions& options) {
   // plan's pose (the Monte Carlo counts such a trial as failed).
   SimulationOptions sim{ParseNoisySensors(options.sensors), !options.no_encoder_noise, true};
   sim.systematic_errors = options.systematic_errors;
+  sim.skip_infeasible = options.skip_infeasible;
   if (sim.systematic_errors && !nominal.sensors.systematic.any()) {
     throw InputError("--systematic-errors", "",
                      "the robot " + PrintableText(nominal.name) + " (" + (options.robot_path.empty() ? "built in" : options.robot_path) +
@@ -372,8 +373,18 @@ int RunSimulate(const Context& ctx, const SimulateOptions& options) {
                                             experiment.true_poses));
   }
   output.Commit();
-  std::printf("simulated %zu poses (noisy sensors: %s, encoder noise %s%s) to %s\n", plan.size(),
-              ToString(sim.noisy), sim.encoder_noise ? "on" : "off",
+  if (!ctx.quiet) {
+    for (const SkippedPose& skipped : experiment.skipped) {
+      std::fprintf(stderr, "cablecal: skipped pose %d of %s: %s\n", skipped.pose_id, options.plan_path.c_str(),
+                   skipped.reason.c_str());
+    }
+  }
+  const std::string skipped =
+      options.skip_infeasible ? ", " + std::to_string(experiment.skipped.size()) + " of " + std::to_string(plan.size()) +
+                                    " skipped (the true robot cannot hold them)"
+                              : "";
+  std::printf("simulated %zu poses%s (noisy sensors: %s, encoder noise %s%s) to %s\n",
+              experiment.measurements.size(), skipped.c_str(), ToString(sim.noisy), sim.encoder_noise ? "on" : "off",
               sim.systematic_errors ? ", systematic sensor errors added" : "", options.out_path.c_str());
   return kExitOk;
 }
@@ -416,7 +427,9 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   IdentifyResult result = Identify(nominal, measurements, id);
   if (nominal.sensors.systematic.any()) result.corrected_for = nominal.sensors.systematic;
   RequireUsableResult(result, options.measurements_path);
-  const std::string result_yaml = IdentifyResultYaml(result, ctx.command_line);
+  // Not made for --json alone: 100,000 poses' tables cost a second (issue 24).
+  const std::string result_yaml =
+      options.out_path.empty() && !report ? std::string() : IdentifyResultYaml(result, ctx.command_line);
   const ReportSources sources{ctx.command_line, options.measurements_path, options.holdout_path};
   std::optional<ValidationResult> validation;
   if (!holdout.empty()) validation = ValidateCalibration(nominal, result, holdout, sources);
@@ -447,7 +460,7 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   // Said after the summary below: the results were written, the figures were not.
   if (!figure_error.empty()) figure_error = ReportWithoutFiguresMessage(options.report_dir, figure_error);
   if (options.json) {
-    std::printf("%s\n", ToJson(YAML::Load(result_yaml)).c_str());
+    std::printf("%s\n", IdentifyResultJson(result, ctx.command_line).c_str());
     if (!figure_error.empty()) throw FigureFailure(figure_error);
     return kExitOk;
   }
@@ -521,7 +534,8 @@ int RunValidate(const Context& ctx, const ValidateCommandOptions& options) {
   if (!options.nominal_path.empty()) nominal = LoadRobotFile(options.nominal_path);
   const std::vector<Measurement> measurements =
       ReadMeasurementsOption(ctx, calibrated, options.measurements_path, options.delimiter);
-  ValidationResult result = Validate(calibrated, nominal, measurements, options.measurements_path);
+  ValidationResult result =
+      Validate(calibrated, nominal, measurements, options.measurements_path, options.skip_infeasible);
   if (calibrated.sensors.systematic.any()) result.corrected_for = calibrated.sensors.systematic;
   const std::string summary_yaml = ValidationSummaryYaml(result, ctx.command_line);
   AtomicOutput output;
@@ -530,18 +544,26 @@ int RunValidate(const Context& ctx, const ValidateCommandOptions& options) {
   }
   if (!options.summary_path.empty()) output.WriteText(options.summary_path, summary_yaml);
   output.Commit();
+  if (!ctx.quiet) {
+    for (const SkippedReading& k : result.skipped) {
+      std::fprintf(stderr, "cablecal: skipped pose %d (%s): %s\n", k.pose_id, PrintableText(k.where).c_str(),
+                   PrintableText(k.reason).c_str());
+    }
+    if (options.skip_infeasible) {
+      std::fprintf(stderr, "cablecal: skipped %zu of %zu readings that a robot cannot hold (--skip-infeasible)\n",
+                   result.skipped.size(), measurements.size());
+    }
+  }
   if (options.json) {
-    YAML::Node doc = YAML::Load(summary_yaml);
-    doc["rows"] = YAML::Load(ValidationRowsYaml(result));
-    std::printf("%s\n", ToJson(doc).c_str());
+    std::printf("%s\n", MergeJsonObjects({ToJson(YAML::Load(summary_yaml)), ValidationRowsJson(result)}).c_str());
     return kExitOk;
   }
   // Millimetres and milliradians, 3 significant digits: what a reader compares; the files keep
   // every digit.
-  const std::string readings = result.num_poses == static_cast<int>(measurements.size())
-                                   ? std::to_string(measurements.size()) + " poses"
-                                   : std::to_string(measurements.size()) + " readings (" +
-                                         std::to_string(result.num_poses) + " poses)";
+  const std::size_t kept = result.pose_ids.size();
+  const std::string readings = result.num_poses == static_cast<int>(kept)
+                                   ? std::to_string(kept) + " poses"
+                                   : std::to_string(kept) + " readings (" + std::to_string(result.num_poses) + " poses)";
   std::string noise;
   if (result.has_laser) noise += "laser " + Rounded(1e3 * result.laser_sigma_m) + " mm";
   if (result.has_inclinometer) {
@@ -550,6 +572,10 @@ int RunValidate(const Context& ctx, const ValidateCommandOptions& options) {
   }
   std::printf("validated on %s of %s (error = predicted - measured; sensor noise: %s)\n", readings.c_str(),
               PrintableText(options.measurements_path).c_str(), noise.c_str());
+  if (options.skip_infeasible) {
+    std::printf("  skipped %zu of %zu readings that a robot cannot hold (listed on stderr and in the summary)\n",
+                result.skipped.size(), measurements.size());
+  }
   for (const RobotPrediction& p : result.robots) {
     std::string line;
     if (p.z_m) line += "z rms " + Rounded(1e3 * p.z_m->rms) + " mm (max " + Rounded(1e3 * p.z_m->max_abs) + " mm)";

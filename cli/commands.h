@@ -50,6 +50,7 @@ struct SimulateOptions {
   std::string sensors = "both";
   bool no_encoder_noise = false;
   bool systematic_errors = false;  // add the robot file's systematic sensor errors
+  bool skip_infeasible = false;    // skip the poses the true robot cannot hold (listed on stderr)
 };
 int RunSimulate(const Context& ctx, const SimulateOptions& options);
 
@@ -70,6 +71,7 @@ struct ValidateCommandOptions {
   std::string robot_path, nominal_path, measurements_path, out_path, summary_path;
   std::string delimiter = ",";  // of the measurement CSV
   bool json = false;  // the summary and the per-pose rows on stdout as JSON (then --out is optional)
+  bool skip_infeasible = false;  // skip the readings a robot cannot hold (listed on stderr and in the summary)
 };
 int RunValidate(const Context& ctx, const ValidateCommandOptions& options);
 

@@ -121,6 +121,9 @@ int main(int argc, char** argv) {
   sim_cmd->add_flag("--no-encoder-noise", sim.no_encoder_noise, "encoders read the commanded changes exactly");
   sim_cmd->add_flag("--systematic-errors", sim.systematic_errors,
                     "also add the robot file's systematic laser and inclinometer errors (sensors fit)");
+  sim_cmd->add_flag("--skip-infeasible", sim.skip_infeasible,
+                    "skip the plan's poses the true robot cannot hold or holds outside its workspace (each named on "
+                    "stderr) instead of stopping at the first; an error still if it can hold none");
   sim_cmd->add_option("--out", sim.out_path, "measurement CSV (pose,dl1..dlm,z,theta)")->required();
   sim_cmd->add_option("--truth-out", sim.truth_out_path, "true robot and true poses (YAML)");
 
@@ -173,6 +176,9 @@ int main(int argc, char** argv) {
   val_cmd->add_option("--out", val.out_path, "CSV, one row per reading: measured and predicted z, theta and their errors (required unless --json)");
   val_cmd->add_option("--summary", val.summary_path, "summary YAML: RMS and largest errors per robot");
   val_cmd->add_flag("--json", val.json, "print the summary and the per-pose rows as JSON on stdout");
+  val_cmd->add_flag("--skip-infeasible", val.skip_infeasible,
+                    "skip the readings a robot cannot hold (each named on stderr and in the summary) instead of "
+                    "stopping at the first; an error still if every reading is skipped");
 
   cablecal::cli::SensorsFitOptions sfit;
   CLI::App* sensors_cmd = app.add_subcommand("sensors", "the laser's and inclinometer's error models");

@@ -82,6 +82,18 @@ void Emit(const YAML::Node& node, std::string* out) {
 
 }  // namespace
 
+std::string MergeJsonObjects(const std::vector<std::string>& parts) {
+  std::string out = "{";
+  for (const std::string& part : parts) {
+    CABLECAL_CHECK(!part.empty(), "an empty part of a JSON object");
+    const std::string members = part.front() == '{' ? part.substr(1, part.size() - 2) : part;
+    if (members.empty()) continue;
+    if (out.size() > 1) out += ", ";
+    out += members;
+  }
+  return out + "}";
+}
+
 std::string ToJson(const YAML::Node& node) {
   std::string out;
   Emit(node, &out);

@@ -7,9 +7,16 @@
 #include <yaml-cpp/yaml.h>
 
 #include <string>
+#include <vector>
 
 namespace cablecal {
 
 std::string ToJson(const YAML::Node& node);  // one line, ends without a newline
+
+// One JSON object from parts, in order: each part either a whole object ("{...}", as ToJson
+// writes a map; its members are taken) or a bare member ("\"key\": value", as FlowRows::Finish
+// writes a table). A document with a long table is written this way instead of parsing its
+// YAML back (issue 24).
+std::string MergeJsonObjects(const std::vector<std::string>& parts);
 
 }  // namespace cablecal

@@ -88,11 +88,23 @@ struct SimulationOptions {
   // Also add the nominal robot file's systematic sensor errors (model/sensor_model.h) to the
   // laser and inclinometer readings, whatever `noisy` says (simulate --systematic-errors).
   bool systematic_errors = false;
+  // Skip a pose the true robot cannot hold (or, with require_feasible, holds outside its
+  // workspace) instead of failing: it is listed in SimulatedExperiment::skipped and has no
+  // reading (simulate --skip-infeasible). Its noise is drawn all the same, so the other poses
+  // read what they would have read had it been holdable.
+  bool skip_infeasible = false;
+};
+
+// A plan's pose that was skipped (SimulationOptions::skip_infeasible), with why.
+struct SkippedPose {
+  int pose_id = 0;
+  std::string reason;
 };
 
 struct SimulatedExperiment {
   std::vector<Measurement> measurements;
   std::vector<Eigen::Vector3d> true_poses;  // (x, z, theta) where the platform settled
+  std::vector<SkippedPose> skipped;         // with skip_infeasible: the poses left out, in plan order
 };
 
 // Why a robot cannot hold the lengths SolveForwardGeometricoStatic was given: the status and
@@ -101,7 +113,8 @@ std::string CannotHoldReason(ForwardStatus status, const std::string& expected_p
 
 // Throws SolverFailure naming the pose if the true robot cannot hold a commanded pose
 // (forward model not converged, slack cable, unstable, or the lengths met only by another
-// assembly of the robot, far from the commanded pose).
+// assembly of the robot, far from the commanded pose), unless options.skip_infeasible, which
+// skips such poses (and fails only when it would skip every pose).
 SimulatedExperiment SimulateExperiment(const Robot& nominal, const Robot& truth,
                                        const std::vector<PlanPose>& plan, const SimulationOptions& options,
                                        Rng& rng);
@@ -111,7 +124,8 @@ SimulatedExperiment SimulateExperiment(const Robot& nominal, const Robot& truth,
 // geometry_sigma_m (0: the nominal robot itself). The geometry draws come from stream 0 of
 // `seed` and the sensor noise from stream 1, so a seed gives the same true robot whatever the
 // sensors' settings. A plan the true robot cannot run (SimulateExperiment's SolverFailure) is
-// an InputError naming `plan_source` and the pose: the plan does not suit that robot.
+// an InputError naming `plan_source` and the pose: the plan does not suit that robot; with
+// skip_infeasible, only a plan whose every pose is skipped is.
 struct PlanSimulation {
   Robot truth;
   SimulatedExperiment experiment;

@@ -228,5 +228,8 @@ bool IsHeld(const IdentifyResult& result, int k);
 
 // result.yaml (README, "identify").
 std::string IdentifyResultYaml(const IdentifyResult& result, const std::string& command_line);
+// The same content as one line of JSON (identify --json; common/json.h's conventions), the
+// per-pose and per-reading tables written directly rather than parsed back from the YAML.
+std::string IdentifyResultJson(const IdentifyResult& result, const std::string& command_line);
 
 }  // namespace cablecal

@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "common/format.h"
+#include "common/json.h"
 #include "common/yaml_writer.h"
 #include "common/version.h"
 #include "identify/identify.h"
@@ -32,7 +33,15 @@ void EmitSensorCorrection(YAML::Emitter& o, const SystematicSensorErrors& e, con
 
 bool IsHeld(const IdentifyResult& r, int k) { return k == 0 && r.gauge == Gauge::kA1x; }
 
-std::string IdentifyResultYaml(const IdentifyResult& r, const std::string& command_line) {
+namespace {
+
+// result.yaml in its parts: the head (a map from the provenance to the correlations), the two
+// tables, and the tail (identifiability); YAML text, or with `json` the tables as JSON members.
+struct ResultParts {
+  std::string head, poses, readings, tail;
+};
+
+ResultParts IdentifyResultParts(const IdentifyResult& r, const std::string& command_line, bool json) {
   YAML::Emitter o;
   o << YAML::Comment("cablecal identification result (README, \"identify\"). SI units: m, rad.") << BeginMap;
   o << Key << "cablecal" << Value << Flow << BeginMap << Key << "version" << Value << YamlString{Version()} << Key
@@ -126,55 +135,74 @@ std::string IdentifyResultYaml(const IdentifyResult& r, const std::string& comma
     }
     o << EndSeq;
   }
-  o << Key << "poses" << Value << BeginSeq;
+  o << EndMap;
+  // The per-pose and per-reading tables (up to 100,000 rows each) by a writer of their own: the
+  // same text as the emitter's, without its per-node cost (issue 24).
+  const FlowRows::Syntax syntax = json ? FlowRows::Syntax::kJson : FlowRows::Syntax::kYaml;
   const bool ml = r.estimator == Estimator::kMaximumLikelihood;
+  FlowRows poses(syntax);
+  const auto number = [](FlowRows& rows, const char* key, double value) {
+    rows.Key(key);
+    rows.Number(value);
+  };
   for (const PoseEstimate& p : r.poses) {
-    o << Flow << BeginMap << Key << "pose" << Value << p.pose_id << Key << "x" << Value << YamlNumber{p.q(0)};
-    if (r.has_covariance) o << Key << "x_std" << Value << YamlNumber{p.std_dev(0)};
-    o << Key << "z" << Value << YamlNumber{p.q(1)};
-    if (r.has_covariance && ml) o << Key << "z_std" << Value << YamlNumber{p.std_dev(1)};
-    o << Key << "theta" << Value << YamlNumber{p.q(2)};
-    if (r.has_covariance && ml) o << Key << "theta_std" << Value << YamlNumber{p.std_dev(2)};
-    o << EndMap;
+    poses.BeginRow();
+    poses.Key("pose");
+    poses.Int(p.pose_id);
+    number(poses, "x", p.q(0));
+    if (r.has_covariance) number(poses, "x_std", p.std_dev(0));
+    number(poses, "z", p.q(1));
+    if (r.has_covariance && ml) number(poses, "z_std", p.std_dev(1));
+    number(poses, "theta", p.q(2));
+    if (r.has_covariance && ml) number(poses, "theta_std", p.std_dev(2));
+    poses.EndRow();
   }
-  o << EndSeq;
+  ResultParts parts{YamlText(o), poses.Finish("poses"), "", ""};
   if (!r.readings.empty()) {
-    o << Key << "readings" << Value
-      << YAML::Comment(std::string("per reading (data row), each sensor's residual (model - reading) over its sigma") +
-                       (r.estimator == Estimator::kPaper ? " (paper: length residuals over the laser's sigma)" : "") +
-                       (r.loss.kind != LossKind::kNone ? "; weights: the loss's, 1 = full" : ""))
-      << BeginSeq;
+    FlowRows readings(syntax);
     const bool robust = r.loss.kind != LossKind::kNone;
+    const auto list = [&](const char* key, const Eigen::VectorXd& values) {
+      readings.Key(key);
+      readings.BeginList();
+      for (int i = 0; i < values.size(); ++i) readings.Number(values(i));
+      readings.EndList();
+    };
     for (std::size_t k = 0; k < r.readings.size(); ++k) {
       const ReadingFit& f = r.readings[k];
-      o << Flow << BeginMap << Key << "reading" << Value << k + 1 << Key << "pose" << Value << f.pose_id;
-      o << Key << "encoder_sigmas" << Value << Flow << BeginSeq;
-      for (int i = 0; i < f.encoder_sigmas.size(); ++i) o << YamlNumber{f.encoder_sigmas(i)};
-      o << EndSeq;
-      if (f.laser_sigmas) o << Key << "laser_sigmas" << Value << YamlNumber{*f.laser_sigmas};
-      if (f.inclinometer_sigmas) o << Key << "inclinometer_sigmas" << Value << YamlNumber{*f.inclinometer_sigmas};
+      readings.BeginRow();
+      readings.Key("reading");
+      readings.Int(static_cast<long long>(k + 1));
+      readings.Key("pose");
+      readings.Int(f.pose_id);
+      list("encoder_sigmas", f.encoder_sigmas);
+      if (f.laser_sigmas) number(readings, "laser_sigmas", *f.laser_sigmas);
+      if (f.inclinometer_sigmas) number(readings, "inclinometer_sigmas", *f.inclinometer_sigmas);
       if (robust) {
-        o << Key << "encoder_weights" << Value << Flow << BeginSeq;
-        for (int i = 0; i < f.encoder_weights.size(); ++i) o << YamlNumber{f.encoder_weights(i)};
-        o << EndSeq;
-        if (f.laser_sigmas) o << Key << "laser_weight" << Value << YamlNumber{f.laser_weight};
-        if (f.inclinometer_sigmas) o << Key << "inclinometer_weight" << Value << YamlNumber{f.inclinometer_weight};
+        list("encoder_weights", f.encoder_weights);
+        if (f.laser_sigmas) number(readings, "laser_weight", f.laser_weight);
+        if (f.inclinometer_sigmas) number(readings, "inclinometer_weight", f.inclinometer_weight);
       }
       if (f.min_detectable_sigmas.size() > 0) {
         // Encoders, then the laser and inclinometer the data have (a missing sensor's row is 0).
-        o << Key << "detectable_sigmas" << Value << Flow << BeginSeq;
+        readings.Key("detectable_sigmas");
+        readings.BeginList();
         for (int i = 0; i < f.min_detectable_sigmas.size(); ++i) {
-          if (f.HasValue(i)) o << YamlNumber{f.min_detectable_sigmas(i)};
+          if (f.HasValue(i)) readings.Number(f.min_detectable_sigmas(i));
         }
-        o << EndSeq;
+        readings.EndList();
       }
-      o << EndMap;
+      readings.EndRow();
     }
-    o << EndSeq;
+    parts.readings = readings.Finish(
+        "readings", std::string("per reading (data row), each sensor's residual (model - reading) over its sigma") +
+                        (r.estimator == Estimator::kPaper ? " (paper: length residuals over the laser's sigma)" : "") +
+                        (robust ? "; weights: the loss's, 1 = full" : ""));
   }
   const Identifiability& id = r.identifiability;
   if (!id.names.empty()) {
-    o << Key << "identifiability" << Value
+    YAML::Emitter t;  // the rest of the document's map
+    YAML::Emitter& o = t;
+    o << BeginMap << Key << "identifiability" << Value
       << YAML::Comment(std::string("the ") + (ml ? "whitened " : "") +
                        "Jacobian at the solution, every pose's own unknowns eliminated (README, \"identify\")")
       << BeginMap;
@@ -198,10 +226,25 @@ std::string IdentifyResultYaml(const IdentifyResult& r, const std::string& comma
                       ": every pose's unmeasured coordinates come from the encoders alone; the singular values "
                       "above say what the data still determine"};
     }
-    o << EndMap;
+    o << EndMap << EndMap;
+    parts.tail = YamlText(t);
   }
-  o << EndMap;
-  return YamlText(o);
+  return parts;
+}
+
+}  // namespace
+
+std::string IdentifyResultYaml(const IdentifyResult& r, const std::string& command_line) {
+  const ResultParts parts = IdentifyResultParts(r, command_line, false);
+  return parts.head + parts.poses + parts.readings + parts.tail;
+}
+
+std::string IdentifyResultJson(const IdentifyResult& r, const std::string& command_line) {
+  const ResultParts parts = IdentifyResultParts(r, command_line, true);
+  std::vector<std::string> objects = {ToJson(YAML::Load(parts.head)), parts.poses};
+  if (!parts.readings.empty()) objects.push_back(parts.readings);
+  if (!parts.tail.empty()) objects.push_back(ToJson(YAML::Load(parts.tail)));
+  return MergeJsonObjects(objects);
 }
 
 }  // namespace cablecal

@@ -1,6 +1,7 @@
 #include "identify/validate.h"
 
 #include <cmath>
+#include <algorithm>
 #include <cstdio>
 #include <limits>
 #include <set>
@@ -35,17 +36,18 @@ std::string RobotLabel(const std::string& role, const Robot& robot) { return "th
 // so Newton lands on the equilibrium the lab's platform was in, not on another one a cold
 // start from home could reach; and a solution far from the readings means they are not this
 // robot's.
-Eigen::Vector3d PredictPose(const Robot& robot, const std::string& role, const GeometryVector& geometry,
-                            const Measurement& m, const std::string& source) {
+// Returns false with `why` (the message after the reading's place) when it cannot.
+bool PredictPose(const Robot& robot, const std::string& role, const GeometryVector& geometry, const Measurement& m,
+                 Eigen::Vector3d* q_out, std::string* why) {
   const int cables = robot.num_cables();
   const Eigen::Vector3d start = StartingPose(robot, geometry, m);
   const Eigen::VectorXd lengths = geometry.tail(cables) + m.dl_m;  // l_i0 + dl_i
   const ForwardResult fwd = SolveForwardGeometricoStatic(robot, lengths, &start);
-  const std::string where = Where(m, source);
   const std::string hint = ": readings of another robot, or a pose outside its workspace?";
   if (fwd.status != ForwardStatus::kConverged) {
-    throw InputError(where, "", RobotLabel(role, robot) + " cannot hold these lengths, its initial lengths + dl (" +
-                                    CannotHoldReason(fwd.status, "where the sensors saw the platform") + ")" + hint);
+    *why = RobotLabel(role, robot) + " cannot hold these lengths, its initial lengths + dl (" +
+           CannotHoldReason(fwd.status, "where the sensors saw the platform") + ")" + hint;
+    return false;
   }
   // With 2 cables the forward model falls back on cold starts and keeps any stable
   // equilibrium: the bounds 3 or more cables get (kOtherAssembly) keep it honest. Only what
@@ -59,9 +61,11 @@ Eigen::Vector3d PredictPose(const Robot& robot, const std::string& role, const G
     if (m.has_inclinometer) {
       off += std::string(m.has_laser ? " and " : " ") + Millimetres(std::abs(dtheta_rad)) + " rad from the inclinometer's theta";
     }
-    throw InputError(where, "", RobotLabel(role, robot) + " holds these lengths only at " + off + hint);
+    *why = RobotLabel(role, robot) + " holds these lengths only at " + off + hint;
+    return false;
   }
-  return q;
+  *q_out = q;
+  return true;
 }
 
 ErrorSummary Stats(const std::vector<double>& errors) {
@@ -75,18 +79,19 @@ ErrorSummary Stats(const std::vector<double>& errors) {
   return s;
 }
 
+// One robot's predictions of the readings `keep` says to keep.
 RobotPrediction Predict(const Robot& robot, const std::string& role, const std::vector<Measurement>& measurements,
-                        const std::string& source) {
+                        const std::vector<Eigen::Vector3d>& q, const std::vector<bool>& keep) {
   RobotPrediction p;
   p.name = role;
   p.robot = robot.name;
   p.source = robot.source;
-  const GeometryVector geometry = GeometryOf(robot);
-  for (const Measurement& m : measurements) {
-    const Eigen::Vector3d q = PredictPose(robot, role, geometry, m, source);
-    p.q.push_back(q);
-    if (m.has_laser) p.z_error_m.push_back(q(1) - m.z_m);
-    if (m.has_inclinometer) p.theta_error_rad.push_back(q(2) - m.theta_rad);
+  for (std::size_t j = 0; j < measurements.size(); ++j) {
+    if (!keep[j]) continue;
+    const Measurement& m = measurements[j];
+    p.q.push_back(q[j]);
+    if (m.has_laser) p.z_error_m.push_back(q[j](1) - m.z_m);
+    if (m.has_inclinometer) p.theta_error_rad.push_back(q[j](2) - m.theta_rad);
   }
   if (measurements.front().has_laser) p.z_m = Stats(p.z_error_m);
   if (measurements.front().has_inclinometer) p.theta_rad = Stats(p.theta_error_rad);
@@ -132,7 +137,8 @@ void EmitStats(YAML::Emitter& o, const char* key, const char* unit, const std::o
 }  // namespace
 
 ValidationResult Validate(const Robot& calibrated, const std::optional<Robot>& nominal,
-                          const std::vector<Measurement>& measurements, const std::string& source) {
+                          const std::vector<Measurement>& measurements, const std::string& source,
+                          bool skip_infeasible) {
   if (measurements.empty()) throw InputError(source, "", "no readings to validate on");
   const int m = calibrated.num_cables();
   if (nominal && nominal->num_cables() != m) {
@@ -158,14 +164,45 @@ ValidationResult Validate(const Robot& calibrated, const std::optional<Robot>& n
                                      MissingSensorsText({"laser", "inclinometer"}) +
                                      " (validate compares the predicted z and theta with those readings)");
   }
-  for (const Measurement& r : measurements) {
+  // Every reading predicted by every robot; a reading one of them cannot hold is refused, or
+  // with skip_infeasible left out for all of them (the rows stay one per kept reading).
+  std::vector<const Robot*> robots = {&calibrated};
+  std::vector<std::string> roles = {"calibrated"};
+  if (nominal) robots.push_back(&*nominal), roles.push_back("nominal");
+  std::vector<std::vector<Eigen::Vector3d>> q(robots.size(), std::vector<Eigen::Vector3d>(measurements.size()));
+  std::vector<bool> keep(measurements.size(), true);
+  for (std::size_t k = 0; k < robots.size(); ++k) {
+    const GeometryVector geometry = GeometryOf(*robots[k]);
+    for (std::size_t j = 0; j < measurements.size(); ++j) {
+      if (!keep[j]) continue;
+      std::string why;
+      if (PredictPose(*robots[k], roles[k], geometry, measurements[j], &q[k][j], &why)) continue;
+      if (!skip_infeasible) throw InputError(Where(measurements[j], source), "", why);
+      keep[j] = false;
+      result.skipped.push_back({measurements[j].pose_id, Where(measurements[j], source), why, j});
+    }
+  }
+  // In the readings' order, whichever robot failed first.
+  std::stable_sort(result.skipped.begin(), result.skipped.end(),
+                   [&](const SkippedReading& a, const SkippedReading& b) { return a.index < b.index; });
+  if (!result.skipped.empty() && result.skipped.size() == measurements.size()) {
+    throw InputError(source, "", "no reading is left to validate on: every one of the " +
+                                     std::to_string(measurements.size()) +
+                                     " was skipped, a robot cannot hold it (the first, " + result.skipped.front().where +
+                                     ": " + result.skipped.front().reason + ")");
+  }
+  for (std::size_t j = 0; j < measurements.size(); ++j) {
+    if (!keep[j]) continue;
+    const Measurement& r = measurements[j];
     result.pose_ids.push_back(r.pose_id);
     if (r.has_laser) result.z_measured_m.push_back(r.z_m);
     if (r.has_inclinometer) result.theta_measured_rad.push_back(r.theta_rad);
   }
   result.num_poses = static_cast<int>(std::set<int>(result.pose_ids.begin(), result.pose_ids.end()).size());
-  result.robots.push_back(Predict(calibrated, "calibrated", measurements, source));
-  if (nominal) result.robots.push_back(Predict(*nominal, "nominal", measurements, source));
+  for (std::size_t k = 0; k < robots.size(); ++k) {
+    result.robots.push_back(Predict(*robots[k], roles[k], measurements, q[k], keep));
+  }
+  result.skip_infeasible = skip_infeasible;
   result.laser_sigma_m = calibrated.sensors.laser_sigma_m();
   result.inclinometer_sigma_rad = calibrated.sensors.inclinometer_sigma_rad();
   return result;
@@ -194,18 +231,21 @@ std::string ValidationCsv(const ValidationResult& result, const std::string& pro
   return out;
 }
 
-std::string ValidationRowsYaml(const ValidationResult& result) {
+std::string ValidationRowsJson(const ValidationResult& result) {
   const std::vector<std::string> columns = Columns(result);
-  YAML::Emitter o;
-  o << YAML::BeginSeq;
+  FlowRows rows(FlowRows::Syntax::kJson);
   for (std::size_t j = 0; j < result.pose_ids.size(); ++j) {
-    o << YAML::Flow << YAML::BeginMap << YAML::Key << columns[0] << YAML::Value << result.pose_ids[j];
+    rows.BeginRow();
+    rows.Key(columns[0].c_str());
+    rows.Int(result.pose_ids[j]);
     const std::vector<double> row = Row(result, j);
-    for (std::size_t k = 0; k < row.size(); ++k) o << YAML::Key << columns[k + 1] << YAML::Value << YamlNumber{row[k]};
-    o << YAML::EndMap;
+    for (std::size_t k = 0; k < row.size(); ++k) {
+      rows.Key(columns[k + 1].c_str());
+      rows.Number(row[k]);
+    }
+    rows.EndRow();
   }
-  o << YAML::EndSeq;
-  return YamlText(o);
+  return rows.Finish("rows");
 }
 
 std::string ValidationSummaryYaml(const ValidationResult& result, const std::string& command_line) {
@@ -217,6 +257,20 @@ std::string ValidationSummaryYaml(const ValidationResult& result, const std::str
   o << YAML::Key << "command" << YAML::Value << YamlString{command_line};
   o << YAML::Key << "readings" << YAML::Value << result.pose_ids.size();
   o << YAML::Key << "poses" << YAML::Value << result.num_poses;
+  // Only with --skip-infeasible: a summary without it reads as before.
+  if (result.skip_infeasible) {
+    o << YAML::Key << "skipped" << YAML::Value << result.skipped.size()
+      << YAML::Comment("readings left out: a robot cannot hold them (--skip-infeasible)");
+    o << YAML::Key << "skipped_readings" << YAML::Value;
+    if (result.skipped.empty()) o << YAML::Flow;
+    o << YAML::BeginSeq;
+    for (const SkippedReading& k : result.skipped) {
+      o << YAML::Flow << YAML::BeginMap << YAML::Key << "pose" << YAML::Value << k.pose_id << YAML::Key << "where"
+        << YAML::Value << YamlString{k.where} << YAML::Key << "reason" << YAML::Value << YamlString{k.reason}
+        << YAML::EndMap;
+    }
+    o << YAML::EndSeq;
+  }
   o << YAML::Key << "compared" << YAML::Value << YAML::Flow << YAML::BeginSeq;
   if (result.has_laser) o << "z";
   if (result.has_inclinometer) o << "theta";

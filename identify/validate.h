@@ -34,6 +34,14 @@ struct RobotPrediction {
   std::optional<ErrorSummary> z_m, theta_rad;
 };
 
+// A reading left out by Validate's skip_infeasible: its pose, file and line, and why.
+struct SkippedReading {
+  int pose_id = 0;
+  std::string where;   // "file:line"
+  std::string reason;  // which robot could not hold it, and how
+  std::size_t index = 0;  // in the readings given
+};
+
 struct ValidationResult {
   std::vector<int> pose_ids;  // one per reading (a pose measured twice appears twice)
   int num_poses = 0;          // distinct pose ids
@@ -46,6 +54,9 @@ struct ValidationResult {
   // Set by a caller that corrected the readings for the robot file's systematic sensor errors
   // (CorrectedReadings, sensors/correction.h, which depends on identify/): said in the summary.
   std::optional<SystematicSensorErrors> corrected_for;
+  // With skip_infeasible (validate --skip-infeasible): the readings left out, in their order.
+  bool skip_infeasible = false;
+  std::vector<SkippedReading> skipped;
 };
 
 // Predicts every reading of `measurements` with `calibrated` and, when given, `nominal`. Throws
@@ -54,9 +65,12 @@ struct ValidationResult {
 // the laser or inclinometer read (another assembly: more than kOtherAssemblyDistance_m in z or
 // kOtherAssemblyAngle_rad in theta), and naming `source` for readings with neither a laser nor an
 // inclinometer (nothing to compare), robots of different cable counts, readings of another
-// count, and no readings at all.
+// count, and no readings at all. With skip_infeasible, a reading a robot cannot hold (either
+// reason above) is left out for every robot and listed in `skipped` instead; only a set whose
+// every reading is skipped is then refused.
 ValidationResult Validate(const Robot& calibrated, const std::optional<Robot>& nominal,
-                          const std::vector<Measurement>& measurements, const std::string& source);
+                          const std::vector<Measurement>& measurements, const std::string& source,
+                          bool skip_infeasible = false);
 
 // nominal / calibrated RMS errors (inf when the calibrated one is 0); NaN without a nominal
 // robot or without that sensor.
@@ -73,8 +87,9 @@ std::string ValidationCsv(const ValidationResult& result, const std::string& pro
 // the nominal/calibrated ratios.
 std::string ValidationSummaryYaml(const ValidationResult& result, const std::string& command_line);
 
-// The CSV's rows as a YAML sequence of maps with the CSV's column names as keys (validate --json).
-std::string ValidationRowsYaml(const ValidationResult& result);
+// The CSV's rows as the JSON member "rows": a list of objects with the CSV's column names as
+// keys (validate --json; MergeJsonObjects, common/json.h, adds it to the summary's object).
+std::string ValidationRowsJson(const ValidationResult& result);
 
 // "z" and "theta" not compared, as MissingSensorsText says it ("no 'theta' column
 // (inclinometer)"); empty when both were.

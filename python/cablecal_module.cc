@@ -709,11 +709,17 @@ PYBIND11_MODULE(cablecal, m) {
         Eigen::MatrixXd q(s.experiment.true_poses.size(), 3);
         for (std::size_t j = 0; j < s.experiment.true_poses.size(); ++j) q.row(j) = s.experiment.true_poses[j].transpose();
         return Array(q);
-      });
+      })
+      .def_property_readonly("skipped", [](const PlanSimulation& s) {
+        py::list out;
+        for (const SkippedPose& k : s.experiment.skipped) out.append(py::make_tuple(k.pose_id, k.reason));
+        return out;
+      }, "the plan's poses skipped with skip_infeasible=True: (pose id, reason), in plan order");
   m.def(
       "simulate",
       [](py::handle robot_arg, py::handle plan_arg, py::handle truth_arg, py::handle geometry_sigma,
-         py::handle sensors, py::handle encoder_noise, py::handle seed, py::handle systematic_errors) {
+         py::handle sensors, py::handle encoder_noise, py::handle seed, py::handle systematic_errors,
+         py::handle skip_infeasible) {
         const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
         const PyPlan& plan = AsObject<PyPlan>(plan_arg, "plan", "Plan");
         std::optional<Robot> truth;
@@ -729,6 +735,8 @@ PYBIND11_MODULE(cablecal, m) {
         SimulationOptions sim{ParseNoisySensors(AsText(sensors, "sensors")), encoder_noise.cast<bool>(), true};
         if (!py::isinstance<py::bool_>(systematic_errors)) Bad("systematic_errors", "expected True or False");
         sim.systematic_errors = systematic_errors.cast<bool>();
+        if (!py::isinstance<py::bool_>(skip_infeasible)) Bad("skip_infeasible", "expected True or False");
+        sim.skip_infeasible = skip_infeasible.cast<bool>();
         if (sim.systematic_errors && !robot.sensors.systematic.any()) {
           Bad("systematic_errors", "the robot " + robot.name +
                                        " has no systematic sensor errors to add (its sensors block has no laser offset, "
@@ -736,14 +744,28 @@ PYBIND11_MODULE(cablecal, m) {
         }
         const std::uint64_t s = AsSeed(seed);
         CheckPlanMatchesRobot(robot, plan.poses, "plan");
-        py::gil_scoped_release release;
-        return SimulatePlan(robot, truth, sigma, plan.poses, sim, s, "plan");
+        std::optional<PlanSimulation> run;
+        {
+          py::gil_scoped_release release;
+          run = SimulatePlan(robot, truth, sigma, plan.poses, sim, s, "plan");
+        }
+        if (!run->experiment.skipped.empty()) {
+          std::string ids;
+          for (const SkippedPose& k : run->experiment.skipped) ids += (ids.empty() ? "" : ", ") + std::to_string(k.pose_id);
+          const std::string w = "skipped " + std::to_string(run->experiment.skipped.size()) + " of " +
+                                std::to_string(plan.poses.size()) + " poses the true robot cannot hold (" + ids +
+                                "; Experiment.skipped says why)";
+          if (PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 1) < 0) throw py::error_already_set();
+        }
+        return std::move(*run);
       },
       py::arg("robot"), py::arg("plan"), py::arg("truth") = py::none(), py::arg("geometry_sigma") = py::none(),
       py::arg("sensors") = "both", py::arg("encoder_noise") = true, py::arg("seed") = 1,
-      py::arg("systematic_errors") = false,
+      py::arg("systematic_errors") = false, py::arg("skip_infeasible") = false,
       "The sensors' readings of a plan on a true robot (cablecal simulate); systematic_errors=True also adds the "
-      "robot's systematic laser and inclinometer errors (simulate --systematic-errors).");
+      "robot's systematic laser and inclinometer errors (simulate --systematic-errors); skip_infeasible=True skips "
+      "the poses the true robot cannot hold (Experiment.skipped) instead of raising InputError at the first "
+      "(simulate --skip-infeasible).");
 
   // ---- identify
   py::class_<IdentifyResult>(m, "IdentifyResult")
@@ -941,6 +963,11 @@ PYBIND11_MODULE(cablecal, m) {
         d["theta_rms"] = r.has_inclinometer ? py::object(py::float_(ThetaRmsRatio(r))) : py::none();
         return d;
       }, "nominal / calibrated RMS errors (> 1: the calibration helped); None without a nominal robot")
+      .def_property_readonly("skipped", [](const ValidationResult& r) {
+        py::list out;
+        for (const SkippedReading& k : r.skipped) out.append(py::make_tuple(k.pose_id, k.reason));
+        return out;
+      }, "the readings left out with skip_infeasible=True: (pose id, reason) in the readings' order")
       .def_property_readonly("not_compared", [](const ValidationResult& r) { return NotCompared(r); },
                              "what the data lack, e.g. \"no 'theta' column (inclinometer)\"; empty when both compared")
       .def("to_csv", [](const ValidationResult& r) { return ValidationCsv(r, ""); },
@@ -949,8 +976,10 @@ PYBIND11_MODULE(cablecal, m) {
            "The CLI's summary YAML (the command line reads python: cablecal.validate).");
   m.def(
       "validate",
-      [](py::handle robot_arg, py::handle measurements_arg, py::handle nominal_arg) {
+      [](py::handle robot_arg, py::handle measurements_arg, py::handle nominal_arg, py::handle skip_infeasible) {
         const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
+        if (!py::isinstance<py::bool_>(skip_infeasible)) Bad("skip_infeasible", "expected True or False");
+        const bool skip = skip_infeasible.cast<bool>();
         const PyMeasurements& measurements = AsObject<PyMeasurements>(measurements_arg, "measurements", "Measurements");
         if (measurements.num_cables != robot.num_cables()) Bad("measurements", "read for a robot with another number of cables");
         std::optional<Robot> nominal;
@@ -959,14 +988,23 @@ PYBIND11_MODULE(cablecal, m) {
         ValidationResult r;
         {
           py::gil_scoped_release release;
-          r = Validate(robot, nominal, readings, "measurements");
+          r = Validate(robot, nominal, readings, "measurements", skip);
         }
         if (robot.sensors.systematic.any()) r.corrected_for = robot.sensors.systematic;
+        if (!r.skipped.empty()) {
+          std::string ids;
+          for (const SkippedReading& k : r.skipped) ids += (ids.empty() ? "" : ", ") + std::to_string(k.pose_id);
+          const std::string w = "skipped " + std::to_string(r.skipped.size()) + " of " +
+                                std::to_string(readings.size()) + " readings a robot cannot hold (poses " + ids +
+                                "; Validation.skipped says why)";
+          if (PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 1) < 0) throw py::error_already_set();
+        }
         return r;
       },
-      py::arg("robot"), py::arg("measurements"), py::arg("nominal") = py::none(),
+      py::arg("robot"), py::arg("measurements"), py::arg("nominal") = py::none(), py::arg("skip_infeasible") = false,
       "Predicts every measured pose with `robot` (and `nominal`) and compares z and theta with the readings "
-      "(cablecal validate); InputError when a robot cannot hold a pose's lengths.");
+      "(cablecal validate); InputError when a robot cannot hold a pose's lengths, or with skip_infeasible=True "
+      "such readings are left out and listed in Validation.skipped (validate --skip-infeasible).");
 
   // ---- sensors fit
   py::class_<PySensorsFit>(m, "SensorsFit", "Sensor error models fitted from bench readings (cablecal sensors fit).")

@@ -2,9 +2,12 @@
 """Figures of a `cablecal montecarlo` study (the paper's Figs. 6-11, extended), written into
 the study folder:
   sigma_vs_n.png       sigma of each identified variable against n, per design (Fig. 6)
+  sigma_vs_n.png       also: the failed trials of each design at each n, in a panel below
   distributions.png    error distributions at up to four n of the study (6, 10, 20, 50 when
-                       run), random sets if it has them (Figs. 7-9)
-  one_calibration.png  every variable's error in one calibration at the largest n (Fig. 11)
+                       run), random sets if it has them (Figs. 7-9); the axis clipped to
+                       robust quantiles, what falls beyond it said in each panel
+  one_calibration.png  every variable's error in one calibration at the largest n (Fig. 11):
+                       the trial of median error (max |error| over the variables), not trial 1
   ablation.png         with --ablation DIR: a2x errors at n = 50 per noisy-sensor setting (Fig. 10)
 Usage: /usr/bin/python3 scripts/plot_montecarlo.py STUDY_DIR [--ablation ABLATION_DIR]
 """
@@ -38,19 +41,20 @@ def read_summary(path):
         return list(csv.DictReader(f))
 
 
-def read_errors(path, keep):
-    """{(n, design, parameter): [errors in mm]} for parameters in `keep`, and the trial-1 rows."""
+def read_errors(path, keep, cell=None):
+    """{(n, design, parameter): [errors in mm]} for parameters in `keep`, and every trial of
+    the (n, design) `cell`: {trial: {parameter: error in mm}}."""
     errors = collections.defaultdict(list)
-    first_trial = collections.defaultdict(dict)
+    trials = collections.defaultdict(dict)
     with open(path, newline="") as f:
         for row in csv.DictReader(f):
             key = (int(row["n"]), row["design"])
             e = 1e3 * float(row["error"])
             if row["parameter"] in keep:
                 errors[key + (row["parameter"],)].append(e)
-            if row["trial"] == "1":
-                first_trial[key][row["parameter"]] = e
-    return errors, first_trial
+            if key == cell:
+                trials[int(row["trial"])][row["parameter"]] = e
+    return errors, trials
 
 
 # Full names and fixed colours, so that a design keeps its colour from one figure to the next.
@@ -83,12 +87,18 @@ def run_setting(study, key):
     return None
 
 
-def sigma_vs_n(summary, out, geometry_sigma_m=None):
+def sigma_vs_n(summary, out, geometry_sigma_m=None, trials=None):
     # Every geometric parameter but the gauge's a1x (always 0 under gauge a1x), then x4; three
-    # panels a row (2 x 3 for two cables).
+    # panels a row (2 x 3 for two cables), and below them a panel of the failed trials: sigma
+    # is over the successful trials only, so a design is judged by both.
     params = [p for p in geometry_names(r["parameter"] for r in summary) if p != "a1x"] + ["x4"]
     rows_of_panels = (len(params) + 2) // 3
-    fig, axes = plt.subplots(rows_of_panels, 3, figsize=(13, 3.5 * rows_of_panels), sharex=True, squeeze=False)
+    fig = plt.figure(figsize=(13, 3.5 * rows_of_panels + 2.8))
+    grid = fig.add_gridspec(rows_of_panels + 1, 3, height_ratios=[1.0] * rows_of_panels + [0.8])
+    axes = np.empty((rows_of_panels, 3), dtype=object)
+    for i in range(rows_of_panels):
+        for j in range(3):
+            axes[i, j] = fig.add_subplot(grid[i, j], sharex=axes[0, 0] if (i or j) else None)
     order = list(DESIGN_STYLE)
     designs = sorted({r["design"] for r in summary}, key=lambda d: order.index(d) if d in order else len(order))
     for ax, p in zip(axes.flat, params):
@@ -114,11 +124,36 @@ def sigma_vs_n(summary, out, geometry_sigma_m=None):
             lambda v, _: f"{v:g}" if f"{v:.0e}"[0] in "25" else ""))
         ax.set_ylabel("sigma (mm, log scale)")
         ax.grid(alpha=0.3)
+        ax.tick_params(labelbottom=True)
     for ax in axes.flat[len(params):]:
         ax.set_visible(False)
-    for ax in axes[-1]:
-        ax.set_xlabel("number of poses n")
     axes.flat[0].legend(fontsize=8)
+    # Failed trials per design and n (every parameter's row of a cell has the cell's count).
+    ax = fig.add_subplot(grid[rows_of_panels, :], sharex=axes[0, 0])
+    failed = {}
+    for r in summary:
+        if r["failures"] not in ("", None):
+            failed[(r["design"], int(r["n"]))] = int(r["failures"])
+    offsets = np.linspace(-0.3, 0.3, len(designs)) if len(designs) > 1 else [0.0]
+    top = max(failed.values(), default=0)
+    for d, dx in zip(designs, offsets):
+        cells = sorted((n, f) for (dd, n), f in failed.items() if dd == d)
+        if not cells:
+            continue
+        label, colour = DESIGN_STYLE.get(d, (d, None))
+        ax.plot([n for n, _ in cells], [f for _, f in cells], "o-", ms=3, lw=1.0, color=colour, label=label)
+        for n, f in cells:
+            if f > 0:  # the count written at each n where any trial of this design failed
+                ax.annotate(str(f), (n + dx, f), textcoords="offset points", xytext=(0, 4), ha="center",
+                            fontsize=6.5, color=colour)
+    ax.set_ylim(-0.05 * max(top, 1), 1.25 * max(top, 1))
+    of = f" of {int(trials)}" if trials else ""
+    ax.set_ylabel(f"failed trials{of}")
+    ax.set_title("Failed trials (no verified design, sampling, a pose the true robot cannot hold, or no convergence): "
+                 "sigma above is over the others", fontsize=9)
+    ax.set_xlabel("number of poses n")
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    ax.grid(alpha=0.3)
     fig.suptitle("Standard deviation of the identification error against the number of poses")
     fig.tight_layout()
     fig.savefig(out, dpi=110)
@@ -137,30 +172,63 @@ def distributions(errors, out):
     ns = [n for n in (6, 10, 20, 50) if n in run]
     if len(ns) < min(4, len(run)):
         ns = sorted({run[int(round(i))] for i in np.linspace(0, len(run) - 1, min(4, len(run)))})
-    fig, axes = plt.subplots(1, 3, figsize=(14, 4.2))
+    fig, axes = plt.subplots(1, 3, figsize=(14, 4.6))
     for ax, p in zip(axes, params):
-        for n in ns:
-            e = errors.get((n, design, p))
-            if not e or len(e) < 2:
-                continue
-            lim = max(5.0, np.percentile(np.abs(e), 99.5))
-            # About 5 trials a bin at least: a short study gets a coarser, readable histogram.
-            ax.hist(e, bins=int(np.clip(len(e) // 5, 8, 60)), range=(-lim, lim), density=True, histtype="step",
-                    lw=1.4, label=f"n = {n}, sigma = {np.std(e, ddof=1):.2f} mm")
+        cells = [(n, np.asarray(errors.get((n, design, p), []))) for n in ns]
+        cells = [(n, e) for n, e in cells if len(e) >= 2]
+        if not cells:
+            continue
+        # The axis spans the central 98 % of the errors of every n but the smallest (at least
+        # +-5 mm): the smallest n's errors (n = 6: random sets spread ten times wider, with tails
+        # of metres) would squash every other histogram to a spike. What falls beyond is said
+        # in the panel; the legend's sigma counts every trial.
+        spread = cells[1:] if len(cells) > 1 else cells
+        lim = max(5.0, max(np.percentile(np.abs(e), 98.0) for _, e in spread))
+        beyond = []
+        for n, e in cells:
+            # Bins over this n's own spread (within the axis), each reading weighted so that the
+            # area over the axis is the share of trials within it.
+            own = min(lim, max(1.0, np.percentile(np.abs(e), 99.5)))
+            bins = int(np.clip(len(e) // 5, 8, 60))
+            weights = np.full(len(e), bins / (2.0 * own * len(e)))
+            ax.hist(e, bins=bins, range=(-own, own), weights=weights, histtype="step", lw=1.4,
+                    label=f"n = {n}, sigma = {np.std(e, ddof=1):.2f} mm")
+            out_of_axis = np.abs(e) > lim
+            if out_of_axis.any():
+                beyond.append(f"n = {n}: {out_of_axis.sum()} of {len(e)} trials beyond ±{lim:.3g} mm "
+                              f"(max |error| {np.max(np.abs(e)):.3g} mm)")
+        ax.set_xlim(-lim, lim)
         ax.set_title(f"{p}, {DESIGN_STYLE.get(design, (design,))[0]}")
         ax.set_xlabel("error (mm)")
         ax.set_ylabel("probability density")
-        if ax.get_legend_handles_labels()[0]:
-            ax.legend(fontsize=8)
+        ax.legend(fontsize=7.5, loc="center right")
+        basis = f"n ≥ {spread[0][0]}" if len(cells) > 1 else f"n = {cells[0][0]}"
+        ax.text(0.02, 0.98, f"axis: the central 98 % of the errors at {basis}"
+                + ("".join("\n" + b for b in beyond) or "\n(no trial beyond it)"),
+                transform=ax.transAxes, va="top", ha="left", fontsize=6.5, color="0.25",
+                bbox=dict(facecolor="white", edgecolor="none", alpha=0.8, pad=1.0))
     fig.tight_layout()
     fig.savefig(out, dpi=110)
 
 
-def one_calibration(first_trial, out):
-    if not first_trial:
+def calibration_cell(summary):
+    """The (n, design) whose calibration one_calibration shows: the largest n of random sets
+    (the paper's Fig. 11), or of the study's first design."""
+    cells = {(int(r["n"]), r["design"]) for r in summary}
+    if not cells:
+        return None
+    return max((c for c in cells if c[1] == "random"), default=None) or max(cells)
+
+
+def one_calibration(trials, cell, out):
+    """A typical calibration: of the cell's successful trials, the one whose largest |error|
+    over every identified variable is the median (the lower one of an even count)."""
+    if not trials:
         return
-    key = max((k for k in first_trial if k[1] == "random"), default=None) or max(first_trial)
-    row = first_trial[key]
+    size = {t: np.max(np.abs(list(row.values()))) for t, row in trials.items()}
+    ranked = sorted(size, key=lambda t: (size[t], t))
+    trial = ranked[(len(ranked) - 1) // 2]
+    row = trials[trial]
     names = geometry_names(row)
     geometry_count = len(names)
     names += sorted((p for p in row if p.startswith("x")), key=lambda s: int(s[1:]))
@@ -177,8 +245,10 @@ def one_calibration(first_trial, out):
     ax.set_xticks(range(len(names)))
     ax.set_xticklabels(names, rotation=90, fontsize=7)
     ax.set_ylabel("error (mm)")
-    ax.set_title(f"All identified variables in one calibration (n = {key[0]}, {key[1]} poses, trial 1): "
-                 f"max |error| {np.max(np.abs(values)):.2f} mm, {within:.1f} % within ±5 mm")
+    worst = max(size.values())
+    ax.set_title(f"All identified variables in one calibration (n = {cell[0]}, {cell[1]} poses, trial {trial}: the median "
+                 f"of {len(size)} successful trials by max |error|): max |error| {size[trial]:.2f} mm "
+                 f"(worst trial {worst:.2f} mm), {within:.1f} % within ±5 mm", fontsize=9)
     fig.tight_layout()
     fig.savefig(out, dpi=110)
 
@@ -209,10 +279,12 @@ def main():
     ap.add_argument("--ablation")
     args = ap.parse_args()
     summary = read_summary(os.path.join(args.study, "summary.csv"))
-    errors, first_trial = read_errors(os.path.join(args.study, "errors.csv"), {"a2x", "l10", "x4"})
-    sigma_vs_n(summary, os.path.join(args.study, "sigma_vs_n.png"), run_setting(args.study, "geometry_sigma_m"))
+    cell = calibration_cell(summary)
+    errors, trials = read_errors(os.path.join(args.study, "errors.csv"), {"a2x", "l10", "x4"}, cell)
+    sigma_vs_n(summary, os.path.join(args.study, "sigma_vs_n.png"), run_setting(args.study, "geometry_sigma_m"),
+               run_setting(args.study, "trials"))
     distributions(errors, os.path.join(args.study, "distributions.png"))
-    one_calibration(first_trial, os.path.join(args.study, "one_calibration.png"))
+    one_calibration(trials, cell, os.path.join(args.study, "one_calibration.png"))
     if args.ablation:
         ablation(args.ablation, os.path.join(args.ablation, "ablation.png"))
     return 0

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -224,6 +225,61 @@ TEST_F(Cli, SimulateRefusesAPoseTheTrueRobotSettlesOutsideItsWorkspace) {
                                   Path("m.csv") + " --truth-out " + Path("t.yaml"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("the true robot settles outside its workspace ("), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(Path("m.csv")));
+  EXPECT_FALSE(fs::exists(Path("t.yaml")));
+}
+
+// The same plan with --skip-infeasible: the poses the true robot settles outside its workspace
+// at are skipped, each named on stderr with its reason, the count said; the measurement CSV has
+// the other poses under their plan ids. A plan of such poses alone is still exit 2, nothing
+// written.
+TEST_F(Cli, SimulateSkipInfeasibleSkipsAndNamesThePoses) {
+  ASSERT_EQ(RunCablecal("sample --poses 10 --seed 8 --out " + Path("plan.csv")).exit_code, 0);
+  const std::string args = " --seed 8 --geometry-sigma 0.005 --skip-infeasible --out " + Path("m.csv") +
+                           " --truth-out " + Path("t.yaml");
+  const RunResult r = RunCablecal("simulate --plan " + Path("plan.csv") + args);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::regex named("cablecal: skipped pose ([0-9]+) of " + Path("plan.csv") +
+                         ": the true robot settles outside its workspace \\([a-z_]+\\)\n");
+  std::vector<int> skipped;
+  for (auto it = std::sregex_iterator(r.output.begin(), r.output.end(), named); it != std::sregex_iterator(); ++it) {
+    skipped.push_back(std::stoi((*it)[1]));
+  }
+  ASSERT_FALSE(skipped.empty()) << r.output;
+  EXPECT_NE(r.output.find("simulated " + std::to_string(10 - skipped.size()) + " poses, " +
+                          std::to_string(skipped.size()) + " of 10 skipped"),
+            std::string::npos)
+      << r.output;
+  std::istringstream csv(Read("m.csv"));
+  std::string line;
+  std::vector<int> ids;
+  while (std::getline(csv, line)) {
+    if (!line.empty() && std::isdigit(static_cast<unsigned char>(line[0]))) ids.push_back(std::stoi(line));
+  }
+  ASSERT_EQ(ids.size() + skipped.size(), 10u);
+  for (int id = 1, k = 0; id <= 10; ++id) {
+    const bool was_skipped = std::find(skipped.begin(), skipped.end(), id) != skipped.end();
+    if (!was_skipped) EXPECT_EQ(ids[k++], id);
+  }
+  EXPECT_EQ(YAML::LoadFile(Path("t.yaml"))["true_poses"].size(), ids.size());
+  // The skipped poses alone (renumbered from 1): the same true robot (seed 8) holds none.
+  std::istringstream plan(Read("plan.csv"));
+  std::string hopeless;
+  int row = 0, renumbered = 0;
+  while (std::getline(plan, line)) {
+    if (line.empty() || !std::isdigit(static_cast<unsigned char>(line[0]))) {
+      hopeless += line + "\n";
+    } else if (std::find(skipped.begin(), skipped.end(), ++row) != skipped.end()) {
+      hopeless += std::to_string(++renumbered) + line.substr(line.find(',')) + "\n";
+    }
+  }
+  std::ofstream(Path("hopeless.csv")) << hopeless;
+  fs::remove(Path("m.csv"));
+  fs::remove(Path("t.yaml"));
+  const RunResult none = RunCablecal("simulate --plan " + Path("hopeless.csv") + args);
+  EXPECT_EQ(none.exit_code, 2) << none.output << hopeless;
+  EXPECT_NE(none.output.find("hopeless.csv: the true robot can hold none of the plan's"), std::string::npos)
+      << none.output;
   EXPECT_FALSE(fs::exists(Path("m.csv")));
   EXPECT_FALSE(fs::exists(Path("t.yaml")));
 }
@@ -1266,6 +1322,46 @@ TEST_F(Cli, ValidateRefusesWhatItCannotCompareAndWritesNothing) {
     EXPECT_FALSE(fs::exists(Path("v.yaml"))) << args;
   }
   EXPECT_EQ(Read("meas.csv"), meas);
+}
+
+// validate --skip-infeasible: the reading no robot holds is skipped, named on stderr and in the
+// summary (pose, file:line, why), the count said; the CSV and statistics are those of the file
+// without it. A file of such readings alone is still exit 2, nothing written.
+TEST_F(Cli, ValidateSkipInfeasibleSkipsAndNamesTheReadings) {
+  ASSERT_EQ(RunCablecal("sample --poses 4 --seed 1 --out " + Path("plan.csv")).exit_code, 0);
+  ASSERT_EQ(RunCablecal("simulate --plan " + Path("plan.csv") + " --seed 2 --out " + Path("meas.csv")).exit_code, 0);
+  const std::string meas = Read("meas.csv");  // 2 provenance lines, the header, 4 rows
+  std::ofstream(Path("slack.csv")) << meas + "9,3,0,1.4,0\n";
+  const std::string builtin = " --robot " CABLECAL_SOURCE_DIR "/robots/wang2022.yaml";
+  const RunResult r = RunCablecal("validate --measurements " + Path("slack.csv") + builtin + " --skip-infeasible --out " +
+                                  Path("v.csv") + " --summary " + Path("v.yaml"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("cablecal: skipped pose 9 (" + Path("slack.csv") + ":8): the calibrated robot ("
+                          CABLECAL_SOURCE_DIR "/robots/wang2022.yaml) holds these lengths only at"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("skipped 1 of 5 readings"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("validated on 4 poses"), std::string::npos) << r.output;
+  const YAML::Node summary = YAML::LoadFile(Path("v.yaml"));
+  EXPECT_EQ(summary["readings"].as<int>(), 4);
+  EXPECT_EQ(summary["skipped"].as<int>(), 1);
+  EXPECT_EQ(summary["skipped_readings"][0]["pose"].as<int>(), 9);
+  EXPECT_EQ(summary["skipped_readings"][0]["where"].as<std::string>(), Path("slack.csv") + ":8");
+  ASSERT_EQ(RunCablecal("validate --measurements " + Path("meas.csv") + builtin + " --out " + Path("w.csv")).exit_code, 0);
+  const auto rows = [](const std::string& csv) { return csv.substr(csv.find("\npose,")); };
+  EXPECT_EQ(rows(Read("v.csv")), rows(Read("w.csv")));
+  const RunResult json = RunCablecal("validate --measurements " + Path("slack.csv") + builtin + " --skip-infeasible --json -q");
+  ASSERT_EQ(json.exit_code, 0) << json.output;
+  EXPECT_EQ(YAML::Load(json.output)["rows"].size(), 4u);
+  EXPECT_EQ(YAML::Load(json.output)["skipped_readings"][0]["pose"].as<int>(), 9);
+  // Only readings no robot holds.
+  std::ofstream(Path("only.csv")) << "pose,dl1,dl2,z,theta\n9,3,0,1.4,0\n";
+  const RunResult none = RunCablecal("validate --measurements " + Path("only.csv") + builtin +
+                                     " --skip-infeasible --out " + Path("n.csv") + " --summary " + Path("n.yaml"));
+  EXPECT_EQ(none.exit_code, 2) << none.output;
+  EXPECT_NE(none.output.find("only.csv: no reading is left to validate on"), std::string::npos) << none.output;
+  EXPECT_FALSE(fs::exists(Path("n.csv")));
+  EXPECT_FALSE(fs::exists(Path("n.yaml")));
 }
 
 // ---- sensors fit, simulate --systematic-errors, identify's correction ---------------------

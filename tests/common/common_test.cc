@@ -3,6 +3,7 @@
 #include <clocale>
 
 #include <cmath>
+#include <limits>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -13,6 +14,8 @@
 #include "common/csv.h"
 #include "common/error.h"
 #include "common/format.h"
+#include "common/json.h"
+#include "common/yaml_writer.h"
 #include "common/random.h"
 
 namespace cablecal {
@@ -72,6 +75,63 @@ TEST(Format, YamlReadersSeeFloats) {
   EXPECT_FALSE(ParseFiniteDouble("1,5", &v));
   EXPECT_TRUE(ParseFiniteDouble("1e-400", &v));
   EXPECT_EQ(v, 0.0);
+}
+
+// FlowRows, the writer of long tables (issue 24), writes byte for byte what yaml-cpp's emitter
+// writes for the same block sequence of flow maps, and as JSON what ToJson makes of that YAML:
+// random rows of integers, numbers of every size and sign, NaN and infinities, lists of 0 to 3
+// numbers; tables of 0, 1 and 40 rows; with and without a comment.
+TEST(FlowRows, SameTextAsTheEmitterAndTheSameJsonAsToJson) {
+  const double inf = std::numeric_limits<double>::infinity();
+  const std::vector<double> specials = {0.0, -0.0, 1.0, 3.0, -2.5e-7, 1e22, 1e-5, std::nan(""), inf, -inf, 0.1,
+                                        123456789.0};
+  Rng rng(24);
+  const auto number = [&]() {
+    if (rng.Uniform() < 0.3) return specials[static_cast<std::size_t>(rng.Uniform() * specials.size())];
+    return rng.Normal() * std::pow(10.0, std::floor(rng.Uniform(-12.0, 12.0)));
+  };
+  for (const int rows : {0, 1, 40}) {
+    for (const std::string comment : {"", "per reading (data row), model - reading; 1 = full"}) {
+      YAML::Emitter head, whole;
+      head << YAML::BeginMap << YAML::Key << "head" << YAML::Value << YamlString{std::string("a: b")} << YAML::EndMap;
+      whole << YAML::BeginMap << YAML::Key << "head" << YAML::Value << YamlString{std::string("a: b")} << YAML::Key
+            << "table" << YAML::Value;
+      if (!comment.empty()) whole << YAML::Comment(comment);
+      whole << YAML::BeginSeq;
+      FlowRows yaml(FlowRows::Syntax::kYaml), json(FlowRows::Syntax::kJson);
+      for (int r = 0; r < rows; ++r) {
+        const long long id = static_cast<long long>(rng.Uniform(-1e6, 1e12));
+        const double x = number(), y = number();
+        std::vector<double> list(static_cast<std::size_t>(rng.Uniform() * 4.0));
+        for (double& v : list) v = number();
+        whole << YAML::Flow << YAML::BeginMap << YAML::Key << "pose" << YAML::Value << id << YAML::Key << "x"
+              << YAML::Value << YamlNumber{x} << YAML::Key << "encoder_sigmas" << YAML::Value << YAML::Flow
+              << YAML::BeginSeq;
+        for (const double v : list) whole << YamlNumber{v};
+        whole << YAML::EndSeq << YAML::Key << "y_2" << YAML::Value << YamlNumber{y} << YAML::EndMap;
+        for (FlowRows* t : {&yaml, &json}) {
+          t->BeginRow();
+          t->Key("pose");
+          t->Int(id);
+          t->Key("x");
+          t->Number(x);
+          t->Key("encoder_sigmas");
+          t->BeginList();
+          for (const double v : list) t->Number(v);
+          t->EndList();
+          t->Key("y_2");
+          t->Number(y);
+          t->EndRow();
+        }
+      }
+      whole << YAML::EndSeq << YAML::EndMap;
+      const std::string expected = YamlText(whole);
+      EXPECT_EQ(YamlText(head) + yaml.Finish("table", comment), expected) << rows << " rows";
+      EXPECT_EQ(MergeJsonObjects({ToJson(YAML::Load(YamlText(head))), json.Finish("table")}),
+                ToJson(YAML::Load(expected)))
+          << rows << " rows";
+    }
+  }
 }
 
 TEST(Format, ParsingIgnoresADecimalCommaLocale) {

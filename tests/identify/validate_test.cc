@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 #include <sstream>
@@ -178,7 +179,7 @@ TEST(Validate, CsvAndJsonRowsShareTheColumnsAndTheSummaryReadsBack) {
                       0),
             0u)
       << csv;
-  const YAML::Node rows = YAML::Load(ValidationRowsYaml(v));
+  const YAML::Node rows = YAML::Load("{" + ValidationRowsJson(v) + "}")["rows"];
   ASSERT_EQ(rows.size(), exp.measurements.size());
   EXPECT_EQ(rows[1]["pose"].as<int>(), 2);
   EXPECT_EQ(rows[1]["z_error_nominal_m"].as<double>(), v.robots[1].z_error_m[1]);
@@ -244,7 +245,7 @@ TEST(Validate, AMissingSensorsComparisonIsLeftOut) {
       EXPECT_FALSE(summary["calibrated"][laser ? "theta" : "z"]);
       EXPECT_TRUE(summary["nominal"][laser ? "z" : "theta"]);
       EXPECT_FALSE(summary["nominal_over_calibrated"][laser ? "theta_rms" : "z_rms"]);
-      EXPECT_EQ(YAML::Load(ValidationRowsYaml(v))[0].size(), 10u);
+      EXPECT_EQ(YAML::Load("{" + ValidationRowsJson(v) + "}")["rows"][0].size(), 10u);
     }
     std::vector<Measurement> neither = exp.measurements;
     for (Measurement& m : neither) m.has_laser = m.has_inclinometer = false;
@@ -298,6 +299,110 @@ TEST(Validate, PosesARobotCannotHoldAreRefusedWithFileAndLine) {
         << e.what();
   }
   EXPECT_THROW(Validate(planar3, std::nullopt, exp.measurements, "m.csv"), InputError);
+}
+
+// skip_infeasible (validate --skip-infeasible): a reading a robot cannot hold is left out and
+// listed with its pose, file and line and why; the others are validated exactly as a file
+// without it would be; without the option it is refused as before; a file of such readings
+// alone is still refused.
+TEST(Validate, SkipInfeasibleLeavesOutWhatARobotCannotHoldAndValidatesTheRest) {
+  const Robot& nominal = BuiltinRobot();
+  Rng rng(4);
+  const Robot truth = PerturbGeometry(nominal, 0.01, rng);
+  const SimulatedExperiment exp = Experiment(nominal, truth, 6, 5);
+  const std::string text = MeasurementsCsv(exp.measurements, "# provenance\n");
+  // Cable 1 3 m longer (no taut pose near the readings), after the third reading: line 6.
+  const Measurement& first = exp.measurements[0];
+  const std::string bad = "9,3,0," + FormatDouble(first.z_m) + "," + FormatDouble(first.theta_rad) + "\n";
+  std::size_t at = 0;
+  for (int line = 0; line < 5; ++line) at = text.find('\n', at) + 1;
+  const auto read = [](const std::string& csv) {
+    std::istringstream in(csv);
+    return ReadMeasurementsCsv(in, "h.csv", 2);
+  };
+  const std::vector<Measurement> with_bad = read(text.substr(0, at) + bad + text.substr(at));
+  ASSERT_EQ(with_bad.size(), 7u);
+  const ValidationResult skipped = Validate(truth, nominal, with_bad, "h.csv", true);
+  ASSERT_EQ(skipped.skipped.size(), 1u);
+  EXPECT_EQ(skipped.skipped[0].pose_id, 9);
+  EXPECT_EQ(skipped.skipped[0].where, "h.csv:6");
+  EXPECT_NE(skipped.skipped[0].reason.find("the calibrated robot (" + truth.source + ") holds these lengths only at"),
+            std::string::npos)
+      << skipped.skipped[0].reason;
+  const ValidationResult clean = Validate(truth, nominal, read(text), "h.csv");
+  EXPECT_EQ(ValidationCsv(skipped, ""), ValidationCsv(clean, ""));
+  EXPECT_EQ(skipped.robots[1].z_m->rms, clean.robots[1].z_m->rms);
+  const YAML::Node summary = YAML::Load(ValidationSummaryYaml(skipped, "cablecal validate ..."));
+  EXPECT_EQ(summary["readings"].as<int>(), 6);
+  EXPECT_EQ(summary["skipped"].as<int>(), 1);
+  EXPECT_EQ(summary["skipped_readings"][0]["pose"].as<int>(), 9);
+  EXPECT_EQ(summary["skipped_readings"][0]["where"].as<std::string>(), "h.csv:6");
+  EXPECT_EQ(summary["skipped_readings"][0]["reason"].as<std::string>(), skipped.skipped[0].reason);
+  // Without the option: refused at that line, and a summary without skipping has no such keys.
+  try {
+    Validate(truth, nominal, with_bad, "h.csv");
+    ADD_FAILURE() << "a reading the robot cannot hold accepted without skip_infeasible";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("h.csv:6: the calibrated robot", 0), 0u) << e.what();
+  }
+  EXPECT_FALSE(YAML::Load(ValidationSummaryYaml(clean, ""))["skipped"]);
+  // Every reading skipped: nothing is left to validate on.
+  try {
+    Validate(truth, nominal, read(text.substr(0, text.find('\n', text.find('\n') + 1) + 1) + bad), "h.csv", true);
+    ADD_FAILURE() << "every reading skipped, accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("h.csv: no reading is left to validate on: every one of the 1 was skipped"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// skip_infeasible in the simulation (simulate --skip-infeasible): a plan whose true robot
+// settles outside its workspace at some poses. Those poses are skipped and named; the others
+// read exactly what they read when nothing is skipped (the workspace check off), since a
+// skipped pose's noise is drawn all the same; without the option the first such pose fails.
+TEST(Validate, SimulateSkipInfeasibleKeepsTheOtherPosesReadings) {
+  const Robot& nominal = BuiltinRobot();
+  // The CLI test's case: seed 8 draws a true robot that settles outside its workspace here.
+  const std::vector<PlanPose> plan = SampleFeasiblePoses(nominal, 10, 8);
+  SimulationOptions strict{NoisySensors::kBoth, true, true};
+  EXPECT_THROW(SimulatePlan(nominal, std::nullopt, 0.005, plan, strict, 8, "plan.csv"), InputError);
+  SimulationOptions skip = strict;
+  skip.skip_infeasible = true;
+  const PlanSimulation skipped = SimulatePlan(nominal, std::nullopt, 0.005, plan, skip, 8, "plan.csv");
+  ASSERT_FALSE(skipped.experiment.skipped.empty());
+  ASSERT_EQ(skipped.experiment.measurements.size() + skipped.experiment.skipped.size(), plan.size());
+  SimulationOptions all = strict;
+  all.require_feasible = false;
+  const PlanSimulation every = SimulatePlan(nominal, std::nullopt, 0.005, plan, all, 8, "plan.csv");
+  ASSERT_EQ(every.experiment.measurements.size(), plan.size());
+  std::size_t k = 0;
+  for (const Measurement& m : every.experiment.measurements) {
+    const bool was_skipped =
+        std::any_of(skipped.experiment.skipped.begin(), skipped.experiment.skipped.end(),
+                    [&](const SkippedPose& s) { return s.pose_id == m.pose_id; });
+    if (was_skipped) continue;
+    ASSERT_LT(k, skipped.experiment.measurements.size());
+    const Measurement& kept = skipped.experiment.measurements[k++];
+    EXPECT_EQ(kept.pose_id, m.pose_id);
+    EXPECT_EQ(kept.dl_m, m.dl_m) << "pose " << m.pose_id;
+    EXPECT_EQ(kept.z_m, m.z_m) << "pose " << m.pose_id;
+    EXPECT_EQ(kept.theta_rad, m.theta_rad) << "pose " << m.pose_id;
+  }
+  EXPECT_EQ(k, skipped.experiment.measurements.size());
+  for (const SkippedPose& s : skipped.experiment.skipped) {
+    EXPECT_EQ(s.reason.rfind("the true robot settles outside its workspace (", 0), 0u) << s.reason;
+  }
+  // A plan of skipped poses alone: an error, naming the plan.
+  std::vector<PlanPose> hopeless;
+  for (const SkippedPose& s : skipped.experiment.skipped) hopeless.push_back(plan[s.pose_id - 1]);
+  try {
+    SimulatePlan(nominal, std::nullopt, 0.005, hopeless, skip, 8, "plan.csv");
+    ADD_FAILURE() << "every pose skipped, accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("plan.csv: the true robot can hold none of the plan's"), std::string::npos)
+        << e.what();
+  }
 }
 
 // A 3-cable robot: the lengths met only far from the readings are another assembly.

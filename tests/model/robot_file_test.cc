@@ -249,6 +249,41 @@ TEST(RobotFile, ManyCableFilesLoadAndRoundTrip) {
   EXPECT_EQ(p4.cables[0].wrap, PulleyWrap::kOver);
 }
 
+// README's "A complete robot file": the yaml block after that heading loads as it is, sets
+// every optional key it shows, and its initial_length is the one the home equilibrium gives.
+TEST(RobotFile, ReadmeExampleLoads) {
+  std::ifstream in(std::string(CABLECAL_SOURCE_DIR) + "/README.md");
+  ASSERT_TRUE(in.good());
+  std::stringstream readme;
+  readme << in.rdbuf();
+  const std::string text = readme.str();
+  const std::size_t heading = text.find("**A complete robot file**");
+  ASSERT_NE(heading, std::string::npos);
+  const std::size_t begin = text.find("```yaml\n", heading);
+  ASSERT_NE(begin, std::string::npos);
+  const std::size_t end = text.find("```\n", begin + 8);
+  ASSERT_NE(end, std::string::npos);
+  const std::string yaml = text.substr(begin + 8, end - begin - 8);
+  EXPECT_EQ(LoadError(yaml), "");
+  const Robot r = LoadRobotFromString(yaml, "README.md");
+  ASSERT_EQ(r.num_cables(), 3);
+  EXPECT_TRUE(EvaluateHome(r).feasible());
+  EXPECT_NEAR(r.home_theta_rad, 18.0 * M_PI / 180.0, 1e-15);
+  EXPECT_EQ(r.cables[0].wrap, PulleyWrap::kOver);
+  EXPECT_EQ(r.cables[1].side, PulleySide::kLeft);
+  EXPECT_EQ(r.cables[2].side, PulleySide::kRight);
+  EXPECT_EQ(r.sensors.systematic.laser_offset_m, 0.002);
+  EXPECT_NEAR(r.sensors.systematic.inclinometer_offset_rad, 0.05 * M_PI / 180.0, 1e-15);
+  EXPECT_NEAR(r.sensors.systematic.inclinometer_sec_coefficient_rad, -0.2 * M_PI / 180.0, 1e-15);
+  ASSERT_TRUE(r.sensors.tracker_sigma_m.has_value());
+  EXPECT_EQ(*r.sensors.tracker_sigma_m, 0.0005);
+  // The example's initial_length is the computed one (to its 0.1 mm), not an arbitrary number.
+  ASSERT_TRUE(r.cables[0].initial_length_m.has_value());
+  Robot computed = r;
+  computed.cables[0].initial_length_m.reset();
+  EXPECT_NEAR(*r.cables[0].initial_length_m, InitialLengths(computed)(0), 1e-4);
+}
+
 // With 3 or more cables two cables may share an anchor (a common design): the file loads, and
 // the shared anchor still has a feasible workspace around home.
 TEST(RobotFile, ManyCablesMayShareAnAnchor) {

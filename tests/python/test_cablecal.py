@@ -351,6 +351,43 @@ def test_validate_refuses_what_it_cannot_compare():
             call()
 
 
+def test_validate_skip_infeasible_leaves_out_what_a_robot_cannot_hold():
+    r2 = cablecal.Robot.load(robot_file("asymmetric"))
+    m2 = cablecal.simulate(r2, cablecal.sample(r2, 4, seed=1), seed=2).measurements
+    slack = cablecal.Measurements(r2, np.vstack([m2.dl, [3.0, 0.0]]), np.append(m2.z, 1.2), np.append(m2.theta, 0.0))
+    with pytest.warns(UserWarning, match="skipped 1 of 5 readings a robot cannot hold"):
+        v = cablecal.validate(r2, slack, skip_infeasible=True)
+    assert [pose for pose, _ in v.skipped] == [5]
+    assert "the calibrated robot" in v.skipped[0][1] and "cannot hold" in v.skipped[0][1]
+    assert v.to_csv() == cablecal.validate(r2, m2).to_csv()
+    assert "skipped: 1" in v.to_yaml()
+    assert cablecal.validate(r2, m2).skipped == []
+    only = cablecal.Measurements(r2, np.array([[3.0, 0.0]]), np.array([1.2]), np.array([0.0]))
+    with pytest.raises(cablecal.InputError, match="no reading is left to validate on"):
+        cablecal.validate(r2, only, skip_infeasible=True)
+    with pytest.raises(cablecal.InputError, match="skip_infeasible: expected True or False"):
+        cablecal.validate(r2, m2, skip_infeasible="yes")
+
+
+def test_simulate_skip_infeasible_equals_the_cli(tmp_path):
+    # The CLI test's case: seed 8 draws a true robot that settles outside its workspace at some
+    # of these poses.
+    robot = cablecal.Robot.builtin("wang2022")
+    plan = cablecal.sample(robot, 10, seed=8)
+    with pytest.raises(cablecal.InputError, match="settles outside its workspace"):
+        cablecal.simulate(robot, plan, geometry_sigma=0.005, seed=8)
+    with pytest.warns(UserWarning, match="poses the true robot cannot hold"):
+        exp = cablecal.simulate(robot, plan, geometry_sigma=0.005, seed=8, skip_infeasible=True)
+    assert exp.skipped and all("settles outside its workspace" in why for _, why in exp.skipped)
+    assert len(exp.measurements) + len(exp.skipped) == 10
+    assert not set(exp.measurements.pose_ids) & {pose for pose, _ in exp.skipped}
+    plan_csv, meas = tmp_path / "plan.csv", tmp_path / "m.csv"
+    plan_csv.write_text(plan.to_csv())
+    cli("simulate", "--plan", str(plan_csv), "--geometry-sigma", "0.005", "--seed", "8", "--skip-infeasible",
+        "--out", str(meas), "-q")
+    assert exp.measurements.to_csv() == data_lines(meas)
+
+
 def test_repeated_readings_and_a_missing_inclinometer(tmp_path):
     robot = cablecal.Robot.load(robot_file("planar4_fully_constrained"))
     plan = cablecal.sample(robot, 12, seed=4)
