@@ -140,6 +140,11 @@ int main(int argc, char** argv) {
                      "robust loss on each reading: none, huber or cauchy, optionally :SCALE in sigmas "
                      "(defaults huber:3, cauchy:10; ml only)")
       ->capture_default_str();
+  id_cmd->add_option("--equilibrium", ident.equilibrium,
+                     "on: with 2 cables each pose's static equilibrium is a residual, its sigma the robot file's "
+                     "platform.com_sigma (default 5 mm); off: theta free per pose (ml only)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"on", "off"}));
   id_cmd->add_option("--report", ident.report_dir,
                      "folder for a calibration report: report.md with the estimates, figures and provenance, and the "
                      "data files behind them (created if new; its parent must exist)");
@@ -224,6 +229,13 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(kNonNegative);
   mc_cmd->add_option("--loss", mc.loss, "robust loss of every identification, as identify --loss")
+      ->capture_default_str();
+  mc_cmd->add_option("--equilibrium", mc.equilibrium, "every identification's 2-cable equilibrium rows, as identify")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"on", "off"}));
+  mc_cmd->add_option("--com-error", mc.com_error_m,
+                     "the true robot's centre of mass off the robot file's by this along the platform's x, m "
+                     "(what a wrong platform.com costs)")
       ->capture_default_str();
   mc_cmd->add_option("--outliers", mc.outliers,
                      "RATE[:SIZE]: each reading off by SIZE sigmas (default 100) with probability RATE")

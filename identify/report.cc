@@ -72,6 +72,13 @@ std::string IdentifyResultYaml(const IdentifyResult& r, const std::string& comma
     for (const std::string& w : r.warnings) o << YamlString{w};
     o << EndSeq;
   }
+  o << Key << "equilibrium" << Value;
+  if (r.equilibrium_com_sigma_m) {
+    o << Flow << BeginMap << Key << "com_sigma_m" << Value << YamlNumber{*r.equilibrium_com_sigma_m} << EndMap
+      << YAML::Comment("each pose's static equilibrium was a residual (2 cables), with this sigma");
+  } else {
+    o << "off";
+  }
   o << Key << "loss" << Value << ToString(r.loss);
   if (r.loss.kind != LossKind::kNone) {
     o << Key << "down_weighted" << Value
@@ -117,6 +124,10 @@ std::string IdentifyResultYaml(const IdentifyResult& r, const std::string& comma
     if (r.has_covariance && ml) o << Key << "z_std" << Value << YamlNumber{p.std_dev(1)};
     o << Key << "theta" << Value << YamlNumber{p.q(2)};
     if (r.has_covariance && ml) o << Key << "theta_std" << Value << YamlNumber{p.std_dev(2)};
+    if (p.equilibrium_sigmas) o << Key << "equilibrium_sigmas" << Value << YamlNumber{*p.equilibrium_sigmas};
+    if (p.equilibrium_theta_error_rad) {
+      o << Key << "theta_minus_equilibrium_rad" << Value << YamlNumber{*p.equilibrium_theta_error_rad};
+    }
     o << EndMap;
   }
   o << EndSeq;
