@@ -491,7 +491,7 @@ int RunValidate(const Context& ctx, const ValidateCommandOptions& options) {
       ratios += (ratios.empty() ? "" : ", ") + std::string("theta ") + Rounded(ThetaRmsRatio(result));
     }
     std::printf("  nominal / calibrated rms: %s (> 1: the calibration helped%s)\n", ratios.c_str(),
-                result.warnings.empty() ? "" : "; but see the warning below");
+                result.warnings.empty() ? "" : "; but see the warning");
   }
   if (!NotCompared(result).empty()) std::printf("  not compared: %s\n", NotCompared(result).c_str());
   if (result.corrected_for) PrintSensorCorrection(*result.corrected_for);
