@@ -417,6 +417,7 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   id.max_iterations = options.max_iterations;
   id.loss = ParseLoss(options.loss);
   id.geometry_prior_sigma_m = options.geometry_prior_sigma_m;
+  id.equilibrium = options.equilibrium == "on";
   // A robot file with systematic sensor errors (sensors fit) has them removed before the solve.
   const std::vector<Measurement> measurements =
       ReadMeasurementsOption(ctx, nominal, options.measurements_path, options.delimiter);
@@ -504,6 +505,11 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   }
   if (!ctx.quiet) {
     for (const std::string& w : result.warnings) std::fprintf(stderr, "cablecal: warning: %s\n", w.c_str());
+    if (validation) {
+      for (const std::string& w : validation->warnings) {
+        std::fprintf(stderr, "cablecal: warning: --holdout: %s\n", w.c_str());
+      }
+    }
   }
   if (result.corrected_for) PrintSensorCorrection(*result.corrected_for);
   const std::vector<std::string> names = GeometryNames(nominal.num_cables());
@@ -591,10 +597,14 @@ int RunValidate(const Context& ctx, const ValidateCommandOptions& options) {
     if (result.has_inclinometer) {
       ratios += (ratios.empty() ? "" : ", ") + std::string("theta ") + Rounded(ThetaRmsRatio(result));
     }
-    std::printf("  nominal / calibrated rms: %s (> 1: the calibration helped)\n", ratios.c_str());
+    std::printf("  nominal / calibrated rms: %s (> 1: the calibration helped%s)\n", ratios.c_str(),
+                result.warnings.empty() ? "" : "; but see the warning");
   }
   if (!NotCompared(result).empty()) std::printf("  not compared: %s\n", NotCompared(result).c_str());
   if (result.corrected_for) PrintSensorCorrection(*result.corrected_for);
+  if (!ctx.quiet) {
+    for (const std::string& w : result.warnings) std::fprintf(stderr, "cablecal: warning: %s\n", w.c_str());
+  }
   return kExitOk;
 }
 

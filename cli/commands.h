@@ -9,6 +9,7 @@
 
 #include "cli/processes.h"
 #include "common/atomic_output.h"
+#include "identify/identify.h"
 #include "model/robot.h"
 
 namespace cablecal::cli {
@@ -61,6 +62,7 @@ struct IdentifyCommandOptions {
   bool json = false;  // the result on stdout as JSON (then --out is optional)
   std::string delimiter = ",";  // of the measurement CSV
   std::string loss = "none";     // ParseLoss
+  std::string equilibrium = cablecal::kDefaultEquilibrium ? "on" : "off";  // the 2-cable equilibrium rows
   std::string report_dir;        // --report: the calibration report's folder (identify/calibration_report.h)
   std::string holdout_path;      // --holdout: held-out readings the report validates the calibration on
   double geometry_prior_sigma_m = 0.0;  // --geometry-prior (0: none)
@@ -97,8 +99,10 @@ int RunDesign(const Context& ctx, const DesignCommandOptions& options);
 struct MonteCarloCommandOptions {
   std::string robot_path, poses, designs = "random,optimized", estimator = "ml", gauge = "a1x", sensors = "both",
                           out_dir, loss = "none", outliers = "0";
+  std::string equilibrium = cablecal::kDefaultEquilibrium ? "on" : "off";
   int trials = 0, threads = 0, design_starts = 2;
   double geometry_sigma_m = 0.01;
+  double com_error_m = 0.0;  // the true robot's centre of mass off the file's along the platform's x
   unsigned long long seed = 1;
   bool plot = true;
   bool geometry_prior = false;  // --geometry-prior: identify every trial with geometry_sigma_m as a prior

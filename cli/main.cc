@@ -152,6 +152,11 @@ int main(int argc, char** argv) {
   id_cmd->add_option("--geometry-prior", ident.geometry_prior_sigma_m,
                      "standard deviation of the nominal exit points and initial lengths, m: a prior, so that the "
                      "result knows at least what the robot file did (ml only; default none)");
+  id_cmd->add_option("--equilibrium", ident.equilibrium,
+                     "on: with 2 cables each pose's static equilibrium is a residual, its sigma the robot file's "
+                     "platform.com_sigma (default 5 mm); off: theta free per pose (ml only)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"on", "off"}));
   id_cmd->add_option("--report", ident.report_dir,
                      "folder for a calibration report: report.md with the estimates, figures and provenance, and the "
                      "data files behind them (created if new; its parent must exist)");
@@ -244,6 +249,13 @@ int main(int argc, char** argv) {
   mc_cmd->add_flag("--geometry-prior", mc.geometry_prior,
                    "identify every trial with a prior of --geometry-sigma on the geometry (identify --geometry-prior)");
   mc_cmd->add_option("--loss", mc.loss, "robust loss of every identification, as identify --loss")
+      ->capture_default_str();
+  mc_cmd->add_option("--equilibrium", mc.equilibrium, "every identification's 2-cable equilibrium rows, as identify")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"on", "off"}));
+  mc_cmd->add_option("--com-error", mc.com_error_m,
+                     "the true robot's centre of mass off the robot file's by this along the platform's x, m "
+                     "(what a wrong platform.com costs)")
       ->capture_default_str();
   mc_cmd->add_option("--outliers", mc.outliers,
                      "RATE[:SIZE]: each reading off by SIZE sigmas (default 100) with probability RATE")

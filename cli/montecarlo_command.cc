@@ -58,6 +58,8 @@ std::string RunYaml(const Robot& robot, const MonteCarloOptions& o, const std::s
   y << Key << "geometry_sigma_m" << Value << YamlNumber{o.geometry_sigma_m};
   y << Key << "geometry_prior" << Value << o.geometry_prior;
   y << Key << "loss" << Value << ToString(o.loss);
+  y << Key << "equilibrium" << Value << (o.equilibrium ? "on" : "off");
+  y << Key << "com_error_m" << Value << YamlNumber{o.com_error_m};
   y << Key << "outliers" << Value << YAML::Flow << YAML::BeginMap << Key << "rate" << Value
     << YamlNumber{o.outliers.rate} << Key << "size_sigmas" << Value << YamlNumber{o.outliers.size_sigmas}
     << YAML::EndMap;
@@ -136,6 +138,8 @@ int RunMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptions& opt
     o.geometry_sigma_m = options.geometry_sigma_m;
     o.loss = ParseLoss(options.loss);
     o.geometry_prior = options.geometry_prior;
+    o.equilibrium = options.equilibrium == "on";
+    o.com_error_m = options.com_error_m;
     o.outliers = ParseOutliers(options.outliers);
     o.seed = options.seed;
     o.design_starts = options.design_starts;

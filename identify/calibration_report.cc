@@ -366,8 +366,10 @@ std::string ValidationSection(const ValidationResult& v, const ReportSources& so
     o << "Nominal / calibrated RMS error:";
     if (v.has_laser) o << " z " << Rounded(ZRmsRatio(v));
     if (v.has_inclinometer) o << (v.has_laser ? "," : "") << " θ " << Rounded(ThetaRmsRatio(v));
-    o << " (above 1: the calibration predicts the held-out poses better than the nominal robot).\n\n";
+    o << " (above 1: the calibration predicts the held-out poses better than the nominal robot" <<
+        (v.warnings.empty() ? "" : ", yet see below") << ").\n\n";
   }
+  for (const std::string& w : v.warnings) o << "**Warning:** " << PrintableText(w) << ".\n\n";
   if (!NotCompared(v).empty()) o << "Not compared: the held-out readings have " << NotCompared(v) << ".\n\n";
   o << Figure(kValidationFigure, "Held-out poses: predicted − measured, calibrated and nominal robots", figure_error);
   o << "Per reading: `validation.csv`; the summary: `validation.yaml`.\n\n";

@@ -69,6 +69,21 @@ struct MlSensorCost {
   }
 };
 
+// The static equilibrium's row of a pose (robots of M < 3 cables; residuals.h,
+// MlEquilibriumResidual): one block per pose, after its readings' blocks, never under a robust
+// loss (it is no reading).
+template <int M>
+struct MlEquilibriumCost {
+  const Robot* robot;
+  ReadingWeights weights;
+
+  template <typename T>
+  bool operator()(const T* geometry, const T* pose, T* residual) const {
+    MlEquilibriumResidual<M, T>(*robot, weights, geometry, pose, residual);
+    return AllFinite<T, 1>(residual);
+  }
+};
+
 // With a robust loss (identify --loss) every reading is a residual block of its own, so that
 // the loss weighs each reading, not a pose's readings together: one cable's length residual,
 // and the laser's or the inclinometer's (sensor 0 or 1 of MlSensorResiduals).

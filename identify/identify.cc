@@ -77,6 +77,8 @@ std::string MissingSensorsText(const std::vector<std::string>& missing_sensors) 
   return text;
 }
 
+double EquilibriumSigma(const Robot& robot) { return robot.com_sigma_m.value_or(kDefaultComSigma_m); }
+
 const char* ToString(Estimator e) { return e == Estimator::kPaper ? "paper" : "ml"; }
 const char* ToString(Gauge g) {
   switch (g) {

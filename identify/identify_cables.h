@@ -187,21 +187,26 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   const int values_per_reading = ml ? M + (laser ? 1 : 0) + (inclinometer ? 1 : 0) : M;
   const bool geometry_prior = options.geometry_prior_sigma_m > 0.0;
   const int geometry_cols = options.gauge == Gauge::kA1x ? kGeometry - 1 : kGeometry;
+  // ml with fewer cables than the pose's 3 DoF: each pose's static equilibrium, 3 - M rows of its
+  // block (residuals.h, MlEquilibriumResidual), whatever the number of its readings.
+  const int equilibrium_rows = ml && options.equilibrium ? EquilibriumRows(M) : 0;
   // Ceres' prior rows (GeometryPriorCost: all 3M; ExitPointPriorCost: the exits) and the
   // equations they add (a held a1x's row is zero).
   const int prior_rows = geometry_prior ? kGeometry : options.gauge == Gauge::kPrior ? 2 * M : 0;
   const int prior_equations = geometry_prior ? geometry_cols : prior_rows;
-  const int equations = values_per_reading * num_readings + prior_equations;
+  const int equations = values_per_reading * num_readings + equilibrium_rows * n + prior_equations;
   const int unknowns = geometry_cols + per_pose_unknowns * n;
   if (equations < unknowns) {
     std::string advice;
-    if (values_per_reading <= per_pose_unknowns) {
+    if (values_per_reading + equilibrium_rows <= per_pose_unknowns) {
       advice = "each reading's " + std::to_string(values_per_reading) + " values only fix its pose's own " +
                std::to_string(per_pose_unknowns) + " unknowns, so no number of poses determines the geometry" +
                (missing_text.empty() ? "" : " (the data have " + missing_text + ")");
     } else {
       int needed = n;
-      while (values_per_reading * needed + prior_equations < geometry_cols + per_pose_unknowns * needed) ++needed;
+      while ((values_per_reading + equilibrium_rows) * needed + prior_equations < geometry_cols + per_pose_unknowns * needed) {
+        ++needed;
+      }
       advice = "at least " + std::to_string(needed) + " poses are needed";
     }
     throw InputError(options.source, "",
@@ -232,6 +237,7 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   result.gauge = options.gauge;
   result.loss = options.loss;
   result.missing_sensors = missing_sensors;
+  if (equilibrium_rows > 0) result.equilibrium_com_sigma_m = EquilibriumSigma(nominal);
   result.geometry_std = GeometryVector::Zero(kGeometry);
   result.geometry_correlation = Eigen::MatrixXd::Identity(kGeometry, kGeometry);
 
@@ -262,6 +268,7 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   // No reading, no weight: its row stays in the block (the same block shapes) but is zero.
   if (!laser) weights.inv_sigma_laser = 0.0;
   if (!inclinometer) weights.inv_sigma_inclinometer = 0.0;
+  if (equilibrium_rows > 0) weights.inv_sigma_equilibrium = 1.0 / EquilibriumSigma(nominal);
   using PoseValues = std::vector<std::array<double, 3>>;
   // The problem over the poses in `use` at the values in `g` and `q`, each reading's blocks
   // with `loss_kind` (the problem owns its loss function).
@@ -299,6 +306,13 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
           auto* cost = new ceres::AutoDiffCostFunction<internal::PaperPoseCost<M>, M, kGeometry, 1>(
               new internal::PaperPoseCost<M>{&nominal, readings});
           problem->AddResidualBlock(cost, nullptr, g, q[j].data());
+        }
+      }
+      if constexpr (EquilibriumRows(M) > 0) {
+        if (equilibrium_rows > 0) {  // after the pose's readings: the last row of its block
+          problem->AddResidualBlock(new ceres::AutoDiffCostFunction<internal::MlEquilibriumCost<M>, 1, kGeometry, 3>(
+                                        new internal::MlEquilibriumCost<M>{&nominal, weights}),
+                                    nullptr, g, q[j].data());
         }
       }
     }
@@ -382,7 +396,7 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     for (int p = 0; p < n; ++p) {
       if (!use[p]) continue;
       ++poses_used;
-      values += values_per_reading * static_cast<int>(readings_of[p].size());
+      values += values_per_reading * static_cast<int>(readings_of[p].size()) + equilibrium_rows;
     }
     return values + prior_equations >= geometry_cols + per_pose_unknowns * poses_used;
   };
@@ -421,7 +435,7 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   struct Reading {
     double sigmas;
     int reading;  // index into measurements
-    int sensor;   // 0 .. M - 1: encoders; M: laser; M + 1: inclinometer
+    int sensor;   // 0 .. M - 1: encoders; M: laser; M + 1: inclinometer; M + 2: the pose's equilibrium
   };
   const double length_sigma = ml ? s.encoder_sigma_m : std::max(s.laser_sigma_m(), s.encoder_sigma_m);
   // The per-reading ReadingFits are for a person (the CLI, Python); the Monte Carlo, which asks
@@ -483,6 +497,17 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
           fit.inclinometer_weight = LossWeight(options.loss, inclinometer_sigmas);
         }
       }
+      if constexpr (EquilibriumRows(M) > 0) {
+        if (equilibrium_rows > 0) {  // the pose's, named by its first reading
+          double r;
+          MlEquilibriumResidual<M, double>(nominal, weights, g, q[j].data(), &r);
+          readings.push_back({std::abs(r), readings_of[j].front(), M + 2});
+          if (fits) {
+            e.equilibrium_sigmas = r;
+            e.equilibrium_theta_error_rad = EquilibriumThetaError<M>(nominal, g, e.q);
+          }
+        }
+      }
       if (fits) result.poses.push_back(e);
     }
     if (fits) {
@@ -504,9 +529,10 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   const auto describe = [&](const Reading& r, bool with_pose = true) {
     const Measurement& m = measurements[r.reading];
     const bool repeated = readings_of.size() != measurements.size() && !m.where.empty();
-    const std::string sensor = r.sensor < M ? "encoder " + std::to_string(r.sensor + 1)
-                               : r.sensor == M ? std::string("laser")
-                                               : std::string("inclinometer");
+    const std::string sensor = r.sensor < M        ? "encoder " + std::to_string(r.sensor + 1)
+                               : r.sensor == M     ? std::string("laser")
+                               : r.sensor == M + 1 ? std::string("inclinometer")
+                                                   : std::string("equilibrium");
     char buffer[64];
     std::snprintf(buffer, sizeof(buffer), " %.3g sigma", r.sigmas);
     return (with_pose ? "pose " + std::to_string(m.pose_id) + ": " : std::string()) + sensor +
@@ -602,13 +628,13 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     // Ceres rows per reading: the blocks of build() (a zero row for a missing sensor without a
     // loss, none with one).
     const int rows_per_reading = !ml ? M : with_loss ? values_per_reading : M + 2;
-    const int pose_rows = rows_per_reading * num_readings;
+    const int pose_rows = rows_per_reading * num_readings + equilibrium_rows * n;
     CABLECAL_CHECK(crs.num_rows == pose_rows + prior_rows && crs.num_cols == geometry_cols + per_pose_unknowns * n,
                    "the Jacobian has one row block per pose and the prior's");
     std::vector<int> block_of_row(pose_rows), row_in_block(pose_rows);
     if (residuals) residuals->clear();
     for (int j = 0, r = 0; j < n; ++j) {
-      const int rows = rows_per_reading * static_cast<int>(readings_of[j].size());
+      const int rows = rows_per_reading * static_cast<int>(readings_of[j].size()) + equilibrium_rows;
       if (residuals) residuals->push_back(Eigen::Map<const Eigen::VectorXd>(values.data() + r, rows));
       for (int k = 0; k < rows; ++k, ++r) {
         block_of_row[r] = j;
@@ -1001,7 +1027,7 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   // below its 5-sigma lower bound (Wilson-Hilferty: ((1 - 2/9k) - 5 sqrt(2/9k))^3) happens in
   // fewer than one clean experiment in a million.
   if (ml && !robust) {
-    const int dof = values_per_reading * num_readings - unknowns;
+    const int dof = values_per_reading * num_readings + equilibrium_rows * n - unknowns;
     const double h = 2.0 / (9.0 * dof);
     const double lower = std::pow(std::max(0.0, 1.0 - h - 5.0 * std::sqrt(h)), 3);
     double sum = 0.0;

@@ -36,7 +36,8 @@
 namespace cablecal::internal {
 
 // The problem: readings grouped by pose (readings_of[j]: indices into measurements), the
-// weights that whiten them (a missing sensor's weight is 0), whether a1x is held (gauge a1x)
+// weights that whiten them (a missing sensor's weight is 0; weights.inv_sigma_equilibrium > 0
+// adds each pose's equilibrium row when M < 3), whether a1x is held (gauge a1x)
 // and the priors on the geometry: the tracker's on the exit points (gauge prior) and
 // --geometry-prior's on every parameter, as one inverse sigma per coordinate (0: none).
 template <int M>
@@ -104,6 +105,13 @@ double Cost(const MlLeastSquaresProblem<M>& p, const double* g, const PoseValues
       for (int i = 0; i < M; ++i) sum += r[i] * r[i] * (p.weights.inv_sigma_encoder * p.weights.inv_sigma_encoder);
       sum += SensorResiduals<M>(p, m, q[j]).squaredNorm();
     }
+    if constexpr (EquilibriumRows(M) > 0) {
+      if (p.weights.inv_sigma_equilibrium > 0.0) {
+        double r;
+        MlEquilibriumResidual<M, double>(*p.robot, p.weights, g, q[j].data(), &r);
+        sum += r * r;
+      }
+    }
   }
   for (int k = 0; k < 3 * M; ++k) {
     if (p.prior_inv_sigma(k) > 0.0) sum += PriorResidual<M>(p, g, k) * PriorResidual<M>(p, g, k);
@@ -169,6 +177,26 @@ double Normal(const MlLeastSquaresProblem<M>& p, const double* g, const PoseValu
       pose.a(2, 2) += w.inv_sigma_inclinometer * w.inv_sigma_inclinometer;
       pose.gradient(1) += w.inv_sigma_laser * sensors(0);
       pose.gradient(2) += w.inv_sigma_inclinometer * sensors(1);
+    }
+    // The pose's equilibrium row (M < 3; residuals.h, MlEquilibriumResidual): one per pose,
+    // whatever its readings, on the exit points and the pose, by a Jet over those 2M + 3.
+    if constexpr (EquilibriumRows(M) > 0) {
+      if (w.inv_sigma_equilibrium > 0.0) {
+        using JetE = ceres::Jet<double, 2 * M + 3>;
+        JetE exits[2 * M], pose_jet[3];
+        for (int k = 0; k < 2 * M; ++k) exits[k] = JetE(g[k], k);
+        for (int c = 0; c < 3; ++c) pose_jet[c] = JetE(q[j][c], 2 * M + c);
+        JetE r;
+        MlEquilibriumResidual<M, JetE>(*p.robot, w, exits, pose_jet, &r);
+        const Eigen::Matrix<double, 2 * M, 1> row_exits = r.v.template head<2 * M>();
+        const Eigen::Vector3d row_pose = r.v.template tail<3>();
+        sum += r.a * r.a;
+        pose.a.noalias() += row_pose * row_pose.transpose();
+        pose.gradient += row_pose * r.a;
+        pose.b.template topRows<2 * M>().noalias() += row_exits * row_pose.transpose();
+        gradient_g.template head<2 * M>() += row_exits * r.a;
+        h_gg.template topLeftCorner<2 * M, 2 * M>().noalias() += row_exits * row_exits.transpose();
+      }
     }
   }
   for (int k = 0; k < 3 * M; ++k) {

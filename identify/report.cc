@@ -93,6 +93,13 @@ ResultParts IdentifyResultParts(const IdentifyResult& r, const std::string& comm
     for (const std::string& w : r.warnings) o << YamlString{w};
     o << EndSeq;
   }
+  o << Key << "equilibrium" << Value;
+  if (r.equilibrium_com_sigma_m) {
+    o << Flow << BeginMap << Key << "com_sigma_m" << Value << YamlNumber{*r.equilibrium_com_sigma_m} << EndMap
+      << YAML::Comment("each pose's static equilibrium was a residual (2 cables), with this sigma");
+  } else {
+    o << "off";
+  }
   o << Key << "loss" << Value << ToString(r.loss);
   if (r.loss.kind != LossKind::kNone) {
     o << Key << "down_weighted" << Value
@@ -155,6 +162,8 @@ ResultParts IdentifyResultParts(const IdentifyResult& r, const std::string& comm
     if (r.has_covariance && ml) number(poses, "z_std", p.std_dev(1));
     number(poses, "theta", p.q(2));
     if (r.has_covariance && ml) number(poses, "theta_std", p.std_dev(2));
+    if (p.equilibrium_sigmas) number(poses, "equilibrium_sigmas", *p.equilibrium_sigmas);
+    if (p.equilibrium_theta_error_rad) number(poses, "theta_minus_equilibrium_rad", *p.equilibrium_theta_error_rad);
     poses.EndRow();
   }
   ResultParts parts{YamlText(o), poses.Finish("poses"), "", ""};

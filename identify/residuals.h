@@ -4,6 +4,8 @@
 // the identification's vector a1x a1z ... aMx aMz l10 ... lM0 (identify/experiment.h).
 #pragma once
 
+#include <ceres/jet.h>
+
 #include <Eigen/Core>
 
 #include "model/cable.h"
@@ -23,6 +25,9 @@ struct PoseReadings {
 
 struct ReadingWeights {
   double inv_sigma_encoder = 1.0, inv_sigma_laser = 1.0, inv_sigma_inclinometer = 1.0;
+  // The static equilibrium's row of each pose (robots with fewer cables than the pose's 3
+  // DoF, MlEquilibriumResidual below): 1 / platform.com_sigma, in 1/m; 0: no such row.
+  double inv_sigma_equilibrium = 0.0;
 };
 inline ReadingWeights WeightsOf(const SensorNoise& s) {
   return {1.0 / s.encoder_sigma_m, 1.0 / s.laser_sigma_m(), 1.0 / s.inclinometer_sigma_rad()};
@@ -77,6 +82,70 @@ void MlResiduals(const Robot& robot, const PoseReadings<M>& readings, const Read
                  const T* geometry, const T* pose, T* residual) {
   MlLengthResiduals<M, T>(robot, readings, weights, geometry, pose, residual);
   MlSensorResiduals<M, T>(readings, weights, pose, residual + M);
+}
+
+// ---- The static equilibrium (robots with fewer cables than the pose's 3 DoF) ----------------
+// With m < 3 cables the lengths leave the platform 3 - m degrees of freedom, and the statics
+// decide them: at a pose the platform can hold, gravity's wrench w_g lies in the span of the
+// m cable wrenches (the columns of W, the cables' unit pulls u_i along their straight
+// segments, tangent point to anchor, and their moments (R b_i) x u_i; model/cable.h). Pose j's
+// unknowns then meet 3 - m conditions besides its readings: rows of its block in the ml fit.
+// The planar tool has m >= 2, so one condition (m = 2); a spatial robot of m < 6 cables would
+// have 6 - m.
+constexpr int EquilibriumRows(int num_cables) { return num_cables < 3 ? 3 - num_cables : 0; }
+
+// m = 2: the tensions that balance gravity's force (u_1 t_1 + u_2 t_2 = (0, m g), solved by
+// Cramer's rule) leave the moment e = sum_i t_i (R b_i) x u_i - m g (R c)_x about the
+// reference point p. Their resultant is the vertical force m g through the intersection I of
+// the two cable lines, so e = m g (x_I - x_c): the platform balances when its centre of mass c
+// hangs plumb below (or stands above) the point where the cables' lines meet. Returned is
+// that horizontal offset x_I - x_c, in m; it does not depend on the mass. Exit points from
+// `geometry` (a1x a1z a2x a2z ...), the anchors, pulleys and centre of mass from `robot`.
+template <int M, typename T>
+T EquilibriumOffset(const Robot& robot, const T* geometry, const Pose<T>& q) {
+  static_assert(M == 2, "the planar equilibrium condition is written for 2 cables (EquilibriumRows)");
+  const Eigen::Matrix<T, 2, 2> R = Rotation(q(2));
+  const Vec2<T> p(q(0), q(1));
+  Vec2<T> u[M];
+  T moment[M];
+  for (int i = 0; i < M; ++i) {
+    const Cable& c = robot.cables[i];
+    const Vec2<T> r_F_anchor = R * c.p_P_anchor_m.template cast<T>();
+    const Vec2<T> p_F_exit(geometry[2 * i], geometry[2 * i + 1]);
+    u[i] = CableGeometry<T>(p_F_exit, T(c.pulley_radius_m), SignsOf(c), p + r_F_anchor).u_F_cable;
+    moment[i] = Cross2<T>(r_F_anchor, u[i]);
+  }
+  const T det = u[0].x() * u[1].y() - u[0].y() * u[1].x();
+  // t_1 / (m g) = -u_2x / det, t_2 / (m g) = u_1x / det.
+  const T x_intersection = (u[0].x() * moment[1] - u[1].x() * moment[0]) / det;
+  const T x_com = (R * robot.p_P_com_m.template cast<T>()).x();
+  return x_intersection - x_com;
+}
+
+// The ml estimator's equilibrium row of one pose: that offset over platform.com_sigma, the
+// uncertainty of the centre of mass (per axis; friction at the pulleys can be folded into it as
+// an equivalent shift): a centre of mass off by delta moves x_c by delta cos(theta) along the
+// platform's x and -delta sin(theta) along its z, so the offset's standard deviation is
+// com_sigma whatever the pose. Touches the exit points and the pose, not the initial lengths.
+// Nothing to evaluate (no row) when weights.inv_sigma_equilibrium is 0 or M >= 3.
+template <int M, typename T>
+void MlEquilibriumResidual(const Robot& robot, const ReadingWeights& weights, const T* geometry, const T* pose,
+                           T* residual) {
+  residual[0] = EquilibriumOffset<M, T>(robot, geometry, Pose<T>(pose[0], pose[1], pose[2])) *
+                weights.inv_sigma_equilibrium;
+}
+
+// The same condition as an angle, for a person: theta minus the platform's equilibrium angle at
+// the pose's (x, z), to first order, the offset divided by its derivative along theta (the
+// pose's rotational stiffness over m g, in m/rad). Exact where the offset is 0; d rad from an
+// equilibrium it is d (1 + O(d)).
+template <int M>
+double EquilibriumThetaError(const Robot& robot, const double* geometry, const Pose<double>& q) {
+  using Jet1 = ceres::Jet<double, 1>;
+  Jet1 g[2 * M];
+  for (int k = 0; k < 2 * M; ++k) g[k] = Jet1(geometry[k]);
+  const Jet1 offset = EquilibriumOffset<M, Jet1>(robot, g, Pose<Jet1>(Jet1(q(0)), Jet1(q(1)), Jet1(q(2), 0)));
+  return offset.a / offset.v(0);
 }
 
 // The paper's Eq. (6) itself, f_ij = l_model^2 - (dl_ij + l_i0)^2 in m^2, with z_j and theta_j

@@ -205,6 +205,24 @@ ValidationResult Validate(const Robot& calibrated, const std::optional<Robot>& n
   result.skip_infeasible = skip_infeasible;
   result.laser_sigma_m = calibrated.sensors.laser_sigma_m();
   result.inclinometer_sigma_rad = calibrated.sensors.inclinometer_sigma_rad();
+  // The calibrated model against the noise: far above it, something the model leaves out.
+  const RobotPrediction& cal = result.robots.front();
+  const auto check = [&](const std::optional<ErrorSummary>& e, double sigma, const char* what, const char* sensor,
+                         double unit, const char* unit_name) {
+    if (!e || !(sigma > 0.0) || !(e->rms > kUnexplainedNoiseFactor * sigma)) return;
+    char buffer[256];
+    std::snprintf(buffer, sizeof(buffer),
+                  "the calibrated robot's %s RMS error on these readings is %.3g %s, %.3g times the %s's sigma (%.3g %s; "
+                  "more than %g)", what, unit * e->rms, unit_name, e->rms / sigma, sensor, unit * sigma, unit_name,
+                  kUnexplainedNoiseFactor);
+    result.warnings.push_back(std::string(buffer) +
+                              ": the calibrated model does not explain these held-out readings. Check the robot file's "
+                              "platform (mass, com, anchors) and pulleys, which the calibration does not identify, and "
+                              "the sensors' error model (cablecal sensors fit); a 2-cable robot calibrated with "
+                              "--equilibrium off predicts theta less well");
+  };
+  check(cal.z_m, result.laser_sigma_m, "z", "laser", 1e3, "mm");
+  check(cal.theta_rad, result.inclinometer_sigma_rad, "theta", "inclinometer", 1e3, "mrad");
   return result;
 }
 
@@ -296,6 +314,11 @@ std::string ValidationSummaryYaml(const ValidationResult& result, const std::str
     if (result.has_laser) o << YAML::Key << "z_rms" << YAML::Value << YamlNumber{ZRmsRatio(result)};
     if (result.has_inclinometer) o << YAML::Key << "theta_rms" << YAML::Value << YamlNumber{ThetaRmsRatio(result)};
     o << YAML::EndMap << YAML::Comment("> 1: the calibration helped");
+  }
+  if (!result.warnings.empty()) {
+    o << YAML::Key << "warnings" << YAML::Value << YAML::BeginSeq;
+    for (const std::string& w : result.warnings) o << YamlString{w};
+    o << YAML::EndSeq;
   }
   o << YAML::EndMap;
   return YamlText(o);

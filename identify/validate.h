@@ -57,7 +57,17 @@ struct ValidationResult {
   // With skip_infeasible (validate --skip-infeasible): the readings left out, in their order.
   bool skip_infeasible = false;
   std::vector<SkippedReading> skipped;
+  // The calibrated robot's RMS error of z or theta beyond kUnexplainedNoiseFactor times its
+  // sensor's sigma: the calibrated model does not explain these readings (Validate fills it;
+  // validate prints them, its summary lists them under `warnings`, the report says them).
+  std::vector<std::string> warnings;
 };
+
+// A calibrated robot predicts held-out z to about the laser's noise (1.1 sigma, README
+// "Validation"), and a 2-cable robot's theta to 2-5 sigma (the statics amplify the geometry's
+// error; bench/README.md, "The equilibrium in identification"); an RMS error more than this many
+// sigma is a model that does not explain the readings (a 5 cm anchor error: over 100 in theta).
+constexpr double kUnexplainedNoiseFactor = 10.0;
 
 // Predicts every reading of `measurements` with `calibrated` and, when given, `nominal`. Throws
 // InputError naming the reading's file and line (or `source` and the pose) when a robot cannot

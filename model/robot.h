@@ -95,6 +95,9 @@ struct Robot {
   double frame_height_m = 0.0;
   double platform_mass_kg = 0.0;
   Eigen::Vector2d p_P_com_m = Eigen::Vector2d::Zero();
+  // Optional in the file (platform.com_sigma): the centre of mass's uncertainty per axis, m,
+  // the sigma of a 2-cable identification's equilibrium rows (identify/identify.h).
+  std::optional<double> com_sigma_m;
   std::vector<Cable> cables;
   double tension_min_N = 0.0;
   double tension_max_N = 0.0;

@@ -134,11 +134,16 @@ Robot Parse(const YAML::Node& root, const Reader& rd) {
   rd.AtMost(frame["height"], "frame.height", robot.frame_height_m, kMaxFrameSide_m, "m");
 
   const YAML::Node platform = root["platform"];
-  rd.ExpectMap(platform, "platform", {"mass", "com", "anchors"}, {});
+  rd.ExpectMap(platform, "platform", {"mass", "com", "anchors"}, {"com_sigma"});
   robot.platform_mass_kg = rd.Number(platform, "platform", "mass");
   rd.Positive(platform["mass"], "platform.mass", robot.platform_mass_kg);
   rd.AtMost(platform["mass"], "platform.mass", robot.platform_mass_kg, kMaxPlatformMass_kg, "kg");
   robot.p_P_com_m = rd.Vector2(platform["com"], "platform.com");
+  if (platform["com_sigma"]) {
+    robot.com_sigma_m = rd.Number(platform, "platform", "com_sigma");
+    rd.Positive(platform["com_sigma"], "platform.com_sigma", *robot.com_sigma_m);
+    rd.AtMost(platform["com_sigma"], "platform.com_sigma", *robot.com_sigma_m, 0.1, "m");
+  }
   const YAML::Node anchors = platform["anchors"];
   if (!anchors.IsSequence()) rd.Fail(anchors, "platform.anchors", "must be a list of [x, z] points");
 
@@ -435,6 +440,7 @@ void EmitRobotFields(YAML::Emitter& o, const Robot& robot) {
   o << YAML::Key << "mass" << YAML::Value << YamlNumber{robot.platform_mass_kg};
   o << YAML::Key << "com" << YAML::Value;
   v2(robot.p_P_com_m);
+  if (robot.com_sigma_m) o << YAML::Key << "com_sigma" << YAML::Value << YamlNumber{*robot.com_sigma_m};
   o << YAML::Key << "anchors" << YAML::Value << YAML::Flow << YAML::BeginSeq;
   for (const Cable& c : robot.cables) v2(c.p_P_anchor_m);
   o << YAML::EndSeq << YAML::EndMap;

@@ -120,7 +120,8 @@ TrialOutcome RunTrial(const Robot& nominal, const MonteCarloOptions& o, int n, P
     return out;
   }
   try {
-    const Robot truth = TrueGeometryForTrial(nominal, o.geometry_sigma_m, o.gauge, rng);
+    Robot truth = TrueGeometryForTrial(nominal, o.geometry_sigma_m, o.gauge, rng);
+    truth.p_P_com_m.x() += o.com_error_m;
     const std::vector<PlanPose> poses =
         designed ? *designed : SampleFeasiblePoses(nominal, n, StreamSeed(o.seed, {n64, d64, t64, 1}));
     SimulatedExperiment sim;
@@ -139,6 +140,7 @@ TrialOutcome RunTrial(const Robot& nominal, const MonteCarloOptions& o, int n, P
     id.gauge = o.gauge;
     id.loss = o.loss;
     if (o.geometry_prior) id.geometry_prior_sigma_m = o.geometry_sigma_m;
+    id.equilibrium = o.equilibrium;
     id.compute_covariance = false;
     id.compute_identifiability = false;
     id.check_plausible_geometry = false;  // a wild estimate from a poor pose set is counted, not refused
@@ -171,6 +173,7 @@ Criterion CriterionOf(PoseSetDesign d) {
 
 void ValidateOptions(const MonteCarloOptions& o, const Robot* nominal) {
   if (o.trials < 1) throw InputError("--trials", "", "must be at least 1");
+  if (!(std::abs(o.com_error_m) <= 0.1)) throw InputError("--com-error", "", "must be a number of m, at most 0.1 in size");
   if (o.loss.kind != LossKind::kNone && o.estimator != Estimator::kMaximumLikelihood) {
     throw InputError("--loss", "", "needs --estimator ml (the paper estimator's residuals are not in sigmas)");
   }

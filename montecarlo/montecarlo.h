@@ -51,6 +51,10 @@ struct MonteCarloOptions {
   // Identify every trial with a prior on the geometry of geometry_sigma_m (identify
   // --geometry-prior): what the lab knew before measuring, so a trial never knows less.
   bool geometry_prior = false;
+  bool equilibrium = kDefaultEquilibrium;  // of every trial's identification (identify --equilibrium)
+  // The true robot's centre of mass off the nominal file's by this along the platform's x (m):
+  // the identification assumes the file's, so this is what a wrong platform.com costs.
+  double com_error_m = 0.0;
   OutlierModel outliers;  // gross readings added to every trial's (identify/experiment.h)
   std::uint64_t seed = 1;
   int design_starts = 2;  // Ipopt starts per designed set (4x as many if none converges)

@@ -112,6 +112,14 @@ std::string AsText(py::handle h, const std::string& name) {
   return h.cast<std::string>();
 }
 
+// "on" or "off" (True or False too), as the CLI's on|off options.
+bool OnOff(py::handle h, const std::string& name) {
+  if (py::isinstance<py::bool_>(h)) return h.cast<bool>();
+  const std::string text = AsText(h, name);
+  if (text != "on" && text != "off") Bad(name, "expected \"on\" or \"off\", got '" + text + "'");
+  return text == "on";
+}
+
 // A 2-D float array of `rows` (-1: any) x `cols`, finite. A 1-D array is taken as one column
 // when cols == 1.
 Eigen::MatrixXd AsMatrix(py::handle h, const std::string& name, long rows, long cols) {
@@ -852,7 +860,7 @@ PYBIND11_MODULE(cablecal, m) {
   m.def(
       "identify",
       [](py::handle robot_arg, py::handle measurements_arg, py::handle estimator, py::handle gauge,
-         py::handle max_iterations, py::handle loss, py::handle geometry_prior) {
+         py::handle max_iterations, py::handle loss, py::handle geometry_prior, py::handle equilibrium) {
         const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
         const PyMeasurements& measurements = AsObject<PyMeasurements>(measurements_arg, "measurements", "Measurements");
         if (measurements.num_cables != robot.num_cables()) Bad("measurements", "read for a robot with another number of cables");
@@ -862,6 +870,7 @@ PYBIND11_MODULE(cablecal, m) {
         o.max_iterations = static_cast<int>(AsInteger(max_iterations, "max_iterations", 1, kMaxIdentifyIterations));
         o.loss = ParseLoss(AsText(loss, "loss"));
         if (!geometry_prior.is_none()) o.geometry_prior_sigma_m = AsNumber(geometry_prior, "geometry_prior");
+        o.equilibrium = OnOff(equilibrium, "equilibrium");
         o.source = "measurements";
         // As the CLI: a robot with systematic sensor errors has them removed before the solve.
         const std::vector<Measurement> readings = CorrectedReadings(robot, measurements.readings, "measurements");
@@ -879,6 +888,7 @@ PYBIND11_MODULE(cablecal, m) {
       },
       py::arg("robot"), py::arg("measurements"), py::arg("estimator") = "ml", py::arg("gauge") = "a1x",
       py::arg("max_iterations") = 100, py::arg("loss") = "none", py::arg("geometry_prior") = py::none(),
+      py::arg("equilibrium") = kDefaultEquilibrium ? "on" : "off",
       "Identifies exit points and initial lengths (cablecal identify); InputError when the data cannot "
       "calibrate this robot, SolverError when the solve does not converge. geometry_prior: the standard "
       "deviation (m) of the nominal geometry, a prior as identify --geometry-prior (None: none).");
@@ -1101,7 +1111,8 @@ PYBIND11_MODULE(cablecal, m) {
       "montecarlo",
       [](py::handle robot_arg, py::handle poses, py::handle trials, py::handle designs, py::handle estimator,
          py::handle gauge, py::handle sensors, py::handle geometry_sigma, py::handle seed, py::handle design_starts,
-         py::handle threads, py::handle progress, py::handle loss, py::handle outliers, py::handle geometry_prior) {
+         py::handle threads, py::handle progress, py::handle loss, py::handle outliers, py::handle geometry_prior,
+         py::handle equilibrium, py::handle com_error) {
         const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
         MonteCarloOptions o;
         if (py::isinstance<py::str>(poses)) {
@@ -1124,6 +1135,8 @@ PYBIND11_MODULE(cablecal, m) {
         o.outliers = ParseOutliers(AsText(outliers, "outliers"));
         if (!py::isinstance<py::bool_>(geometry_prior)) Bad("geometry_prior", "expected True or False");
         o.geometry_prior = geometry_prior.cast<bool>();
+        o.equilibrium = OnOff(equilibrium, "equilibrium");
+        o.com_error_m = AsNumber(com_error, "com_error");
         o.design_in_child_processes = false;  // as design() above
         ValidateOptions(o, &robot);
         if (!progress.is_none() && !PyCallable_Check(progress.ptr())) Bad("progress", "expected a callable or None");
@@ -1159,6 +1172,7 @@ PYBIND11_MODULE(cablecal, m) {
       py::arg("geometry_sigma") = 0.01, py::arg("seed") = 1, py::arg("design_starts") = 2,
       py::arg("threads") = py::none(), py::arg("progress") = py::none(), py::arg("loss") = "none",
       py::arg("outliers") = "0", py::arg("geometry_prior") = false,
+      py::arg("equilibrium") = kDefaultEquilibrium ? "on" : "off", py::arg("com_error") = 0.0,
       "The Monte Carlo study (cablecal montecarlo); Ctrl-C raises KeyboardInterrupt. progress(done, total), if "
       "given, is called now and then with the trials done. geometry_prior: identify every trial with "
       "geometry_sigma as a prior (montecarlo --geometry-prior).");

@@ -3,7 +3,8 @@
 // initial radius identify used before it): the same estimates to 1e-9 m and the same
 // iteration count, on the built-in robot, the asymmetric robot file, random robots of 2 and 4
 // cables (suspended and fully constrained) and every gauge; repeated readings of a pose and a
-// missing laser; and a problem it cannot solve, reported as not converged.
+// missing laser; the 2-cable equilibrium rows; and a problem it cannot solve, reported as not
+// converged.
 #include <gtest/gtest.h>
 
 #include <ceres/ceres.h>
@@ -64,7 +65,8 @@ struct Start {
 // One pose per distinct pose id, in order of first reading (as Identify groups them); the
 // nominal geometry and each pose's StartingPose as the start.
 template <int M>
-Start<M> MakeStart(const Robot& nominal, const std::vector<Measurement>& measurements, Gauge gauge) {
+Start<M> MakeStart(const Robot& nominal, const std::vector<Measurement>& measurements, Gauge gauge,
+                   bool equilibrium = false) {
   Start<M> s;
   std::vector<int> ids;
   for (int k = 0; k < static_cast<int>(measurements.size()); ++k) {
@@ -86,6 +88,7 @@ Start<M> MakeStart(const Robot& nominal, const std::vector<Measurement>& measure
   s.problem.readings_of = &s.readings_of;
   s.problem.weights = WeightsOf(nominal.sensors);
   if (!measurements.front().has_laser) s.problem.weights.inv_sigma_laser = 0.0;
+  if (equilibrium) s.problem.weights.inv_sigma_equilibrium = 1.0 / EquilibriumSigma(nominal);
   s.problem.hold_a1x = gauge == Gauge::kA1x;
   if (gauge == Gauge::kPrior) {
     s.problem.prior_geometry = g;
@@ -95,8 +98,9 @@ Start<M> MakeStart(const Robot& nominal, const std::vector<Measurement>& measure
 }
 
 template <int M>
-Solution SolveOwn(const Robot& nominal, const std::vector<Measurement>& measurements, Gauge gauge) {
-  Start<M> s = MakeStart<M>(nominal, measurements, gauge);
+Solution SolveOwn(const Robot& nominal, const std::vector<Measurement>& measurements, Gauge gauge,
+                  bool equilibrium = false) {
+  Start<M> s = MakeStart<M>(nominal, measurements, gauge, equilibrium);
   s.problem.measurements = &measurements;
   Solution out{s.geometry, s.poses, {}};
   out.summary = internal::SolveMlLeastSquares<M>(s.problem, out.geometry.data(), out.poses,
@@ -106,8 +110,9 @@ Solution SolveOwn(const Robot& nominal, const std::vector<Measurement>& measurem
 
 // The reference: Ceres with the cost functors and the settings identify used for least squares.
 template <int M>
-Solution SolveCeres(const Robot& nominal, const std::vector<Measurement>& measurements, Gauge gauge) {
-  const Start<M> s = MakeStart<M>(nominal, measurements, gauge);
+Solution SolveCeres(const Robot& nominal, const std::vector<Measurement>& measurements, Gauge gauge,
+                    bool equilibrium = false) {
+  const Start<M> s = MakeStart<M>(nominal, measurements, gauge, equilibrium);
   Solution out{s.geometry, s.poses, {}};
   double* g = out.geometry.data();
   ceres::Problem problem;
@@ -123,6 +128,13 @@ Solution SolveCeres(const Robot& nominal, const std::vector<Measurement>& measur
       problem.AddResidualBlock(new ceres::AutoDiffCostFunction<internal::MlSensorCost<M>, 2, 3>(
                                    new internal::MlSensorCost<M>{readings, s.problem.weights}),
                                nullptr, out.poses[j].data());
+    }
+    if constexpr (EquilibriumRows(M) > 0) {
+      if (equilibrium) {  // the pose's static equilibrium, one row per pose (identify_cables.h)
+        problem.AddResidualBlock(new ceres::AutoDiffCostFunction<internal::MlEquilibriumCost<M>, 1, 3 * M, 3>(
+                                     new internal::MlEquilibriumCost<M>{&nominal, s.problem.weights}),
+                                 nullptr, g, out.poses[j].data());
+      }
     }
     ordering->AddElementToGroup(out.poses[j].data(), 0);
   }
@@ -155,10 +167,10 @@ constexpr double kSame_m = 1e-9;
 
 template <int M>
 void ExpectSame(const Robot& nominal, const std::vector<Measurement>& measurements, Gauge gauge,
-                const std::string& what) {
-  const Solution own = SolveOwn<M>(nominal, measurements, gauge);
-  const Solution ceres = SolveCeres<M>(nominal, measurements, gauge);
-  const std::string where = what + ", gauge " + ToString(gauge);
+                const std::string& what, bool equilibrium = false) {
+  const Solution own = SolveOwn<M>(nominal, measurements, gauge, equilibrium);
+  const Solution ceres = SolveCeres<M>(nominal, measurements, gauge, equilibrium);
+  const std::string where = what + ", gauge " + ToString(gauge) + (equilibrium ? ", equilibrium" : "");
   ASSERT_TRUE(ceres.summary.converged) << where;
   ASSERT_TRUE(own.summary.converged) << where << ": " << own.summary.message;
   EXPECT_EQ(own.summary.iterations, ceres.summary.iterations) << where;
@@ -199,6 +211,29 @@ TEST(MlLeastSquares, SameAsCeresOnRandomRobots) {
     const Robot r4 = testing::RandomRobotWithCables(rng, "random4", 4, draw == 1);
     ExpectSameEveryGauge<4>(r4, Experiment(r4, 30, 0.001, 21 + draw), "random 4-cable robot " + std::to_string(draw));
   }
+}
+
+// The 2-cable equilibrium rows (residuals.h, MlEquilibriumResidual): the own solver's rows in the
+// pose blocks against Ceres' autodiff of the same function, every gauge, the robot files and
+// random robots; and a pose read three times (still one equilibrium row).
+TEST(MlLeastSquares, SameAsCeresWithTheEquilibrium) {
+  const Robot& builtin = BuiltinRobot();
+  for (const Gauge gauge : {Gauge::kA1x, Gauge::kPrior, Gauge::kNone}) {
+    ExpectSame<2>(builtin, Experiment(builtin, 30, 0.005, 1), gauge, "built-in", true);
+  }
+  const Robot asymmetric = LoadRobotFile(std::string(CABLECAL_SOURCE_DIR) + "/robots/asymmetric.yaml");
+  ExpectSame<2>(asymmetric, Experiment(asymmetric, 30, 0.005, 2), Gauge::kA1x, "asymmetric", true);
+  ExpectSame<2>(asymmetric, Experiment(asymmetric, 6, 0.005, 3), Gauge::kA1x, "asymmetric, 6 poses", true);
+  Rng rng(2026);
+  for (int draw = 0; draw < 3; ++draw) {
+    const Robot r2 = testing::RandomValidRobot(rng, "random2");
+    ExpectSame<2>(r2, Experiment(r2, 30, 0.003, 10 + draw), Gauge::kA1x, "random 2-cable robot " + std::to_string(draw),
+                  true);
+  }
+  const std::vector<Measurement> once = Experiment(builtin, 10, 0.005, 40);
+  std::vector<Measurement> repeated;
+  for (int copy = 0; copy < 3; ++copy) repeated.insert(repeated.end(), once.begin(), once.end());
+  ExpectSame<2>(builtin, repeated, Gauge::kA1x, "built-in, each pose read three times", true);
 }
 
 // Three readings of each pose (one set of pose unknowns each), and a file without the laser
