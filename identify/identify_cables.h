@@ -601,8 +601,10 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     result.message = "Levenberg-Marquardt did not converge after " + std::to_string(result.iterations) +
                      (result.iterations == 1 ? " iteration: " : " iterations: ") + sum.message +
                      (!why.empty() ? why
-                      : at_limit   ? " (a grossly wrong reading can do this: check the readings, or raise --max-iterations)"
-                                   : " (a grossly wrong reading can do this: check the readings)");
+                      : at_limit   ? " (a grossly wrong reading can do this, and so can readings of another robot with "
+                                     "as many cables: check the readings and the robot file, or raise --max-iterations)"
+                                   : " (a grossly wrong reading can do this, and so can readings of another robot with "
+                                     "as many cables: check the readings and the robot file)");
     return result;
   };
   if (!converged(summary, geometry, poses, every_pose)) return not_converged(summary);
@@ -915,7 +917,10 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     std::snprintf(buffer, sizeof(buffer),
                   "the residuals are %.3g times the sensors' noise (more than %g): the measurements do not fit "
                   "this robot", fit, kPoorFitFactor);
-    result.message = buffer;
+    // The likely causes a new user hit: dl columns in another order than the robot file's
+    // cables ("14.3 times the noise"), readings of another robot with as many cables, units.
+    result.message = std::string(buffer) + " (are dl1.." + "dl" + std::to_string(M) +
+                     " in the order of the robot file's cables, the readings of this robot, in m and rad?)";
     if (!robust && left_out) result.message += "; " + explain_left_out(*left_out) + "; " + "drop " + (left_out->poses.size() == 1 ? "that pose" : "those poses") + " or identify with --loss cauchy";
     result.message += prior_note;
     return result;
