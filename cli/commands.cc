@@ -353,6 +353,11 @@ int RunSimulate(const Context& ctx, const SimulateOptions& options) {
                          ") has no systematic sensor errors to add (sensors.laser.offset, "
                          "sensors.inclinometer.offset_deg, sec_coefficient_deg; cablecal sensors fit makes them)");
   }
+  if (options.geometry_sigma_m > kMaxGeometrySigma_m) {  // as design's and montecarlo's
+    throw InputError("--geometry-sigma", "", "must be at most " + FormatDouble(kMaxGeometrySigma_m) +
+                                                 " m: a larger error is not a calibration problem (got " +
+                                                 FormatDouble(options.geometry_sigma_m) + ")");
+  }
   if (!options.truth_path.empty() && options.geometry_sigma_m >= 0.0) {
     throw InputError("--truth", "", "give either --truth or --geometry-sigma, not both");
   }
@@ -416,7 +421,7 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   id.source = options.measurements_path;
   id.max_iterations = options.max_iterations;
   id.loss = ParseLoss(options.loss);
-  id.geometry_prior_sigma_m = options.geometry_prior_sigma_m;
+  if (options.geometry_prior_given) id.geometry_prior_sigma_m = options.geometry_prior_sigma_m;
   id.equilibrium = options.equilibrium == "on";
   // A robot file with systematic sensor errors (sensors fit) has them removed before the solve.
   const std::vector<Measurement> measurements =
@@ -469,9 +474,11 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   // result.yaml keeps every digit.
   std::printf("identified %s from %zu poses", PrintableText(nominal.name).c_str(), result.poses.size());
   if (result.poses.size() != measurements.size()) std::printf(" (%zu readings)", measurements.size());
+  std::string settings = id.loss.kind == LossKind::kNone ? "" : ", loss " + ToString(id.loss);
+  if (id.geometry_prior_sigma_m) settings += ", geometry prior " + FormatDouble(1e3 * *id.geometry_prior_sigma_m) + " mm";
+  if (result.equilibrium_com_sigma_m) settings += ", equilibrium";
   std::printf(" (%s, gauge %s%s): %d iterations, residual rms encoder %.3g m", ToString(id.estimator), ToString(id.gauge),
-              id.loss.kind == LossKind::kNone ? "" : (", loss " + ToString(id.loss)).c_str(), result.iterations,
-              result.rms_encoder_m);
+              settings.c_str(), result.iterations, result.rms_encoder_m);
   const auto has = [&](const char* sensor) {
     return std::find(result.missing_sensors.begin(), result.missing_sensors.end(), sensor) == result.missing_sensors.end();
   };

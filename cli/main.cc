@@ -151,7 +151,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   id_cmd->add_option("--geometry-prior", ident.geometry_prior_sigma_m,
                      "standard deviation of the nominal exit points and initial lengths, m: a prior, so that the "
-                     "result knows at least what the robot file did (ml only; default none)");
+                     "result knows at least what the robot file did (ml only; default none)")
+      ->each([&ident](const std::string&) { ident.geometry_prior_given = true; });
   id_cmd->add_option("--equilibrium", ident.equilibrium,
                      "on: with 2 cables each pose's static equilibrium is a residual, its sigma the robot file's "
                      "platform.com_sigma (default 5 mm); off: theta free per pose (ml only)")

@@ -88,7 +88,7 @@ struct IdentifyOptions {
   // A Gaussian prior on every geometric parameter about its nominal value with this standard
   // deviation (m; 0: none; ml only): what the lab knew before measuring, so that the result is
   // never less informed than that (identify --geometry-prior, README "Identification").
-  double geometry_prior_sigma_m = 0.0;
+  std::optional<double> geometry_prior_sigma_m;  // none: no prior; given, it must be in range
   // ml with fewer cables than the pose's 3 DoF (m = 2): each pose's static equilibrium as a
   // residual of its own, its sigma the robot file's platform.com_sigma (kDefaultComSigma_m if
   // absent; README, "Identification"). No effect for `paper` or m >= 3 (identify --equilibrium).

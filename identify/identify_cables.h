@@ -130,15 +130,21 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   if (robust && !ml) {
     throw InputError("--loss", "", "needs --estimator ml (the paper estimator's residuals are not in sigmas)");
   }
-  if (options.geometry_prior_sigma_m != 0.0 && !ml) {
+  if (options.geometry_prior_sigma_m && !ml) {
     throw InputError("--geometry-prior", "", "needs --estimator ml (the paper estimator's residuals are not in sigmas)");
   }
-  if (options.geometry_prior_sigma_m != 0.0 &&
-      !(options.geometry_prior_sigma_m >= kMinGeometryPriorSigma_m && options.geometry_prior_sigma_m <= kMaxGeometryPriorSigma_m)) {
+  if (options.geometry_prior_sigma_m &&
+      !(*options.geometry_prior_sigma_m >= kMinGeometryPriorSigma_m && *options.geometry_prior_sigma_m <= kMaxGeometryPriorSigma_m)) {
     throw InputError("--geometry-prior", "",
                      "must be between " + FormatDouble(kMinGeometryPriorSigma_m) + " and " +
                          FormatDouble(kMaxGeometryPriorSigma_m) + " m (the standard deviation of the nominal geometry), not " +
-                         FormatDouble(options.geometry_prior_sigma_m));
+                         FormatDouble(*options.geometry_prior_sigma_m));
+  }
+  if (options.equilibrium && (!ml || M >= 3)) {
+    throw InputError("--equilibrium", "",
+                     !ml ? std::string("needs --estimator ml (the paper estimator fixes theta at the inclinometer's reading)")
+                         : "applies to robots with fewer cables than the pose's 3 degrees of freedom (2 cables): with " +
+                               std::to_string(M) + " the cables hold theta, and there is no equilibrium row to add");
   }
 
   // Repeated readings of one pose share its unknowns: group them by pose id, poses in the order
@@ -185,7 +191,8 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   // below judges them.
   const int per_pose_unknowns = ml ? 3 : 1;
   const int values_per_reading = ml ? M + (laser ? 1 : 0) + (inclinometer ? 1 : 0) : M;
-  const bool geometry_prior = options.geometry_prior_sigma_m > 0.0;
+  const bool geometry_prior = options.geometry_prior_sigma_m.has_value();
+  const double prior_sigma_m = options.geometry_prior_sigma_m.value_or(0.0);
   const int geometry_cols = options.gauge == Gauge::kA1x ? kGeometry - 1 : kGeometry;
   // ml with fewer cables than the pose's 3 DoF: each pose's static equilibrium, 3 - M rows of its
   // block (residuals.h, MlEquilibriumResidual), whatever the number of its readings.
@@ -243,7 +250,7 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
 
   const GeometryVector nominal_geometry = GeometryOf(nominal);
   const std::vector<std::string> geometry_names = GeometryNames(M);
-  result.geometry_prior_sigma_m = options.geometry_prior_sigma_m;
+  result.geometry_prior_sigma_m = prior_sigma_m;
   // The priors' inverse sigma per geometric coordinate: the tracker's on the exit points
   // (gauge prior) and the geometry prior's on every one, combined as independent Gaussians
   // about the same nominal value (their precisions add); 0 where there is none.
@@ -251,7 +258,7 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   {
     Eigen::Matrix<double, kGeometry, 1> precision = Eigen::Matrix<double, kGeometry, 1>::Zero();
     if (options.gauge == Gauge::kPrior) precision.template head<2 * M>().setConstant(1.0 / (*s.tracker_sigma_m * *s.tracker_sigma_m));
-    if (geometry_prior) precision.array() += 1.0 / (options.geometry_prior_sigma_m * options.geometry_prior_sigma_m);
+    if (geometry_prior) precision.array() += 1.0 / (prior_sigma_m * prior_sigma_m);
     prior_inv_sigma = precision.cwiseSqrt();
   }
   double geometry[kGeometry];
@@ -543,7 +550,17 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   // inclinometer angle (the anchor inside or past its pulley), or poses without which the
   // others converge (each left out in turn, from the same start; up to kMaxPosesLeftOutTest
   // poses, as the outlier test below).
-  const auto why_not_converged = [&]() -> std::string {
+  constexpr int kMaxLeftOut = 3;
+  struct LeftOut {
+    std::vector<int> poses;                 // indices into readings_of
+    double geometry_values[kGeometry];      // the fit without them
+    PoseValues pose_values;                 // every pose: the rest's fit, the left-out fitted to that geometry
+    std::vector<Reading> worst;             // the left-out poses' readings against the rest's geometry
+  };
+  // The pose found by the diagnosis below, with the fit without it (a robust loss starts there).
+  std::optional<LeftOut> lost_fit_culprit;
+  std::optional<std::string> why_not_converged_text;  // computed once
+  const auto diagnose_lost_fit = [&]() -> std::string {
     for (int j = 0; j < n; ++j) {
       for (const int k : readings_of[j]) {
         double r[M];
@@ -563,20 +580,28 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     // At least Ceres' default limit: a user's low --max-iterations must not make a good pose
     // look guilty because the fit without it happens to converge sooner.
     const int diagnosis_limit = std::max(options.max_iterations, 100);
-    // Named only if the fit converges, every reading within kOutlierSigmas, without that pose
-    // and without no other, and the pose's readings are then off against the others' geometry
-    // (that pose alone fitted to it): with few poses, leaving out any of several poses may let a merely poorly spread set converge,
-    // and a clean pose must not be blamed for it (measured on 6-pose Monte Carlo trials).
-    int converging = 0;
+    // Named only if the fit without that pose converges with every reading within
+    // kOutlierSigmas, the pose's readings are then off against the others' geometry (that pose
+    // alone fitted to it), and no other pose is so: with few poses, leaving out any of several
+    // poses may let a merely poorly spread set converge, and a clean pose must not be blamed for
+    // it (measured on 6-pose Monte Carlo trials). A leave-out may also converge and fit by
+    // absorbing the bad reading, and its clean pose then look off against that fit (a new
+    // user's robot, 0.3 m at its last pose, pose 1 left out). With two or more such poses, the
+    // one whose absence leaves the lowest cost is named if that cost is lower than the next
+    // one's by more than kOutlierSigmas^2 / 2 (one reading at the outlier bound).
+    int converging = 0, off_poses = 0;
     std::optional<Reading> culprit;
-    for (int j = 0; j < n && converging <= 1; ++j) {
+    LeftOut found;
+    double found_cost = std::numeric_limits<double>::infinity(), next_cost = found_cost;
+    for (int j = 0; j < n; ++j) {
       std::vector<char> use(n, 1);
       use[j] = 0;
       if (!enough_equations(use)) continue;  // too few poses to tell
       double g[kGeometry];
       for (int k = 0; k < kGeometry; ++k) g[k] = nominal_geometry(k);
       PoseValues q = start_poses;
-      if (!converged(least_squares(g, q, use, diagnosis_limit), g, q, use)) continue;
+      const LeastSquaresSummary sum = least_squares(g, q, use, diagnosis_limit);
+      if (!converged(sum, g, q, use)) continue;
       // A fit that converges only to readings that do not fit (the bad one still in: a 0.3 m
       // laser error at one of 30 poses let 8 such leave-outs converge, to poor fits, and so
       // hid the one whose absence lets the rest fit) explains nothing.
@@ -586,12 +611,33 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
       std::vector<char> only(n, 0);
       only[j] = 1;
       const std::vector<Reading> off = beyond(residuals_at(g, q, only, false));
-      if (!off.empty()) culprit = off.front();
+      if (!off.empty()) {
+        ++off_poses;
+        if (!(sum.final_cost < found_cost)) {
+          next_cost = std::min(next_cost, sum.final_cost);
+          continue;
+        }
+        next_cost = found_cost;
+        found_cost = sum.final_cost;
+        culprit = off.front();
+        found.poses = {j};
+        std::copy(g, g + kGeometry, found.geometry_values);
+        found.pose_values = q;
+        found.worst = off;
+      }
     }
-    if (converging != 1 || !culprit) return "";
-    return "; only without pose " + std::to_string(measurements[culprit->reading].pose_id) +
-           " do the other poses converge, and against their fit its readings are off by " +
-           describe(*culprit, false) + ": check that pose";
+    if (off_poses == 0 || !(found_cost + 0.5 * kOutlierSigmas * kOutlierSigmas < next_cost)) return "";
+    lost_fit_culprit = found;
+    return "; " + std::string(converging == 1 ? "only without pose " : "without pose ") +
+           std::to_string(measurements[culprit->reading].pose_id) +
+           (converging == 1 ? " do the other poses converge" : " the other poses converge and fit") +
+           ", and against their fit its readings are off by " + describe(*culprit, false) +
+           (converging == 1 ? "" : off_poses == 1 ? " (no other pose's are against the fit without it)"
+                                                  : " (the others fit best without it)") + ": check that pose";
+  };
+  const auto why_not_converged = [&]() -> std::string {
+    if (!why_not_converged_text) why_not_converged_text = diagnose_lost_fit();
+    return *why_not_converged_text;
   };
   const auto not_converged = [&](const LeastSquaresSummary& sum) {
     result.status = IdentifyStatus::kNotConverged;
@@ -605,9 +651,19 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
                                      "as many cables: check the readings and the robot file, or raise --max-iterations)"
                                    : " (a grossly wrong reading can do this, and so can readings of another robot with "
                                      "as many cables: check the readings and the robot file)");
+    if (robust) result.message += " (the robust fit starts from least squares' fit, or from the fit without the pose named)";
     return result;
   };
-  if (!converged(summary, geometry, poses, every_pose)) return not_converged(summary);
+  // Least squares lost: a robust loss can still start from the fit without the one pose whose
+  // absence lets the rest converge and fit (a 0.3 m laser error at one of 19 poses of a new
+  // user's robot: least squares needed 106 iterations, --loss cauchy exited 3 at the default 100).
+  // Without such a pose it starts where least squares did.
+  const bool least_squares_lost = !converged(summary, geometry, poses, every_pose);
+  if (least_squares_lost && !robust) return not_converged(summary);
+  if (least_squares_lost && (why_not_converged(), !lost_fit_culprit)) {
+    for (int k = 0; k < kGeometry; ++k) geometry[k] = nominal_geometry(k);
+    poses = start_poses;
+  }
   std::vector<Reading> readings = residuals_at(geometry, poses, every_pose, true);
   std::vector<Reading> tripped = beyond(readings);
   const std::size_t few = std::max<std::size_t>(kFewOutliers, static_cast<std::size_t>(values_per_reading) * num_readings / 20);
@@ -679,7 +735,7 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   // identifiability when no robust fit follows (the same problem at the same values).
   std::optional<BlockJacobian> ls_blocks;
   std::optional<BlockAnalysis> ls_analysis;
-  if (ml && options.gauge == Gauge::kA1x && (options.compute_covariance || robust)) {
+  if (ml && options.gauge == Gauge::kA1x && (options.compute_covariance || robust) && !least_squares_lost) {
     std::vector<Eigen::VectorXd> block_residuals;
     ls_blocks = jacobian_blocks(problem_at_estimate(), false, &block_residuals);
     ls_analysis = AnalyzeBlocks(*ls_blocks, 1e-9);
@@ -705,14 +761,8 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   // its readings against the rest's geometry say which sensor. Greedy, up to kMaxLeftOut poses,
   // a refit per pose and round (warm-started: a few iterations each); skipped beyond
   // kMaxPosesLeftOutTest poses, where the largest residuals are named instead.
-  constexpr int kMaxLeftOut = 3;
-  struct LeftOut {
-    std::vector<int> poses;                 // indices into readings_of
-    double geometry_values[kGeometry];      // the fit without them
-    PoseValues pose_values;                 // every pose: the rest's fit, the left-out fitted to that geometry
-    std::vector<Reading> worst;             // the left-out poses' readings against the rest's geometry
-  };
   const auto leave_out = [&]() -> std::optional<LeftOut> {
+    if (least_squares_lost) return lost_fit_culprit;
     if ((tripped.empty() && flagged_pose < 0) || n > kMaxPosesLeftOutTest) return std::nullopt;
     LeftOut out;
     std::copy(geometry, geometry + kGeometry, out.geometry_values);
@@ -730,7 +780,23 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
           double g[kGeometry];
           std::copy(out.geometry_values, out.geometry_values + kGeometry, g);
           PoseValues q = out.pose_values;
-          const LeastSquaresSummary sum = least_squares(g, q, use, options.max_iterations);
+          LeastSquaresSummary sum = least_squares(g, q, use, options.max_iterations);
+          // Warm-started from a fit that absorbed the bad reading, the refit can stay in that
+          // fit's basin and leave a clean pose off (a new user's robot: pose 17's bad laser
+          // reading made pose 1 look 112 sigma off; fitted without pose 17 from the nominal
+          // start, pose 1 is at 0.8 sigma). Where the warm refit leaves readings off, the
+          // nominal start is tried too, and the lower cost kept.
+          if (!converged(sum, g, q, use) || !beyond(residuals_at(g, q, use, false)).empty()) {
+            double g0[kGeometry];
+            for (int k = 0; k < kGeometry; ++k) g0[k] = nominal_geometry(k);
+            PoseValues q0 = start_poses;
+            const LeastSquaresSummary sum0 = least_squares(g0, q0, use, options.max_iterations);
+            if (converged(sum0, g0, q0, use) && (!converged(sum, g, q, use) || sum0.final_cost < sum.final_cost)) {
+              sum = sum0;
+              std::copy(g0, g0 + kGeometry, g);
+              q = q0;
+            }
+          }
           if (converged(sum, g, q, use) && sum.final_cost < best_cost) {
             best_cost = sum.final_cost;
             best = j;
@@ -844,6 +910,24 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     } else {
       without.readings.clear();
     }
+    // One estimate per pose id, as every result has (the Monte Carlo reads x_j of each): a
+    // dropped pose's is its fit to the returned geometry alone, without a standard deviation.
+    {
+      std::vector<PoseEstimate> all;
+      all.reserve(n);
+      std::size_t next = 0;
+      for (int j = 0; j < n; ++j) {
+        if (left[j]) {
+          PoseEstimate e;
+          e.pose_id = pose_id_of(j);
+          e.q = Eigen::Vector3d(q[j][0], q[j][1], q[j][2]);
+          all.push_back(e);
+        } else if (next < without.poses.size()) {
+          all.push_back(without.poses[next++]);
+        }
+      }
+      without.poses = std::move(all);
+    }
     without.loss = options.loss;
     for (const int j : l.poses) without.dropped_pose_ids.push_back(pose_id_of(j));
     char buffer[96];
@@ -892,7 +976,7 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
             "are the exit points within a few sensors.tracker.sigma of the robot file's?)"
       : geometry_prior
           ? " (with --geometry-prior this is also what a nominal geometry further from the real one than the prior's "
-            "sigma allows looks like: is " + FormatDouble(options.geometry_prior_sigma_m) + " m too small?)"
+            "sigma allows looks like: is " + FormatDouble(prior_sigma_m) + " m too small?)"
           : "";
   // Goodness of fit. With the right model the whitened residuals have RMS near 1 (ml), and
   // the paper estimator's length residuals are of the order of the laser's noise, which
@@ -1200,7 +1284,7 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
         std::string little;
         int count = 0;
         for (int k = 0; k < kGeometry; ++k) {
-          if (!(result.geometry_std(k) > kDataAddLittle * options.geometry_prior_sigma_m)) continue;
+          if (!(result.geometry_std(k) > kDataAddLittle * prior_sigma_m)) continue;
           if (++count <= 4) {
             char buffer[64];
             std::snprintf(buffer, sizeof(buffer), "%s%s (%.3g mm)", count > 1 ? ", " : "", geometry_names[k].c_str(),
@@ -1212,7 +1296,7 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
         if (count > 0) {
           result.data_add_little = count;
           result.warnings.push_back(
-              "the data add little to the geometry prior (" + FormatDouble(1e3 * options.geometry_prior_sigma_m) +
+              "the data add little to the geometry prior (" + FormatDouble(1e3 * prior_sigma_m) +
               " mm) for " + std::to_string(count) + " of " + std::to_string(geometry_cols) + " parameters: " + little +
               "; they are known about as well as before measuring: add poses, or plan ones that see them (cablecal design)");
         }

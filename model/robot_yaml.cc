@@ -89,6 +89,9 @@ class Reader {
       Fail(node, key, "must be at most " + FormatDouble(most) + " " + unit + " (got " + FormatDouble(v) + "): units?");
     }
   }
+  void AtLeast(const YAML::Node& node, const std::string& key, double v, double least, const std::string& unit) const {
+    if (!(v >= least)) Fail(node, key, "must be at least " + FormatDouble(least) + " " + unit + " (got " + FormatDouble(v) + ")");
+  }
   void NonNegative(const YAML::Node& node, const std::string& key, double v) const {
     if (!(v >= 0.0)) Fail(node, key, "must be >= 0 (got " + FormatDouble(v) + ")");
   }
@@ -142,6 +145,9 @@ Robot Parse(const YAML::Node& root, const Reader& rd) {
   if (platform["com_sigma"]) {
     robot.com_sigma_m = rd.Number(platform, "platform", "com_sigma");
     rd.Positive(platform["com_sigma"], "platform.com_sigma", *robot.com_sigma_m);
+    // As a sensor's sigma (model/sensor_model.h): below a micrometre the equilibrium row's weight
+    // overflows Levenberg-Marquardt (1e-300 gave a non-finite residual at the start).
+    rd.AtLeast(platform["com_sigma"], "platform.com_sigma", *robot.com_sigma_m, kMinSensorSigma_m, "m");
     rd.AtMost(platform["com_sigma"], "platform.com_sigma", *robot.com_sigma_m, 0.1, "m");
   }
   const YAML::Node anchors = platform["anchors"];

@@ -149,6 +149,7 @@ TrialOutcome RunTrial(const Robot& nominal, const MonteCarloOptions& o, int n, P
       out.failure = std::string("identification: ") + ToString(r.status) + (r.message.empty() ? "" : " (" + r.message + ")");
       return out;
     }
+    CABLECAL_CHECK(static_cast<int>(r.poses.size()) == n, "one pose estimate per pose");
     const GeometryVector g_true = GeometryOf(truth);
     for (int k = 0; k < g_true.size(); ++k) out.errors_m.push_back(r.geometry(k) - g_true(k));  // paper, Eq. (9)
     for (int j = 0; j < n; ++j) out.errors_m.push_back(r.poses[j].q(0) - sim.true_poses[j](0));
@@ -173,6 +174,21 @@ Criterion CriterionOf(PoseSetDesign d) {
 
 void ValidateOptions(const MonteCarloOptions& o, const Robot* nominal) {
   if (o.trials < 1) throw InputError("--trials", "", "must be at least 1");
+  if (o.geometry_prior && !(o.geometry_sigma_m >= kMinGeometryPriorSigma_m)) {
+    throw InputError("--geometry-prior", "", "needs --geometry-sigma of at least " + FormatDouble(kMinGeometryPriorSigma_m) +
+                                                 " m: the prior is the spread the true geometry is drawn with (got " +
+                                                 FormatDouble(o.geometry_sigma_m) + ")");
+  }
+  if (o.geometry_prior && o.estimator != Estimator::kMaximumLikelihood) {
+    throw InputError("--geometry-prior", "", "needs --estimator ml (the paper estimator's residuals are not in sigmas)");
+  }
+  if (o.equilibrium && (o.estimator != Estimator::kMaximumLikelihood || (nominal && nominal->num_cables() >= 3))) {
+    throw InputError("--equilibrium", "",
+                     o.estimator != Estimator::kMaximumLikelihood
+                         ? std::string("needs --estimator ml (the paper estimator fixes theta at the inclinometer's reading)")
+                         : "applies to robots with fewer cables than the pose's 3 degrees of freedom (2 cables): with " +
+                               std::to_string(nominal->num_cables()) + " the cables hold theta");
+  }
   if (!(std::abs(o.com_error_m) <= 0.1)) throw InputError("--com-error", "", "must be a number of m, at most 0.1 in size");
   if (o.loss.kind != LossKind::kNone && o.estimator != Estimator::kMaximumLikelihood) {
     throw InputError("--loss", "", "needs --estimator ml (the paper estimator's residuals are not in sigmas)");

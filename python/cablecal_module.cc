@@ -869,7 +869,7 @@ PYBIND11_MODULE(cablecal, m) {
         o.gauge = ParseGauge(AsText(gauge, "gauge"));
         o.max_iterations = static_cast<int>(AsInteger(max_iterations, "max_iterations", 1, kMaxIdentifyIterations));
         o.loss = ParseLoss(AsText(loss, "loss"));
-        if (!geometry_prior.is_none()) o.geometry_prior_sigma_m = AsNumber(geometry_prior, "geometry_prior");
+        if (!geometry_prior.is_none()) o.geometry_prior_sigma_m = AsNumber(geometry_prior, "geometry_prior");  // 0 refused
         o.equilibrium = OnOff(equilibrium, "equilibrium");
         o.source = "measurements";
         // As the CLI: a robot with systematic sensor errors has them removed before the solve.

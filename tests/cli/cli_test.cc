@@ -575,6 +575,37 @@ TEST_F(Cli, SeedsBeyondSixtyFourBitsAreRefusedByEveryCommand) {
   EXPECT_EQ(largest.exit_code, 0) << largest.output;
 }
 
+// A new user's hostile trial: options that cannot apply are refused, not silently dropped
+// (--geometry-prior 0 meant no prior; --equilibrium on with the paper estimator or 3 cables was
+// ignored; a Monte Carlo prior of sigma 0; simulate's --geometry-sigma 1 m, which design and
+// montecarlo refuse).
+TEST_F(Cli, OptionsThatCannotApplyAreRefused) {
+  ASSERT_EQ(RunCablecal("sample --poses 12 --seed 3 --out " + Path("plan.csv")).exit_code, 0);
+  ASSERT_EQ(RunCablecal("simulate --plan " + Path("plan.csv") + " --out " + Path("m.csv")).exit_code, 0);
+  const std::string planar3 = std::string(CABLECAL_SOURCE_DIR) + "/robots/planar3_suspended.yaml";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"identify --measurements " + Path("m.csv") + " --geometry-prior 0 --out " + Path("r.yaml"),
+       "--geometry-prior: must be between 1.0e-06 and 0.5 m"},
+      {"identify --measurements " + Path("m.csv") + " --estimator paper --equilibrium on --out " + Path("r.yaml"),
+       "--equilibrium: needs --estimator ml"},
+      {"montecarlo --robot " + planar3 + " --poses 6 --trials 2 --equilibrium on --out " + Path("mc"),
+       "--equilibrium: applies to robots with fewer cables"},
+      {"montecarlo --poses 6 --trials 2 --geometry-sigma 0 --geometry-prior --out " + Path("mc"),
+       "--geometry-prior: needs --geometry-sigma of at least"},
+      {"simulate --plan " + Path("plan.csv") + " --geometry-sigma 1 --out " + Path("s.csv"),
+       "--geometry-sigma: must be at most 0.5 m"},
+  };
+  for (const auto& [args, message] : cases) {
+    const RunResult r = RunCablecal(args);
+    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.output;
+    EXPECT_NE(r.output.find(message), std::string::npos) << args << "\n" << r.output;
+  }
+  for (const char* name : {"r.yaml", "mc", "s.csv"}) EXPECT_FALSE(fs::exists(Path(name))) << name;
+  const RunResult prior = RunCablecal("identify --measurements " + Path("m.csv") + " --geometry-prior 0.01 --out " + Path("r.yaml"));
+  EXPECT_EQ(prior.exit_code, 0) << prior.output;
+  EXPECT_NE(prior.output.find("geometry prior 10 mm"), std::string::npos) << prior.output;
+}
+
 // A plan must be one of the robot's: poses off its equilibrium, beyond the inclinometer, or
 // made for another robot are refused by pose and column.
 TEST_F(Cli, SimulateRefusesPlansThatAreNotTheRobots) {

@@ -149,9 +149,11 @@ TEST(Equilibrium, OnlyForTwoCablesAndWhenAsked) {
   EXPECT_FALSE(off.poses.front().equilibrium_sigmas.has_value());
   const Robot planar3 = LoadRobotFile(std::string(CABLECAL_SOURCE_DIR) + "/robots/planar3_suspended.yaml");
   const Experiment e3 = Simulate(planar3, 8, 0.001, 301, true);
-  const IdentifyResult on3 = Identify(planar3, e3.measurements, WithEquilibrium(true));
-  ASSERT_TRUE(on3.converged()) << on3.message;
-  EXPECT_FALSE(on3.equilibrium_com_sigma_m.has_value());
+  // Asked for where it cannot apply, it is refused (a new user's 3-cable robot was silently without).
+  EXPECT_THROW(Identify(planar3, e3.measurements, WithEquilibrium(true)), InputError);
+  const IdentifyResult off3 = Identify(planar3, e3.measurements, WithEquilibrium(false));
+  ASSERT_TRUE(off3.converged()) << off3.message;
+  EXPECT_FALSE(off3.equilibrium_com_sigma_m.has_value());
 }
 
 // The symptom: without the equilibrium the fit puts each pose's theta on its

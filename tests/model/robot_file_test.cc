@@ -127,6 +127,9 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"HomeThetaWithTwoCables", "home: [2.6045, 1.4]", "home: [2.6045, 1.4]\nhome_theta_deg: 3",
                 "home_theta_deg: is for robots with 3 or more cables"},
         BadCase{"ShortVector", "com: [0.0, 0.0]", "com: [0.0]", "platform\\.com: must be a list of two numbers"},
+        // The equilibrium row's weight 1/com_sigma: 1e-300 failed as a non-finite residual at the start.
+        BadCase{"TinyComSigma", "com: [0.0, 0.0]", "com: [0.0, 0.0]\n  com_sigma: 1e-300",
+                "platform\\.com_sigma: must be at least 1\\.0e-06 m \\(got 1\\.0e-300\\)"},
         BadCase{"NegativeNoise", "encoder: {sigma: 0.00005}", "encoder: {sigma: -0.00005}",
                 "sensors\\.encoder\\.sigma: must be from 1e-06 to 1 m, one standard deviation \\(got -5e-05\\)"},
         // Every reading is weighed by 1/sigma: a noiseless sensor failed inside the solvers.
