@@ -560,6 +560,11 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   // The pose found by the diagnosis below, with the fit without it (a robust loss starts there).
   std::optional<LeftOut> lost_fit_culprit;
   std::optional<std::string> why_not_converged_text;  // computed once
+  // The identification's start: the nominal geometry and each pose's StartingPose.
+  const auto reset_to_start = [&](double* g, PoseValues& q) {
+    for (int k = 0; k < kGeometry; ++k) g[k] = nominal_geometry(k);
+    q = start_poses;
+  };
   const auto diagnose_lost_fit = [&]() -> std::string {
     for (int j = 0; j < n; ++j) {
       for (const int k : readings_of[j]) {
@@ -598,8 +603,8 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
       use[j] = 0;
       if (!enough_equations(use)) continue;  // too few poses to tell
       double g[kGeometry];
-      for (int k = 0; k < kGeometry; ++k) g[k] = nominal_geometry(k);
-      PoseValues q = start_poses;
+      PoseValues q;
+      reset_to_start(g, q);
       const LeastSquaresSummary sum = least_squares(g, q, use, diagnosis_limit);
       if (!converged(sum, g, q, use)) continue;
       // A fit that converges only to readings that do not fit (the bad one still in: a 0.3 m
@@ -664,10 +669,7 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   // Without such a pose it starts where least squares did.
   const bool least_squares_lost = !converged(summary, geometry, poses, every_pose);
   if (least_squares_lost && !robust) return not_converged(summary);
-  if (least_squares_lost && (why_not_converged(), !lost_fit_culprit)) {
-    for (int k = 0; k < kGeometry; ++k) geometry[k] = nominal_geometry(k);
-    poses = start_poses;
-  }
+  if (least_squares_lost && (why_not_converged(), !lost_fit_culprit)) reset_to_start(geometry, poses);
   std::vector<Reading> readings = residuals_at(geometry, poses, every_pose, true);
   std::vector<Reading> tripped = beyond(readings);
   const std::size_t few = std::max<std::size_t>(kFewOutliers, static_cast<std::size_t>(values_per_reading) * num_readings / 20);
@@ -792,8 +794,8 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
           // nominal start is tried too, and the lower cost kept.
           if (!converged(sum, g, q, use) || !beyond(residuals_at(g, q, use, false)).empty()) {
             double g0[kGeometry];
-            for (int k = 0; k < kGeometry; ++k) g0[k] = nominal_geometry(k);
-            PoseValues q0 = start_poses;
+            PoseValues q0;
+            reset_to_start(g0, q0);
             const LeastSquaresSummary sum0 = least_squares(g0, q0, use, options.max_iterations);
             if (converged(sum0, g0, q0, use) && (!converged(sum, g, q, use) || sum0.final_cost < sum.final_cost)) {
               sum = sum0;
@@ -863,6 +865,21 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   // than kRobustStraySigmas (of that fit's own sigmas) from it, that fit is the result, the
   // poses named as dropped, their readings reported against it at weight 0.
   constexpr double kRobustStraySigmas = 2.0;
+  // The geometric parameter where `a` is furthest from `b` in `sigma` (held ones skipped), if
+  // beyond `above` sigmas: its index (-1 if none) and distance in sigmas.
+  struct Apart {
+    int k = -1;
+    double sigmas = 0.0;
+  };
+  const auto furthest_apart = [&](const double* a, const double* b, const GeometryVector& sigma, double above) {
+    Apart worst{-1, above};
+    for (int k = 0; k < kGeometry; ++k) {
+      if (!(sigma(k) > 0.0)) continue;
+      const double sigmas = std::abs(a[k] - b[k]) / sigma(k);
+      if (sigmas > worst.sigmas) worst = Apart{k, sigmas};
+    }
+    return worst;
+  };
   const auto fit_without_left_out = [&](const LeftOut& l) -> std::optional<IdentifyResult> {
     std::vector<char> dropped_reading(num_readings, 0);
     for (const int j : l.poses) {
@@ -880,17 +897,8 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     least_squares_options.compute_covariance = true;  // its sigmas measure the stray
     IdentifyResult without = IdentifyWithCables<M>(nominal, kept, least_squares_options);
     if (!without.converged() || !without.has_covariance) return std::nullopt;
-    int worst = -1;
-    double worst_sigmas = kRobustStraySigmas;
-    for (int k = 0; k < kGeometry; ++k) {
-      if (!(without.geometry_std(k) > 0.0)) continue;
-      const double sigmas = std::abs(geometry[k] - without.geometry(k)) / without.geometry_std(k);
-      if (sigmas > worst_sigmas) {
-        worst_sigmas = sigmas;
-        worst = k;
-      }
-    }
-    if (worst < 0) return std::nullopt;
+    const Apart stray = furthest_apart(geometry, without.geometry.data(), without.geometry_std, kRobustStraySigmas);
+    if (stray.k < 0) return std::nullopt;
     // The dropped poses' readings against the returned geometry, each pose fitted to it alone.
     double g[kGeometry];
     for (int k = 0; k < kGeometry; ++k) g[k] = without.geometry(k);
@@ -935,8 +943,8 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     without.loss = options.loss;
     for (const int j : l.poses) without.dropped_pose_ids.push_back(pose_id_of(j));
     char buffer[96];
-    std::snprintf(buffer, sizeof(buffer), "%.3g sigma (%.3g mm in %s)", worst_sigmas,
-                  1e3 * std::abs(geometry[worst] - without.geometry(worst)), geometry_names[worst].c_str());
+    std::snprintf(buffer, sizeof(buffer), "%.3g sigma (%.3g mm in %s)", stray.sigmas,
+                  1e3 * std::abs(geometry[stray.k] - without.geometry(stray.k)), geometry_names[stray.k].c_str());
     const bool one = l.poses.size() == 1;
     without.warnings.insert(
         without.warnings.begin(),
@@ -1321,20 +1329,13 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   // so when its estimate strays from the fit without the poses found above.
   // The parameter furthest from that fit, in its sigmas, is named.
   if (robust && left_out && result.has_covariance) {
-    int worst = -1;
-    double worst_sigmas = 2.0;
-    for (int k = 0; k < kGeometry; ++k) {
-      if (!(result.geometry_std(k) > 0.0)) continue;
-      const double sigmas = std::abs(result.geometry(k) - left_out->geometry_values[k]) / result.geometry_std(k);
-      if (sigmas > worst_sigmas) {
-        worst_sigmas = sigmas;
-        worst = k;
-      }
-    }
-    if (worst >= 0) {
+    const Apart stray =
+        furthest_apart(result.geometry.data(), left_out->geometry_values, result.geometry_std, kRobustStraySigmas);
+    if (stray.k >= 0) {
+      const int worst = stray.k;
       char buffer[96];
       std::snprintf(buffer, sizeof(buffer), "%.3g mm (%.3g sigma)",
-                    1e3 * std::abs(result.geometry(worst) - left_out->geometry_values[worst]), worst_sigmas);
+                    1e3 * std::abs(result.geometry(worst) - left_out->geometry_values[worst]), stray.sigmas);
       result.warnings.push_back("the " + ToString(options.loss) + " estimate of " + geometry_names[worst] + " is " +
                                 buffer + " from the fit without pose " + left_out_ids(*left_out) +
                                 " (readings that do not fit the others): " +
