@@ -14,38 +14,6 @@
 
 namespace cablecal {
 
-std::vector<std::string> GeometryNames(int num_cables) {
-  std::vector<std::string> names;
-  for (int i = 1; i <= num_cables; ++i) {
-    names.push_back("a" + std::to_string(i) + "x");
-    names.push_back("a" + std::to_string(i) + "z");
-  }
-  for (int i = 1; i <= num_cables; ++i) names.push_back("l" + std::to_string(i) + "0");
-  return names;
-}
-
-GeometryVector GeometryOf(const Robot& robot) {
-  const int m = robot.num_cables();
-  const Eigen::VectorXd l0 = InitialLengths(robot);
-  GeometryVector g(GeometrySize(m));
-  for (int i = 0; i < m; ++i) {
-    g.segment<2>(ExitIndex(i, 0)) = robot.cables[i].p_F_exit_m;
-    g(InitialLengthIndex(m, i)) = l0(i);
-  }
-  return g;
-}
-
-Robot WithGeometry(const Robot& robot, const GeometryVector& geometry) {
-  const int m = robot.num_cables();
-  CABLECAL_CHECK(geometry.size() == GeometrySize(m), "a geometry vector has 3 entries per cable");
-  Robot r = robot;
-  for (int i = 0; i < m; ++i) {
-    r.cables[i].p_F_exit_m = geometry.segment<2>(ExitIndex(i, 0));
-    r.cables[i].initial_length_m = geometry(InitialLengthIndex(m, i));
-  }
-  return r;
-}
-
 Robot PerturbGeometry(const Robot& nominal, double sigma_m, double exit_sigma_m, Rng& rng) {
   GeometryVector g = GeometryOf(nominal);
   const int size = static_cast<int>(g.size());

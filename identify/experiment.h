@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "common/random.h"
+#include "model/geometry.h"
 #include "model/robot.h"
 #include "model/statics.h"
 #include "workspace/workspace.h"
@@ -42,19 +43,6 @@ struct Measurement {
   bool has_laser = true;
   bool has_inclinometer = true;
 };
-
-// The geometric parameters the identification estimates, 3m of them for m cables, in this
-// order: the exit points a1x a1z ... amx amz (in F), then the initial lengths l10 ... lm0, m.
-// GeometryVector is dynamic: the cable count lives in the robot alone (the identification's
-// cost functors take it as a compile-time M, dispatched once per call).
-using GeometryVector = Eigen::VectorXd;
-inline int GeometrySize(int num_cables) { return 3 * num_cables; }
-inline int ExitIndex(int cable, int axis) { return 2 * cable + axis; }  // axis 0: x, 1: z
-inline int InitialLengthIndex(int num_cables, int cable) { return 2 * num_cables + cable; }
-// "a1x", "a1z", ..., "l10", ...: the names of the geometry vector's entries, in its order.
-std::vector<std::string> GeometryNames(int num_cables);
-GeometryVector GeometryOf(const Robot& robot);              // initial lengths from InitialLengths
-Robot WithGeometry(const Robot& robot, const GeometryVector& geometry);  // sets exits and initial_length
 
 // The one geometry perturbation (simulate --geometry-sigma, the Monte Carlo's true robots,
 // README "Identification"): a true robot drawn around the nominal one.

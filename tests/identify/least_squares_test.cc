@@ -147,11 +147,7 @@ Solution SolveCeres(const Robot& nominal, const std::vector<Measurement>& measur
   ceres::Solver::Options options;
   options.linear_solver_type = ceres::DENSE_SCHUR;
   options.linear_solver_ordering.reset(ordering);
-  options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  options.function_tolerance = 1e-10;
-  options.gradient_tolerance = 1e-12;
-  options.parameter_tolerance = 1e-10;
-  options.initial_trust_region_radius = 1e8;
+  internal::ApplyLevenbergMarquardt(&options);
   options.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
