@@ -213,12 +213,25 @@ TEST(MonteCarlo, GaugePriorWithoutATrackerIsBadInput) {
   }
 }
 
+// The flag raised once trials are running (as SIGINT would be), not before the call: that
+// would return before the first trial and leave the trials' own check untried.
 TEST(MonteCarlo, InterruptStopsEarly) {
-  std::atomic<bool> stop{true};
+  std::atomic<bool> stop{false};
   MonteCarloOptions o = Small();
   o.designs = {PoseSetDesign::kRandom};
+  o.trials = 50;
   o.interrupted = &stop;
+  long last_done = 0, total = 0;
+  o.progress = [&](long done, long all) {
+    last_done = done;
+    total = all;
+    if (done >= 2) stop = true;
+  };
   EXPECT_TRUE(RunMonteCarlo(BuiltinRobot(), o).interrupted);
+  EXPECT_TRUE(stop.load()) << "interrupted before the flag was raised";
+  // The study's end reports (total, total); an interrupted one stops short of it.
+  EXPECT_EQ(total, 100);
+  EXPECT_LT(last_done, total);
 }
 
 TEST(MonteCarlo, ParsesPoseRangesAndDesigns) {

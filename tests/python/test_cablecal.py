@@ -73,10 +73,17 @@ def test_dict_round_trip_keeps_the_robot(name):
     np.testing.assert_array_equal(back.geometry, r.geometry)
 
 
-def test_handmade_dict_robot_is_asymmetric_and_valid():
-    r = cablecal.Robot.from_dict(handmade_robot_dict())
+def test_handmade_dict_robot_carries_the_dicts_values():
+    # The values handmade_robot_dict sets, written out here: the robot must carry them, not the
+    # built-in robot's it was copied from (2.8 m exits, a centred mass).
+    d = handmade_robot_dict()
+    r = cablecal.Robot.from_dict(d)
+    assert r.name == "handmade"
     g = dict(zip(r.geometry_names, r.geometry))
-    assert g["a1z"] != g["a2z"]
+    assert (g["a1x"], g["a1z"], g["a2x"], g["a2z"]) == (0.0, 2.4, 5.209, 2.1)
+    assert r.to_dict()["platform"]["com"] == [0.04, -0.03]
+    # Everything else as in the dict: the loader's own reading of it, back as a dict.
+    assert r.to_dict() == d
 
 
 def test_misspelt_key_is_the_loaders_message():

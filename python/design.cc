@@ -1,0 +1,105 @@
+// Binds the experiment design: cablecal.design and the cablecal.DesignResult it returns (the plan,
+// its criteria against random sets, and each Ipopt start).
+
+#include <atomic>
+#include <string>
+
+#include "design/design.h"
+#include "model/robot.h"
+#include "python/bindings.h"
+#include "python/converters.h"
+#include "python/interrupt.h"
+
+namespace cablecal::python {
+namespace {
+
+struct PyDesign {
+  DesignResult result;
+  DesignOptions options;  // as run, without the interrupt flag
+};
+
+py::dict CriteriaDict(const CriteriaValues& v) {
+  py::dict d;
+  d["condition_number"] = v.condition_number;
+  d["d_log_det_information"] = v.d_log_det_information;
+  d["a_trace_covariance_m2"] = v.a_trace_covariance_m2;
+  d["e_min_eigenvalue"] = v.e_min_eigenvalue;
+  return d;
+}
+
+}  // namespace
+
+void BindDesign(py::module_& m) {
+  py::class_<PyDesign>(m, "DesignResult")
+      .def_property_readonly("plan", [](const PyDesign& d) { return PyPlan{d.result.poses, d.result.num_cables}; })
+      .def_property_readonly("criteria", [](const PyDesign& d) { return CriteriaDict(d.result.criteria); })
+      .def_property_readonly("random_median", [](const PyDesign& d) { return CriteriaDict(d.result.random_median); })
+      .def_property_readonly("comparison", [](const PyDesign& d) -> py::object {
+        if (d.options.random_sets == 0) return py::none();
+        return py::str(ImprovementText(Improvement(d.options.criterion, d.result.criteria, d.result.random_median),
+                                       d.options.random_sets));
+      }, "\"3.2 x better than the median of 100 random sets\" (or worse) on the criterion; None without random sets")
+      .def_property_readonly("best_start", [](const PyDesign& d) { return d.result.best_start; })
+      .def_property_readonly("converged_starts", [](const PyDesign& d) { return d.result.converged_starts; })
+      .def_property_readonly("wall_time_s", [](const PyDesign& d) { return d.result.wall_time_s; })
+      .def_property_readonly("starts", [](const PyDesign& d) {
+        py::list l;
+        for (const StartReport& s : d.result.starts) {
+          py::dict e;
+          e["start"] = s.start;
+          e["ipopt_status"] = s.ipopt_status;
+          e["iterations"] = s.iterations;
+          e["converged"] = s.converged;
+          e["verified"] = s.verified;
+          e["verification_failure"] = s.verification_failure;
+          e["objective"] = s.objective;
+          l.append(e);
+        }
+        return l;
+      }, "Per Ipopt start: status, iterations, converged, verified, objective.")
+      .def("to_yaml", [](const PyDesign& d) { return DesignSummaryYaml(d.result, d.options, CallText("design")); },
+           "The CLI's summary.yaml.");
+  m.def(
+      "design",
+      [](py::handle robot_arg, py::handle n, py::handle criterion, py::handle starts, py::handle seed,
+         py::handle min_spacing, py::handle random_sets, py::handle geometry_sigma, py::handle robust_sigmas,
+         py::handle prior) {
+        Robot robot = AsObject<Robot>(robot_arg, "robot", "Robot");
+        DesignOptions o;
+        if (!prior.is_none()) {
+          // The next round of a calibration, planned around the estimate (design --prior).
+          DesignPrior p = LoadDesignPrior(robot, AsPath(prior, "prior"));
+          robot = p.robot;
+          o.prior_information = p.information;
+        }
+        o.poses = static_cast<int>(AsInteger(n, "n", 1, kMaxPlanPoses));
+        o.criterion = ParseCriterion(AsText(criterion, "criterion"));
+        o.starts = static_cast<int>(AsInteger(starts, "starts", 1, 1000));
+        o.seed = AsSeed(seed);
+        o.min_spacing_m = AsNumber(min_spacing, "min_spacing");
+        o.random_sets = static_cast<int>(AsInteger(random_sets, "random_sets", 0, 100000));
+        o.geometry_sigma_m = AsNumber(geometry_sigma, "geometry_sigma");
+        o.robust_sigmas = AsNumber(robust_sigmas, "robust_sigmas");
+        // In process: a Python process may run threads of its own, and a fork copies them
+        // half-way; the plans are bit for bit the same (tests/design).
+        o.solve_in_child_processes = false;
+        std::atomic<bool> stop{false};
+        o.interrupted = &stop;
+        PyDesign d{Interruptible(stop, [&] { return DesignPoses(robot, o); }), o};
+        d.options.interrupted = nullptr;
+        if (o.random_sets > 0 && !(Improvement(o.criterion, d.result.criteria, d.result.random_median) > 1.0)) {
+          // The CLI's warning: a result, but not a good plan.
+          const int warned =
+              PyErr_WarnEx(PyExc_UserWarning, NoBetterThanRandomWarning(o, "geometry_sigma").c_str(), 1);
+          if (warned < 0) throw py::error_already_set();  // warnings filtered into errors
+        }
+        return d;
+      },
+      py::arg("robot"), py::arg("n"), py::arg("criterion") = "a", py::arg("starts") = 8, py::arg("seed") = 1,
+      py::arg("min_spacing") = 0.0, py::arg("random_sets") = 100, py::arg("geometry_sigma") = 0.01,
+      py::arg("robust_sigmas") = 3.0, py::arg("prior") = py::none(),
+      "Optimal measurement poses (cablecal design); SolverError if no start converges. prior: the path of an earlier "
+      "identification's result.yaml (design --prior).");
+}
+
+}  // namespace cablecal::python

@@ -1,0 +1,107 @@
+// Binds the robot: cablecal.Robot (a robot file's content, loaded, built in or from a dict, and
+// back to YAML) and cablecal.workspace (where the robot can hold its platform).
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <string>
+
+#include "common/error.h"
+#include "identify/experiment.h"
+#include "model/robot.h"
+#include "model/statics.h"
+#include "python/bindings.h"
+#include "python/converters.h"
+#include "workspace/workspace.h"
+
+namespace cablecal::python {
+
+void BindModel(py::module_& m) {
+  // ---- Robot
+  py::class_<Robot>(m, "Robot", "A robot file's content (README, \"Robot file\").")
+      .def_static("load", [](py::handle path) { return LoadRobotFile(AsPath(path, "path")); }, py::arg("path"),
+                  "Loads and validates a robot YAML file.")
+      .def_static(
+          "builtin",
+          [](py::handle name) {
+            const std::string n = AsText(name, "name");
+            if (n != BuiltinRobot().name) Bad("name", "no built-in robot '" + n + "' (there is '" + BuiltinRobot().name + "')");
+            return BuiltinRobot();
+          },
+          py::arg("name") = "wang2022", "The built-in robot (wang2022).")
+      .def_static(
+          "from_dict",
+          [](py::handle d) {
+            if (!py::isinstance<py::dict>(d)) Bad("robot", "expected a dict in the robot file's schema, got " + TypeName(d));
+            YAML::Emitter out;
+            ToYaml(out, d, "");
+            try {
+              return LoadRobotFromString(out.c_str(), "robot dict");
+            } catch (const InputError& e) {
+              // "robot dict:30: gravty: ..." names a line of the YAML made here, not of anything
+              // the user wrote: keep the key.
+              std::string message = e.what();
+              const std::size_t colon = message.find(':', std::string("robot dict:").size());
+              if (message.rfind("robot dict:", 0) == 0 && colon != std::string::npos &&
+                  message.find_first_not_of("0123456789", 11) == colon) {
+                message = "robot dict:" + message.substr(colon + 1);
+              }
+              throw InputError("", "", message);
+            }
+          },
+          py::arg("d"), "A robot from a dict in the robot file's schema (the file's checks apply).")
+      .def("to_dict", [](const Robot& r) { return FromYaml(YAML::Load(RobotToYaml(r))); })
+      .def("to_yaml", [](const Robot& r) { return RobotToYaml(r); })
+      .def_property_readonly("name", [](const Robot& r) { return r.name; })
+      .def_property_readonly("num_cables", &Robot::num_cables)
+      .def_property_readonly("geometry", [](const Robot& r) { return Vector(GeometryOf(r)); },
+                             "a1x a1z ... amx amz l10 ... lm0 (m)")
+      .def_property_readonly("geometry_names", [](const Robot& r) { return GeometryNames(r.num_cables()); })
+      .def("__repr__", [](const Robot& r) {
+        return "<cablecal.Robot '" + r.name + "', " + std::to_string(r.num_cables()) + " cables>";
+      });
+
+  // ---- workspace
+  m.def(
+      "workspace",
+      [](py::handle robot_arg, py::handle step) {
+        const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
+        const double step_m = AsNumber(step, "step");
+        if (!(step_m > 0.0)) Bad("step", "must be positive (m)");
+        WorkspaceGrid grid;
+        {
+          py::gil_scoped_release release;
+          grid = ComputeWorkspaceGrid(robot, step_m);
+        }
+        const int mc = robot.num_cables();
+        const long n = static_cast<long>(grid.points.size());
+        Eigen::MatrixXd xzt(n, 3), t(n, mc);
+        py::array_t<bool> feasible(n);
+        py::list reasons;
+        auto f = feasible.mutable_unchecked<1>();
+        for (long k = 0; k < n; ++k) {
+          const WorkspacePoint& p = grid.points[k];
+          const bool has = p.evaluation.has_equilibrium;
+          xzt(k, 0) = p.x_m;
+          xzt(k, 1) = p.z_m;
+          xzt(k, 2) = has ? p.evaluation.equilibrium.q(2) : std::nan("");
+          for (int i = 0; i < mc; ++i) t(k, i) = has ? p.evaluation.equilibrium.tensions_N(i) : std::nan("");
+          f(k) = p.evaluation.feasible();
+          reasons.append(ToString(p.evaluation.feasibility));
+        }
+        py::dict d;
+        d["x"] = Vector(xzt.col(0));
+        d["z"] = Vector(xzt.col(1));
+        d["theta"] = Vector(xzt.col(2));
+        d["tensions"] = Array(t);
+        d["feasible"] = feasible;
+        d["reason"] = reasons;
+        d["area_m2"] = grid.feasible_area_m2();
+        d["csv"] = WorkspaceCsv(robot, grid, "");
+        return d;
+      },
+      py::arg("robot"), py::arg("step") = 0.05,
+      "The feasible workspace on a grid: x, z, theta, tensions (NaN without equilibrium), feasible, reason, "
+      "area_m2, and csv (the CLI's file).");
+}
+
+}  // namespace cablecal::python

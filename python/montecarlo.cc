@@ -1,0 +1,113 @@
+// Binds the Monte Carlo study: cablecal.montecarlo (interruptible, with progress callbacks) and
+// the cablecal.MonteCarloResult it returns.
+
+#include <omp.h>
+
+#include <atomic>
+#include <string>
+
+#include "model/robot.h"
+#include "montecarlo/montecarlo.h"
+#include "python/bindings.h"
+#include "python/converters.h"
+#include "python/interrupt.h"
+
+namespace cablecal::python {
+
+void BindMonteCarlo(py::module_& m) {
+  py::class_<MonteCarloResult>(m, "MonteCarloResult")
+      .def_readonly("wall_time_s", &MonteCarloResult::wall_time_s)
+      .def("summary_csv", [](const MonteCarloResult& r) { return SummaryCsv(r); }, "The CLI's summary.csv.")
+      .def("failures_csv", [](const MonteCarloResult& r) { return FailuresCsv(r); })
+      .def_property_readonly("summary", [](const MonteCarloResult& r) {
+        py::list rows;
+        for (const MonteCarloCell& cell : r.cells) {
+          for (const std::string& parameter : SummaryParameters(r.num_cables)) {
+            const ErrorStats s = Summarise(cell, r.num_cables, parameter);
+            py::dict d;
+            d["n"] = cell.n;
+            d["design"] = ToString(cell.design);
+            d["parameter"] = parameter;
+            d["mean"] = s.mean;
+            d["std"] = s.std;
+            d["rms"] = s.rms;
+            d["max_abs"] = s.max_abs;
+            d["share_within_5mm"] = s.share_within_5mm;
+            d["failures"] = cell.failures();
+            rows.append(d);
+          }
+        }
+        return rows;
+      }, "One dict per (n, design, parameter), as summary.csv's rows (errors in m).");
+  m.def(
+      "montecarlo",
+      [](py::handle robot_arg, py::handle poses, py::handle trials, py::handle designs, py::handle estimator,
+         py::handle gauge, py::handle sensors, py::handle geometry_sigma, py::handle seed, py::handle design_starts,
+         py::handle threads, py::handle progress, py::handle loss, py::handle outliers, py::handle geometry_prior,
+         py::handle equilibrium, py::handle com_error) {
+        const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
+        MonteCarloOptions o;
+        if (py::isinstance<py::str>(poses)) {
+          o.pose_counts = ParsePoseCounts(poses.cast<std::string>());
+        } else if (IsInteger(poses)) {
+          o.pose_counts = {static_cast<int>(AsInteger(poses, "poses", 1, kMaxPlanPoses))};
+        } else {
+          if (!py::isinstance<py::sequence>(poses)) Bad("poses", "expected \"first:last[:step]\", an integer or a list of them");
+          for (const auto& e : poses) o.pose_counts.push_back(static_cast<int>(AsInteger(e, "poses", 1, kMaxPlanPoses)));
+        }
+        o.trials = static_cast<int>(AsInteger(trials, "trials", 1, 100000000));
+        o.designs = ParseDesigns(AsText(designs, "designs"));
+        o.estimator = ParseEstimator(AsText(estimator, "estimator"));
+        o.gauge = ParseGauge(AsText(gauge, "gauge"));
+        o.sensors = ParseNoisySensors(AsText(sensors, "sensors"));
+        o.geometry_sigma_m = AsNumber(geometry_sigma, "geometry_sigma");
+        o.seed = AsSeed(seed);
+        o.design_starts = static_cast<int>(AsInteger(design_starts, "design_starts", 1, 1000));
+        o.loss = ParseLoss(AsText(loss, "loss"));
+        o.outliers = ParseOutliers(AsText(outliers, "outliers"));
+        if (!py::isinstance<py::bool_>(geometry_prior)) Bad("geometry_prior", "expected True or False");
+        o.geometry_prior = geometry_prior.cast<bool>();
+        o.equilibrium = OnOff(equilibrium, "equilibrium");
+        o.com_error_m = AsNumber(com_error, "com_error");
+        o.design_in_child_processes = false;  // as design() (design.cc)
+        ValidateOptions(o, &robot);
+        if (!progress.is_none() && !PyCallable_Check(progress.ptr())) Bad("progress", "expected a callable or None");
+        std::atomic<bool> stop{false};
+        o.interrupted = &stop;
+        // The study reports (done, total) from one of its threads; Python hears it from here.
+        std::atomic<long> done{0}, total{0};
+        o.progress = [&](long d, long t) {
+          done = d;
+          total = t;
+        };
+        long reported = -1;
+        const auto report = [&] {
+          if (progress.is_none() || total == 0 || done == reported) return;
+          reported = done;
+          progress(reported, total.load());
+        };
+        // OpenMP threads of the worker that runs the study (its own setting, as --threads);
+        // the results do not depend on it.
+        const int thread_count = threads.is_none() ? 0 : static_cast<int>(AsInteger(threads, "threads", 1, 1024));
+        MonteCarloResult r = Interruptible(
+            stop,
+            [&] {
+              if (thread_count > 0) omp_set_num_threads(thread_count);
+              return RunMonteCarlo(robot, o);
+            },
+            report);
+        report();  // the last count: (total, total)
+        return r;
+      },
+      py::arg("robot"), py::arg("poses"), py::arg("trials"), py::arg("designs") = "random,optimized",
+      py::arg("estimator") = "ml", py::arg("gauge") = "a1x", py::arg("sensors") = "both",
+      py::arg("geometry_sigma") = 0.01, py::arg("seed") = 1, py::arg("design_starts") = 2,
+      py::arg("threads") = py::none(), py::arg("progress") = py::none(), py::arg("loss") = "none",
+      py::arg("outliers") = "0", py::arg("geometry_prior") = false,
+      py::arg("equilibrium") = kDefaultEquilibrium ? "on" : "off", py::arg("com_error") = 0.0,
+      "The Monte Carlo study (cablecal montecarlo); Ctrl-C raises KeyboardInterrupt. progress(done, total), if "
+      "given, is called now and then with the trials done. geometry_prior: identify every trial with "
+      "geometry_sigma as a prior (montecarlo --geometry-prior).");
+}
+
+}  // namespace cablecal::python
