@@ -482,8 +482,9 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   const auto has = [&](const char* sensor) {
     return std::find(result.missing_sensors.begin(), result.missing_sensors.end(), sensor) == result.missing_sensors.end();
   };
-  if (has("laser")) std::printf(", laser %.3g m", result.rms_laser_m);
-  if (has("inclinometer")) std::printf(", inclinometer %.3g rad", result.rms_inclinometer_rad);
+  for (const SensorUnit& u : kPlanarSensors) {
+    if (has(u.name)) std::printf(", %s %.3g %s", u.name, result.rms_sensor[static_cast<int>(u.id)], u.unit);
+  }
   std::printf("\n");
   if (!result.missing_sensors.empty()) {
     std::printf("  the data have %s: see identifiability in the result\n", MissingSensorsText(result.missing_sensors).c_str());

@@ -98,9 +98,9 @@ std::vector<SensorResidual> SensorResiduals(const IdentifyResult& r) {
     for (Eigen::Index i = 0; i < f.encoder_sigmas.size(); ++i) {
       out.push_back({k + 1, f.pose_id, "encoder" + std::to_string(i + 1), f.encoder_sigmas(i), f.encoder_weights(i)});
     }
-    if (f.laser_sigmas) out.push_back({k + 1, f.pose_id, "laser", *f.laser_sigmas, f.laser_weight});
-    if (f.inclinometer_sigmas) {
-      out.push_back({k + 1, f.pose_id, "inclinometer", *f.inclinometer_sigmas, f.inclinometer_weight});
+    for (const SensorUnit& u : kPlanarSensors) {
+      const int id = static_cast<int>(u.id);
+      if (f.sensor_sigmas[id]) out.push_back({k + 1, f.pose_id, u.name, *f.sensor_sigmas[id], f.sensor_weights[id]});
     }
   }
   return out;
@@ -234,8 +234,9 @@ std::string EstimatesSection(const Robot& nominal, const IdentifyResult& r, cons
   }
   o << "\nResidual RMS: encoder " << Rounded(1e3 * r.rms_encoder_m) << " mm";
   if (r.estimator == Estimator::kMaximumLikelihood) {
-    if (!Missing(r, "laser")) o << ", laser " << Rounded(1e3 * r.rms_laser_m) << " mm";
-    if (!Missing(r, "inclinometer")) o << ", inclinometer " << Rounded(1e3 * r.rms_inclinometer_rad) << " mrad";
+    for (const SensorUnit& u : kPlanarSensors) {  // in milli-units: mm, mrad
+      if (!Missing(r, u.name)) o << ", " << u.name << " " << Rounded(1e3 * r.rms_sensor[static_cast<int>(u.id)]) << " m" << u.unit;
+    }
   }
   o << ".\n\n";
   o << Figure(kEstimatesFigure, "Identified − nominal, mm, with ±1 σ and ±3 σ", figure_error);

@@ -11,6 +11,7 @@
 #include "common/error.h"
 #include "identify/experiment.h"
 #include "identify/residuals.h"
+#include "model/geometry.h"
 #include "model/robot.h"
 
 namespace cablecal::internal {
@@ -32,13 +33,12 @@ PoseReadings<M> ReadingsOf(const Measurement& m) {
   CABLECAL_CHECK(m.dl_m.size() == M, "one encoder reading per cable");
   PoseReadings<M> r;
   r.dl_m = m.dl_m;
-  r.z_m = m.z_m;
-  r.theta_rad = m.theta_rad;
+  for (int k = 0; k < kNumSensorIds; ++k) r.sensor_values[k] = m.value(static_cast<SensorId>(k));
   return r;
 }
 
 // Maximum likelihood, errors in variables: per pose, every cable's length residual and the
-// laser and inclinometer residuals, each whitened by its sensor's sigma (residuals.h).
+// other sensors' residuals (model/sensors.h), each whitened by its sensor's sigma (residuals.h).
 // Identify gives Ceres two residual blocks per pose, MlLengthCost (geometry and pose) and
 // MlSensorCost (the pose alone): with 2 cables every row block is then 2 rows by a 3-wide pose
 // block and a 6-wide geometry block, a shape Ceres' Schur eliminator has a compiled
@@ -86,7 +86,7 @@ struct MlEquilibriumCost {
 
 // With a robust loss (identify --loss) every reading is a residual block of its own, so that
 // the loss weighs each reading, not a pose's readings together: one cable's length residual,
-// and the laser's or the inclinometer's (sensor 0 or 1 of MlSensorResiduals).
+// and each sensor's (its index in kPlanarSensors, the order of MlSensorResiduals).
 template <int M>
 struct MlCableCost {
   const Robot* robot;
@@ -107,13 +107,13 @@ template <int M>
 struct MlOneSensorCost {
   PoseReadings<M> readings;
   ReadingWeights weights;
-  int sensor;  // 0: laser, 1: inclinometer
+  int sensor;  // index in kPlanarSensors
 
   template <typename T>
   bool operator()(const T* pose, T* residual) const {
-    T both[2];
-    MlSensorResiduals<M, T>(readings, weights, pose, both);
-    residual[0] = both[sensor];
+    T all[kNumPlanarSensors];
+    MlSensorResiduals<M, T>(readings, weights, pose, all);
+    residual[0] = all[sensor];
     return true;
   }
 };
@@ -136,11 +136,12 @@ struct PaperPoseCost {
 // inv_sigma_k = 0 (a coordinate without one).
 template <int M>
 struct GeometryPriorCost {
-  Eigen::Matrix<double, 3 * M, 1> nominal;
-  Eigen::Matrix<double, 3 * M, 1> inv_sigma;
+  static constexpr int kSize = PlanarLayout(M).size();
+  Eigen::Matrix<double, kSize, 1> nominal;
+  Eigen::Matrix<double, kSize, 1> inv_sigma;
   template <typename T>
   bool operator()(const T* geometry, T* residual) const {
-    for (int k = 0; k < 3 * M; ++k) residual[k] = (geometry[k] - nominal(k)) * inv_sigma(k);
+    for (int k = 0; k < kSize; ++k) residual[k] = (geometry[k] - nominal(k)) * inv_sigma(k);
     return true;
   }
 };
@@ -148,11 +149,12 @@ struct GeometryPriorCost {
 // Laser-tracker prior on the exit points (gauge `prior`): a1x a1z ... aMx aMz.
 template <int M>
 struct ExitPointPriorCost {
-  Eigen::Matrix<double, 2 * M, 1> nominal;
+  static constexpr int kSize = PlanarLayout(M).exit_coordinates();
+  Eigen::Matrix<double, kSize, 1> nominal;
   double inv_sigma;
   template <typename T>
   bool operator()(const T* geometry, T* residual) const {
-    for (int k = 0; k < 2 * M; ++k) residual[k] = (geometry[k] - nominal(k)) * inv_sigma;
+    for (int k = 0; k < kSize; ++k) residual[k] = (geometry[k] - nominal(k)) * inv_sigma;
     return true;
   }
 };

@@ -335,7 +335,7 @@ std::optional<IdentifyResult> FitWithoutLeftOut(const IdentificationProblem<M>& 
     for (int k = 0; k < p.num_readings; ++k) {
       if (!dropped_reading[k]) continue;
       all[k].encoder_weights.setZero();
-      all[k].laser_weight = all[k].inclinometer_weight = 0.0;
+      all[k].sensor_weights.fill(0.0);
       all[k].min_detectable_sigmas.resize(0);
     }
     without.readings = std::move(all);

@@ -103,8 +103,8 @@ SimulatedExperiment SimulateExperiment(const Robot& nominal, const Robot& truth,
     const double z_read = options.systematic_errors ? LaserReading(sys, fwd.equilibrium.q(1)) : fwd.equilibrium.q(1);
     const double theta_read =
         options.systematic_errors ? InclinometerReading(sys, fwd.equilibrium.q(2)) : fwd.equilibrium.q(2);
-    m.z_m = z_read + (laser ? laser_acc + laser_rep : 0.0);
-    m.theta_rad = theta_read + (inclinometer ? inc_acc + inc_rep : 0.0);
+    m.set(SensorId::kLaser, z_read + (laser ? laser_acc + laser_rep : 0.0));
+    m.set(SensorId::kInclinometer, theta_read + (inclinometer ? inc_acc + inc_rep : 0.0));
     out.measurements.push_back(m);
     out.true_poses.push_back(fwd.equilibrium.q);
   }
@@ -162,26 +162,34 @@ void AddOutliers(std::vector<Measurement>& readings, const SensorNoise& sensors,
     const double hit = rng.Uniform(), sign = rng.Uniform() < 0.5 ? -1.0 : 1.0;
     if (hit < model.rate) value += sign * model.size_sigmas * sigma;
   };
+  double unread = 0.0;  // a sensor the data lack still takes its draws
   for (Measurement& m : readings) {
     for (int i = 0; i < m.dl_m.size(); ++i) perturb(m.dl_m(i), sensors.encoder_sigma_m);
-    perturb(m.z_m, sensors.laser_sigma_m());
-    perturb(m.theta_rad, sensors.inclinometer_sigma_rad());
+    for (const SensorUnit& u : kPlanarSensors) {
+      Eigen::VectorXd& values = m.sensor_values[static_cast<int>(u.id)];
+      perturb(values.size() > 0 ? values(0) : unread, u.sigma(sensors));
+    }
   }
 }
 
 std::string MeasurementsCsv(const std::vector<Measurement>& measurements, const std::string& provenance) {
   std::string out = provenance + "pose";
   const int m = measurements.empty() ? 2 : static_cast<int>(measurements.front().dl_m.size());
-  const bool laser = measurements.empty() || measurements.front().has_laser;
-  const bool inclinometer = measurements.empty() || measurements.front().has_inclinometer;
+  std::array<bool, kNumSensorIds> present{};
+  present.fill(true);
+  if (!measurements.empty()) present = measurements.front().sensors();
   for (int i = 1; i <= m; ++i) out += ",dl" + std::to_string(i);
-  out += std::string(laser ? ",z" : "") + (inclinometer ? ",theta" : "") + "\n";
+  for (const SensorUnit& u : kPlanarSensors) {
+    if (present[static_cast<int>(u.id)]) out += std::string(",") + u.column;
+  }
+  out += "\n";
   for (const Measurement& r : measurements) {
-    CABLECAL_CHECK(r.has_laser == laser && r.has_inclinometer == inclinometer, "one file, one set of sensors");
+    CABLECAL_CHECK(r.sensors() == present, "one file, one set of sensors");
     out += std::to_string(r.pose_id);
     for (int i = 0; i < m; ++i) out += "," + FormatDouble(r.dl_m(i));
-    if (laser) out += "," + FormatDouble(r.z_m);
-    if (inclinometer) out += "," + FormatDouble(r.theta_rad);
+    for (const SensorUnit& u : kPlanarSensors) {
+      if (present[static_cast<int>(u.id)]) out += "," + FormatDouble(r.value(u.id));
+    }
     out += "\n";
   }
   return out;
@@ -232,18 +240,11 @@ std::vector<std::string> MeasurementWarnings(const std::string& source, const st
                                              const std::vector<Measurement>& readings) {
   std::vector<std::string> warnings;
   if (readings.empty()) return warnings;
-  const struct {
-    const char* name;
-    bool present;
-    const char* unit;
-    const char* sensor;
-  } sensors[] = {{"z", readings.front().has_laser, "m", "laser"},
-                 {"theta", readings.front().has_inclinometer, "rad", "inclinometer"}};
   for (const std::string& column : ignored) {
-    for (const auto& s : sensors) {
-      if (s.present || !LooksLikeColumn(column, s.name)) continue;
-      warnings.push_back(source + ": column '" + column + "' ignored: " + s.name + " is read from a column '" + s.name +
-                         "' in " + s.unit + ", and without one the " + s.sensor + " is taken as missing");
+    for (const SensorUnit& u : kPlanarSensors) {
+      if (readings.front().has(u.id) || !LooksLikeColumn(column, u.column)) continue;
+      warnings.push_back(source + ": column '" + column + "' ignored: " + u.column + " is read from a column '" +
+                         u.column + "' in " + u.unit + ", and without one the " + u.name + " is taken as missing");
     }
   }
   if (const std::optional<std::string> reused = ReusedPoseIdWarning(source, readings)) warnings.push_back(*reused);
@@ -271,7 +272,9 @@ std::vector<Measurement> ReadMeasurementsCsv(std::istream& in, const std::string
     ignored = names;
     if (on_ignored) on_ignored(names);
   };
-  ForEachCsvRowByName(in, path, delimiter, header, {"z", "theta"}, note_ignored, [&](const CsvRow& row) {
+  std::vector<std::string> optional_columns;
+  for (const SensorUnit& u : kPlanarSensors) optional_columns.push_back(u.column);
+  ForEachCsvRowByName(in, path, delimiter, header, optional_columns, note_ignored, [&](const CsvRow& row) {
     if (static_cast<int>(out.size()) >= kMaxMeasuredPoses) {
       throw InputError(row.Where(), "", "more than " + std::to_string(kMaxMeasuredPoses) + " readings");
     }
@@ -280,10 +283,10 @@ std::vector<Measurement> ReadMeasurementsCsv(std::istream& in, const std::string
     m.pose_id = row.PositiveInt(0);
     m.dl_m.resize(num_cables);
     for (int i = 0; i < num_cables; ++i) m.dl_m(i) = row.Number(1 + i);
-    m.has_laser = row.present[1 + num_cables];
-    m.has_inclinometer = row.present[2 + num_cables];
-    if (m.has_laser) m.z_m = row.Number(1 + num_cables);
-    if (m.has_inclinometer) m.theta_rad = row.Number(2 + num_cables);
+    for (std::size_t k = 0; k < kPlanarSensors.size(); ++k) {
+      const int column = 1 + num_cables + static_cast<int>(k);
+      if (row.present[column]) m.set(kPlanarSensors[k].id, row.Number(column));
+    }
     out.push_back(m);
   });
   if (on_warning) {
@@ -313,19 +316,19 @@ void CheckReadingsPlausible(const Robot& robot, const std::vector<Measurement>& 
                              "lengths are in m)");
       }
     }
-    if (m.has_laser && !(m.z_m >= z_min && m.z_m <= z_max)) {
+    if (m.has(SensorId::kLaser) && !(m.value(SensorId::kLaser) >= z_min && m.value(SensorId::kLaser) <= z_max)) {
       throw InputError(where, "column 'z'",
-                       FormatDouble(m.z_m) + " m is outside what the laser can read here, [" + FormatDouble(z_min) +
+                       FormatDouble(m.value(SensorId::kLaser)) + " m is outside what the laser can read here, [" + FormatDouble(z_min) +
                            ", " + FormatDouble(z_max) + "] m (the laser range and the frame height of " + robot.name +
                            ", widened by 5 sigma of the laser's noise)" +
-                           (m.z_m > 10.0 * robot.frame_height_m ? " (millimetres? z is in m)" : ""));
+                           (m.value(SensorId::kLaser) > 10.0 * robot.frame_height_m ? " (millimetres? z is in m)" : ""));
     }
-    if (m.has_inclinometer && !(std::abs(m.theta_rad) <= theta_max)) {
+    if (m.has(SensorId::kInclinometer) && !(std::abs(m.value(SensorId::kInclinometer)) <= theta_max)) {
       throw InputError(where, "column 'theta'",
-                       FormatDouble(m.theta_rad) + " rad is beyond the inclinometer range of +-" +
+                       FormatDouble(m.value(SensorId::kInclinometer)) + " rad is beyond the inclinometer range of +-" +
                            FormatDouble(robot.theta_max_rad) + " rad (+-" + FormatDouble(theta_max) +
                            " with 5 sigma of its noise)" +
-                           (std::abs(m.theta_rad) > M_PI ? " (degrees? theta is in radians)" : ""));
+                           (std::abs(m.value(SensorId::kInclinometer)) > M_PI ? " (degrees? theta is in radians)" : ""));
     }
   }
 }
@@ -342,12 +345,10 @@ std::string TruthYaml(const Robot& truth, const std::vector<Measurement>& measur
     rows.BeginRow();
     rows.Key("pose");
     rows.Int(measurements[j].pose_id);
-    rows.Key("x");
-    rows.Number(true_poses[j](0));
-    rows.Key("z");
-    rows.Number(true_poses[j](1));
-    rows.Key("theta");
-    rows.Number(true_poses[j](2));
+    for (int k = 0; k < PlanarKind::kPoseDim; ++k) {
+      rows.Key(PlanarKind::kPoseNames[k]);
+      rows.Number(true_poses[j](k));
+    }
     rows.EndRow();
   }
   return YamlText(o) + rows.Finish("true_poses", "where the platform settled at each measured pose: x, z (m), theta (rad)");

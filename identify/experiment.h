@@ -16,6 +16,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <functional>
 #include <istream>
 #include <optional>
@@ -25,23 +26,35 @@
 #include "common/random.h"
 #include "model/geometry.h"
 #include "model/robot.h"
+#include "model/sensors.h"
 #include "model/statics.h"
 #include "workspace/workspace.h"
 
 namespace cablecal {
 
-// One reading of a pose. dl: encoder length changes from the home pose (m); z: laser
-// height (m); theta: inclinometer angle (rad). A lab without a laser or an inclinometer has
-// no z or theta (has_laser / has_inclinometer false, the value then unused). Several readings
-// may share a pose_id: repeated measurements of one pose, fitted with one set of pose unknowns.
+// One reading of a pose. dl: encoder length changes from the home pose (m), one per cable;
+// then each of the robot kind's other sensors' values (model/sensors.h: the planar laser's
+// height z in m, the inclinometer's angle theta in rad). A lab without a laser or an
+// inclinometer has no value for it (has() false; value() then 0, unused). Several readings may
+// share a pose_id: repeated measurements of one pose, fitted with one set of pose unknowns.
 struct Measurement {
   int pose_id = 0;
   std::string where;  // "file:line" when read from a file, for messages; empty when simulated
   Eigen::VectorXd dl_m;
-  double z_m = 0.0;
-  double theta_rad = 0.0;
-  bool has_laser = true;
-  bool has_inclinometer = true;
+  // By SensorId; empty where the data lack that sensor.
+  std::array<Eigen::VectorXd, kNumSensorIds> sensor_values;
+
+  bool has(SensorId id) const { return sensor_values[static_cast<int>(id)].size() > 0; }
+  double value(SensorId id, int k = 0) const { return has(id) ? sensor_values[static_cast<int>(id)](k) : 0.0; }
+  void set(SensorId id, double v) { sensor_values[static_cast<int>(id)] = Eigen::VectorXd::Constant(1, v); }
+  double& at(SensorId id, int k = 0) { return sensor_values[static_cast<int>(id)](k); }  // a value the reading has
+  void drop(SensorId id) { sensor_values[static_cast<int>(id)].resize(0); }
+  // The sensors this reading has, by SensorId.
+  std::array<bool, kNumSensorIds> sensors() const {
+    std::array<bool, kNumSensorIds> out{};
+    for (int k = 0; k < kNumSensorIds; ++k) out[k] = sensor_values[k].size() > 0;
+    return out;
+  }
 };
 
 // The one geometry perturbation (simulate --geometry-sigma, the Monte Carlo's true robots,

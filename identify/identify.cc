@@ -112,7 +112,7 @@ template <int M>
 IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measurement>& measurements,
                                   const IdentifyOptions& options);
 template <int M>
-Eigen::Vector3d StartingPose(const Robot& robot, const GeometryVector& g, Measurement m);
+Eigen::Vector3d StartingPose(const Robot& robot, const GeometryVector& g, const Measurement& m);
 
 // f(std::integral_constant<int, M>{}) for the robot's cable count M: the one dispatch from a
 // run-time count to the compile-time instances.

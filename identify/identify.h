@@ -18,12 +18,14 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "identify/experiment.h"
 #include "model/robot.h"
+#include "model/sensors.h"
 
 namespace YAML {
 class Emitter;
@@ -130,19 +132,19 @@ struct ReadingFit {
   int pose_id = 0;
   std::string where;                    // "file:line" when read from a file
   Eigen::VectorXd encoder_sigmas;       // one per cable, signed
-  std::optional<double> laser_sigmas;   // absent: no laser reading, or `paper`
-  std::optional<double> inclinometer_sigmas;
+  // Each other sensor's (model/sensors.h), by SensorId; absent: no such reading, or `paper`.
+  std::array<std::optional<double>, kNumSensorIds> sensor_sigmas;
   Eigen::VectorXd encoder_weights;      // one per cable
-  double laser_weight = 1.0, inclinometer_weight = 1.0;
-  // The smallest error of each value alone (encoders, then laser and inclinometer), in its
-  // sigmas, that the other poses would show beyond kOutlierSigmas (identify/schur.h,
-  // CheckPosesAgainstTheOthers); infinite where nothing checks it. Empty when not computed
-  // (paper, gauge none, a robust loss).
+  std::array<double, kNumSensorIds> sensor_weights = {1.0, 1.0};
+  // The smallest error of each value alone (encoders, then the sensors in kPlanarSensors'
+  // order), in its sigmas, that the other poses would show beyond kOutlierSigmas
+  // (identify/schur.h, CheckPosesAgainstTheOthers); infinite where nothing checks it. Empty
+  // when not computed (paper, gauge none, a robust loss).
   Eigen::VectorXd min_detectable_sigmas;
-  // Whether value `row` (encoders, then laser, inclinometer) was read and fitted.
+  // Whether value `row` (encoders, then the sensors) was read and fitted.
   bool HasValue(int row) const {
     const int m = static_cast<int>(encoder_sigmas.size());
-    return row < m || (row == m ? laser_sigmas.has_value() : inclinometer_sigmas.has_value());
+    return row < m || sensor_sigmas[static_cast<int>(kPlanarSensors[row - m].id)].has_value();
   }
 };
 
@@ -185,7 +187,8 @@ struct IdentifyResult {
   double final_cost = 0.0;  // Ceres' cost: half the sum of squared residuals
   // Residual RMS per sensor in physical units (m, m, rad): encoder length residuals, laser
   // z_j - z_meas, inclinometer theta_j - theta_meas (zero for `paper`, which fixes them).
-  double rms_encoder_m = 0.0, rms_laser_m = 0.0, rms_inclinometer_rad = 0.0;
+  double rms_encoder_m = 0.0;
+  std::array<double, kNumSensorIds> rms_sensor = {0.0, 0.0};  // by SensorId, in the sensor's unit
   GeometryVector geometry;  // 3m entries, GeometryNames(m) order (identify/experiment.h)
   bool has_covariance = false;
   GeometryVector geometry_std;           // 3m entries, 0 for a held a1x (all 0 without covariance)

@@ -48,17 +48,17 @@ namespace cablecal::internal {
 // from it (measured on planar3 and 18 random robots with 3 to 8 cables: every one of 400
 // identifications converged, in the same iterations as from the best single-cable estimate).
 template <int M>
-double StartingX(const Robot& nominal, const GeometryVector& g, const Measurement& m) {
+double StartingX(const Robot& nominal, const GeometryVector& g, const Measurement& m, double z_m, double theta_rad) {
   using Jet1 = ceres::Jet<double, 1>;
   constexpr GeometryLayout kLayout = PlanarLayout(M);
-  const Eigen::Matrix2d R = Rotation(m.theta_rad);
+  const Eigen::Matrix2d R = Rotation(theta_rad);
   double sum = 0.0;
   int count = 0;
   for (int i = 0; i < M; ++i) {
     const Cable& c = nominal.cables[i];
     const Eigen::Vector2d r_anchor = R * c.p_P_anchor_m;
     const double length = g(kLayout.initial_length(i)) + m.dl_m(i);
-    const double dz = g(kLayout.exit(i, 1)) - (m.z_m + r_anchor.y());
+    const double dz = g(kLayout.exit(i, 1)) - (z_m + r_anchor.y());
     const double horizontal2 = length * length - dz * dz;
     if (horizontal2 <= 0.0) continue;
     sum += g(kLayout.exit(i, 0)) + SideSign(c.side) * std::sqrt(horizontal2) - r_anchor.x();
@@ -70,7 +70,7 @@ double StartingX(const Robot& nominal, const GeometryVector& g, const Measuremen
   const PoseReadings<M> readings = ReadingsOf<M>(m);
   for (int it = 0; it < 6; ++it) {
     Jet1 r[M];
-    LengthResiduals<M, Jet1>(nominal, geometry, Pose<Jet1>(Jet1(x, 0), Jet1(m.z_m), Jet1(m.theta_rad)),
+    LengthResiduals<M, Jet1>(nominal, geometry, Pose<Jet1>(Jet1(x, 0), Jet1(z_m), Jet1(theta_rad)),
                              readings.dl_m.data(), r);
     double num = 0.0, den = 0.0;
     for (int i = 0; i < M; ++i) {
@@ -86,20 +86,25 @@ double StartingX(const Robot& nominal, const GeometryVector& g, const Measuremen
 }
 
 // Starting pose for one reading (identify's x_j, z_j, theta_j; validate's forward model): the
-// measured z and theta with StartingX's x. A missing z or theta starts where `robot` settles
-// with these lengths (a cold forward model; home, level, if it finds nothing).
+// measured z and theta (each sensor's pose coordinate) with StartingX's x. A coordinate no
+// sensor read starts where `robot` settles with these lengths (a cold forward model; home,
+// level, if it finds nothing).
 template <int M>
-Eigen::Vector3d StartingPose(const Robot& robot, const GeometryVector& g, Measurement m) {
-  if (!m.has_laser || !m.has_inclinometer) {
+Eigen::Vector3d StartingPose(const Robot& robot, const GeometryVector& g, const Measurement& m) {
+  Eigen::Vector3d q = Eigen::Vector3d::Zero();
+  bool every_sensor = true;
+  for (const SensorUnit& u : kPlanarSensors) every_sensor = every_sensor && m.has(u.id);
+  if (!every_sensor) {
     const Eigen::VectorXd lengths = g.tail<M>() + m.dl_m;
     const ForwardResult fwd = SolveForwardGeometricoStatic(robot, lengths);
-    const Eigen::Vector3d q = fwd.status == ForwardStatus::kConverged
-                                  ? fwd.equilibrium.q
-                                  : Eigen::Vector3d(robot.p_F_home_m.x(), robot.p_F_home_m.y(), 0.0);
-    if (!m.has_laser) m.z_m = q(1);
-    if (!m.has_inclinometer) m.theta_rad = q(2);
+    q = fwd.status == ForwardStatus::kConverged ? fwd.equilibrium.q
+                                                : Eigen::Vector3d(robot.p_F_home_m.x(), robot.p_F_home_m.y(), 0.0);
   }
-  return Eigen::Vector3d(StartingX<M>(robot, g, m), m.z_m, m.theta_rad);
+  for (const SensorUnit& u : kPlanarSensors) {
+    if (m.has(u.id)) q(u.pose_coordinate) = m.value(u.id);
+  }
+  q(0) = StartingX<M>(robot, g, m, q(1), q(2));
+  return q;
 }
 
 // The result before any solve: what was asked, and no uncertainty yet.
@@ -248,7 +253,8 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
     for (int j = 0; j < p.n; ++j) {
       for (std::size_t c = 0; c < p.readings_of[j].size(); ++c) {
         result.readings[p.readings_of[j][c]].min_detectable_sigmas =
-            checks.checks[j].min_detectable_sigmas.segment(static_cast<Eigen::Index>(c) * (M + 2), M + 2);
+            checks.checks[j].min_detectable_sigmas.segment(static_cast<Eigen::Index>(c) * (M + kNumPlanarSensors),
+                                                            M + kNumPlanarSensors);
       }
     }
   }

@@ -61,13 +61,13 @@ Rows<T> MlResidualRows(const Robot& robot, const Pose<T>& q) {
   using J = ceres::Jet<T, 3>;
   const int m = robot.num_cables();
   const ReadingWeights weights = WeightsOf(robot.sensors);
-  Rows<T> rows = Rows<T>::Zero(m + 2, RowColumns(m));
+  Rows<T> rows = Rows<T>::Zero(m + kNumPlanarSensors, RowColumns(m));
   rows.topRows(m) = LengthResidualRows<T>(robot, q) * weights.inv_sigma_encoder;
   // MlSensorResiduals reads no encoder reading: any PoseReadings will do.
   const J pose[3] = {J(q(0), 0), J(q(1), 1), J(q(2), 2)};
-  J sensor[2];
+  J sensor[kNumPlanarSensors];
   MlSensorResiduals<1, J>(PoseReadings<1>{}, weights, pose, sensor);
-  for (int r = 0; r < 2; ++r) {
+  for (int r = 0; r < kNumPlanarSensors; ++r) {
     for (int k = 0; k < 3; ++k) rows(m + r, 3 * m + k) = sensor[r].v[k];
   }
   return rows;
@@ -76,9 +76,9 @@ Rows<T> MlResidualRows(const Robot& robot, const Pose<T>& q) {
 template <typename T>
 Rows<T> ReducedInformation(const Rows<T>& ml_rows) {
   using std::sqrt;
-  const int m = static_cast<int>(ml_rows.rows()) - 2;
+  const int m = static_cast<int>(ml_rows.rows()) - kNumPlanarSensors;
   const int g = 3 * m - 1;  // a1z .. lm0: column 1 + c of the rows
-  const int r_count = m + 2;
+  const int r_count = m + kNumPlanarSensors;
   Rows<T> E = ml_rows.block(0, 3 * m, r_count, 3);
   for (int k = 0; k < 3; ++k) {
     for (int pass = 0; pass < 2; ++pass) {

@@ -45,7 +45,7 @@ Rows<T> LengthResidualRows(const Robot& robot, const Pose<T>& q);
 // The maximum-likelihood estimator's whitened rows for one pose (residuals.h MlResiduals):
 // m encoder rows (the length rows over the encoder's sigma, as MlLengthResiduals scales
 // them), the laser row and the inclinometer row (MlSensorResiduals, differentiated);
-// (m + 2) x RowColumns(m).
+// (m + kNumPlanarSensors) x RowColumns(m).
 template <typename T>
 Rows<T> MlResidualRows(const Robot& robot, const Pose<T>& q);
 

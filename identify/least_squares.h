@@ -86,13 +86,13 @@ struct PoseNormal {
   Eigen::Matrix3d damped_inverse;  // (A + mu D)^-1 of the current step
 };
 
-// A reading's laser and inclinometer residuals at pose q (residuals.h, MlSensorResiduals).
+// A reading's sensor residuals at pose q (residuals.h, MlSensorResiduals), in kPlanarSensors' order.
 template <int M>
-Eigen::Vector2d SensorResiduals(const MlLeastSquaresProblem<M>& p, const Measurement& m, const std::array<double, 3>& q) {
+Eigen::Matrix<double, kNumPlanarSensors, 1> SensorResiduals(const MlLeastSquaresProblem<M>& p, const Measurement& m,
+                                                            const std::array<double, 3>& q) {
   PoseReadings<M> readings;
-  readings.z_m = m.z_m;
-  readings.theta_rad = m.theta_rad;
-  Eigen::Vector2d r;
+  for (int k = 0; k < kNumSensorIds; ++k) readings.sensor_values[k] = m.value(static_cast<SensorId>(k));
+  Eigen::Matrix<double, kNumPlanarSensors, 1> r;
   MlSensorResiduals<M, double>(readings, p.weights, q.data(), r.data());
   return r;
 }
@@ -183,13 +183,15 @@ double Normal(const MlLeastSquaresProblem<M>& p, const double* g, const PoseValu
           for (int d = 0; d < 3; ++d) h_gg(cols[c], cols[d]) += row_cable(c) * row_cable(d);
         }
       }
-      // The laser reads z and the inclinometer theta: rows w e_z and w e_theta.
-      const Eigen::Vector2d sensors = SensorResiduals<M>(p, m, q[j]);
+      // Each sensor reads one pose coordinate c (the laser z, the inclinometer theta): a row w e_c.
+      const Eigen::Matrix<double, kNumPlanarSensors, 1> sensors = SensorResiduals<M>(p, m, q[j]);
       sum += sensors.squaredNorm();
-      pose.a(1, 1) += w.inv_sigma_laser * w.inv_sigma_laser;
-      pose.a(2, 2) += w.inv_sigma_inclinometer * w.inv_sigma_inclinometer;
-      pose.gradient(1) += w.inv_sigma_laser * sensors(0);
-      pose.gradient(2) += w.inv_sigma_inclinometer * sensors(1);
+      for (int k = 0; k < kNumPlanarSensors; ++k) {
+        const int c = kPlanarSensors[k].pose_coordinate;
+        const double w_k = w.inv_sigma_sensor[static_cast<int>(kPlanarSensors[k].id)];
+        pose.a(c, c) += w_k * w_k;
+        pose.gradient(c) += w_k * sensors(k);
+      }
     }
     // The pose's equilibrium row (M < 3; residuals.h, MlEquilibriumResidual): one per pose,
     // whatever its readings, on the exit points and the pose, by a Jet over those 2M + 3.

@@ -29,6 +29,7 @@
 #include "identify/residuals.h"
 #include "identify/schur.h"
 #include "model/geometry.h"
+#include "model/sensors.h"
 
 namespace cablecal::internal {
 
@@ -44,13 +45,13 @@ inline void ApplyLevenbergMarquardt(ceres::Solver::Options* options) {
 }
 
 template <int M>
-Eigen::Vector3d StartingPose(const Robot& robot, const GeometryVector& g, Measurement m);
+Eigen::Vector3d StartingPose(const Robot& robot, const GeometryVector& g, const Measurement& m);
 
 // One reading's whitened residual, |r| / sigma.
 struct Reading {
   double sigmas;
   int reading;  // index into measurements
-  int sensor;   // 0 .. M - 1: encoders; M: laser; M + 1: inclinometer; M + 2: the pose's equilibrium
+  int sensor;   // 0 .. M - 1: encoders; M + k: kPlanarSensors[k]; M + kNumPlanarSensors: the pose's equilibrium
 };
 
 // The readings beyond kOutlierSigmas, the largest first.
@@ -78,8 +79,8 @@ struct IdentificationProblem {
   bool robust = false;
   int num_readings = 0;
 
-  // The sensors the data have: one set for every reading (a file's columns).
-  bool laser = true, inclinometer = true;
+  // The sensors the data have, by SensorId: one set for every reading (a file's columns).
+  std::array<bool, kNumSensorIds> present{};
   std::vector<std::string> missing_sensors;
   std::string missing_text;
 
@@ -94,7 +95,7 @@ struct IdentificationProblem {
 
   // Equations and unknowns (paper, Eq. 7; the gauge removes one unknown).
   int per_pose_unknowns = 3;
-  int values_per_reading = M + 2;
+  int values_per_reading = M + kNumPlanarSensors;
   bool geometry_prior = false;
   double prior_sigma_m = 0.0;
   int geometry_cols = kGeometry;  // the tangent space's: a held a1x has no column
@@ -147,7 +148,7 @@ struct IdentificationProblem {
   // Converged, with every value finite.
   bool Converged(const LeastSquaresSummary& sum, const double* g, const PoseValues& q, const std::vector<char>& use) const;
   // Every reading's whitened residual at (g, q) (ml: each value over its sigma; paper: each
-  // length residual over the laser's sigma, as the global test), for the readings of the poses
+  // length residual over the length sigma of the global test), for the readings of the poses
   // in `use`; with `fits`, also the per-pose estimates, ReadingFits and RMS into it.
   std::vector<Reading> ResidualsAt(const double* g, const PoseValues& q, const std::vector<char>& use,
                                    IdentifyResult* fits) const;
@@ -180,17 +181,21 @@ IdentificationProblem<M>::IdentificationProblem(const Robot& nominal_robot, cons
   robust = options.loss.kind != LossKind::kNone;
   num_readings = static_cast<int>(measurements.size());
 
-  laser = num_readings == 0 || measurements.front().has_laser;
-  inclinometer = num_readings == 0 || measurements.front().has_inclinometer;
+  present.fill(true);
+  if (num_readings > 0) present = measurements.front().sensors();
   for (const Measurement& m : measurements) {
-    if (m.has_laser != laser || m.has_inclinometer != inclinometer) {
+    if (m.sensors() != present) {
+      std::string which;  // "laser (z) or inclinometer (theta)"
+      for (const SensorUnit& u : kPlanarSensors) {
+        which += std::string(which.empty() ? "" : " or ") + u.name + " (" + u.column + ")";
+      }
       throw InputError(options.source, "",
-                       "some readings have a laser (z) or inclinometer (theta) value and others not: give every "
-                       "reading the same sensors");
+                       "some readings have a " + which + " value and others not: give every reading the same sensors");
     }
   }
-  if (!laser) missing_sensors.push_back("laser");
-  if (!inclinometer) missing_sensors.push_back("inclinometer");
+  for (const SensorUnit& u : kPlanarSensors) {
+    if (!present[static_cast<int>(u.id)]) missing_sensors.push_back(u.name);
+  }
   missing_text = MissingSensorsText(missing_sensors);
   if (!ml && !missing_sensors.empty()) {
     throw InputError(options.source, "", "the paper estimator takes z and theta as measured, but the data have " +
@@ -233,8 +238,7 @@ IdentificationProblem<M>::IdentificationProblem(const Robot& nominal_robot, cons
     for (int k = 0; k < num_readings; ++k) {
       const Measurement& m = measurements[k];
       std::vector<double> key(m.dl_m.data(), m.dl_m.data() + m.dl_m.size());
-      key.push_back(m.has_laser ? m.z_m : 0.0);
-      key.push_back(m.has_inclinometer ? m.theta_rad : 0.0);
+      for (const SensorUnit& u : kPlanarSensors) key.push_back(m.value(u.id));
       const auto [it, inserted] = first_with.emplace(std::move(key), k);
       if (inserted || measurements[it->second].pose_id == m.pose_id) continue;
       ++copied_count;
@@ -245,13 +249,14 @@ IdentificationProblem<M>::IdentificationProblem(const Robot& nominal_robot, cons
     }
   }
 
-  // Enough equations for the unknowns: per reading M encoder values, plus the laser's and the
-  // inclinometer's for ml; per pose 3 unknowns (ml) or 1 (paper); 3M geometric unknowns, 3M - 1
+  // Enough equations for the unknowns: per reading M encoder values, plus each sensor's the
+  // data have, for ml; per pose 3 unknowns (ml) or 1 (paper); 3M geometric unknowns, 3M - 1
   // with a1x held; the tracker prior adds 2M equations, the geometry prior one per geometric
   // unknown (any pose count is then determined). Repeated readings add equations, not
   // information on other poses: the rank test judges them.
   per_pose_unknowns = ml ? 3 : 1;
-  values_per_reading = ml ? M + (laser ? 1 : 0) + (inclinometer ? 1 : 0) : M;
+  values_per_reading = M;
+  for (const SensorUnit& u : kPlanarSensors) values_per_reading += ml && present[static_cast<int>(u.id)] ? 1 : 0;
   geometry_prior = options.geometry_prior_sigma_m.has_value();
   prior_sigma_m = options.geometry_prior_sigma_m.value_or(0.0);
   geometry_cols = options.gauge == Gauge::kA1x ? kGeometry - 1 : kGeometry;
@@ -287,12 +292,11 @@ IdentificationProblem<M>::IdentificationProblem(const Robot& nominal_robot, cons
     if (!(s.encoder_sigma_m > 0.0)) {
       throw InputError(nominal.source, "sensors.encoder.sigma", "must be > 0 for the ml estimator");
     }
-    if (laser && !(s.laser_sigma_m() > 0.0)) {
-      throw InputError(nominal.source, "sensors.laser", "accuracy or repeatability must be > 0 for the ml estimator");
-    }
-    if (inclinometer && !(s.inclinometer_sigma_rad() > 0.0)) {
-      throw InputError(nominal.source, "sensors.inclinometer",
-                       "accuracy or repeatability must be > 0 for the ml estimator");
+    for (const SensorUnit& u : kPlanarSensors) {
+      if (present[static_cast<int>(u.id)] && !(u.sigma(s) > 0.0)) {
+        throw InputError(nominal.source, std::string("sensors.") + u.name,
+                         "accuracy or repeatability must be > 0 for the ml estimator");
+      }
     }
   }
   if (options.gauge == Gauge::kPrior && !s.tracker_sigma_m) {
@@ -320,8 +324,9 @@ IdentificationProblem<M>::IdentificationProblem(const Robot& nominal_robot, cons
 
   weights = ml ? WeightsOf(s) : ReadingWeights{};
   // No reading, no weight: its row stays in the block (the same block shapes) but is zero.
-  if (!laser) weights.inv_sigma_laser = 0.0;
-  if (!inclinometer) weights.inv_sigma_inclinometer = 0.0;
+  for (int k = 0; k < kNumSensorIds; ++k) {
+    if (!present[k]) weights.inv_sigma_sensor[k] = 0.0;
+  }
   if (equilibrium_rows > 0) weights.inv_sigma_equilibrium = 1.0 / EquilibriumSigma(nominal);
   length_sigma = ml ? s.encoder_sigma_m : std::max(s.laser_sigma_m(), s.encoder_sigma_m);
   reading_fits = options.compute_covariance || options.compute_identifiability;
@@ -354,8 +359,8 @@ std::unique_ptr<ceres::Problem> IdentificationProblem<M>::Build(double* g, PoseV
                                         new MlCableCost<M>{&nominal, readings, weights, i}),
                                     loss, g, q[j].data());
         }
-        for (int sensor = 0; sensor < 2; ++sensor) {
-          if (!(sensor == 0 ? laser : inclinometer)) continue;
+        for (int sensor = 0; sensor < kNumPlanarSensors; ++sensor) {
+          if (!present[static_cast<int>(kPlanarSensors[sensor].id)]) continue;
           problem->AddResidualBlock(new ceres::AutoDiffCostFunction<MlOneSensorCost<M>, 1, 3>(
                                         new MlOneSensorCost<M>{readings, weights, sensor}),
                                     loss, q[j].data());
@@ -364,7 +369,8 @@ std::unique_ptr<ceres::Problem> IdentificationProblem<M>::Build(double* g, PoseV
         auto* lengths = new ceres::AutoDiffCostFunction<MlLengthCost<M>, M, kGeometry, 3>(
             new MlLengthCost<M>{&nominal, readings, weights});
         problem->AddResidualBlock(lengths, nullptr, g, q[j].data());
-        auto* sensors = new ceres::AutoDiffCostFunction<MlSensorCost<M>, 2, 3>(new MlSensorCost<M>{readings, weights});
+        auto* sensors = new ceres::AutoDiffCostFunction<MlSensorCost<M>, kNumPlanarSensors, 3>(
+            new MlSensorCost<M>{readings, weights});
         problem->AddResidualBlock(sensors, nullptr, q[j].data());
       } else {
         auto* cost = new ceres::AutoDiffCostFunction<PaperPoseCost<M>, M, kGeometry, 1>(
@@ -467,7 +473,8 @@ std::vector<Reading> IdentificationProblem<M>::ResidualsAt(const double* g, cons
                                                            const std::vector<char>& use, IdentifyResult* fits) const {
   std::vector<Reading> readings;
   readings.reserve(static_cast<std::size_t>(values_per_reading) * num_readings);
-  double sum_enc = 0.0, sum_laser = 0.0, sum_inc = 0.0;
+  double sum_enc = 0.0;
+  std::array<double, kNumSensorIds> sum_sensor{};
   const bool keep_fits = fits && reading_fits;
   if (fits) {
     fits->readings.assign(keep_fits ? num_readings : 0, ReadingFit{});
@@ -482,28 +489,29 @@ std::vector<Reading> IdentificationProblem<M>::ResidualsAt(const double* g, cons
     } else {  // z and theta as measured: their mean over the pose's readings
       e.q = Eigen::Vector3d(q[j][0], 0.0, 0.0);
       for (const int k : readings_of[j]) {
-        e.q.tail<2>() += Eigen::Vector2d(measurements[k].z_m, measurements[k].theta_rad);
+        e.q.tail<2>() += Eigen::Vector2d(measurements[k].value(SensorId::kLaser), measurements[k].value(SensorId::kInclinometer));
       }
       e.q.tail<2>() /= static_cast<double>(readings_of[j].size());
     }
     for (const int k : readings_of[j]) {
       const Measurement& m = measurements[k];
-      const Eigen::Vector3d q_k = ml ? e.q : Eigen::Vector3d(q[j][0], m.z_m, m.theta_rad);
+      const Eigen::Vector3d q_k =
+          ml ? e.q : Eigen::Vector3d(q[j][0], m.value(SensorId::kLaser), m.value(SensorId::kInclinometer));
       double length_residuals[M];
       LengthResiduals<M, double>(nominal, g, q_k, m.dl_m.data(), length_residuals);
       for (int i = 0; i < M; ++i) {
         sum_enc += length_residuals[i] * length_residuals[i];
         readings.push_back({std::abs(length_residuals[i]) / length_sigma, k, i});
       }
-      const double laser_sigmas = (q_k(1) - m.z_m) / s.laser_sigma_m();
-      const double inclinometer_sigmas = (q_k(2) - m.theta_rad) / s.inclinometer_sigma_rad();
-      if (ml && laser) {
-        sum_laser += (q_k(1) - m.z_m) * (q_k(1) - m.z_m);
-        readings.push_back({std::abs(laser_sigmas), k, M});
-      }
-      if (ml && inclinometer) {
-        sum_inc += (q_k(2) - m.theta_rad) * (q_k(2) - m.theta_rad);
-        readings.push_back({std::abs(inclinometer_sigmas), k, M + 1});
+      std::array<double, kNumSensorIds> sensor_sigmas{};
+      for (int u = 0; u < kNumPlanarSensors; ++u) {
+        const SensorUnit& unit = kPlanarSensors[u];
+        const int id = static_cast<int>(unit.id);
+        const double r = unit.Residual(q_k.data(), m.value(unit.id));
+        sensor_sigmas[id] = r / unit.sigma(s);
+        if (!ml || !present[id]) continue;
+        sum_sensor[id] += r * r;
+        readings.push_back({std::abs(sensor_sigmas[id]), k, M + u});
       }
       if (!keep_fits) continue;
       ReadingFit& fit = fits->readings[k];
@@ -511,20 +519,17 @@ std::vector<Reading> IdentificationProblem<M>::ResidualsAt(const double* g, cons
       fit.where = m.where;
       fit.encoder_sigmas = Eigen::Map<const Eigen::Matrix<double, M, 1>>(length_residuals) / length_sigma;
       fit.encoder_weights = fit.encoder_sigmas.unaryExpr([&](double r) { return LossWeight(options.loss, r); });
-      if (ml && laser) {
-        fit.laser_sigmas = laser_sigmas;
-        fit.laser_weight = LossWeight(options.loss, laser_sigmas);
-      }
-      if (ml && inclinometer) {
-        fit.inclinometer_sigmas = inclinometer_sigmas;
-        fit.inclinometer_weight = LossWeight(options.loss, inclinometer_sigmas);
+      for (int id = 0; id < kNumSensorIds; ++id) {
+        if (!ml || !present[id]) continue;
+        fit.sensor_sigmas[id] = sensor_sigmas[id];
+        fit.sensor_weights[id] = LossWeight(options.loss, sensor_sigmas[id]);
       }
     }
     if constexpr (EquilibriumRows(M) > 0) {
       if (equilibrium_rows > 0) {  // the pose's, named by its first reading
         double r;
         MlEquilibriumResidual<M, double>(nominal, weights, g, q[j].data(), &r);
-        readings.push_back({std::abs(r), readings_of[j].front(), M + 2});
+        readings.push_back({std::abs(r), readings_of[j].front(), M + kNumPlanarSensors});
         if (fits) {
           e.equilibrium_sigmas = r;
           e.equilibrium_theta_error_rad = EquilibriumThetaError<M>(nominal, g, e.q);
@@ -535,8 +540,7 @@ std::vector<Reading> IdentificationProblem<M>::ResidualsAt(const double* g, cons
   }
   if (fits) {
     fits->rms_encoder_m = std::sqrt(sum_enc / (static_cast<double>(M) * num_readings));
-    fits->rms_laser_m = std::sqrt(sum_laser / num_readings);
-    fits->rms_inclinometer_rad = std::sqrt(sum_inc / num_readings);
+    for (int id = 0; id < kNumSensorIds; ++id) fits->rms_sensor[id] = std::sqrt(sum_sensor[id] / num_readings);
   }
   return readings;
 }
@@ -545,10 +549,9 @@ template <int M>
 std::string IdentificationProblem<M>::Describe(const Reading& r, bool with_pose) const {
   const Measurement& m = measurements[r.reading];
   const bool repeated = readings_of.size() != measurements.size() && !m.where.empty();
-  const std::string sensor = r.sensor < M        ? "encoder " + std::to_string(r.sensor + 1)
-                             : r.sensor == M     ? std::string("laser")
-                             : r.sensor == M + 1 ? std::string("inclinometer")
-                                                 : std::string("equilibrium");
+  const std::string sensor = r.sensor < M                      ? "encoder " + std::to_string(r.sensor + 1)
+                             : r.sensor < M + kNumPlanarSensors ? std::string(kPlanarSensors[r.sensor - M].name)
+                                                               : std::string("equilibrium");
   char buffer[64];
   std::snprintf(buffer, sizeof(buffer), " %.3g sigma", r.sigmas);
   return (with_pose ? "pose " + std::to_string(m.pose_id) + ": " : std::string()) + sensor +
@@ -567,7 +570,7 @@ BlockJacobian IdentificationProblem<M>::JacobianBlocks(ceres::Problem& p, double
   p.Evaluate(eval, nullptr, residuals ? &values : nullptr, nullptr, &crs);
   // Ceres rows per reading: the blocks of Build() (a zero row for a missing sensor without a
   // loss, none with one).
-  const int rows_per_reading = !ml ? M : with_loss ? values_per_reading : M + 2;
+  const int rows_per_reading = !ml ? M : with_loss ? values_per_reading : M + kNumPlanarSensors;
   const int pose_rows = rows_per_reading * num_readings + equilibrium_rows * n;
   CABLECAL_CHECK(crs.num_rows == pose_rows + prior_rows && crs.num_cols == geometry_cols + per_pose_unknowns * n,
                  "the Jacobian has one row block per pose and the prior's");

@@ -80,8 +80,9 @@ ResultParts IdentifyResultParts(const IdentifyResult& r, const std::string& comm
     return std::find(r.missing_sensors.begin(), r.missing_sensors.end(), sensor) != r.missing_sensors.end();
   };
   o << Key << "residual_rms" << Value << Flow << BeginMap << Key << "encoder_m" << Value << YamlNumber{r.rms_encoder_m};
-  if (!missing("laser")) o << Key << "laser_m" << Value << YamlNumber{r.rms_laser_m};
-  if (!missing("inclinometer")) o << Key << "inclinometer_rad" << Value << YamlNumber{r.rms_inclinometer_rad};
+  for (const SensorUnit& u : kPlanarSensors) {
+    if (!missing(u.name)) o << Key << std::string(u.name) + "_" + u.unit << Value << YamlNumber{r.rms_sensor[static_cast<int>(u.id)]};
+  }
   o << EndMap;
   if (!r.missing_sensors.empty()) {
     o << Key << "missing_sensors" << Value << Flow << BeginSeq;
@@ -184,12 +185,16 @@ ResultParts IdentifyResultParts(const IdentifyResult& r, const std::string& comm
       readings.Key("pose");
       readings.Int(f.pose_id);
       list("encoder_sigmas", f.encoder_sigmas);
-      if (f.laser_sigmas) number(readings, "laser_sigmas", *f.laser_sigmas);
-      if (f.inclinometer_sigmas) number(readings, "inclinometer_sigmas", *f.inclinometer_sigmas);
+      for (const SensorUnit& u : kPlanarSensors) {
+        const std::optional<double>& sigmas = f.sensor_sigmas[static_cast<int>(u.id)];
+        if (sigmas) number(readings, (std::string(u.name) + "_sigmas").c_str(), *sigmas);
+      }
       if (robust) {
         list("encoder_weights", f.encoder_weights);
-        if (f.laser_sigmas) number(readings, "laser_weight", f.laser_weight);
-        if (f.inclinometer_sigmas) number(readings, "inclinometer_weight", f.inclinometer_weight);
+        for (const SensorUnit& u : kPlanarSensors) {
+          const int id = static_cast<int>(u.id);
+          if (f.sensor_sigmas[id]) number(readings, (std::string(u.name) + "_weight").c_str(), f.sensor_weights[id]);
+        }
       }
       if (f.min_detectable_sigmas.size() > 0) {
         // Encoders, then the laser and inclinometer the data have (a missing sensor's row is 0).

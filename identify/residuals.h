@@ -7,30 +7,34 @@
 #include <ceres/jet.h>
 
 #include <Eigen/Core>
+#include <array>
 
 #include "model/cable.h"
 #include "model/robot.h"
+#include "model/sensors.h"
 
 namespace cablecal {
 
-// What one pose's readings say and how much each is trusted: the M encoder length changes
-// from home (m), the laser height (m), the inclinometer angle (rad), and the inverse sigmas
-// that whiten them (the ml estimator).
+// What one pose's readings say: the M encoder length changes from home (m), then each other
+// sensor's value by SensorId (model/sensors.h; 0 where the data lack it, its weight then 0).
 template <int M>
 struct PoseReadings {
   Eigen::Matrix<double, M, 1> dl_m = Eigen::Matrix<double, M, 1>::Zero();
-  double z_m = 0.0;
-  double theta_rad = 0.0;
+  std::array<double, kNumSensorIds> sensor_values{};
 };
 
 struct ReadingWeights {
-  double inv_sigma_encoder = 1.0, inv_sigma_laser = 1.0, inv_sigma_inclinometer = 1.0;
+  double inv_sigma_encoder = 1.0;
+  std::array<double, kNumSensorIds> inv_sigma_sensor = {1.0, 1.0};  // by SensorId; 0: the data lack it
   // The static equilibrium's row of each pose (robots with fewer cables than the pose's 3
   // DoF, MlEquilibriumResidual below): 1 / platform.com_sigma, in 1/m; 0: no such row.
   double inv_sigma_equilibrium = 0.0;
 };
 inline ReadingWeights WeightsOf(const SensorNoise& s) {
-  return {1.0 / s.encoder_sigma_m, 1.0 / s.laser_sigma_m(), 1.0 / s.inclinometer_sigma_rad()};
+  ReadingWeights w;
+  w.inv_sigma_encoder = 1.0 / s.encoder_sigma_m;
+  for (const SensorUnit& u : kPlanarSensors) w.inv_sigma_sensor[static_cast<int>(u.id)] = 1.0 / u.sigma(s);
+  return w;
 }
 
 // Length residual of cable i at a pose: r_ij = l_i(B_i; a_i) - (dl_ij + l_i0), in m, with
@@ -61,8 +65,9 @@ void LengthResiduals(const Robot& robot, const T* geometry, const Pose<T>& q, co
 }
 
 // The maximum-likelihood estimator's residuals of one pose (errors in variables: x, z and
-// theta all unknown): M length residuals over the encoder's sigma, then the laser's
-// (z - z_meas) and the inclinometer's (theta - theta_meas) over theirs. M + 2 residuals.
+// theta all unknown): M length residuals over the encoder's sigma, then each sensor's
+// (model/sensors.h: the laser's z - z_meas, the inclinometer's theta - theta_meas) over its
+// own. M + kNumPlanarSensors residuals.
 // Identify gives Ceres the two parts as residual blocks of their own (cost_functors.h).
 template <int M, typename T>
 void MlLengthResiduals(const Robot& robot, const PoseReadings<M>& readings, const ReadingWeights& weights,
@@ -73,8 +78,10 @@ void MlLengthResiduals(const Robot& robot, const PoseReadings<M>& readings, cons
 
 template <int M, typename T>
 void MlSensorResiduals(const PoseReadings<M>& readings, const ReadingWeights& weights, const T* pose, T* residual) {
-  residual[0] = (pose[1] - readings.z_m) * weights.inv_sigma_laser;
-  residual[1] = (pose[2] - readings.theta_rad) * weights.inv_sigma_inclinometer;
+  for (std::size_t k = 0; k < kPlanarSensors.size(); ++k) {
+    const int id = static_cast<int>(kPlanarSensors[k].id);
+    residual[k] = kPlanarSensors[k].Residual(pose, readings.sensor_values[id]) * weights.inv_sigma_sensor[id];
+  }
 }
 
 template <int M, typename T>
@@ -153,7 +160,9 @@ double EquilibriumThetaError(const Robot& robot, const double* geometry, const P
 template <int M, typename T>
 void PaperResiduals(const Robot& robot, const PoseReadings<M>& readings, const T* geometry, const T* x,
                     T* residual) {
-  LengthResiduals<M, T>(robot, geometry, Pose<T>(x[0], T(readings.z_m), T(readings.theta_rad)),
+  LengthResiduals<M, T>(robot, geometry,
+                        Pose<T>(x[0], T(readings.sensor_values[static_cast<int>(SensorId::kLaser)]),
+                                T(readings.sensor_values[static_cast<int>(SensorId::kInclinometer)])),
                         readings.dl_m.data(), residual);
   for (int i = 0; i < M; ++i) {
     const T measured = T(readings.dl_m(i)) + geometry[2 * M + i];

@@ -76,7 +76,7 @@ bool AddIdentifiability(const IdentificationProblem<M>& p, const BlockAnalysis& 
   }
   if (!p.missing_text.empty()) {
     result.message += " (the data have " + p.missing_text + ")";
-    if (!p.laser && p.options.gauge != Gauge::kPrior) {
+    if (!p.present[static_cast<int>(SensorId::kLaser)] && p.options.gauge != Gauge::kPrior) {
       result.message += "; a tracker prior on the exit points fixes the heights: --gauge prior";
     }
   }
@@ -104,7 +104,8 @@ BlockCovariance PaperSandwich(const IdentificationProblem<M>& p, const BlockJaco
     for (int c = 0; c < count; ++c) {
       const Measurement& m = p.measurements[p.readings_of[j][c]];
       Jet2 r[M];
-      LengthResiduals<M, Jet2>(p.nominal, geometry_jets, Pose<Jet2>(Jet2(poses[j][0]), Jet2(m.z_m, 0), Jet2(m.theta_rad, 1)),
+      LengthResiduals<M, Jet2>(p.nominal, geometry_jets, Pose<Jet2>(Jet2(poses[j][0]), Jet2(m.value(SensorId::kLaser), 0),
+                                                                  Jet2(m.value(SensorId::kInclinometer), 1)),
                                m.dl_m.data(), r);
       Eigen::Matrix<double, M, 1> b_z, b_theta, encoder;
       for (int i = 0; i < M; ++i) {

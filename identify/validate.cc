@@ -53,13 +53,13 @@ bool PredictPose(const Robot& robot, const std::string& role, const GeometryVect
   // equilibrium: the bounds 3 or more cables get (kOtherAssembly) keep it honest. Only what
   // was measured is compared: a missing reading's start came from the model itself.
   const Eigen::Vector3d& q = fwd.equilibrium.q;
-  const double dz_m = q(1) - m.z_m, dtheta_rad = q(2) - m.theta_rad;
-  if ((m.has_laser && std::abs(dz_m) > kOtherAssemblyDistance_m) ||
-      (m.has_inclinometer && std::abs(dtheta_rad) > kOtherAssemblyAngle_rad)) {
+  const double dz_m = q(1) - m.value(SensorId::kLaser), dtheta_rad = q(2) - m.value(SensorId::kInclinometer);
+  if ((m.has(SensorId::kLaser) && std::abs(dz_m) > kOtherAssemblyDistance_m) ||
+      (m.has(SensorId::kInclinometer) && std::abs(dtheta_rad) > kOtherAssemblyAngle_rad)) {
     std::string off = "(" + Millimetres(q(0)) + ", " + Millimetres(q(1)) + ") m, " + Millimetres(q(2)) + " rad:";
-    if (m.has_laser) off += " " + Millimetres(std::abs(dz_m)) + " m from the laser's z";
-    if (m.has_inclinometer) {
-      off += std::string(m.has_laser ? " and " : " ") + Millimetres(std::abs(dtheta_rad)) + " rad from the inclinometer's theta";
+    if (m.has(SensorId::kLaser)) off += " " + Millimetres(std::abs(dz_m)) + " m from the laser's z";
+    if (m.has(SensorId::kInclinometer)) {
+      off += std::string(m.has(SensorId::kLaser) ? " and " : " ") + Millimetres(std::abs(dtheta_rad)) + " rad from the inclinometer's theta";
     }
     *why = RobotLabel(role, robot) + " holds these lengths only at " + off + hint;
     return false;
@@ -90,11 +90,11 @@ RobotPrediction Predict(const Robot& robot, const std::string& role, const std::
     if (!keep[j]) continue;
     const Measurement& m = measurements[j];
     p.q.push_back(q[j]);
-    if (m.has_laser) p.z_error_m.push_back(q[j](1) - m.z_m);
-    if (m.has_inclinometer) p.theta_error_rad.push_back(q[j](2) - m.theta_rad);
+    if (m.has(SensorId::kLaser)) p.z_error_m.push_back(q[j](1) - m.value(SensorId::kLaser));
+    if (m.has(SensorId::kInclinometer)) p.theta_error_rad.push_back(q[j](2) - m.value(SensorId::kInclinometer));
   }
-  if (measurements.front().has_laser) p.z_m = Stats(p.z_error_m);
-  if (measurements.front().has_inclinometer) p.theta_rad = Stats(p.theta_error_rad);
+  if (measurements.front().has(SensorId::kLaser)) p.z_m = Stats(p.z_error_m);
+  if (measurements.front().has(SensorId::kInclinometer)) p.theta_rad = Stats(p.theta_error_rad);
   return p;
 }
 
@@ -147,14 +147,14 @@ ValidationResult Validate(const Robot& calibrated, const std::optional<Robot>& n
                                               ": a file for another robot?");
   }
   ValidationResult result;
-  result.has_laser = measurements.front().has_laser;
-  result.has_inclinometer = measurements.front().has_inclinometer;
+  result.has_laser = measurements.front().has(SensorId::kLaser);
+  result.has_inclinometer = measurements.front().has(SensorId::kInclinometer);
   for (const Measurement& r : measurements) {
     if (r.dl_m.size() != m) {
       throw InputError(Where(r, source), "", std::to_string(r.dl_m.size()) + " encoder readings for a robot with " +
                                                  std::to_string(m) + " cables");
     }
-    if (r.has_laser != result.has_laser || r.has_inclinometer != result.has_inclinometer) {
+    if (r.has(SensorId::kLaser) != result.has_laser || r.has(SensorId::kInclinometer) != result.has_inclinometer) {
       throw InputError(Where(r, source), "", "a laser or inclinometer reading here but not in the first reading, or "
                                              "the other way round: one set of readings has one set of sensors");
     }
@@ -195,8 +195,8 @@ ValidationResult Validate(const Robot& calibrated, const std::optional<Robot>& n
     if (!keep[j]) continue;
     const Measurement& r = measurements[j];
     result.pose_ids.push_back(r.pose_id);
-    if (r.has_laser) result.z_measured_m.push_back(r.z_m);
-    if (r.has_inclinometer) result.theta_measured_rad.push_back(r.theta_rad);
+    if (r.has(SensorId::kLaser)) result.z_measured_m.push_back(r.value(SensorId::kLaser));
+    if (r.has(SensorId::kInclinometer)) result.theta_measured_rad.push_back(r.value(SensorId::kInclinometer));
   }
   result.num_poses = static_cast<int>(std::set<int>(result.pose_ids.begin(), result.pose_ids.end()).size());
   for (std::size_t k = 0; k < robots.size(); ++k) {

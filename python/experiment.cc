@@ -48,10 +48,8 @@ PyMeasurements MakeMeasurements(const Robot& robot, py::handle dl, py::handle z,
     Measurement m;
     m.pose_id = static_cast<int>(ids[j]);
     m.dl_m = dl_m.row(j).transpose();
-    m.has_laser = !z.is_none();
-    m.has_inclinometer = !theta.is_none();
-    if (m.has_laser) m.z_m = z_m(j, 0);
-    if (m.has_inclinometer) m.theta_rad = theta_rad(j, 0);
+    if (!z.is_none()) m.set(SensorId::kLaser, z_m(j, 0));
+    if (!theta.is_none()) m.set(SensorId::kInclinometer, theta_rad(j, 0));
     out.readings.push_back(m);
   }
   return out;
@@ -121,15 +119,15 @@ void BindExperiment(py::module_& m) {
         return Array(d);
       })
       .def_property_readonly("z", [](const PyMeasurements& p) -> py::object {
-        if (p.readings.empty() || !p.readings.front().has_laser) return py::none();
+        if (p.readings.empty() || !p.readings.front().has(SensorId::kLaser)) return py::none();
         Eigen::VectorXd v(p.readings.size());
-        for (std::size_t j = 0; j < p.readings.size(); ++j) v(j) = p.readings[j].z_m;
+        for (std::size_t j = 0; j < p.readings.size(); ++j) v(j) = p.readings[j].value(SensorId::kLaser);
         return Vector(v);
       }, "(n,) laser heights, m; None without a laser")
       .def_property_readonly("theta", [](const PyMeasurements& p) -> py::object {
-        if (p.readings.empty() || !p.readings.front().has_inclinometer) return py::none();
+        if (p.readings.empty() || !p.readings.front().has(SensorId::kInclinometer)) return py::none();
         Eigen::VectorXd v(p.readings.size());
-        for (std::size_t j = 0; j < p.readings.size(); ++j) v(j) = p.readings[j].theta_rad;
+        for (std::size_t j = 0; j < p.readings.size(); ++j) v(j) = p.readings[j].value(SensorId::kInclinometer);
         return Vector(v);
       }, "(n,) inclinometer angles, rad; None without an inclinometer")
       .def_property_readonly("pose_ids", [](const PyMeasurements& p) {

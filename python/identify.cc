@@ -76,8 +76,9 @@ void BindIdentify(py::module_& m) {
       .def_readonly("iterations", &IdentifyResult::iterations)
       .def_readonly("final_cost", &IdentifyResult::final_cost)
       .def_readonly("rms_encoder_m", &IdentifyResult::rms_encoder_m)
-      .def_readonly("rms_laser_m", &IdentifyResult::rms_laser_m)
-      .def_readonly("rms_inclinometer_rad", &IdentifyResult::rms_inclinometer_rad)
+      .def_property_readonly("rms_laser_m", [](const IdentifyResult& r) { return r.rms_sensor[static_cast<int>(SensorId::kLaser)]; })
+      .def_property_readonly("rms_inclinometer_rad",
+                             [](const IdentifyResult& r) { return r.rms_sensor[static_cast<int>(SensorId::kInclinometer)]; })
       .def_property_readonly("geometry_names", [](const IdentifyResult& r) {
         return GeometryNames(static_cast<int>(r.geometry.size() / 3));
       })
@@ -100,11 +101,14 @@ void BindIdentify(py::module_& m) {
           py::dict d;
           d["pose_id"] = f.pose_id;
           d["encoder_sigmas"] = Vector(f.encoder_sigmas);
-          d["laser_sigmas"] = f.laser_sigmas ? py::cast(*f.laser_sigmas) : py::none();
-          d["inclinometer_sigmas"] = f.inclinometer_sigmas ? py::cast(*f.inclinometer_sigmas) : py::none();
+          for (const SensorUnit& u : kPlanarSensors) {  // "laser_sigmas", ...
+            const std::optional<double>& sigmas = f.sensor_sigmas[static_cast<int>(u.id)];
+            d[(std::string(u.name) + "_sigmas").c_str()] = sigmas ? py::cast(*sigmas) : py::none();
+          }
           d["encoder_weights"] = Vector(f.encoder_weights);
-          d["laser_weight"] = f.laser_weight;
-          d["inclinometer_weight"] = f.inclinometer_weight;
+          for (const SensorUnit& u : kPlanarSensors) {
+            d[(std::string(u.name) + "_weight").c_str()] = f.sensor_weights[static_cast<int>(u.id)];
+          }
           out.append(d);
         }
         return out;

@@ -13,8 +13,10 @@ std::vector<Measurement> CorrectedReadings(const Robot& robot, std::vector<Measu
     return readings;
   }
   for (Measurement& m : readings) {
-    if (m.has_laser) m.z_m = CorrectedLaserReading(e, m.z_m);
-    if (m.has_inclinometer) m.theta_rad = CorrectedInclinometerReading(e, m.theta_rad);
+    if (m.has(SensorId::kLaser)) m.set(SensorId::kLaser, CorrectedLaserReading(e, m.value(SensorId::kLaser)));
+    if (m.has(SensorId::kInclinometer)) {
+      m.set(SensorId::kInclinometer, CorrectedInclinometerReading(e, m.value(SensorId::kInclinometer)));
+    }
   }
   try {
     CheckReadingsPlausible(robot, readings, source);

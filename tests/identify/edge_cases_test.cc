@@ -69,8 +69,8 @@ TEST(EdgeCases, MeasurementsFarFromAnyReachablePoseAreFlagged) {
     Measurement r;
     r.pose_id = j;
     r.dl_m = Eigen::Vector2d(5.0 * j, -7.0 * j);  // lengths no robot of this frame can have
-    r.z_m = 0.1 * j;
-    r.theta_rad = 0.05 * j;
+    r.set(SensorId::kLaser, 0.1 * j);
+    r.set(SensorId::kInclinometer, 0.05 * j);
     m.push_back(r);
   }
   for (const Estimator e : {Estimator::kMaximumLikelihood, Estimator::kPaper}) {
@@ -150,8 +150,8 @@ TEST(EdgeCases, ReadingsPastASensorRangeByItsNoiseOnlyAreAccepted) {
   m.pose_id = 1;
   m.dl_m = Eigen::VectorXd::Zero(2);
   const auto check = [&](double z, double theta) {
-    m.z_m = z;
-    m.theta_rad = theta;
+    m.set(SensorId::kLaser, z);
+    m.set(SensorId::kInclinometer, theta);
     CheckReadingsPlausible(robot, {m}, "test");
   };
   EXPECT_NO_THROW(check(1.0, robot.theta_max_rad + 4.5 * theta_sigma));
@@ -183,8 +183,8 @@ TEST(EdgeCases, ResidualsFarAboveTheSensorsNoiseArePoorFit) {
   const SensorNoise& s = robot.sensors;
   for (Measurement& m : exp.measurements) {
     for (int i = 0; i < m.dl_m.size(); ++i) m.dl_m(i) += rng.Normal(0.0, 30.0 * s.encoder_sigma_m);
-    m.z_m += rng.Normal(0.0, 30.0 * s.laser_sigma_m());
-    m.theta_rad += rng.Normal(0.0, 30.0 * s.inclinometer_sigma_rad());
+    m.at(SensorId::kLaser) += rng.Normal(0.0, 30.0 * s.laser_sigma_m());
+    m.at(SensorId::kInclinometer) += rng.Normal(0.0, 30.0 * s.inclinometer_sigma_rad());
   }
   const IdentifyResult r = Identify(robot, exp.measurements, IdentifyOptions{});
   EXPECT_EQ(r.status, IdentifyStatus::kPoorFit) << r.message;

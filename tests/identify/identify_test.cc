@@ -295,8 +295,8 @@ TEST(Simulation, SameSeedSameReadingsAndNoiseHasTheStatedSigma) {
   EXPECT_EQ(MeasurementsCsv(ea.measurements, ""), MeasurementsCsv(eb.measurements, ""));
   double sz = 0, st = 0, sl = 0;
   for (std::size_t j = 0; j < plan.size(); ++j) {
-    sz += std::pow(ea.measurements[j].z_m - ea.true_poses[j](1), 2);
-    st += std::pow(ea.measurements[j].theta_rad - ea.true_poses[j](2), 2);
+    sz += std::pow(ea.measurements[j].value(SensorId::kLaser) - ea.true_poses[j](1), 2);
+    st += std::pow(ea.measurements[j].value(SensorId::kInclinometer) - ea.true_poses[j](2), 2);
     sl += std::pow(ea.measurements[j].dl_m(0) - plan[j].length_change_m(0), 2);
   }
   const double n = plan.size();
@@ -309,8 +309,8 @@ TEST(Simulation, SameSeedSameReadingsAndNoiseHasTheStatedSigma) {
   Rng c(5);
   const SimulatedExperiment ec =
       SimulateExperiment(nominal, nominal, plan, SimulationOptions{NoisySensors::kInclinometer, true}, c);
-  EXPECT_EQ(ec.measurements[3].theta_rad, ea.measurements[3].theta_rad);
-  EXPECT_EQ(ec.measurements[3].z_m, ea.true_poses[3](1));
+  EXPECT_EQ(ec.measurements[3].value(SensorId::kInclinometer), ea.measurements[3].value(SensorId::kInclinometer));
+  EXPECT_EQ(ec.measurements[3].value(SensorId::kLaser), ea.true_poses[3](1));
 }
 
 // ---------------------------------------------------------------------------------------
@@ -371,8 +371,8 @@ std::vector<Measurement> ConstructedReadings(const Robot& truth, const std::vect
     for (int i = 0; i < m; ++i) {
       r.dl_m(i) = testing::CableLengthByConstruction(truth.cables[i], poses[j]) - g(InitialLengthIndex(m, i));
     }
-    r.z_m = poses[j](1);
-    r.theta_rad = poses[j](2);
+    r.set(SensorId::kLaser, poses[j](1));
+    r.set(SensorId::kInclinometer, poses[j](2));
     out.push_back(r);
   }
   return out;

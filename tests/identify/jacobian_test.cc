@@ -55,8 +55,8 @@ void CheckRowsOfRobot(const Robot& robot) {
     // laser and inclinometer rows, as Identify adds them), at readings of this pose.
     Measurement m;
     m.dl_m = pose.length_change_m;
-    m.z_m = q(1) + 0.001;  // the rows do not depend on the readings
-    m.theta_rad = q(2) - 0.002;
+    m.set(SensorId::kLaser, q(1) + 0.001);  // the rows do not depend on the readings
+    m.set(SensorId::kInclinometer, q(2) - 0.002);
     const PoseReadings<M> readings = internal::ReadingsOf<M>(m);
     ceres::AutoDiffCostFunction<internal::MlLengthCost<M>, M, kG, 3> lengths(
         new internal::MlLengthCost<M>{&robot, readings, weights});

@@ -87,7 +87,7 @@ Start<M> MakeStart(const Robot& nominal, const std::vector<Measurement>& measure
   s.problem.robot = &nominal;
   s.problem.readings_of = &s.readings_of;
   s.problem.weights = WeightsOf(nominal.sensors);
-  if (!measurements.front().has_laser) s.problem.weights.inv_sigma_laser = 0.0;
+  if (!measurements.front().has(SensorId::kLaser)) s.problem.weights.inv_sigma_sensor[static_cast<int>(SensorId::kLaser)] = 0.0;
   if (equilibrium) s.problem.weights.inv_sigma_equilibrium = 1.0 / EquilibriumSigma(nominal);
   s.problem.hold_a1x = gauge == Gauge::kA1x;
   if (gauge == Gauge::kPrior) {
@@ -242,14 +242,14 @@ TEST(MlLeastSquares, SameAsCeresWithRepeatedReadingsAndAMissingSensor) {
   for (int copy = 0; copy < 3; ++copy) repeated.insert(repeated.end(), once.begin(), once.end());
   Rng noise(8);
   for (Measurement& m : repeated) {
-    m.z_m += noise.Normal(0.0, builtin.sensors.laser_sigma_m());
+    m.at(SensorId::kLaser) += noise.Normal(0.0, builtin.sensors.laser_sigma_m());
     m.dl_m(0) += noise.Normal(0.0, builtin.sensors.encoder_sigma_m);
   }
   ExpectSame<2>(builtin, repeated, Gauge::kA1x, "built-in, each pose read three times");
 
   const Robot planar4 = LoadRobotFile(std::string(CABLECAL_SOURCE_DIR) + "/robots/planar4_fully_constrained.yaml");
   std::vector<Measurement> no_laser = Experiment(planar4, 30, 0.001, 41);
-  for (Measurement& m : no_laser) m.has_laser = false;
+  for (Measurement& m : no_laser) m.drop(SensorId::kLaser);
   ExpectSame<4>(planar4, no_laser, Gauge::kA1x, "planar4 without its laser");
 }
 

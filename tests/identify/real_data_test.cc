@@ -79,8 +79,8 @@ TEST(RepeatedReadings, ShareThePoseUnknownsAndShrinkTheSpreadBySqrtOfTheirCount)
     for (int copy = 0; copy < 3; ++copy) {
       for (Measurement m : clean.readings) {
         for (int i = 0; i < m.dl_m.size(); ++i) m.dl_m(i) += rng.Normal(0.0, nominal.sensors.encoder_sigma_m);
-        m.z_m += rng.Normal(0.0, nominal.sensors.laser_sigma_m());
-        m.theta_rad += rng.Normal(0.0, nominal.sensors.inclinometer_sigma_rad());
+        m.at(SensorId::kLaser) += rng.Normal(0.0, nominal.sensors.laser_sigma_m());
+        m.at(SensorId::kInclinometer) += rng.Normal(0.0, nominal.sensors.inclinometer_sigma_rad());
         if (copy == 0) once.push_back(m);
         thrice.push_back(m);
       }
@@ -120,10 +120,8 @@ TEST(RepeatedReadings, NoiseFreeCopiesRecoverTheTruth) {
 
 std::vector<Measurement> Without(std::vector<Measurement> readings, bool laser, bool inclinometer) {
   for (Measurement& m : readings) {  // as the CSV reader leaves them: no value read
-    m.has_laser = laser;
-    m.has_inclinometer = inclinometer;
-    if (!laser) m.z_m = 0.0;
-    if (!inclinometer) m.theta_rad = 0.0;
+    if (!laser) m.drop(SensorId::kLaser);
+    if (!inclinometer) m.drop(SensorId::kInclinometer);
   }
   return readings;
 }
@@ -175,8 +173,8 @@ TEST(MissingSensor, CsvWithoutAColumnReadsAndWritesBack) {
   const std::vector<Measurement> m = ReadMeasurementsCsv(in, "lab.csv", 2);
   ASSERT_EQ(m.size(), 3u);
   EXPECT_EQ(m[1].pose_id, 1);
-  EXPECT_TRUE(m[0].has_laser);
-  EXPECT_FALSE(m[0].has_inclinometer);
+  EXPECT_TRUE(m[0].has(SensorId::kLaser));
+  EXPECT_FALSE(m[0].has(SensorId::kInclinometer));
   EXPECT_EQ(MeasurementsCsv(m, ""), "pose,dl1,dl2,z\n1,0.01,-0.02,1.5\n1,0.011,-0.02,1.5\n2,0.1,0.2,1.2\n");
   std::istringstream no_dl("pose,dl1,z,theta\n1,0,1,0\n");
   EXPECT_THROW(ReadMeasurementsCsv(no_dl, "lab.csv", 2), InputError);
@@ -198,8 +196,8 @@ TEST(Outlier, NamedWithoutALossAndRejectedByCauchy) {
     for (const int sensor : {0, 1}) {
       const int bad = 7;
       std::vector<Measurement> readings = e.readings;
-      if (sensor == 0) readings[bad - 1].z_m += 0.3;
-      if (sensor == 1) readings[bad - 1].theta_rad += 5.0 * M_PI / 180.0;
+      if (sensor == 0) readings[bad - 1].at(SensorId::kLaser) += 0.3;
+      if (sensor == 1) readings[bad - 1].at(SensorId::kInclinometer) += 5.0 * M_PI / 180.0;
       std::vector<Measurement> dropped = e.readings;
       dropped.erase(dropped.begin() + (bad - 1));
       const IdentifyResult reference = Identify(nominal, dropped, IdentifyOptions{});
@@ -229,7 +227,7 @@ TEST(Outlier, NamedWithoutALossAndRejectedByCauchy) {
       const ReadingFit& fit = robust.readings[bad - 1];
       const double expected = sensor == 0 ? 0.3 / nominal.sensors.laser_sigma_m()
                                           : 5.0 * M_PI / 180.0 / nominal.sensors.inclinometer_sigma_rad();
-      const double got = std::max(std::abs(*fit.laser_sigmas), std::abs(*fit.inclinometer_sigmas));
+      const double got = std::max(std::abs(*fit.sensor_sigmas[0]), std::abs(*fit.sensor_sigmas[1]));
       EXPECT_GT(got, 0.5 * expected) << label;
     }
   }
@@ -362,7 +360,7 @@ TEST(Outlier, AbsorbedAtTheWeakestPoseIsStillNamed) {
     ASSERT_TRUE(clean.converged()) << nominal.name << ": " << clean.message;
     const int weakest = clean.identifiability.weakest_pose_id;
     std::vector<Measurement> readings = e.readings;
-    readings[weakest - 1].z_m += 0.3;
+    readings[weakest - 1].at(SensorId::kLaser) += 0.3;
     const IdentifyResult r = Identify(nominal, readings, IdentifyOptions{});
     EXPECT_EQ(r.status, IdentifyStatus::kPoorFit) << nominal.name << ": converged, geometry off by "
                                                   << MaxSigmasApart(r, GeometryOf(e.truth), clean) << " sigma";
@@ -386,7 +384,7 @@ TEST(Diagnostics, AReadingTwiceItsDetectableSizeIsRefusedHalfOfItPasses) {
     ASSERT_TRUE(std::isfinite(detectable) && detectable < 50.0) << nominal.name << ": " << detectable;
     for (const double factor : {2.0, 0.5}) {
       std::vector<Measurement> readings = e.readings;
-      readings[k].z_m += factor * detectable * nominal.sensors.laser_sigma_m();
+      readings[k].at(SensorId::kLaser) += factor * detectable * nominal.sensors.laser_sigma_m();
       const IdentifyResult r = Identify(nominal, readings, IdentifyOptions{});
       EXPECT_EQ(r.converged(), factor < 1.0) << nominal.name << " x" << factor << ": " << r.message;
     }
@@ -397,7 +395,7 @@ TEST(Outlier, HuberEitherHoldsOrWarns) {
   for (const Robot& nominal : Robots()) {
     const Experiment e = Simulated(nominal, 20, 21);
     std::vector<Measurement> readings = e.readings;
-    readings[6].z_m += 0.3;
+    readings[6].at(SensorId::kLaser) += 0.3;
     std::vector<Measurement> dropped = e.readings;
     dropped.erase(dropped.begin() + 6);
     const IdentifyResult reference = Identify(nominal, dropped, IdentifyOptions{});
@@ -441,7 +439,7 @@ TEST(Outlier, ARobustFitFarFromTheFitWithoutTheNamedPosesIsNotReturned) {
     const Experiment e = Simulated(nominal, 30, 100 + k);
     for (const int bad : {7, 4}) {
       std::vector<Measurement> readings = e.readings;
-      readings[bad - 1].z_m += 0.3;
+      readings[bad - 1].at(SensorId::kLaser) += 0.3;
       std::vector<Measurement> without = e.readings;
       without.erase(without.begin() + (bad - 1));
       const IdentifyResult reference = Identify(nominal, without, IdentifyOptions{});
@@ -473,8 +471,8 @@ TEST(Outlier, ARobustFitFarFromTheFitWithoutTheNamedPosesIsNotReturned) {
           EXPECT_NE(r.warnings.front().find("pose " + std::to_string(bad) + " dropped"), std::string::npos)
               << r.warnings.front();
           // The dropped pose's readings are still reported, against the returned geometry.
-          EXPECT_GT(std::abs(*r.readings[bad - 1].laser_sigmas), kOutlierSigmas) << label;
-          EXPECT_EQ(r.readings[bad - 1].laser_weight, 0.0) << label;
+          EXPECT_GT(std::abs(*r.readings[bad - 1].sensor_sigmas[0]), kOutlierSigmas) << label;
+          EXPECT_EQ(r.readings[bad - 1].sensor_weights[0], 0.0) << label;
           ASSERT_EQ(r.poses.size(), readings.size()) << label;  // every pose's estimate, the dropped one's too
           EXPECT_EQ(r.poses[bad - 1].pose_id, bad) << label;
           EXPECT_NE(IdentifyResultYaml(r, "test").find("dropped_poses: [" + std::to_string(bad) + "]"),
@@ -499,7 +497,7 @@ TEST(BadReading, AGrossLaserErrorIsNamedWithinTheDefaultIterations) {
     const Experiment e = Simulated(nominal, 30, 1300 + k);
     for (int bad = 1; bad <= 30; bad += 4) {
       std::vector<Measurement> readings = e.readings;
-      readings[bad - 1].z_m += 0.3;
+      readings[bad - 1].at(SensorId::kLaser) += 0.3;
       const IdentifyResult r = Identify(nominal, readings, IdentifyOptions{});
       const std::string label = nominal.name + " pose " + std::to_string(bad);
       ++cases;
@@ -650,7 +648,7 @@ sensors:
   int lost_least_squares = 0;
   for (std::size_t bad = 0; bad < clean.size(); ++bad) {
     std::vector<Measurement> readings = clean;
-    readings[bad].z_m += 0.3;
+    readings[bad].at(SensorId::kLaser) += 0.3;
     std::vector<Measurement> without = clean;
     without.erase(without.begin() + static_cast<long>(bad));
     const IdentifyResult reference = Identify(lab, without, IdentifyOptions{});
@@ -714,8 +712,8 @@ TEST(Diagnostics, WhitenedResidualsPerReadingHaveTheNoiseScale) {
     double sum = 0.0;
     int count = 0;
     for (const ReadingFit& f : r.readings) {
-      sum += f.encoder_sigmas.squaredNorm() + *f.laser_sigmas * *f.laser_sigmas +
-             *f.inclinometer_sigmas * *f.inclinometer_sigmas;
+      sum += f.encoder_sigmas.squaredNorm() + *f.sensor_sigmas[0] * *f.sensor_sigmas[0] +
+             *f.sensor_sigmas[1] * *f.sensor_sigmas[1];
       count += static_cast<int>(f.encoder_sigmas.size()) + 2;
     }
     const int unknowns = 3 * 40 + 3 * nominal.num_cables() - 1;

@@ -243,7 +243,7 @@ TEST(Validate, AMissingSensorsComparisonIsLeftOut) {
     const ValidationResult both = Validate(truth, nominal, exp.measurements, "m.csv");
     for (const bool laser : {false, true}) {
       std::vector<Measurement> readings = exp.measurements;
-      for (Measurement& m : readings) (laser ? m.has_inclinometer : m.has_laser) = false;
+      for (Measurement& m : readings) m.drop(laser ? SensorId::kInclinometer : SensorId::kLaser);
       const ValidationResult v = Validate(truth, nominal, readings, "m.csv");
       EXPECT_EQ(v.has_laser, laser);
       EXPECT_EQ(v.has_inclinometer, !laser);
@@ -276,7 +276,7 @@ TEST(Validate, AMissingSensorsComparisonIsLeftOut) {
       EXPECT_EQ(YAML::Load("{" + ValidationRowsJson(v) + "}")["rows"][0].size(), 10u);
     }
     std::vector<Measurement> neither = exp.measurements;
-    for (Measurement& m : neither) m.has_laser = m.has_inclinometer = false;
+    for (Measurement& m : neither) m.drop(SensorId::kLaser), m.drop(SensorId::kInclinometer);
     try {
       Validate(truth, nominal, neither, "m.csv");
       ADD_FAILURE() << "nothing to compare, accepted";
@@ -305,7 +305,7 @@ TEST(Validate, PosesARobotCannotHoldAreRefusedWithFileAndLine) {
   };
   const auto with_row = [&](const std::string& row) { return text + row + "\n"; };
   const Measurement& first = exp.measurements[0];
-  const std::string z = FormatDouble(first.z_m), theta = FormatDouble(first.theta_rad);
+  const std::string z = FormatDouble(first.value(SensorId::kLaser)), theta = FormatDouble(first.value(SensorId::kInclinometer));
   // Cable 1 3 m longer: it cannot be taut anywhere in the frame.
   // (The built-in robot's forward model finds a taut equilibrium 2.4 m away, tilted 78 degrees,
   // below the floor: an assembly no lab's platform was in.)
@@ -313,7 +313,7 @@ TEST(Validate, PosesARobotCannotHoldAreRefusedWithFileAndLine) {
                  "holdout.csv:6: the calibrated robot (" + robot.source + ") holds these lengths only at");
   // The first pose's lengths with the laser reading 0.4 m higher than where they put the platform.
   expect_refused(with_row("9," + FormatDouble(first.dl_m(0)) + "," + FormatDouble(first.dl_m(1)) + "," +
-                          FormatDouble(first.z_m + 0.4) + "," + theta),
+                          FormatDouble(first.value(SensorId::kLaser) + 0.4) + "," + theta),
                  "holdout.csv:6: the calibrated robot (" + robot.source + ") holds these lengths only at");
   EXPECT_THROW(Validate(robot, std::nullopt, {}, "empty.csv"), InputError);
   // Robots of different cable counts.
@@ -341,7 +341,7 @@ TEST(Validate, SkipInfeasibleLeavesOutWhatARobotCannotHoldAndValidatesTheRest) {
   const std::string text = MeasurementsCsv(exp.measurements, "# provenance\n");
   // Cable 1 3 m longer (no taut pose near the readings), after the third reading: line 6.
   const Measurement& first = exp.measurements[0];
-  const std::string bad = "9,3,0," + FormatDouble(first.z_m) + "," + FormatDouble(first.theta_rad) + "\n";
+  const std::string bad = "9,3,0," + FormatDouble(first.value(SensorId::kLaser)) + "," + FormatDouble(first.value(SensorId::kInclinometer)) + "\n";
   std::size_t at = 0;
   for (int line = 0; line < 5; ++line) at = text.find('\n', at) + 1;
   const auto read = [](const std::string& csv) {
@@ -414,8 +414,8 @@ TEST(Validate, SimulateSkipInfeasibleKeepsTheOtherPosesReadings) {
     const Measurement& kept = skipped.experiment.measurements[k++];
     EXPECT_EQ(kept.pose_id, m.pose_id);
     EXPECT_EQ(kept.dl_m, m.dl_m) << "pose " << m.pose_id;
-    EXPECT_EQ(kept.z_m, m.z_m) << "pose " << m.pose_id;
-    EXPECT_EQ(kept.theta_rad, m.theta_rad) << "pose " << m.pose_id;
+    EXPECT_EQ(kept.value(SensorId::kLaser), m.value(SensorId::kLaser)) << "pose " << m.pose_id;
+    EXPECT_EQ(kept.value(SensorId::kInclinometer), m.value(SensorId::kInclinometer)) << "pose " << m.pose_id;
   }
   EXPECT_EQ(k, skipped.experiment.measurements.size());
   for (const SkippedPose& s : skipped.experiment.skipped) {
@@ -438,7 +438,7 @@ TEST(Validate, ThreeCableReadingsFarFromTheLengthsAreAnotherAssembly) {
   const Robot planar3 = LoadRobotFile(CABLECAL_SOURCE_DIR "/robots/planar3_suspended.yaml");
   const SimulatedExperiment exp = Experiment(planar3, planar3, 2, 9);
   std::vector<Measurement> m = exp.measurements;
-  m[1].z_m += 0.4;
+  m[1].at(SensorId::kLaser) += 0.4;
   m[1].where = "far.csv:4";
   try {
     Validate(planar3, std::nullopt, m, "far.csv");

@@ -317,8 +317,8 @@ TEST(SystematicErrors, OffTheSimulationIsTheSameBitForBit) {
   const PlanSimulation a = SimulatePlan(plain, {}, 0.01, plan, off, 4, "p");
   const PlanSimulation b = SimulatePlan(with, {}, 0.01, plan, on, 4, "p");
   for (std::size_t j = 0; j < plan.size(); ++j) {
-    EXPECT_NEAR(b.experiment.measurements[j].z_m - a.experiment.measurements[j].z_m, 0.02, 1e-15);
-    EXPECT_NEAR(b.experiment.measurements[j].theta_rad - a.experiment.measurements[j].theta_rad,
+    EXPECT_NEAR(b.experiment.measurements[j].value(SensorId::kLaser) - a.experiment.measurements[j].value(SensorId::kLaser), 0.02, 1e-15);
+    EXPECT_NEAR(b.experiment.measurements[j].value(SensorId::kInclinometer) - a.experiment.measurements[j].value(SensorId::kInclinometer),
                 InclinometerError(with.sensors.systematic, a.experiment.true_poses[j](2)), 1e-15);
   }
 }
@@ -379,8 +379,8 @@ TEST(SystematicErrors, ARefusedCorrectedReadingSaysItWasCorrected) {
   m.pose_id = 1;
   m.where = "m.csv:3";
   m.dl_m = Eigen::VectorXd::Zero(2);
-  m.z_m = 2.0;
-  m.theta_rad = 1.3;  // 74 degrees: beyond the 60-degree range
+  m.set(SensorId::kLaser, 2.0);
+  m.set(SensorId::kInclinometer, 1.3);  // 74 degrees: beyond the 60-degree range
   try {
     CorrectedReadings(with, {m}, "m.csv");
     FAIL() << "accepted";
@@ -391,8 +391,8 @@ TEST(SystematicErrors, ARefusedCorrectedReadingSaysItWasCorrected) {
         << e.what();
   }
   // Without systematic terms the readings come back as read.
-  m.theta_rad = 0.3;
-  EXPECT_EQ(CorrectedReadings(BuiltinRobot(), {m}, "m.csv")[0].theta_rad, 0.3);
+  m.set(SensorId::kInclinometer, 0.3);
+  EXPECT_EQ(CorrectedReadings(BuiltinRobot(), {m}, "m.csv")[0].value(SensorId::kInclinometer), 0.3);
 }
 
 }  // namespace
