@@ -201,38 +201,7 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   }
   if (!FitsTheNoise(p, readings, left_out, result)) return result;
 
-  // With a robust loss a few readings beyond kOutlierSigmas are what it down-weights; many
-  // point to wrong units or another robot, which no loss mends.
-  const std::size_t few =
-      std::max<std::size_t>(kFewOutliers, static_cast<std::size_t>(p.values_per_reading) * p.num_readings / 20);
-  const std::string drop_or_loss = std::string("check those readings, drop ") +
-                                   (left_out && left_out->poses.size() == 1 ? "that pose" : "their poses") +
-                                   ", or identify with --loss cauchy, which down-weights them";
-  const bool outliers = !tripped.empty() || checks.flagged_pose >= 0;
-  if (p.robust) {
-    if (tripped.size() > few) {
-      RefuseOutliers(p,
-                     "too many for a robust loss to be trusted: are the readings in the file's units (m, rad), and "
-                     "of this robot?",
-                     left_out, tripped, checks, result);
-      return result;
-    }
-    for (const Reading& r : tripped) {
-      char buffer[48];
-      std::snprintf(buffer, sizeof(buffer), " (weight %.2g)", LossWeight(options.loss, r.sigmas));
-      result.down_weighted.push_back(p.Describe(r) + buffer);
-    }
-  } else if (outliers && (tripped.size() <= few || left_out)) {
-    // A few bad readings explain an implausible estimate better than wrong units do (one
-    // inclinometer reading of 0 among 20 poses drags a2x off the frame): name them first.
-    RefuseOutliers(p, drop_or_loss, left_out, tripped, checks, result);
-    return result;
-  }
-  if (options.check_plausible_geometry && !Plausible(p, result)) return result;
-  if (!p.robust && outliers) {
-    RefuseOutliers(p, drop_or_loss, left_out, tripped, checks, result);
-    return result;
-  }
+  if (!Accepted(p, tripped, checks, left_out, result)) return result;
   WarnOfCopiedReadings(p, result);
   WarnOfResidualsBelowTheNoise(p, readings, result);
   if (!options.compute_identifiability && !options.compute_covariance) return result;

@@ -240,6 +240,9 @@ auto LmDiagonal(const Eigen::MatrixBase<Derived>& normal) {
 
 }  // namespace least_squares
 
+// One function of ~150 lines: as in Ceres' own trust-region minimiser, every step's decisions
+// (accept, shrink, stop) share the loop's state (radius, cost, the normal equations, the
+// invalid-step count); split, each part would take all of it.
 // Minimises the ml estimator's cost over the geometry g (3M values: a1x a1z ... l10 ...) and
 // the poses in `use` (q[j] = x, z, theta), in place, from their values on entry.
 template <int M>

@@ -120,6 +120,12 @@ struct IdentificationProblem {
   IdentificationProblem(const Robot& nominal_robot, const std::vector<Measurement>& readings,
                         const IdentifyOptions& identify_options);
   IdentificationProblem(const IdentificationProblem&) = delete;
+  // The constructor's steps, in this order.
+  void CheckOptions();
+  void GroupReadings();
+  void CountEquations();
+  void SetUpPriorsStartAndWeights();
+
   IdentificationProblem& operator=(const IdentificationProblem&) = delete;
 
   int pose_id_of(int j) const { return measurements[readings_of[j].front()].pose_id; }
@@ -177,6 +183,15 @@ template <int M>
 IdentificationProblem<M>::IdentificationProblem(const Robot& nominal_robot, const std::vector<Measurement>& readings,
                                                 const IdentifyOptions& identify_options)
     : nominal(nominal_robot), measurements(readings), options(identify_options), s(nominal_robot.sensors) {
+  CheckOptions();
+  GroupReadings();
+  CountEquations();
+  SetUpPriorsStartAndWeights();
+}
+
+// The sensors the data have, and the options they allow.
+template <int M>
+void IdentificationProblem<M>::CheckOptions() {
   ml = options.estimator == Estimator::kMaximumLikelihood;
   robust = options.loss.kind != LossKind::kNone;
   num_readings = static_cast<int>(measurements.size());
@@ -221,6 +236,11 @@ IdentificationProblem<M>::IdentificationProblem(const Robot& nominal_robot, cons
                                std::to_string(M) + " the cables hold theta, and there is no equilibrium row to add");
   }
 
+}
+
+// Repeated readings of one pose share its unknowns; copied readings are noted.
+template <int M>
+void IdentificationProblem<M>::GroupReadings() {
   {
     std::map<int, int> index_of;
     for (int k = 0; k < num_readings; ++k) {
@@ -249,6 +269,11 @@ IdentificationProblem<M>::IdentificationProblem(const Robot& nominal_robot, cons
     }
   }
 
+}
+
+// Enough equations for the unknowns, and sigmas for every sensor read (InputError otherwise).
+template <int M>
+void IdentificationProblem<M>::CountEquations() {
   // Enough equations for the unknowns: per reading M encoder values, plus each sensor's the
   // data have, for ml; per pose 3 unknowns (ml) or 1 (paper); 3M geometric unknowns, 3M - 1
   // with a1x held; the tracker prior adds 2M equations, the geometry prior one per geometric
@@ -303,6 +328,11 @@ IdentificationProblem<M>::IdentificationProblem(const Robot& nominal_robot, cons
     throw InputError(nominal.source, "sensors.tracker.sigma", "is needed for --gauge prior");
   }
 
+}
+
+// The nominal start, the priors' inverse sigmas and the readings' weights.
+template <int M>
+void IdentificationProblem<M>::SetUpPriorsStartAndWeights() {
   nominal_geometry = GeometryOf(nominal);
   geometry_names = kLayout.names();
   // The priors' inverse sigma per geometric coordinate: the tracker's on the exit points

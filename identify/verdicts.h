@@ -160,6 +160,47 @@ bool Plausible(const IdentificationProblem<M>& p, IdentifyResult& result) {
   return true;
 }
 
+// The verdict on readings beyond kOutlierSigmas (`tripped`) or a pose that does not fit the
+// others, and on the estimate's plausibility: false (status and message set) if the result is
+// refused. With a robust loss a few such readings are what it down-weights (listed in
+// result.down_weighted); many point to wrong units or another robot, which no loss mends.
+// Without one, a few bad readings are named before the plausibility check: they explain an
+// implausible estimate better than wrong units do (one inclinometer reading of 0 among 20
+// poses drags a2x off the frame).
+template <int M>
+bool Accepted(const IdentificationProblem<M>& p, const std::vector<Reading>& tripped, const PoseChecks& checks,
+              const std::optional<LeftOut<M>>& left_out, IdentifyResult& result) {
+  const std::size_t few =
+      std::max<std::size_t>(kFewOutliers, static_cast<std::size_t>(p.values_per_reading) * p.num_readings / 20);
+  const std::string drop_or_loss = std::string("check those readings, drop ") +
+                                   (left_out && left_out->poses.size() == 1 ? "that pose" : "their poses") +
+                                   ", or identify with --loss cauchy, which down-weights them";
+  const bool outliers = !tripped.empty() || checks.flagged_pose >= 0;
+  if (p.robust) {
+    if (tripped.size() > few) {
+      RefuseOutliers(p,
+                     "too many for a robust loss to be trusted: are the readings in the file's units (m, rad), and "
+                     "of this robot?",
+                     left_out, tripped, checks, result);
+      return false;
+    }
+    for (const Reading& r : tripped) {
+      char buffer[48];
+      std::snprintf(buffer, sizeof(buffer), " (weight %.2g)", LossWeight(p.options.loss, r.sigmas));
+      result.down_weighted.push_back(p.Describe(r) + buffer);
+    }
+  } else if (outliers && (tripped.size() <= few || left_out)) {
+    RefuseOutliers(p, drop_or_loss, left_out, tripped, checks, result);
+    return false;
+  }
+  if (p.options.check_plausible_geometry && !Plausible(p, result)) return false;
+  if (!p.robust && outliers) {
+    RefuseOutliers(p, drop_or_loss, left_out, tripped, checks, result);
+    return false;
+  }
+  return true;
+}
+
 // Readings identical in every value to another pose's (IdentificationProblem::copied).
 template <int M>
 void WarnOfCopiedReadings(const IdentificationProblem<M>& p, IdentifyResult& result) {
