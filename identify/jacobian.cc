@@ -45,13 +45,14 @@ Eigen::Matrix<T, 1, kDirections> CableRow(const Robot& robot, int cable_index, c
 template <typename T>
 Rows<T> LengthResidualRows(const Robot& robot, const Pose<T>& q) {
   const int m = robot.num_cables();
+  const GeometryLayout layout = LayoutOf(robot);
   Rows<T> rows = Rows<T>::Zero(m, RowColumns(m));
   for (int i = 0; i < m; ++i) {
     const Eigen::Matrix<T, 1, kDirections> row = CableRow<T>(robot, i, q);
-    rows(i, 2 * i) = row(kExitX);
-    rows(i, 2 * i + 1) = row(kExitZ);
-    rows(i, 2 * m + i) = row(kInitialLength);
-    for (int k = 0; k < 3; ++k) rows(i, 3 * m + k) = row(kPose + k);
+    rows(i, layout.exit(i, 0)) = row(kExitX);
+    rows(i, layout.exit(i, 1)) = row(kExitZ);
+    rows(i, layout.initial_length(i)) = row(kInitialLength);
+    for (int k = 0; k < PlanarKind::kPoseDim; ++k) rows(i, layout.size() + k) = row(kPose + k);
   }
   return rows;
 }
@@ -68,7 +69,7 @@ Rows<T> MlResidualRows(const Robot& robot, const Pose<T>& q) {
   J sensor[kNumPlanarSensors];
   MlSensorResiduals<1, J>(PoseReadings<1>{}, weights, pose, sensor);
   for (int r = 0; r < kNumPlanarSensors; ++r) {
-    for (int k = 0; k < 3; ++k) rows(m + r, 3 * m + k) = sensor[r].v[k];
+    for (int k = 0; k < PlanarKind::kPoseDim; ++k) rows(m + r, LayoutOf(robot).size() + k) = sensor[r].v[k];
   }
   return rows;
 }
@@ -77,9 +78,9 @@ template <typename T>
 Rows<T> ReducedInformation(const Rows<T>& ml_rows) {
   using std::sqrt;
   const int m = static_cast<int>(ml_rows.rows()) - kNumPlanarSensors;
-  const int g = 3 * m - 1;  // a1z .. lm0: column 1 + c of the rows
+  const int g = PlanarLayout(m).size() - 1;  // a1z .. lm0: column 1 + c of the rows (a1x held)
   const int r_count = m + kNumPlanarSensors;
-  Rows<T> E = ml_rows.block(0, 3 * m, r_count, 3);
+  Rows<T> E = ml_rows.block(0, PlanarLayout(m).size(), r_count, PlanarKind::kPoseDim);
   for (int k = 0; k < 3; ++k) {
     for (int pass = 0; pass < 2; ++pass) {
       for (int l = 0; l < k; ++l) {

@@ -18,6 +18,8 @@
 #include "identify/nested_jet.h"
 #include "identify/residuals.h"
 #include "model/cable.h"
+#include "model/geometry.h"
+#include "model/kind.h"
 #include "model/robot.h"
 
 namespace cablecal {
@@ -28,7 +30,7 @@ namespace cablecal {
 // or on the readings. The sizes are run-time ones: the design's criteria are written once for
 // every cable count, and compile-time sizes would instantiate them (on nested Jets) seven
 // times, minutes of compilation for no measurable gain.
-inline int RowColumns(int num_cables) { return 3 * num_cables + 3; }
+inline int RowColumns(int num_cables) { return PlanarLayout(num_cables).size() + PlanarKind::kPoseDim; }
 template <typename T>
 using Rows = Eigen::Matrix<T, Eigen::Dynamic, Eigen::Dynamic>;
 

@@ -31,6 +31,7 @@
 #include "identify/experiment.h"
 #include "identify/residuals.h"
 #include "model/cable.h"
+#include "model/geometry.h"
 #include "model/robot.h"
 
 namespace cablecal::internal {
@@ -42,13 +43,14 @@ namespace cablecal::internal {
 // --geometry-prior's on every parameter, as one inverse sigma per coordinate (0: none).
 template <int M>
 struct MlLeastSquaresProblem {
+  static constexpr GeometryLayout kLayout = PlanarLayout(M);
   const Robot* robot = nullptr;
   const std::vector<Measurement>* measurements = nullptr;
   const std::vector<std::vector<int>>* readings_of = nullptr;
   ReadingWeights weights;
   bool hold_a1x = true;
-  Eigen::Matrix<double, 3 * M, 1> prior_geometry = Eigen::Matrix<double, 3 * M, 1>::Zero();
-  Eigen::Matrix<double, 3 * M, 1> prior_inv_sigma = Eigen::Matrix<double, 3 * M, 1>::Zero();
+  Eigen::Matrix<double, kLayout.size(), 1> prior_geometry = Eigen::Matrix<double, kLayout.size(), 1>::Zero();
+  Eigen::Matrix<double, kLayout.size(), 1> prior_inv_sigma = Eigen::Matrix<double, kLayout.size(), 1>::Zero();
   int max_iterations = 100;
 };
 
@@ -81,7 +83,7 @@ using PoseValues = std::vector<std::array<double, 3>>;
 template <int M>
 struct PoseNormal {
   Eigen::Matrix3d a;
-  Eigen::Matrix<double, 3 * M, 3> b;
+  Eigen::Matrix<double, PlanarLayout(M).size(), 3> b;
   Eigen::Vector3d gradient;
   Eigen::Matrix3d damped_inverse;  // (A + mu D)^-1 of the current step
 };
@@ -126,7 +128,7 @@ double Cost(const MlLeastSquaresProblem<M>& p, const double* g, const PoseValues
       }
     }
   }
-  for (int k = 0; k < 3 * M; ++k) {
+  for (int k = 0; k < PlanarLayout(M).size(); ++k) {
     if (p.prior_inv_sigma(k) > 0.0) sum += PriorResidual<M>(p, g, k) * PriorResidual<M>(p, g, k);
   }
   return std::isfinite(sum) ? 0.5 * sum : std::numeric_limits<double>::infinity();
@@ -136,8 +138,11 @@ double Cost(const MlLeastSquaresProblem<M>& p, const double* g, const PoseValues
 // gradient. Returns the cost (infinite if a residual is not finite).
 template <int M>
 double Normal(const MlLeastSquaresProblem<M>& p, const double* g, const PoseValues& q, const std::vector<char>& use,
-              std::vector<PoseNormal<M>>& poses, Eigen::Matrix<double, 3 * M, 3 * M>& h_gg,
-              Eigen::Matrix<double, 3 * M, 1>& gradient_g) {
+              std::vector<PoseNormal<M>>& poses,
+              Eigen::Matrix<double, PlanarLayout(M).size(), PlanarLayout(M).size()>& h_gg,
+              Eigen::Matrix<double, PlanarLayout(M).size(), 1>& gradient_g) {
+  constexpr GeometryLayout kLayout = PlanarLayout(M);
+  constexpr int kExits = kLayout.exit_coordinates();
   using Jet2 = ceres::Jet<double, 2>;
   using Jet3 = ceres::Jet<double, 3>;
   const ReadingWeights& w = p.weights;
@@ -167,13 +172,14 @@ double Normal(const MlLeastSquaresProblem<M>& p, const double* g, const PoseValu
       const Measurement& m = (*p.measurements)[k];
       for (int i = 0; i < M; ++i) {
         const Cable& cable = p.robot->cables[i];
-        const Jet2 r = CableResidual<Jet2>(cable, Vec2<Jet2>(Jet2(g[2 * i]), Jet2(g[2 * i + 1])), Jet2(g[2 * M + i]),
+        const Jet2 r = CableResidual<Jet2>(cable, Vec2<Jet2>(Jet2(g[kLayout.exit(i, 0)]), Jet2(g[kLayout.exit(i, 1)])),
+                                           Jet2(g[kLayout.initial_length(i)]),
                                            Vec2<Jet2>(Jet2(anchor[i].x(), 0), Jet2(anchor[i].y(), 1)), m.dl_m(i));
         const double residual = r.a * w.inv_sigma_encoder;
         const Eigen::Vector2d by_anchor = r.v * w.inv_sigma_encoder;
         const Eigen::Vector3d row_pose = anchor_by_pose[i].transpose() * by_anchor;
         const Eigen::Vector3d row_cable(-by_anchor.x(), -by_anchor.y(), -w.inv_sigma_encoder);  // a_ix, a_iz, l_i0
-        const int cols[3] = {2 * i, 2 * i + 1, 2 * M + i};
+        const int cols[3] = {kLayout.exit(i, 0), kLayout.exit(i, 1), kLayout.initial_length(i)};
         sum += residual * residual;
         pose.a.noalias() += row_pose * row_pose.transpose();
         pose.gradient += row_pose * residual;
@@ -197,24 +203,24 @@ double Normal(const MlLeastSquaresProblem<M>& p, const double* g, const PoseValu
     // whatever its readings, on the exit points and the pose, by a Jet over those 2M + 3.
     if constexpr (EquilibriumRows(M) > 0) {
       if (w.inv_sigma_equilibrium > 0.0) {
-        using JetE = ceres::Jet<double, 2 * M + 3>;
-        JetE exits[2 * M], pose_jet[3];
-        for (int k = 0; k < 2 * M; ++k) exits[k] = JetE(g[k], k);
-        for (int c = 0; c < 3; ++c) pose_jet[c] = JetE(q[j][c], 2 * M + c);
+        using JetE = ceres::Jet<double, kExits + 3>;
+        JetE exits[kExits], pose_jet[3];
+        for (int k = 0; k < kExits; ++k) exits[k] = JetE(g[k], k);
+        for (int c = 0; c < 3; ++c) pose_jet[c] = JetE(q[j][c], kExits + c);
         JetE r;
         MlEquilibriumResidual<M, JetE>(*p.robot, w, exits, pose_jet, &r);
-        const Eigen::Matrix<double, 2 * M, 1> row_exits = r.v.template head<2 * M>();
+        const Eigen::Matrix<double, kExits, 1> row_exits = r.v.template head<kExits>();
         const Eigen::Vector3d row_pose = r.v.template tail<3>();
         sum += r.a * r.a;
         pose.a.noalias() += row_pose * row_pose.transpose();
         pose.gradient += row_pose * r.a;
-        pose.b.template topRows<2 * M>().noalias() += row_exits * row_pose.transpose();
-        gradient_g.template head<2 * M>() += row_exits * r.a;
-        h_gg.template topLeftCorner<2 * M, 2 * M>().noalias() += row_exits * row_exits.transpose();
+        pose.b.template topRows<kExits>().noalias() += row_exits * row_pose.transpose();
+        gradient_g.template head<kExits>() += row_exits * r.a;
+        h_gg.template topLeftCorner<kExits, kExits>().noalias() += row_exits * row_exits.transpose();
       }
     }
   }
-  for (int k = 0; k < 3 * M; ++k) {
+  for (int k = 0; k < PlanarLayout(M).size(); ++k) {
     if (!(p.prior_inv_sigma(k) > 0.0)) continue;
     const double r = PriorResidual<M>(p, g, k);
     sum += r * r;
@@ -249,7 +255,7 @@ template <int M>
 LeastSquaresSummary SolveMlLeastSquares(const MlLeastSquaresProblem<M>& p, double* g,
                                         std::vector<std::array<double, 3>>& q, const std::vector<char>& use) {
   using namespace least_squares;
-  constexpr int G = 3 * M;
+  constexpr int G = PlanarLayout(M).size();
   using MatrixG = Eigen::Matrix<double, G, G>;
   using VectorG = Eigen::Matrix<double, G, 1>;
   constexpr LevenbergMarquardtSettings kSettings;

@@ -10,6 +10,7 @@
 #include <array>
 
 #include "model/cable.h"
+#include "model/geometry.h"
 #include "model/robot.h"
 #include "model/sensors.h"
 
@@ -49,8 +50,9 @@ T CableResidual(const Cable& cable, const Vec2<T>& p_F_exit_m, const T& initial_
 }
 template <int M, typename T>
 T LengthResidual(const Cable& cable, int cable_index, const T* geometry, const Vec2<T>& p_F_anchor_m, double dl_m) {
-  const Vec2<T> p_F_exit(geometry[2 * cable_index], geometry[2 * cable_index + 1]);
-  return CableResidual<T>(cable, p_F_exit, geometry[2 * M + cable_index], p_F_anchor_m, dl_m);
+  constexpr GeometryLayout kLayout = PlanarLayout(M);
+  const Vec2<T> p_F_exit(geometry[kLayout.exit(cable_index, 0)], geometry[kLayout.exit(cable_index, 1)]);
+  return CableResidual<T>(cable, p_F_exit, geometry[kLayout.initial_length(cable_index)], p_F_anchor_m, dl_m);
 }
 
 // Every cable's length residual at pose q = (x, z, theta), the rotation computed once.
@@ -118,7 +120,7 @@ T EquilibriumOffset(const Robot& robot, const T* geometry, const Pose<T>& q) {
   for (int i = 0; i < M; ++i) {
     const Cable& c = robot.cables[i];
     const Vec2<T> r_F_anchor = R * c.p_P_anchor_m.template cast<T>();
-    const Vec2<T> p_F_exit(geometry[2 * i], geometry[2 * i + 1]);
+    const Vec2<T> p_F_exit(geometry[PlanarLayout(M).exit(i, 0)], geometry[PlanarLayout(M).exit(i, 1)]);
     u[i] = CableGeometry<T>(p_F_exit, T(c.pulley_radius_m), SignsOf(c), p + r_F_anchor).u_F_cable;
     moment[i] = Cross2<T>(r_F_anchor, u[i]);
   }
@@ -149,8 +151,8 @@ void MlEquilibriumResidual(const Robot& robot, const ReadingWeights& weights, co
 template <int M>
 double EquilibriumThetaError(const Robot& robot, const double* geometry, const Pose<double>& q) {
   using Jet1 = ceres::Jet<double, 1>;
-  Jet1 g[2 * M];
-  for (int k = 0; k < 2 * M; ++k) g[k] = Jet1(geometry[k]);
+  Jet1 g[PlanarLayout(M).exit_coordinates()];
+  for (int k = 0; k < PlanarLayout(M).exit_coordinates(); ++k) g[k] = Jet1(geometry[k]);
   const Jet1 offset = EquilibriumOffset<M, Jet1>(robot, g, Pose<Jet1>(Jet1(q(0)), Jet1(q(1)), Jet1(q(2), 0)));
   return offset.a / offset.v(0);
 }
@@ -165,7 +167,7 @@ void PaperResiduals(const Robot& robot, const PoseReadings<M>& readings, const T
                                 T(readings.sensor_values[static_cast<int>(SensorId::kInclinometer)])),
                         readings.dl_m.data(), residual);
   for (int i = 0; i < M; ++i) {
-    const T measured = T(readings.dl_m(i)) + geometry[2 * M + i];
+    const T measured = T(readings.dl_m(i)) + geometry[PlanarLayout(M).initial_length(i)];
     const T model = residual[i] + measured;
     residual[i] = model * model - measured * measured;
   }
