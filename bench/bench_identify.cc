@@ -7,7 +7,7 @@
 #include <string>
 
 #include "common/error.h"
-#include "identify/experiment.h"
+#include "experiment/experiment.h"
 #include "identify/identify.h"
 #include "workspace/workspace.h"
 

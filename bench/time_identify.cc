@@ -10,7 +10,7 @@
 #include <exception>
 #include <vector>
 
-#include "identify/experiment.h"
+#include "experiment/experiment.h"
 #include "identify/identify.h"
 
 int main(int argc, char** argv) {

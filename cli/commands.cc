@@ -28,7 +28,7 @@
 #include "common/version.h"
 #include "design/design.h"
 #include "identify/calibration_report.h"
-#include "identify/experiment.h"
+#include "experiment/experiment.h"
 #include "identify/identify.h"
 #include "identify/validate.h"
 #include "model/statics.h"
@@ -93,8 +93,7 @@ void PrintSensorCorrection(const SystematicSensorErrors& e) {
 }
 
 // --measurements: the CSV read by column name for `robot` (the ignored columns noted on
-// stderr unless -q), then corrected for the robot file's systematic sensor errors and checked
-// against what its sensors can read (CorrectedReadings).
+// stderr unless -q), as read (identify corrects them itself: IdentifyOptions::readings_as_read).
 std::vector<Measurement> ReadMeasurementsOption(const Context& ctx, const Robot& robot, const std::string& path,
                                                 const std::string& delimiter) {
   const std::vector<Measurement> measurements =
@@ -108,7 +107,13 @@ std::vector<Measurement> ReadMeasurementsOption(const Context& ctx, const Robot&
           [&](const std::string& warning) {
             if (!ctx.quiet) std::fprintf(stderr, "cablecal: warning: %s\n", PrintableText(warning).c_str());
           });
-  return CorrectedReadings(robot, measurements, path);
+  return measurements;
+}
+// The same, corrected for the robot file's systematic sensor errors and checked against what
+// its sensors can read (CorrectedReadings): what validate compares with.
+std::vector<Measurement> ReadCorrectedMeasurementsOption(const Context& ctx, const Robot& robot, const std::string& path,
+                                                         const std::string& delimiter) {
+  return CorrectedReadings(robot, ReadMeasurementsOption(ctx, robot, path, delimiter), path);
 }
 
 // Whether two paths name one file (the same device and inode: another spelling of the path, a
@@ -423,15 +428,15 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   id.loss = ParseLoss(options.loss);
   if (options.geometry_prior_given) id.geometry_prior_sigma_m = options.geometry_prior_sigma_m;
   id.equilibrium = options.equilibrium == "on";
+  id.readings_as_read = true;
   // A robot file with systematic sensor errors (sensors fit) has them removed before the solve.
   const std::vector<Measurement> measurements =
       ReadMeasurementsOption(ctx, nominal, options.measurements_path, options.delimiter);
   // Read before the solve: a bad held-out file is refused before any work.
   const std::vector<Measurement> holdout =
       options.holdout_path.empty() ? std::vector<Measurement>()
-                                   : ReadMeasurementsOption(ctx, nominal, options.holdout_path, options.delimiter);
+                                   : ReadCorrectedMeasurementsOption(ctx, nominal, options.holdout_path, options.delimiter);
   IdentifyResult result = Identify(nominal, measurements, id);
-  if (nominal.sensors.systematic.any()) result.corrected_for = nominal.sensors.systematic;
   RequireUsableResult(result, options.measurements_path);
   // Not made for --json alone: 100,000 poses' tables cost a second (issue 24).
   const std::string result_yaml =
@@ -547,7 +552,7 @@ int RunValidate(const Context& ctx, const ValidateCommandOptions& options) {
   std::optional<Robot> nominal;
   if (!options.nominal_path.empty()) nominal = LoadRobotFile(options.nominal_path);
   const std::vector<Measurement> measurements =
-      ReadMeasurementsOption(ctx, calibrated, options.measurements_path, options.delimiter);
+      ReadCorrectedMeasurementsOption(ctx, calibrated, options.measurements_path, options.delimiter);
   ValidationResult result =
       Validate(calibrated, nominal, measurements, options.measurements_path, options.skip_infeasible);
   if (calibrated.sensors.systematic.any()) result.corrected_for = calibrated.sensors.systematic;

@@ -23,7 +23,7 @@
 #include "design/solve_process.h"
 #include "design/objective.h"
 #include "design/robust.h"
-#include "identify/experiment.h"
+#include "experiment/experiment.h"
 #include "identify/identify.h"
 #include "model/cable.h"
 #include "model/statics.h"
@@ -85,7 +85,7 @@ constexpr int kStartPool = 10;
 // Random feasible poses probed for the hint when no start gives verified poses.
 constexpr int kRobustProbes = 200;
 
-// "a1z a2x a2z l10 l20": the names of geometric parameters from..3m - 1 (identify/experiment.h's
+// "a1z a2x a2z l10 l20": the names of geometric parameters from..3m - 1 (model/geometry.h's
 // order), space-separated.
 std::string GeometryNameList(int m, int from) {
   const std::vector<std::string> names = GeometryNames(m);

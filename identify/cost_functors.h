@@ -9,7 +9,7 @@
 #include <cmath>
 
 #include "common/error.h"
-#include "identify/experiment.h"
+#include "experiment/experiment.h"
 #include "identify/residuals.h"
 #include "model/geometry.h"
 #include "model/robot.h"

@@ -136,6 +136,13 @@ auto WithCableCount(int num_cables, F&& f) {
 
 IdentifyResult Identify(const Robot& nominal, const std::vector<Measurement>& measurements,
                         const IdentifyOptions& options) {
+  if (options.readings_as_read) {
+    IdentifyOptions corrected_options = options;
+    corrected_options.readings_as_read = false;
+    IdentifyResult result = Identify(nominal, CorrectedReadings(nominal, measurements, options.source), corrected_options);
+    if (nominal.sensors.systematic.any()) result.corrected_for = nominal.sensors.systematic;
+    return result;
+  }
   IdentifyResult result = internal::WithCableCount(nominal.num_cables(), [&](auto m) {
     return internal::IdentifyWithCables<decltype(m)::value>(nominal, measurements, options);
   });

@@ -23,7 +23,7 @@
 #include <string>
 #include <vector>
 
-#include "identify/experiment.h"
+#include "experiment/experiment.h"
 #include "model/robot.h"
 #include "model/sensors.h"
 
@@ -96,6 +96,11 @@ struct IdentifyOptions {
   // absent; README, "Identification"). No effect for `paper` or m >= 3 (identify --equilibrium).
   bool equilibrium = kDefaultEquilibrium;
   std::string source = "measurements";  // names the data in messages
+  // The readings as a lab read them (identify, Python's identify): first corrected for the
+  // robot file's systematic sensor errors and checked against what its sensors can read
+  // (experiment/correction.h, CorrectedReadings), result.corrected_for saying what was
+  // removed. Off for simulated readings (the Monte Carlo's have no systematic errors).
+  bool readings_as_read = false;
 };
 
 // "no 'z' column (laser) and no 'theta' column (inclinometer)" for IdentifyResult::missing_sensors.
@@ -189,7 +194,7 @@ struct IdentifyResult {
   // z_j - z_meas, inclinometer theta_j - theta_meas (zero for `paper`, which fixes them).
   double rms_encoder_m = 0.0;
   std::array<double, kNumSensorIds> rms_sensor = {0.0, 0.0};  // by SensorId, in the sensor's unit
-  GeometryVector geometry;  // 3m entries, GeometryNames(m) order (identify/experiment.h)
+  GeometryVector geometry;  // 3m entries, GeometryNames(m) order (model/geometry.h)
   bool has_covariance = false;
   GeometryVector geometry_std;           // 3m entries, 0 for a held a1x (all 0 without covariance)
   Eigen::MatrixXd geometry_correlation;  // 3m x 3m, the same order (identity without covariance)
@@ -211,8 +216,8 @@ struct IdentifyResult {
   std::vector<std::string> warnings;         // a result, but one to read with care
   Identifiability identifiability;
   // The robot file's systematic sensor errors the laser and inclinometer readings were
-  // corrected for before the solve (sensors/correction.h; the caller sets it, Identify does
-  // not correct); none: the readings were used as read. result.yaml says which.
+  // corrected for before the solve (IdentifyOptions::readings_as_read); none: the readings
+  // were used as read. result.yaml says which.
   std::optional<SystematicSensorErrors> corrected_for;
   bool converged() const { return status == IdentifyStatus::kConverged; }
 };

@@ -28,7 +28,7 @@
 #include <string>
 #include <vector>
 
-#include "identify/experiment.h"
+#include "experiment/experiment.h"
 #include "identify/residuals.h"
 #include "model/cable.h"
 #include "model/geometry.h"

@@ -1,7 +1,7 @@
 // The identification's residuals, written once on the scalar type T and the cable count M:
 // Ceres evaluates them with Jets inside Identify (identify.cc), and identify/jacobian.h
 // differentiates the same functions for the experiment design (design/). The geometry is
-// the identification's vector a1x a1z ... aMx aMz l10 ... lM0 (identify/experiment.h).
+// the identification's vector a1x a1z ... aMx aMz l10 ... lM0 (model/geometry.h).
 #pragma once
 
 #include <ceres/jet.h>

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "identify/experiment.h"
+#include "experiment/experiment.h"
 #include "model/robot.h"
 
 namespace cablecal {
@@ -52,7 +52,7 @@ struct ValidationResult {
   // The sensors' noise (their sigma): the RMS error even a perfect model would show.
   double laser_sigma_m = 0.0, inclinometer_sigma_rad = 0.0;
   // Set by a caller that corrected the readings for the robot file's systematic sensor errors
-  // (CorrectedReadings, sensors/correction.h, which depends on identify/): said in the summary.
+  // (CorrectedReadings, experiment/correction.h): said in the summary.
   std::optional<SystematicSensorErrors> corrected_for;
   // With skip_infeasible (validate --skip-infeasible): the readings left out, in their order.
   bool skip_infeasible = false;

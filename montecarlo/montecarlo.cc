@@ -101,7 +101,7 @@ int MonteCarloCell::failures(const std::string& cause) const {
 }
 
 Robot TrueGeometryForTrial(const Robot& nominal, double sigma_m, Gauge gauge, Rng& rng) {
-  // The one rule (identify/experiment.h PerturbGeometry): a1x held, 3m draws whatever the sigmas.
+  // The one rule (experiment/simulation.h PerturbGeometry): a1x held, 3m draws whatever the sigmas.
   const double exit_sigma_m =
       gauge == Gauge::kPrior && nominal.sensors.tracker_sigma_m ? *nominal.sensors.tracker_sigma_m : sigma_m;
   return PerturbGeometry(nominal, sigma_m, exit_sigma_m, rng);

@@ -21,7 +21,7 @@
 #include <string>
 #include <vector>
 
-#include "identify/experiment.h"
+#include "experiment/experiment.h"
 #include "identify/identify.h"
 #include "model/robot.h"
 #include "workspace/workspace.h"
@@ -55,7 +55,7 @@ struct MonteCarloOptions {
   // The true robot's centre of mass off the nominal file's by this along the platform's x (m):
   // the identification assumes the file's, so this is what a wrong platform.com costs.
   double com_error_m = 0.0;
-  OutlierModel outliers;  // gross readings added to every trial's (identify/experiment.h)
+  OutlierModel outliers;  // gross readings added to every trial's (experiment/simulation.h)
   std::uint64_t seed = 1;
   int design_starts = 2;  // Ipopt starts per designed set (4x as many if none converges)
   // The designs' Ipopt solves in child processes (DesignOptions::solve_in_child_processes);
@@ -165,7 +165,7 @@ std::vector<TrialOutcome> DecodeOutcomes(const std::string& bytes);
 std::string EncodePoses(const std::vector<PlanPose>& poses);
 std::vector<PlanPose> DecodePoses(const std::string& bytes);
 
-// The true geometry of one trial: PerturbGeometry's one rule (identify/experiment.h): every
+// The true geometry of one trial: PerturbGeometry's one rule (experiment/simulation.h): every
 // parameter but a1x (which fixes F's x origin, under every gauge) perturbed by N(0, sigma^2),
 // the exit points by the tracker's sigma under `prior` (what the prior assumes).
 Robot TrueGeometryForTrial(const Robot& nominal, double sigma_m, Gauge gauge, Rng& rng);

@@ -13,7 +13,7 @@
 
 #include <vector>
 
-#include "identify/experiment.h"
+#include "experiment/experiment.h"
 #include "workspace/workspace.h"
 
 namespace py = pybind11;

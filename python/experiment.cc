@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "common/format.h"
-#include "identify/experiment.h"
+#include "experiment/experiment.h"
 #include "model/robot.h"
 #include "python/bindings.h"
 #include "python/converters.h"

@@ -9,13 +9,13 @@
 #include "common/atomic_output.h"
 #include "common/error.h"
 #include "identify/calibration_report.h"
-#include "identify/experiment.h"
+#include "experiment/experiment.h"
 #include "identify/identify.h"
 #include "identify/validate.h"
 #include "model/robot.h"
 #include "python/bindings.h"
 #include "python/converters.h"
-#include "sensors/correction.h"
+#include "experiment/correction.h"
 
 namespace cablecal::python {
 namespace {
@@ -171,13 +171,12 @@ void BindIdentify(py::module_& m) {
         o.equilibrium = OnOff(equilibrium, "equilibrium");
         o.source = "measurements";
         // As the CLI: a robot with systematic sensor errors has them removed before the solve.
-        const std::vector<Measurement> readings = CorrectedReadings(robot, measurements.readings, "measurements");
+        o.readings_as_read = true;
         IdentifyResult r;
         {
           py::gil_scoped_release release;
-          r = Identify(robot, readings, o);
+          r = Identify(robot, measurements.readings, o);
         }
-        if (robot.sensors.systematic.any()) r.corrected_for = robot.sensors.systematic;
         RequireUsableResult(r, "measurements");
         for (const std::string& w : r.warnings) {
           if (PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 1) < 0) throw py::error_already_set();

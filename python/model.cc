@@ -6,7 +6,7 @@
 #include <string>
 
 #include "common/error.h"
-#include "identify/experiment.h"
+#include "experiment/experiment.h"
 #include "model/robot.h"
 #include "model/statics.h"
 #include "python/bindings.h"

@@ -3,7 +3,7 @@
 // when it is below 1e-6 m.
 #include <cstdio>
 
-#include "identify/experiment.h"
+#include "experiment/experiment.h"
 #include "identify/identify.h"
 #include "model/robot.h"
 #include "workspace/workspace.h"

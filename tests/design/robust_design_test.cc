@@ -16,7 +16,7 @@
 #include "common/random.h"
 #include "design/design.h"
 #include "design/robust.h"
-#include "identify/experiment.h"
+#include "experiment/experiment.h"
 #include "identify/identify.h"
 #include "model/statics.h"
 #include "tests/support/random_robot.h"

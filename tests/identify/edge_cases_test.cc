@@ -7,7 +7,7 @@
 #include <sstream>
 
 #include "common/error.h"
-#include "identify/experiment.h"
+#include "experiment/experiment.h"
 #include "identify/identify.h"
 #include "model/cable.h"
 #include "model/statics.h"

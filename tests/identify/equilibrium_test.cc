@@ -15,7 +15,7 @@
 
 #include "common/error.h"
 #include "common/random.h"
-#include "identify/experiment.h"
+#include "experiment/experiment.h"
 #include "identify/identify.h"
 #include "identify/residuals.h"
 #include "identify/validate.h"

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "common/error.h"
-#include "identify/experiment.h"
+#include "experiment/experiment.h"
 #include "identify/identify.h"
 #include "tests/support/cable_construction.h"
 #include "tests/support/random_robot.h"
@@ -332,7 +332,7 @@ TEST(Geometry, NamesAndLayoutFollowTheCableCount) {
   EXPECT_EQ(GeometryOf(WithGeometry(planar4, moved)), moved);
 }
 
-// The one perturbation rule (identify/experiment.h): a1x held, every other exit coordinate
+// The one perturbation rule (experiment/simulation.h): a1x held, every other exit coordinate
 // N(0, exit sigma^2), every initial length N(0, sigma^2), from 3m standard normals drawn first
 // in the vector's order, whatever the sigmas.
 TEST(Geometry, PerturbationHoldsA1xAndDrawsThreeNormalsPerCable) {

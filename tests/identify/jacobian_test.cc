@@ -14,7 +14,7 @@
 
 #include "common/random.h"
 #include "identify/cost_functors.h"
-#include "identify/experiment.h"
+#include "experiment/experiment.h"
 #include "identify/identify.h"
 #include "identify/jacobian.h"
 #include "identify/residuals.h"

@@ -15,7 +15,7 @@
 
 #include "common/error.h"
 #include "identify/cost_functors.h"
-#include "identify/experiment.h"
+#include "experiment/experiment.h"
 #include "identify/identify.h"
 #include "identify/identify_cables.h"
 #include "identify/least_squares.h"

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "common/error.h"
-#include "identify/experiment.h"
+#include "experiment/experiment.h"
 #include "identify/identify.h"
 #include "tests/support/random_robot.h"
 #include "workspace/workspace.h"

@@ -14,7 +14,7 @@
 
 #include "common/error.h"
 #include "common/format.h"
-#include "identify/experiment.h"
+#include "experiment/experiment.h"
 #include "identify/identify.h"
 #include "identify/validate.h"
 #include "tests/support/random_robot.h"

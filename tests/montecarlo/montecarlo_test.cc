@@ -7,7 +7,7 @@
 
 #include "common/error.h"
 #include "montecarlo/montecarlo.h"
-#include "identify/experiment.h"
+#include "experiment/experiment.h"
 
 namespace cablecal {
 namespace {

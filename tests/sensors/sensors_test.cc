@@ -11,7 +11,7 @@
 
 #include "common/error.h"
 #include "common/random.h"
-#include "identify/experiment.h"
+#include "experiment/experiment.h"
 #include "identify/identify.h"
 #include "model/sensor_model.h"
 #include "sensors/sensors.h"

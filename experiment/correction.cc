@@ -1,4 +1,4 @@
-#include "sensors/correction.h"
+#include "experiment/correction.h"
 
 #include "common/error.h"
 #include "model/sensor_model.h"

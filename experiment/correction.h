@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "identify/experiment.h"
+#include "experiment/measurements.h"
 #include "model/robot.h"
 
 namespace cablecal {

@@ -1,5 +1,6 @@
-// The calibration experiment: what the sensors read at each measurement pose, either
-// simulated (SimulateExperiment) or read from a lab's measurement CSV.
+// The simulated experiment: a true robot drawn around the nominal one, the platform settled
+// where the true robot puts it for each commanded pose of a plan, and the sensors' noisy
+// readings there; gross errors for robustness studies; the truth file.
 //
 // Simulation (README, "Commands", simulate): the controller commands the plan's length changes dl_ij,
 // computed with the nominal robot; the true robot's cables then have lengths
@@ -15,47 +16,20 @@
 // always.
 #pragma once
 
+
 #include <Eigen/Core>
-#include <array>
-#include <functional>
-#include <istream>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "common/random.h"
+#include "experiment/measurements.h"
 #include "model/geometry.h"
 #include "model/robot.h"
-#include "model/sensors.h"
 #include "model/statics.h"
 #include "workspace/workspace.h"
 
 namespace cablecal {
-
-// One reading of a pose. dl: encoder length changes from the home pose (m), one per cable;
-// then each of the robot kind's other sensors' values (model/sensors.h: the planar laser's
-// height z in m, the inclinometer's angle theta in rad). A lab without a laser or an
-// inclinometer has no value for it (has() false; value() then 0, unused). Several readings may
-// share a pose_id: repeated measurements of one pose, fitted with one set of pose unknowns.
-struct Measurement {
-  int pose_id = 0;
-  std::string where;  // "file:line" when read from a file, for messages; empty when simulated
-  Eigen::VectorXd dl_m;
-  // By SensorId; empty where the data lack that sensor.
-  std::array<Eigen::VectorXd, kNumSensorIds> sensor_values;
-
-  bool has(SensorId id) const { return sensor_values[static_cast<int>(id)].size() > 0; }
-  double value(SensorId id, int k = 0) const { return has(id) ? sensor_values[static_cast<int>(id)](k) : 0.0; }
-  void set(SensorId id, double v) { sensor_values[static_cast<int>(id)] = Eigen::VectorXd::Constant(1, v); }
-  double& at(SensorId id, int k = 0) { return sensor_values[static_cast<int>(id)](k); }  // a value the reading has
-  void drop(SensorId id) { sensor_values[static_cast<int>(id)].resize(0); }
-  // The sensors this reading has, by SensorId.
-  std::array<bool, kNumSensorIds> sensors() const {
-    std::array<bool, kNumSensorIds> out{};
-    for (int k = 0; k < kNumSensorIds; ++k) out[k] = sensor_values[k].size() > 0;
-    return out;
-  }
-};
 
 // The one geometry perturbation (simulate --geometry-sigma, the Monte Carlo's true robots,
 // README "Identification"): a true robot drawn around the nominal one.
@@ -147,46 +121,6 @@ struct OutlierModel {
 OutlierModel ParseOutliers(const std::string& text);  // "RATE[:SIZE]", 0 <= RATE <= 1, SIZE > 0; InputError naming --outliers
 // Draws two uniforms per reading value, used or not, so the stream does not depend on the rate.
 void AddOutliers(std::vector<Measurement>& readings, const SensorNoise& sensors, const OutlierModel& model, Rng& rng);
-
-// Measurement CSV: header pose,dl1..dlm,z,theta (m, m, m, rad); z or theta left out when the
-// readings have no laser or inclinometer.
-std::string MeasurementsCsv(const std::vector<Measurement>& measurements, const std::string& provenance);
-// Throws InputError naming file, line and column (wrong header or count, non-finite number,
-// non-positive pose id). A pose id may repeat (repeated readings of one pose); the z and
-// theta columns may be absent (no laser, no inclinometer: has_laser / has_inclinometer false).
-// CheckReadingsPlausible (below) then checks them against a robot's sensors.
-// At most kMaxMeasuredPoses rows (readings; the file is streamed and rejected at the next row).
-// The file is read by column name (a lab's log): pose, dl1..dlm, z and theta in any order,
-// other columns (a timestamp, a temperature) ignored and named once to `on_ignored`; cells
-// split at `delimiter` (',', ';' or '\t'); an empty cell is refused with line and column.
-// `on_warning` hears what is read but likely not meant (MeasurementWarnings below), once each.
-std::vector<Measurement> ReadMeasurementsCsv(const std::string& path, int num_cables, char delimiter = ',',
-                                             const std::function<void(const std::vector<std::string>&)>& on_ignored = {},
-                                             const std::function<void(const std::string&)>& on_warning = {});
-std::vector<Measurement> ReadMeasurementsCsv(std::istream& in, const std::string& name, int num_cables,
-                                             char delimiter = ',',
-                                             const std::function<void(const std::vector<std::string>&)>& on_ignored = {},
-                                             const std::function<void(const std::string&)>& on_warning = {});
-
-// What a measurement file says that its author likely did not mean, as warnings naming the file:
-// an ignored column that looks like the laser's or the inclinometer's in other units or case
-// ('theta_deg', 'z_mm', 'Theta') while the file has no 'z' or 'theta' column (that sensor is
-// then taken as missing); a pose id that comes again after other poses (1, 2, 3, 1), which is
-// read as a repeated reading of that pose, not as another pose (a reused id). `readings` as read.
-std::vector<std::string> MeasurementWarnings(const std::string& source, const std::vector<std::string>& ignored,
-                                             const std::vector<Measurement>& readings);
-// The delimiter of --delimiter: ",", ";", "tab" (or a tab character); InputError otherwise.
-char ParseDelimiter(const std::string& text);
-constexpr int kMaxMeasuredPoses = 100000;
-
-// Readings no sensor of `robot` can give: an encoder length change longer than the frame's
-// diagonal, a laser height below 0, above the laser range or above the frame, an
-// inclinometer angle beyond its range, the last two limits widened by 5 sigma of
-// that sensor's noise (a pose at the edge of a range reads a little past it). Throws
-// InputError naming the file, line and column (or the pose), the value and the limit;
-// "units?" where it fits.
-void CheckReadingsPlausible(const Robot& robot, const std::vector<Measurement>& measurements,
-                            const std::string& source);
 
 // Truth file: the true robot in the robot-file format plus its `true_poses` list.
 std::string TruthYaml(const Robot& truth, const std::vector<Measurement>& measurements,
