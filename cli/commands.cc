@@ -78,13 +78,6 @@ std::string PosePlanJsonYaml(const std::vector<PlanPose>& poses) {
   return YamlText(o);
 }
 
-// "%.3g": the console's rounding of a number a reader compares.
-std::string Rounded(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.3g", value);
-  return text;
-}
-
 // The console's line for readings corrected for the robot file's systematic sensor errors.
 void PrintSensorCorrection(const SystematicSensorErrors& e) {
   std::printf("  readings corrected for the robot file's systematic sensor errors: laser offset %.3g m, "
@@ -500,7 +493,7 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
         if (f.HasValue(i)) by_sensor[i < m ? 0 : i - m + 1].push_back(f.min_detectable_sigmas(i));
       }
     }
-    std::printf("  a single wrong reading shows beyond 4.5 sigma from (median):");
+    std::printf("  a single wrong reading shows beyond %s sigma from (median):", Rounded(kOutlierSigmas).c_str());
     const char* sensor_names[] = {"encoders", "laser", "inclinometer"};
     for (int k = 0; k < 3; ++k) {
       std::vector<double>& v = by_sensor[k];

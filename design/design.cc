@@ -321,7 +321,9 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
                                         " gauge-fixed geometric parameters and the per-pose unknowns (got " +
                                         std::to_string(n) + ")");
   }
-  if (n > 500) throw InputError("--poses", "", "at most 500 poses (got " + std::to_string(n) + ")");
+  if (n > kMaxDesignPoses) {
+    throw InputError("--poses", "", "at most " + std::to_string(kMaxDesignPoses) + " poses (got " + std::to_string(n) + ")");
+  }
   if (options.starts < 1) throw InputError("--starts", "", "must be at least 1");
   if (options.random_sets < 0) throw InputError("--random-sets", "", "must not be negative");
   if (!(options.min_spacing_m >= 0.0) || !std::isfinite(options.min_spacing_m)) {

@@ -37,7 +37,9 @@ const char* ToString(PoseSetDesign d);
 std::vector<PoseSetDesign> ParseDesigns(const std::string& text);  // "random,optimized,d"
 // "6:50" or "6:50:2" (first:last[:step]); InputError naming --poses otherwise.
 std::vector<int> ParsePoseCounts(const std::string& text);
-constexpr int kMaxPosesPerSet = 1000;  // per pose set of a study (ParsePoseCounts, ValidateOptions)
+// Per pose set of a study (ParsePoseCounts, ValidateOptions): bounds a study's trials and
+// errors. A designed set is a design and stops at design.h's kMaxDesignPoses.
+constexpr int kMaxPosesPerSet = 1000;
 
 struct MonteCarloOptions {
   std::vector<int> pose_counts;
