@@ -182,9 +182,10 @@ struct ErrorStats {
 };
 ErrorStats Summarise(const MonteCarloCell& cell, int num_cables, const std::string& parameter);
 
-std::string ErrorsCsv(const MonteCarloResult& r);   // n,design,trial,parameter,error
-std::string SummaryCsv(const MonteCarloResult& r);
-std::string FailuresCsv(const MonteCarloResult& r);  // n,design,trial,cause,reason: one row per failed trial  // n,design,parameter,mean,std,rms,max_abs,share_within_5mm,failures
+// The study's files (montecarlo/report.cc, their one writer).
+std::string ErrorsCsv(const MonteCarloResult& r);    // n,design,trial,parameter,error
+std::string SummaryCsv(const MonteCarloResult& r);   // n,design,parameter,mean,std,rms,max_abs,share_within_5mm,failures
+std::string FailuresCsv(const MonteCarloResult& r);  // n,design,trial,cause,reason: one row per failed trial
 std::string SummaryMarkdown(const MonteCarloResult& r, const std::string& title);
 
 }  // namespace cablecal
