@@ -55,36 +55,6 @@ std::vector<std::string> FrameArgs(const Robot& robot) {
   return args;
 }
 
-// The plan's poses as a YAML sequence of maps, the pose plan CSV's columns as keys (pose, x,
-// z, theta in m and rad, t1.., l1.., dl1.. in N and m), for design --json.
-std::string PosePlanJsonYaml(const std::vector<PlanPose>& poses) {
-  YAML::Emitter o;
-  o << YAML::BeginSeq;
-  for (std::size_t j = 0; j < poses.size(); ++j) {
-    const PlanPose& p = poses[j];
-    o << YAML::Flow << YAML::BeginMap << YAML::Key << "pose" << YAML::Value << j + 1;
-    const char* names[3] = {"x", "z", "theta"};
-    for (int k = 0; k < 3; ++k) o << YAML::Key << names[k] << YAML::Value << YamlNumber{p.q(k)};
-    const std::pair<const char*, const Eigen::VectorXd*> columns[3] = {
-        {"t", &p.tensions_N}, {"l", &p.lengths_m}, {"dl", &p.length_change_m}};
-    for (const auto& [prefix, values] : columns) {
-      for (Eigen::Index i = 0; i < values->size(); ++i) {
-        o << YAML::Key << prefix + std::to_string(i + 1) << YAML::Value << YamlNumber{(*values)(i)};
-      }
-    }
-    o << YAML::EndMap;
-  }
-  o << YAML::EndSeq;
-  return YamlText(o);
-}
-
-// "%.3g": the console's rounding of a number a reader compares.
-std::string Rounded(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.3g", value);
-  return text;
-}
-
 // The console's line for readings corrected for the robot file's systematic sensor errors.
 void PrintSensorCorrection(const SystematicSensorErrors& e) {
   std::printf("  readings corrected for the robot file's systematic sensor errors: laser offset %.3g m, "
@@ -506,7 +476,7 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
         if (f.HasValue(i)) by_sensor[i < m ? 0 : i - m + 1].push_back(f.min_detectable_sigmas(i));
       }
     }
-    std::printf("  a single wrong reading shows beyond 4.5 sigma from (median):");
+    std::printf("  a single wrong reading shows beyond %s sigma from (median):", Rounded(kOutlierSigmas).c_str());
     const char* sensor_names[] = {"encoders", "laser", "inclinometer"};
     for (int k = 0; k < 3; ++k) {
       std::vector<double>& v = by_sensor[k];

@@ -46,6 +46,13 @@ std::size_t Utf8SequenceAt(const std::string& text, std::size_t i) {
 
 }  // namespace
 
+std::string Rounded(double value, int digits) {
+  if (std::isinf(value)) return value > 0 ? "inf" : "-inf";  // C leaves "inf" or "infinity" to the library
+  char text[64];
+  std::snprintf(text, sizeof text, "%.*g", digits, value);
+  return text;
+}
+
 std::string PrintableText(const std::string& text) {
   std::string out;
   out.reserve(text.size());

@@ -10,6 +10,10 @@ namespace cablecal {
 // With a '.' before any exponent ("1.0e-05"), so that YAML 1.1 readers see a float.
 std::string FormatDouble(double value);
 
+// printf's "%.<digits>g": the rounding a reader compares in a message, a console line or a
+// report, for numbers whose size varies (sigmas, singular values, ratios).
+std::string Rounded(double value, int digits = 3);
+
 // `text` with control characters escaped (\n, \r, \t, \xNN), for a terminal or a one-line
 // heading: a file's bytes quoted in a message must not clear the screen or break a line.
 std::string PrintableText(const std::string& text);

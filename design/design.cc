@@ -85,15 +85,6 @@ constexpr int kStartPool = 10;
 // Random feasible poses probed for the hint when no start gives verified poses.
 constexpr int kRobustProbes = 200;
 
-// "a1z a2x a2z l10 l20": the names of geometric parameters from..3m - 1 (model/geometry.h's
-// order), space-separated.
-std::string GeometryNameList(int m, int from) {
-  const std::vector<std::string> names = GeometryNames(m);
-  std::string list;
-  for (std::size_t k = from; k < names.size(); ++k) list += (list.empty() ? "" : " ") + names[k];
-  return list;
-}
-
 double Median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const std::size_t n = v.size();
@@ -321,7 +312,9 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
                                         " gauge-fixed geometric parameters and the per-pose unknowns (got " +
                                         std::to_string(n) + ")");
   }
-  if (n > 500) throw InputError("--poses", "", "at most 500 poses (got " + std::to_string(n) + ")");
+  if (n > kMaxDesignPoses) {
+    throw InputError("--poses", "", "at most " + std::to_string(kMaxDesignPoses) + " poses (got " + std::to_string(n) + ")");
+  }
   if (options.starts < 1) throw InputError("--starts", "", "must be at least 1");
   if (options.random_sets < 0) throw InputError("--random-sets", "", "must not be negative");
   if (!(options.min_spacing_m >= 0.0) || !std::isfinite(options.min_spacing_m)) {
@@ -488,76 +481,15 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
 }
 
 DesignPrior LoadDesignPrior(const Robot& nominal, const std::string& path) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
-    throw InputError(path, "", "cannot open the file");
-  } catch (const YAML::Exception& e) {
-    throw InputError(path, "", std::string("not valid YAML: ") + e.what());
-  }
-  if (!root.IsMap() || !root["status"] || !root["parameters"]) {
-    throw InputError(path, "", "not an identification result (cablecal identify --out): no status or parameters");
-  }
-  if (root["status"].as<std::string>("") != "converged") {
-    throw InputError(path, "status", "the identification did not converge: it cannot be a prior");
-  }
-  // Gauge none leaves x unfixed: its standard deviations are the pseudo-inverse's, which leave
-  // out the null direction, in a frame that floats along it; taken as information they make the
-  // next round's plan several times too confident (measured: 4x the covariance trace).
-  if (root["gauge"] && root["gauge"].as<std::string>("") == "none") {
-    throw InputError(path, "gauge", "a result identified with --gauge none cannot be a prior (its sigmas leave out the "
-                                    "direction it does not fix): identify the same data with --gauge a1x or prior");
-  }
-  // The robot it was identified for (result.yaml records it since this check; older ones are
-  // checked by their parameter count below): a prior of another robot would plan around the
-  // wrong geometry with confidence.
-  const YAML::Node of = root["robot"];
-  if (of.IsMap() && of["name"] && of["cables"]) {
-    RequireResultOfRobot(path, of["name"].as<std::string>(""), of["cables"].as<int>(0), nominal);
-  }
+  const IdentifiedGeometry known = ReadIdentifiedGeometry(nominal, path);
+  const Eigen::MatrixXd& cov = known.covariance;
   const int m = nominal.num_cables();
-  const int np = 3 * m;  // a1x a1z .. amx amz l10 .. lm0
-  if (!root["parameters"].IsMap() || static_cast<int>(root["parameters"].size()) != np) {
-    throw InputError(path, "parameters", "needs the " + std::to_string(np) + " geometric parameters of " + nominal.name +
-                                             "'s " + std::to_string(m) + " cables (" + GeometryNameList(m, 0) +
-                                             "): a result for another robot?");
-  }
-  const std::vector<std::string> names = GeometryNames(m);
-  GeometryVector g(np);
-  Eigen::VectorXd sd(np);
-  for (int k = 0; k < np; ++k) {
-    const std::string& name = names[k];
-    const YAML::Node p = root["parameters"][name];
-    const std::string key = "parameters." + name;
-    if (!p || !p["value"]) throw InputError(path, key, "missing");
-    g(k) = p["value"].as<double>(NAN);
-    sd(k) = p["std"] ? p["std"].as<double>(NAN) : (k == 0 ? 0.0 : NAN);
-    if (!std::isfinite(g(k))) throw InputError(path, key + ".value", "must be a finite number");
-    if (k > 0 && !(sd(k) > 0.0 && std::isfinite(sd(k)))) {
-      throw InputError(path, key + ".std", "needs a positive standard deviation (identify computes it by default)");
-    }
-  }
-  const std::string matrix = "needs the " + std::to_string(np) + " x " + std::to_string(np) + " matrix";
-  const YAML::Node corr = root["correlation"];
-  if (!corr || !corr.IsSequence() || static_cast<int>(corr.size()) != np) throw InputError(path, "correlation", matrix);
-  Eigen::MatrixXd C(np, np);
-  for (int a = 0; a < np; ++a) {
-    if (!corr[a].IsSequence() || static_cast<int>(corr[a].size()) != np) throw InputError(path, "correlation", matrix);
-    for (int b = 0; b < np; ++b) C(a, b) = corr[a][b].as<double>(NAN);
-  }
-  // Covariance of every parameter but a1x (the gauge or a tracked exit point).
-  const int nr = np - 1;
-  Eigen::MatrixXd cov(nr, nr);
-  for (int a = 0; a < nr; ++a) {
-    for (int b = 0; b < nr; ++b) cov(a, b) = C(a + 1, b + 1) * sd(a + 1) * sd(b + 1);
-  }
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(0.5 * (cov + cov.transpose()));
   if (!cov.allFinite() || !(eig.eigenvalues()(0) > 0.0)) {
     throw InputError(path, "correlation", "the covariance of " + GeometryNameList(m, 1) + " is not positive definite");
   }
   DesignPrior prior;
-  prior.robot = WithGeometry(nominal, g);
+  prior.robot = WithGeometry(nominal, known.geometry);
   prior.information = eig.eigenvectors() * eig.eigenvalues().cwiseInverse().asDiagonal() * eig.eigenvectors().transpose();
   return prior;
 }

@@ -71,6 +71,12 @@ std::string ImprovementText(double factor, int random_sets);
 // A geometry error beyond this is not a calibration problem (the robot file is wrong).
 constexpr double kMaxGeometrySigma_m = 0.5;
 
+// The most poses one design plans: with --min-spacing every pair of poses is a constraint of
+// Ipopt's problem, n (n - 1) / 2 of them (124,750 at 500), so the problem grows as n squared.
+// The Monte Carlo's designed sets are designs too, and share this bound (its random sets
+// alone go to kMaxPosesPerSet).
+constexpr int kMaxDesignPoses = 500;
+
 // "A: trace of the covariance 1.23e-05 m^2" (4 significant digits), for messages and
 // titles; without the name if `with_name` is false.
 std::string DescribeCriterion(Criterion c, const CriteriaValues& v, bool with_name = true);

@@ -148,19 +148,9 @@ bool RobustQuantities(const Robot& robot, const std::vector<Eigen::Vector2d>& po
                       PoseRobustness* out, bool with_derivatives) {
   const int m = robot.num_cables();
   CABLECAL_CHECK(y.size() == PoseVariables(m), "y holds x, z, theta and one tension per cable");
-  // One instance per cable count the loader accepts (kMinCables..kMaxCables).
-  static_assert(kMinCables == 2 && kMaxCables == 8, "RobustQuantities dispatches on m = 2..8");
-  switch (m) {
-    case 2: return RobustQuantitiesM<2>(robot, points, y, out, with_derivatives);
-    case 3: return RobustQuantitiesM<3>(robot, points, y, out, with_derivatives);
-    case 4: return RobustQuantitiesM<4>(robot, points, y, out, with_derivatives);
-    case 5: return RobustQuantitiesM<5>(robot, points, y, out, with_derivatives);
-    case 6: return RobustQuantitiesM<6>(robot, points, y, out, with_derivatives);
-    case 7: return RobustQuantitiesM<7>(robot, points, y, out, with_derivatives);
-    case 8: return RobustQuantitiesM<8>(robot, points, y, out, with_derivatives);
-  }
-  CABLECAL_CHECK(false, "the cable count is between kMinCables and kMaxCables");
-  return false;
+  return WithCableCount(m, [&](auto cables) {
+    return RobustQuantitiesM<decltype(cables)::value>(robot, points, y, out, with_derivatives);
+  });
 }
 
 }  // namespace cablecal::internal

@@ -40,14 +40,6 @@ std::string SignedFixed(double value, int decimals) {
   return s[0] == '-' || s.find_first_not_of("0.") == std::string::npos ? s : "+" + s;
 }
 
-// "%.3g": what a reader compares, for numbers whose size varies (sigmas, singular values).
-std::string Rounded(double value, int digits = 3) {
-  if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
-  char text[64];
-  std::snprintf(text, sizeof text, "%.*g", digits, value);
-  return text;
-}
-
 // "%#.3g": three significant digits, trailing zeros kept (11.0 mm, not 11), for a column.
 std::string Significant3(double value) {
   char text[64];

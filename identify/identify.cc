@@ -114,24 +114,6 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
 template <int M>
 Eigen::Vector3d StartingPose(const Robot& robot, const GeometryVector& g, const Measurement& m);
 
-// f(std::integral_constant<int, M>{}) for the robot's cable count M: the one dispatch from a
-// run-time count to the compile-time instances.
-template <typename F>
-auto WithCableCount(int num_cables, F&& f) {
-  static_assert(kMinCables == 2 && kMaxCables == 8, "one instantiation per cable count below");
-  switch (num_cables) {
-    case 2: return f(std::integral_constant<int, 2>{});
-    case 3: return f(std::integral_constant<int, 3>{});
-    case 4: return f(std::integral_constant<int, 4>{});
-    case 5: return f(std::integral_constant<int, 5>{});
-    case 6: return f(std::integral_constant<int, 6>{});
-    case 7: return f(std::integral_constant<int, 7>{});
-    case 8: return f(std::integral_constant<int, 8>{});
-  }
-  CABLECAL_CHECK(false, "the robot loader keeps 2 to 8 cables");
-  std::abort();
-}
-
 }  // namespace internal
 
 IdentifyResult Identify(const Robot& nominal, const std::vector<Measurement>& measurements,
@@ -143,7 +125,7 @@ IdentifyResult Identify(const Robot& nominal, const std::vector<Measurement>& me
     if (nominal.sensors.systematic.any()) result.corrected_for = nominal.sensors.systematic;
     return result;
   }
-  IdentifyResult result = internal::WithCableCount(nominal.num_cables(), [&](auto m) {
+  IdentifyResult result = WithCableCount(nominal.num_cables(), [&](auto m) {
     return internal::IdentifyWithCables<decltype(m)::value>(nominal, measurements, options);
   });
   result.robot_name = nominal.name;  // so that the result is never combined with another robot's file
@@ -153,7 +135,7 @@ IdentifyResult Identify(const Robot& nominal, const std::vector<Measurement>& me
 Eigen::Vector3d StartingPose(const Robot& robot, const GeometryVector& geometry, const Measurement& reading) {
   CABLECAL_CHECK(reading.dl_m.size() == robot.num_cables() && geometry.size() == GeometrySize(robot.num_cables()),
                  "one encoder reading and three geometry entries per cable");
-  return internal::WithCableCount(robot.num_cables(), [&](auto m) {
+  return WithCableCount(robot.num_cables(), [&](auto m) {
     return internal::StartingPose<decltype(m)::value>(robot, geometry, reading);
   });
 }

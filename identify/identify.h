@@ -5,7 +5,8 @@
 // structure, identify/schur.h, so the cost is linear in the number of poses).
 //   experiment.h  simulated or measured readings, measurement CSV
 //   residuals.h   the templated residuals (shared with design/)
-//   identify.h    Identify(), its options and result, result YAML
+//   identify.h    Identify(), its options and result; result.yaml, written and read back
+//                 (report.cc: its one writer and one reader)
 //   validate.h    Validate(): a robot's predictions of held-out poses against the readings
 //   calibration_report.h  identify --report: report.md and the data files of its figures
 // Depends on model/, workspace/ (pose plans) and common/.
@@ -258,6 +259,16 @@ bool IsHeld(const IdentifyResult& result, int k);
 
 // result.yaml (README, "identify").
 std::string IdentifyResultYaml(const IdentifyResult& result, const std::string& command_line);
+// What a result.yaml knows of the geometry, read back (its one reader, beside its writer):
+// the estimates and the covariance of every parameter but a1x (a1z a2x .. lm0; a1x is the gauge
+// or a tracked exit point), for calibrating in rounds (design --prior). Only a converged result
+// for `nominal`'s robot, with standard deviations, in a gauge that fixes the frame, knows it:
+// InputError naming the file and key otherwise.
+struct IdentifiedGeometry {
+  GeometryVector geometry;
+  Eigen::MatrixXd covariance;  // (3m - 1) x (3m - 1); its definiteness is left to the caller
+};
+IdentifiedGeometry ReadIdentifiedGeometry(const Robot& nominal, const std::string& result_yaml_path);
 // The same content as one line of JSON (identify --json; common/json.h's conventions), the
 // per-pose and per-reading tables written directly rather than parsed back from the YAML.
 std::string IdentifyResultJson(const IdentifyResult& result, const std::string& command_line);

@@ -14,6 +14,13 @@ std::vector<std::string> GeometryLayout::names() const {
   return out;
 }
 
+std::string GeometryNameList(int num_cables, int from) {
+  const std::vector<std::string> names = GeometryNames(num_cables);
+  std::string list;
+  for (std::size_t k = from; k < names.size(); ++k) list += (list.empty() ? "" : " ") + names[k];
+  return list;
+}
+
 GeometryVector GeometryOf(const Robot& robot) {
   const GeometryLayout layout = LayoutOf(robot);
   const Eigen::VectorXd l0 = InitialLengths(robot);

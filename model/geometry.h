@@ -43,6 +43,8 @@ inline int GeometrySize(int num_cables) { return PlanarLayout(num_cables).size()
 inline int ExitIndex(int cable, int axis) { return PlanarLayout(0).exit(cable, axis); }  // axis 0: x, 1: z
 inline int InitialLengthIndex(int num_cables, int cable) { return PlanarLayout(num_cables).initial_length(cable); }
 inline std::vector<std::string> GeometryNames(int num_cables) { return PlanarLayout(num_cables).names(); }
+// "a1z a2x a2z l10 l20": the names from entry `from` on, space-separated, for messages.
+std::string GeometryNameList(int num_cables, int from);
 GeometryVector GeometryOf(const Robot& robot);                           // initial lengths from InitialLengths
 Robot WithGeometry(const Robot& robot, const GeometryVector& geometry);  // sets exits and initial_length
 

@@ -7,9 +7,13 @@
 #include <Eigen/Core>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <vector>
+
+#include "common/error.h"
 
 namespace YAML {
 class Emitter;
@@ -37,6 +41,28 @@ inline double WrapSign(PulleyWrap wrap) { return wrap == PulleyWrap::kOver ? 1.0
 // them, and fixed-capacity scratch arrays in the model rely on the upper one.
 constexpr int kMinCables = 2;
 constexpr int kMaxCables = 8;
+
+// f(std::integral_constant<int, M>{}) for the run-time cable count M: the one switch from a
+// count to the compile-time instances (identify's solver, design's robust constraints), so
+// that a change of kMinCables..kMaxCables is made here alone.
+template <typename F>
+decltype(auto) WithCableCount(int num_cables, F&& f) {
+  static_assert(kMinCables == 2 && kMaxCables == 8, "one case per cable count below");
+  switch (num_cables) {
+    case 2: return f(std::integral_constant<int, 2>{});
+    case 3: return f(std::integral_constant<int, 3>{});
+    case 4: return f(std::integral_constant<int, 4>{});
+    case 5: return f(std::integral_constant<int, 5>{});
+    case 6: return f(std::integral_constant<int, 6>{});
+    case 7: return f(std::integral_constant<int, 7>{});
+    case 8: return f(std::integral_constant<int, 8>{});
+  }
+  CABLECAL_CHECK(false, "the robot loader keeps kMinCables to kMaxCables cables");
+  std::abort();
+}
+
+// The robot file gives angles in degrees (its *_deg keys); the program works in radians.
+constexpr double kDegToRad = M_PI / 180.0;
 // Upper bounds of the robot file's sizes (README, "Robot file"): far beyond any robot this
 // tool is for, so that a unit slip (981 for 9.81, a frame in mm) is refused by name.
 constexpr double kMaxGravity_mps2 = 100.0;

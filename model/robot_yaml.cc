@@ -20,8 +20,6 @@
 namespace cablecal {
 namespace {
 
-constexpr double kDegToRad = M_PI / 180.0;
-
 // Walks the YAML tree and turns every problem into one InputError "file:line: key: problem".
 class Reader {
  public:

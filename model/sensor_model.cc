@@ -8,8 +8,6 @@
 namespace cablecal {
 namespace {
 
-constexpr double kDegToRad = M_PI / 180.0;
-
 // "%.6g": a value in a message, as typed for most.
 std::string Shown(double v) {
   char text[32];

@@ -15,7 +15,6 @@
 namespace cablecal {
 namespace {
 
-constexpr double kDegToRad = M_PI / 180.0;
 // The theta search covers the bar's orientations short of vertical, on a ~5-degree grid
 // (36 intervals); two roots closer than that are a fold at the workspace boundary and are
 // left out. Each bracket is then refined by the Illinois method.

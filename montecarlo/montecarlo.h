@@ -37,7 +37,9 @@ const char* ToString(PoseSetDesign d);
 std::vector<PoseSetDesign> ParseDesigns(const std::string& text);  // "random,optimized,d"
 // "6:50" or "6:50:2" (first:last[:step]); InputError naming --poses otherwise.
 std::vector<int> ParsePoseCounts(const std::string& text);
-constexpr int kMaxPosesPerSet = 1000;  // per pose set of a study (ParsePoseCounts, ValidateOptions)
+// Per pose set of a study (ParsePoseCounts, ValidateOptions): bounds a study's trials and
+// errors. A designed set is a design and stops at design.h's kMaxDesignPoses.
+constexpr int kMaxPosesPerSet = 1000;
 
 struct MonteCarloOptions {
   std::vector<int> pose_counts;
@@ -180,9 +182,10 @@ struct ErrorStats {
 };
 ErrorStats Summarise(const MonteCarloCell& cell, int num_cables, const std::string& parameter);
 
-std::string ErrorsCsv(const MonteCarloResult& r);   // n,design,trial,parameter,error
-std::string SummaryCsv(const MonteCarloResult& r);
-std::string FailuresCsv(const MonteCarloResult& r);  // n,design,trial,cause,reason: one row per failed trial  // n,design,parameter,mean,std,rms,max_abs,share_within_5mm,failures
+// The study's files (montecarlo/report.cc, their one writer).
+std::string ErrorsCsv(const MonteCarloResult& r);    // n,design,trial,parameter,error
+std::string SummaryCsv(const MonteCarloResult& r);   // n,design,parameter,mean,std,rms,max_abs,share_within_5mm,failures
+std::string FailuresCsv(const MonteCarloResult& r);  // n,design,trial,cause,reason: one row per failed trial
 std::string SummaryMarkdown(const MonteCarloResult& r, const std::string& title);
 
 }  // namespace cablecal

@@ -5,25 +5,48 @@
 #   2. the same suite built with AddressSanitizer + UndefinedBehaviorSanitizer (build-sanitize/);
 #   3. the libFuzzer targets (clang, build-fuzz/), each for CABLECAL_FUZZ_SECONDS (default 30).
 # Set CABLECAL_QUICK=1 to run step 1 only.
+# CABLECAL_CI_BUILD_ONLY=release|sanitize|fuzz builds that stage alone, into
+# $CABLECAL_CI_BUILD_DIR, and runs no test (bench/compile_times.sh times the builds so).
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 "$root/scripts/setup.sh" --tests
 jobs="$(nproc)"
+only="${CABLECAL_CI_BUILD_ONLY:-}"
+# For the instrumented builds, whose test executables also run while building (the tests'
+# discovery) and under the fuzzers; nothing else reads them.
+export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1"
+export LSAN_OPTIONS="suppressions=$root/tests/sanitizers/lsan.supp:print_suppressions=0"
+export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+
+build_release() {
+  "$root/scripts/build.sh" -DCABLECAL_MPI=ON
+}
+build_sanitize() {
+  # -O1: sanitizer reports stay readable and the (Ceres-template-heavy) build stays short.
+  CMAKE_BUILD_TYPE=RelWithDebInfo "$root/scripts/build.sh" -DCABLECAL_SANITIZE=ON \
+    -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1"
+}
+build_fuzz() {
+  CC=clang CXX=clang++ CMAKE_BUILD_TYPE=RelWithDebInfo \
+    "$root/scripts/build.sh" -DCABLECAL_FUZZ=ON -DCABLECAL_FUZZ_SECONDS="${CABLECAL_FUZZ_SECONDS:-30}" \
+    -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1"
+}
+if [ -n "$only" ]; then
+  case "$only" in
+    release|sanitize|fuzz) CABLECAL_BUILD_DIR="${CABLECAL_CI_BUILD_DIR:?}" "build_$only"; exit 0 ;;
+    *) echo "cablecal test: CABLECAL_CI_BUILD_ONLY must be release, sanitize or fuzz" >&2; exit 2 ;;
+  esac
+fi
 
 echo "== Release build (with MPI) and tests"
-"$root/scripts/build.sh" -DCABLECAL_MPI=ON
+build_release
 (cd "${CABLECAL_BUILD_DIR:-$root/build}" && ctest --output-on-failure --parallel "$jobs" --timeout 900)
 
 if [ "${CABLECAL_QUICK:-0}" = "1" ]; then exit 0; fi
 
 # The sanitizer build is the default one, without MPI: both configurations get tested.
 echo "== Sanitizer build (ASan + UBSan, without MPI) and tests"
-export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1"
-export LSAN_OPTIONS="suppressions=$root/tests/sanitizers/lsan.supp:print_suppressions=0"
-export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
-# -O1: sanitizer reports stay readable and the (Ceres-template-heavy) build stays short.
-CABLECAL_BUILD_DIR="$root/build-sanitize" CMAKE_BUILD_TYPE=RelWithDebInfo \
-  "$root/scripts/build.sh" -DCABLECAL_SANITIZE=ON -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1"
+CABLECAL_BUILD_DIR="$root/build-sanitize" build_sanitize
 # Left to the Release stage, which runs them all: tests that repeat code other tests already
 # run under the sanitizers, for a statistical or determinism property that instrumentation
 # cannot change. The design-quality sizes N = 15 and 30 (N = 6 stays); the 40 random robots;
@@ -35,7 +58,5 @@ CABLECAL_BUILD_DIR="$root/build-sanitize" CMAKE_BUILD_TYPE=RelWithDebInfo \
   -E '^(Sizes/ConditionQuality\.AtMostHalfTheRandomMedian/(15|30)|Shards/RandomRobots\..*|RobustDesign\.(AsymmetricRobotAtEightAndTwelvePosesIsAtMostHalfTheRandomMedian|RobustPlansSurviveTheTrueGeometryNominalOnesDoNot)|Criteria/InformationQuality\.BeatsRandomMedianByAFactorOfTwo/(d|e)( .*)?|MonteCarlo\.BitIdenticalForOneAndTwoThreads|Design\.SameSeedSameResultWhateverTheThreadCount|Cables/RandomRobotsWithCables\..*|RobustDesign\.ManyCablesSameResultWhateverTheThreadCount)$')
 
 echo "== Fuzzers (libFuzzer, ${CABLECAL_FUZZ_SECONDS:-30} s each)"
-CC=clang CXX=clang++ CABLECAL_BUILD_DIR="$root/build-fuzz" CMAKE_BUILD_TYPE=RelWithDebInfo \
-  "$root/scripts/build.sh" -DCABLECAL_FUZZ=ON -DCABLECAL_FUZZ_SECONDS="${CABLECAL_FUZZ_SECONDS:-30}" \
-  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1"
+CABLECAL_BUILD_DIR="$root/build-fuzz" build_fuzz
 (cd "$root/build-fuzz" && ctest --output-on-failure --parallel "$jobs" -L fuzz)

@@ -18,8 +18,6 @@
 namespace cablecal {
 namespace {
 
-constexpr double kDegToRad = M_PI / 180.0;
-
 // Three significant digits, for the comments and messages a reader compares.
 std::string Short(double v) {
   char buffer[32];

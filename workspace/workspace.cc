@@ -11,6 +11,7 @@
 #include "common/error.h"
 #include "common/format.h"
 #include "common/random.h"
+#include "common/yaml_writer.h"
 #include "model/cable.h"
 
 namespace cablecal {
@@ -200,6 +201,27 @@ void CheckPlanMatchesRobot(const Robot& robot, const std::vector<PlanPose>& plan
                            FormatDouble(residual_N) + " N): the platform would not stay at this pose");
     }
   }
+}
+
+std::string PosePlanJsonYaml(const std::vector<PlanPose>& poses) {
+  YAML::Emitter o;
+  o << YAML::BeginSeq;
+  for (std::size_t j = 0; j < poses.size(); ++j) {
+    const PlanPose& p = poses[j];
+    o << YAML::Flow << YAML::BeginMap << YAML::Key << "pose" << YAML::Value << j + 1;
+    const char* names[3] = {"x", "z", "theta"};
+    for (int k = 0; k < 3; ++k) o << YAML::Key << names[k] << YAML::Value << YamlNumber{p.q(k)};
+    const std::pair<const char*, const Eigen::VectorXd*> columns[3] = {
+        {"t", &p.tensions_N}, {"l", &p.lengths_m}, {"dl", &p.length_change_m}};
+    for (const auto& [prefix, values] : columns) {
+      for (Eigen::Index i = 0; i < values->size(); ++i) {
+        o << YAML::Key << prefix + std::to_string(i + 1) << YAML::Value << YamlNumber{(*values)(i)};
+      }
+    }
+    o << YAML::EndMap;
+  }
+  o << YAML::EndSeq;
+  return YamlText(o);
 }
 
 std::vector<PlanPose> ReadPosePlanCsv(const std::string& path, int num_cables) {

@@ -3,7 +3,8 @@
 //   ComputeWorkspaceGrid   every grid point's equilibrium and feasibility (with the reason)
 //   SampleFeasiblePoses    uniform random feasible poses, seeded; reused by design and
 //                          the Monte Carlo
-//   PosePlan               the pose plan CSV shared by sample, design and simulate
+//   PosePlan               the pose plan CSV shared by sample, design and simulate (its
+//                          one reader and writer; PosePlanJsonYaml, the same for --json)
 // Depends on model/ and common/.
 #pragma once
 
@@ -81,6 +82,9 @@ std::vector<PlanPose> SampleFeasiblePoses(const Robot& robot, int n, std::uint64
 // Pose plan CSV: header pose,x,z,theta,t1..tm,l1..lm,dl1..dlm (pose numbered from 1), then
 // t<i>_worst_min,t<i>_worst_max for each cable when the plan carries them.
 std::string PosePlanCsv(const std::vector<PlanPose>& plan, const std::string& provenance);
+// The same poses as a YAML sequence of maps, the CSV's columns as keys (pose, x, z, theta in m
+// and rad, t1.., l1.., dl1.. in N and m; no worst-case columns), for design --json.
+std::string PosePlanJsonYaml(const std::vector<PlanPose>& plan);
 
 // Reads a pose plan CSV; '#' lines are comments. Throws InputError naming file, line and
 // column on a wrong header, a bad number, a duplicate or non-positive pose id.

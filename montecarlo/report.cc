@@ -1,0 +1,206 @@
+// The files of a Monte Carlo study (errors.csv, failures.csv, summary.csv, summary.md): its
+// statistics per cell and their one writer, apart from the study that fills the cells.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "common/format.h"
+#include "montecarlo/montecarlo.h"
+
+namespace cablecal {
+
+std::vector<std::string> SummaryParameters(int num_cables) {
+  std::vector<std::string> names = GeometryNames(num_cables);
+  names.push_back("x4");
+  names.push_back("x_all");
+  return names;
+}
+
+ErrorStats Summarise(const MonteCarloCell& cell, int num_cables, const std::string& parameter) {
+  const std::vector<std::string> geometry = GeometryNames(num_cables);
+  const int g = static_cast<int>(geometry.size());
+  std::vector<double> e;
+  for (const TrialOutcome& t : cell.trials) {
+    if (!t.ok) continue;
+    if (parameter == "x_all") {
+      e.insert(e.end(), t.errors_m.begin() + g, t.errors_m.end());
+    } else if (parameter == "x4") {
+      if (cell.n >= 4) e.push_back(t.errors_m[g + 3]);
+    } else {
+      for (int k = 0; k < g; ++k) {
+        if (parameter == geometry[k]) e.push_back(t.errors_m[k]);
+      }
+    }
+  }
+  ErrorStats s;
+  s.count = static_cast<int>(e.size());
+  if (e.empty()) return s;
+  double sum = 0, sum2 = 0;
+  int within = 0;
+  for (double v : e) {
+    sum += v;
+    sum2 += v * v;
+    s.max_abs = std::max(s.max_abs, std::abs(v));
+    within += std::abs(v) <= 0.005;
+  }
+  s.mean = sum / e.size();
+  s.rms = std::sqrt(sum2 / e.size());
+  double var = 0;
+  for (double v : e) var += (v - s.mean) * (v - s.mean);
+  s.std = e.size() > 1 ? std::sqrt(var / (e.size() - 1)) : 0.0;
+  s.share_within_5mm = static_cast<double>(within) / e.size();
+  return s;
+}
+
+std::string ErrorsCsv(const MonteCarloResult& r) {
+  std::string out = "n,design,trial,parameter,error\n";
+  const std::vector<std::string> geometry = GeometryNames(r.num_cables);
+  const std::size_t g = geometry.size();
+  for (const MonteCarloCell& c : r.cells) {
+    for (std::size_t t = 0; t < c.trials.size(); ++t) {
+      const TrialOutcome& tr = c.trials[t];
+      if (!tr.ok) continue;
+      const std::string prefix = std::to_string(c.n) + "," + ToString(c.design) + "," + std::to_string(t + 1) + ",";
+      for (std::size_t k = 0; k < tr.errors_m.size(); ++k) {
+        const std::string name = k < g ? geometry[k] : "x" + std::to_string(k - g + 1);
+        out += prefix + name + "," + FormatDouble(tr.errors_m[k]) + "\n";
+      }
+    }
+  }
+  return out;
+}
+
+std::string FailuresCsv(const MonteCarloResult& r) {
+  std::string out = "n,design,trial,cause,reason\n";
+  for (const MonteCarloCell& c : r.cells) {
+    for (std::size_t t = 0; t < c.trials.size(); ++t) {
+      const TrialOutcome& tr = c.trials[t];
+      if (tr.ok) continue;
+      const std::size_t colon = tr.failure.find(':');
+      const std::string cause = colon == std::string::npos ? "unknown" : tr.failure.substr(0, colon);
+      std::string reason = colon == std::string::npos ? tr.failure : tr.failure.substr(colon + 1);
+      if (!reason.empty() && reason[0] == ' ') reason.erase(0, 1);
+      // RFC 4180 quoting: reasons contain commas.
+      std::string quoted = "\"";
+      for (const char ch : reason) quoted += ch == '"' ? std::string("\"\"") : std::string(1, ch == '\n' ? ' ' : ch);
+      quoted += "\"";
+      out += std::to_string(c.n) + "," + ToString(c.design) + "," + std::to_string(t + 1) + "," + cause + "," + quoted +
+             "\n";
+    }
+  }
+  return out;
+}
+
+std::string SummaryCsv(const MonteCarloResult& r) {
+  std::string out = "n,design,parameter,mean,std,rms,max_abs,share_within_5mm,failures";
+  for (const std::string& cause : FailureCauses()) out += ",failed_" + cause;
+  out += "\n";
+  for (const MonteCarloCell& c : r.cells) {
+    for (const std::string& p : SummaryParameters(r.num_cables)) {
+      const ErrorStats s = Summarise(c, r.num_cables, p);
+      // No successful trial: no statistic (empty cells), never a zero; one trial: no std.
+      auto stat = [&](double v, int needed) { return s.count >= needed ? FormatDouble(v) : std::string(); };
+      out += std::to_string(c.n) + "," + ToString(c.design) + "," + p + "," + stat(s.mean, 1) + "," + stat(s.std, 2) +
+             "," + stat(s.rms, 1) + "," + stat(s.max_abs, 1) + "," + stat(s.share_within_5mm, 1) + "," +
+             std::to_string(c.failures());
+      for (const std::string& cause : FailureCauses()) out += "," + std::to_string(c.failures(cause));
+      out += "\n";
+    }
+  }
+  return out;
+}
+
+std::string SummaryMarkdown(const MonteCarloResult& r, const std::string& title) {
+  std::ostringstream o;
+  o << "# " << PrintableText(title) << "\n\n";  // a robot name with a newline must not end the heading
+  o << "Standard deviation of the identification error (identified - true) in mm, per pose count n\n"
+       "and pose-set design; `x4` is the 4th pose's x, `x_all` every pose's x pooled. `failed` counts\n"
+       "trials that failed, by cause: design (no verified pose set), sampling, simulation (the true robot cannot\n"
+       "hold a commanded pose within its limits), identification. Failed trials have no error to count, so the\n"
+       "statistics are over the successful ones: compare designs on both columns.\n\n";
+  o << "| n | design |";
+  for (const std::string& p : SummaryParameters(r.num_cables)) o << " " << p << " |";
+  o << " within ±5 mm | failed |\n|---|---|";
+  for (std::size_t k = 0; k < SummaryParameters(r.num_cables).size() + 2; ++k) o << "---|";
+  o << "\n";
+  char buf[32];
+  for (const MonteCarloCell& c : r.cells) {
+    o << "| " << c.n << " | " << ToString(c.design) << " |";
+    int within = 0, count = 0;
+    for (const std::string& p : SummaryParameters(r.num_cables)) {
+      const ErrorStats s = Summarise(c, r.num_cables, p);
+      if (s.count > 1) {
+        std::snprintf(buf, sizeof(buf), " %.3f |", 1e3 * s.std);
+        o << buf;
+      } else {
+        o << " n/a |";  // no successful trial: no statistic, not zero
+      }
+      if (p != "x_all" && p != "x4") {
+        within += static_cast<int>(std::lround(s.share_within_5mm * s.count));
+        count += s.count;
+      }
+    }
+    const ErrorStats xs = Summarise(c, r.num_cables, "x_all");
+    within += static_cast<int>(std::lround(xs.share_within_5mm * xs.count));
+    count += xs.count;
+    std::snprintf(buf, sizeof(buf), " %.1f %% |", count ? 100.0 * within / count : 0.0);
+    o << buf << " " << c.failures() << " / " << c.trials.size();
+    std::string causes;
+    for (const std::string& cause : FailureCauses()) {
+      if (c.failures(cause) > 0) causes += (causes.empty() ? "" : ", ") + cause + " " + std::to_string(c.failures(cause));
+    }
+    if (!causes.empty()) o << " (" << causes << ")";
+    o << " |\n";
+  }
+  // Before measuring, the lab knew every parameter to geometry_sigma_m (the true geometry is
+  // drawn so): a calibration that knows less, or hardly more, is said to be one.
+  const std::vector<std::string> worse = CellsThatAddLittle(r, true), little = CellsThatAddLittle(r, false);
+  if (r.geometry_sigma_m > 0.0 && !little.empty()) {
+    std::snprintf(buf, sizeof(buf), "%.3g mm", 1e3 * r.geometry_sigma_m);
+    o << "\nBefore measuring, every geometric parameter was known to " << buf
+      << " (the true geometry is drawn so). ";
+    if (!worse.empty()) {
+      o << "In these cells the calibration knows some parameters **less** well than that:\n\n";
+      for (const std::string& c : worse) o << "- " << c << "\n";
+      o << "\n";
+    }
+    if (little.size() > worse.size()) {
+      o << "In these cells the measurements add little to it (a sigma above "
+        << FormatDouble(kDataAddLittle) << " x that" << (worse.empty() ? "" : ", the cells above included") << "):\n\n";
+      for (const std::string& c : little) o << "- " << c << "\n";
+      o << "\n";
+    }
+    o << (r.geometry_prior ? "The trials were identified with that knowledge as a prior (--geometry-prior).\n"
+                           : "Identify with that knowledge as a prior (--geometry-prior) so that a calibration never "
+                             "knows less than the lab did.\n");
+  }
+  return o.str();
+}
+
+std::vector<std::string> CellsThatAddLittle(const MonteCarloResult& r, bool worse) {
+  std::vector<std::string> out;
+  if (!(r.geometry_sigma_m > 0.0)) return out;
+  const double bound = worse ? r.geometry_sigma_m : kDataAddLittle * r.geometry_sigma_m;
+  const std::vector<std::string> names = GeometryNames(r.num_cables);
+  for (const MonteCarloCell& c : r.cells) {
+    std::vector<std::pair<double, std::string>> over;
+    for (std::size_t k = 1; k < names.size(); ++k) {  // a1x is held: the frame's origin, not an estimate
+      const ErrorStats s = Summarise(c, r.num_cables, names[k]);
+      if (s.count > 1 && s.std > bound) over.emplace_back(s.std, names[k]);
+    }
+    if (over.empty()) continue;
+    std::stable_sort(over.begin(), over.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    std::string text = "n=" + std::to_string(c.n) + " " + ToString(c.design) + ":";
+    char buf[48];
+    for (std::size_t k = 0; k < over.size() && k < 4; ++k) {
+      std::snprintf(buf, sizeof(buf), "%s %s %.3g mm", k ? "," : "", over[k].second.c_str(), 1e3 * over[k].first);
+      text += buf;
+    }
+    if (over.size() > 4) text += ", ...";
+    out.push_back(text);
+  }
+  return out;
+}
+
+}  // namespace cablecal
