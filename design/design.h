@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "model/robot.h"
-#include "workspace/workspace.h"
+#include "experiment/plan.h"
 
 namespace cablecal {
 

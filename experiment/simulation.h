@@ -27,6 +27,7 @@
 #include "model/geometry.h"
 #include "model/robot.h"
 #include "model/statics.h"
+#include "experiment/plan.h"
 #include "workspace/workspace.h"
 
 namespace cablecal {

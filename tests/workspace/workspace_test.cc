@@ -9,6 +9,7 @@
 #include "tests/support/temp_dir.h"
 #include "common/error.h"
 #include "model/cable.h"
+#include "experiment/plan.h"
 #include "workspace/workspace.h"
 
 namespace cablecal {

@@ -1,0 +1,203 @@
+#include "experiment/plan.h"
+
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <vector>
+
+#include "common/csv.h"
+#include "common/error.h"
+#include "common/format.h"
+#include "common/random.h"
+#include "common/yaml_writer.h"
+#include "model/cable.h"
+#include "workspace/workspace.h"
+
+namespace cablecal {
+
+PlanPose MakePlanPose(const Robot& robot, const Equilibrium& equilibrium,
+                      const Eigen::VectorXd& initial_lengths_m) {
+  PlanPose pose;
+  pose.q = equilibrium.q;
+  pose.tensions_N = equilibrium.tensions_N;
+  pose.lengths_m = CableLengths(robot, equilibrium.q);
+  pose.length_change_m = pose.lengths_m - initial_lengths_m;
+  return pose;
+}
+
+std::vector<PlanPose> SampleFeasiblePoses(const Robot& robot, int n, std::uint64_t seed) {
+  if (n < 1) throw InputError("--poses", "", "must be at least 1 (got " + std::to_string(n) + ")");
+  const Eigen::VectorXd l0 = InitialLengths(robot);
+  Rng rng(seed);
+  const double x_lo = robot.margin_m, x_hi = robot.frame_width_m - robot.margin_m;
+  const double z_lo = robot.margin_m,
+               z_hi = std::min(robot.frame_height_m - robot.margin_m, robot.laser_range_m);
+  const long max_draws = (10000L + 1000L * n) * (robot.theta_is_free() ? 10 : 1);
+  std::vector<PlanPose> plan;
+  long draws = 0;
+  while (static_cast<int>(plan.size()) < n) {
+    if (++draws > max_draws) {
+      throw SolverFailure("found only " + std::to_string(plan.size()) + " feasible poses in " +
+                          std::to_string(max_draws) + " random draws: the feasible workspace is empty or tiny");
+    }
+    const double x = rng.Uniform(x_lo, x_hi);
+    const double z = rng.Uniform(z_lo, z_hi);
+    const PoseEvaluation e = robot.theta_is_free()
+                                 ? EvaluatePose(robot, Eigen::Vector3d(x, z, rng.Uniform(-robot.theta_max_rad,
+                                                                                         robot.theta_max_rad)))
+                                 : EvaluatePose(robot, x, z);
+    if (e.feasible()) plan.push_back(MakePlanPose(robot, e.equilibrium, l0));
+  }
+  return plan;
+}
+
+std::string PosePlanCsv(const std::vector<PlanPose>& plan, const std::string& provenance) {
+  std::string out = provenance + "pose,x,z,theta";
+  const int m = plan.empty() ? 2 : static_cast<int>(plan.front().lengths_m.size());
+  for (const char* prefix : {"t", "l", "dl"}) {
+    for (int i = 1; i <= m; ++i) out += "," + std::string(prefix) + std::to_string(i);
+  }
+  const bool worst = !plan.empty() && plan.front().tensions_worst_min_N.size() == m;
+  if (worst) {
+    for (int i = 1; i <= m; ++i) out += ",t" + std::to_string(i) + "_worst_min,t" + std::to_string(i) + "_worst_max";
+  }
+  out += "\n";
+  for (std::size_t j = 0; j < plan.size(); ++j) {
+    const PlanPose& p = plan[j];
+    out += std::to_string(j + 1);
+    for (int k = 0; k < 3; ++k) out += "," + FormatDouble(p.q(k));
+    for (int i = 0; i < m; ++i) out += "," + FormatDouble(p.tensions_N(i));
+    for (int i = 0; i < m; ++i) out += "," + FormatDouble(p.lengths_m(i));
+    for (int i = 0; i < m; ++i) out += "," + FormatDouble(p.length_change_m(i));
+    if (worst) {
+      for (int i = 0; i < m; ++i) {
+        out += "," + FormatDouble(p.tensions_worst_min_N(i)) + "," + FormatDouble(p.tensions_worst_max_N(i));
+      }
+    }
+    out += "\n";
+  }
+  return out;
+}
+
+
+void CheckPlanMatchesRobot(const Robot& robot, const std::vector<PlanPose>& plan, const std::string& source) {
+  constexpr double kLengthTol_m = 1e-6;  // files hold shortest round-trip doubles: far below
+  const double weight_N = robot.platform_mass_kg * robot.gravity_mps2;
+  const Eigen::VectorXd l0 = InitialLengths(robot);
+  for (std::size_t j = 0; j < plan.size(); ++j) {
+    const PlanPose& p = plan[j];
+    const std::string where = source + ": pose " + std::to_string(j + 1);
+    // The reference point inside the frame first: a pose outside it is named by its own column
+    // rather than by the cable lengths that follow from it.
+    if (!(p.q(0) >= 0.0 && p.q(0) <= robot.frame_width_m)) {
+      throw InputError(where, "column 'x'", FormatDouble(p.q(0)) + " m is outside the frame [0, " +
+                                                FormatDouble(robot.frame_width_m) + "] m of " + robot.name +
+                                                ": a plan for another robot?");
+    }
+    if (!(p.q(1) >= 0.0 && p.q(1) <= robot.frame_height_m)) {
+      throw InputError(where, "column 'z'", FormatDouble(p.q(1)) + " m is outside the frame [0, " +
+                                                FormatDouble(robot.frame_height_m) + "] m of " + robot.name +
+                                                ": a plan for another robot?");
+    }
+    if (!(std::abs(p.q(2)) <= robot.theta_max_rad)) {
+      throw InputError(where, "column 'theta'", FormatDouble(p.q(2)) + " rad is beyond the inclinometer range of +-" +
+                                                    FormatDouble(robot.theta_max_rad) + " rad" +
+                                                    (std::abs(p.q(2)) > M_PI ? " (degrees? theta is in radians)" : ""));
+    }
+    const Eigen::VectorXd l = CableLengths(robot, p.q);
+    for (int i = 0; i < robot.num_cables(); ++i) {
+      const std::string c = std::to_string(i + 1);
+      if (!(std::abs(l(i) - p.lengths_m(i)) <= kLengthTol_m)) {
+        throw InputError(where, "column 'l" + c + "'", FormatDouble(p.lengths_m(i)) + " m is not the length of cable " +
+                                                           c + " of " + robot.name + " at this pose (" +
+                                                           FormatDouble(l(i)) + " m): a plan for another robot?");
+      }
+      if (!(std::abs(l(i) - l0(i) - p.length_change_m(i)) <= kLengthTol_m)) {
+        throw InputError(where, "column 'dl" + c + "'", FormatDouble(p.length_change_m(i)) +
+                                                            " m is not l" + c + " minus the initial length " +
+                                                            FormatDouble(l0(i)) + " m of " + robot.name);
+      }
+    }
+    const double residual_N = EquilibriumResidual<double>(robot, p.q, p.tensions_N).norm();
+    if (!(residual_N <= 1e-6 * weight_N)) {
+      std::string columns = "x,z,theta";
+      for (int i = 1; i <= robot.num_cables(); ++i) columns += ",t" + std::to_string(i);
+      throw InputError(where, "columns '" + columns + "'",
+                       "not a static equilibrium of " + robot.name + " (force and moment residual " +
+                           FormatDouble(residual_N) + " N): the platform would not stay at this pose");
+    }
+  }
+}
+
+std::string PosePlanJsonYaml(const std::vector<PlanPose>& poses) {
+  YAML::Emitter o;
+  o << YAML::BeginSeq;
+  for (std::size_t j = 0; j < poses.size(); ++j) {
+    const PlanPose& p = poses[j];
+    o << YAML::Flow << YAML::BeginMap << YAML::Key << "pose" << YAML::Value << j + 1;
+    const char* names[3] = {"x", "z", "theta"};
+    for (int k = 0; k < 3; ++k) o << YAML::Key << names[k] << YAML::Value << YamlNumber{p.q(k)};
+    const std::pair<const char*, const Eigen::VectorXd*> columns[3] = {
+        {"t", &p.tensions_N}, {"l", &p.lengths_m}, {"dl", &p.length_change_m}};
+    for (const auto& [prefix, values] : columns) {
+      for (Eigen::Index i = 0; i < values->size(); ++i) {
+        o << YAML::Key << prefix + std::to_string(i + 1) << YAML::Value << YamlNumber{(*values)(i)};
+      }
+    }
+    o << YAML::EndMap;
+  }
+  o << YAML::EndSeq;
+  return YamlText(o);
+}
+
+std::vector<PlanPose> ReadPosePlanCsv(const std::string& path, int num_cables) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "", "cannot open the file");
+  return ReadPosePlanCsv(in, path, num_cables);
+}
+
+std::vector<PlanPose> ReadPosePlanCsv(std::istream& in, const std::string& path, int num_cables) {
+  std::vector<std::string> header = {"pose", "x", "z", "theta"};
+  for (const char* prefix : {"t", "l", "dl"}) {
+    for (int i = 1; i <= num_cables; ++i) header.push_back(prefix + std::to_string(i));
+  }
+  std::vector<std::string> worst_columns;  // optional, written by design
+  for (int i = 1; i <= num_cables; ++i) {
+    worst_columns.push_back("t" + std::to_string(i) + "_worst_min");
+    worst_columns.push_back("t" + std::to_string(i) + "_worst_max");
+  }
+  std::vector<PlanPose> plan;
+  std::set<int> ids;
+  ForEachCsvRow(in, path, header, worst_columns, [&](const CsvRow& row) {
+    if (static_cast<int>(plan.size()) >= kMaxPlanPoses) {
+      throw InputError(row.Where(), "", "more than " + std::to_string(kMaxPlanPoses) + " poses");
+    }
+    const int id = row.PositiveInt(0);
+    if (!ids.insert(id).second) {
+      throw InputError(row.Where(), "column 'pose'", "duplicate pose id " + std::to_string(id));
+    }
+    PlanPose p;
+    for (int k = 0; k < 3; ++k) p.q(k) = row.Number(1 + k);
+    p.tensions_N.resize(num_cables);
+    p.lengths_m.resize(num_cables);
+    p.length_change_m.resize(num_cables);
+    for (int i = 0; i < num_cables; ++i) {
+      p.tensions_N(i) = row.Number(4 + i);
+      p.lengths_m(i) = row.Number(4 + num_cables + i);
+      p.length_change_m(i) = row.Number(4 + 2 * num_cables + i);
+    }
+    if (row.cells.size() > header.size()) {
+      p.tensions_worst_min_N.resize(num_cables);
+      p.tensions_worst_max_N.resize(num_cables);
+      for (int i = 0; i < num_cables; ++i) {
+        p.tensions_worst_min_N(i) = row.Number(4 + 3 * num_cables + 2 * i);
+        p.tensions_worst_max_N(i) = row.Number(5 + 3 * num_cables + 2 * i);
+      }
+    }
+    plan.push_back(p);
+  });
+  return plan;
+}
+
+}  // namespace cablecal
