@@ -369,6 +369,8 @@ int RunSimulate(const Context& ctx, const SimulateOptions& options) {
   return kExitOk;
 }
 
+// Long (~140 lines) for a reason: the identify command's one sequence (read, identify, write
+// every output atomically, print the summary), each output from the same result.
 int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   CheckCommandPaths({{"--robot", options.robot_path},
                      {"--measurements", options.measurements_path},

@@ -77,6 +77,9 @@ void AddRobotOption(CLI::App* app, std::string* path) {
 
 }  // namespace
 
+// Long (~280 lines) for a reason: the command line is one declarative table, every
+// subcommand's options in the order --help prints them; split, the table would be harder to
+// read against the README's "Commands".
 int main(int argc, char** argv) {
   const cablecal::cli::ProcessSession session(&argc, &argv);
   Context ctx;

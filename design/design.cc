@@ -298,17 +298,22 @@ std::string EmptyRobustWorkspaceHint(const Robot& robot, const DesignOptions& op
 }  // namespace
 
 int MinDesignPoses(int num_cables) {
+  // Each pose adds m length equations for its one unknown beyond the readings (x): n (m - 1)
+  // >= the gauge-fixed geometry's 3m - 1, so n = ceil((3m - 1) / (m - 1)).
   const int m = num_cables;
-  return (3 * m - 1 + (m - 2)) / (m - 1);  // ceil((3m - 1) / (m - 1))
+  const int gauge_fixed = PlanarLayout(m).size() - 1;
+  return (gauge_fixed + (m - 2)) / (m - 1);
 }
 
+// Long (~175 lines) for a reason: the design's one sequence (checks, robustness, multi-start
+// Ipopt, verification, random-set comparison), each step using the ones before it.
 DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
   const int n = options.poses;
   const int m = robot.num_cables();
   if (n < MinDesignPoses(m)) {
     throw InputError("--poses", "", "at least " + std::to_string(MinDesignPoses(m)) + " poses are needed to identify the " +
-                                        std::to_string(3 * m - 1) +
+                                        std::to_string(PlanarLayout(m).size() - 1) +
                                         " gauge-fixed geometric parameters and the per-pose unknowns (got " +
                                         std::to_string(n) + ")");
   }
@@ -332,7 +337,8 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
                                     "information: use --criterion a, d or e");
   }
   if (options.prior_information) {
-    CABLECAL_CHECK(options.prior_information->rows() == 3 * m - 1 && options.prior_information->cols() == 3 * m - 1,
+    const int gauge_fixed = PlanarLayout(m).size() - 1;
+    CABLECAL_CHECK(options.prior_information->rows() == gauge_fixed && options.prior_information->cols() == gauge_fixed,
                    "the prior information is (3m - 1) x (3m - 1) for the robot's m cables");
   }
   const PriorInformation* prior = options.prior_information ? &*options.prior_information : nullptr;
@@ -475,7 +481,7 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
     a.push_back(v.a_trace_covariance_m2);
     e.push_back(v.e_min_eigenvalue);
   }
-  result.random_median = {Median(c), Median(d), Median(a), Median(e), 3 * m - 1};
+  result.random_median = {Median(c), Median(d), Median(a), Median(e), PlanarLayout(m).size() - 1};
   result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;
 }

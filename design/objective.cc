@@ -40,8 +40,8 @@ double LogSumPow(const Eigen::VectorXd& log_mu, double p) {
 double ConditionObjective(const Robot& robot, const std::vector<Eigen::Vector3d>& poses, Eigen::VectorXd* gradient,
                           double p) {
   const int num_cables = robot.num_cables();
-  const int G = 3 * num_cables - 1;  // geometry columns
-  const int x_column = 3 * num_cables;     // the x column of identify/jacobian.h's rows
+  const int G = PlanarLayout(num_cables).size() - 1;  // geometry columns (a1x held)
+  const int x_column = PlanarLayout(num_cables).size();  // the x column of identify/jacobian.h's rows
   const int n = static_cast<int>(poses.size());
   if (num_cables * n < G + n) return kInf;
   Eigen::MatrixXd J = Eigen::MatrixXd::Zero(num_cables * n, G + n);

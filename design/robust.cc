@@ -61,7 +61,8 @@ template <int M>
 CABLECAL_FLATTEN bool RobustQuantitiesM(const Robot& robot, const std::vector<Eigen::Vector2d>& points, const Eigen::VectorXd& y_in,
                        PoseRobustness* out, bool with_derivatives) {
   constexpr int P = 3 + M;  // pose variables x, z, theta, t1..tM
-  constexpr int G = 3 * M;  // geometry a1x a1z .. aMx aMz l10 .. lM0
+  constexpr GeometryLayout kLayout = PlanarLayout(M);
+  constexpr int G = kLayout.size();  // geometry a1x a1z .. aMx aMz l10 .. lM0
   constexpr int N = P + G;
   using U = ceres::Jet<double, N>;
   const int m = M;
@@ -71,8 +72,8 @@ CABLECAL_FLATTEN bool RobustQuantitiesM(const Robot& robot, const std::vector<Ei
   Vec2<U> exits[kMaxCables];
   U l0[kMaxCables];
   for (int i = 0; i < m; ++i) {
-    for (int c = 0; c < 2; ++c) exits[i](c) = U(robot.cables[i].p_F_exit_m(c), P + 2 * i + c);
-    l0[i] = U(0.0, P + 2 * m + i);  // only its derivative matters: dl_i is fixed
+    for (int c = 0; c < kLayout.point_dim; ++c) exits[i](c) = U(robot.cables[i].p_F_exit_m(c), P + kLayout.exit(i, c));
+    l0[i] = U(0.0, P + kLayout.initial_length(i));  // only its derivative matters: dl_i is fixed
   }
   const Pose<U> q = yu.template head<3>();
   const Eigen::Matrix<U, 2, 2> rot = Rotation(q(2));

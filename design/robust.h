@@ -48,13 +48,14 @@
 #include <vector>
 
 #include "model/cable.h"
+#include "model/geometry.h"
 #include "model/robot.h"
 
 namespace cablecal::internal {
 
 // Sizes for m cables: y = (x, z, theta, t1..tm), g = (a1x a1z .. amx amz l10 .. lm0).
 inline int PoseVariables(int num_cables) { return 3 + num_cables; }
-inline int GeometryParameters(int num_cables) { return 3 * num_cables; }
+inline int GeometryParameters(int num_cables) { return PlanarLayout(num_cables).size(); }
 
 // One bounded quantity of a pose; lo or hi may be infinite.
 struct PoseQuantity {

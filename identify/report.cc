@@ -43,6 +43,7 @@ struct ResultParts {
   std::string head, poses, readings, tail;
 };
 
+// Long (~200 lines) for a reason: result.yaml's keys in the file's order, written once.
 ResultParts IdentifyResultParts(const IdentifyResult& r, const std::string& command_line, bool json) {
   YAML::Emitter o;
   o << YAML::Comment("cablecal identification result (README, \"identify\"). SI units: m, rad.") << BeginMap;

@@ -113,6 +113,9 @@ YAML::Node SensorsNode(const YAML::Node& sensors, const std::string& key) {
   return dot == std::string::npos ? sensor : sensor[rest.substr(dot + 1)];
 }
 
+// Long (~240 lines) for a reason: the robot file's keys in the file's order, each read,
+// range-checked and placed once, so that the format can be read against the README's
+// robot file section line by line.
 Robot Parse(const YAML::Node& root, const Reader& rd) {
   Robot robot;
   robot.source = rd.source();

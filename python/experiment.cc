@@ -57,6 +57,7 @@ PyMeasurements MakeMeasurements(const Robot& robot, py::handle dl, py::handle z,
 
 }  // namespace
 
+// Long (~160 lines) for a reason: a binding table, as BindIdentify.
 void BindExperiment(py::module_& m) {
   // ---- Pose plans
   py::class_<PyPlan>(m, "Plan", "Measurement poses: a pose plan (sample, design).")
