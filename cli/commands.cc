@@ -404,6 +404,10 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   // A robot file with systematic sensor errors (sensors fit) has them removed before the solve.
   const std::vector<Measurement> measurements =
       ReadMeasurementsOption(ctx, nominal, options.measurements_path, options.delimiter);
+  // Identify corrects and checks the readings itself (readings_as_read); checked here too, so
+  // that a reading no sensor can give is named before the held-out file is read (and its notes
+  // printed), as a lab fixes them: its own data first.
+  CorrectedReadings(nominal, measurements, options.measurements_path);
   // Read before the solve: a bad held-out file is refused before any work.
   const std::vector<Measurement> holdout =
       options.holdout_path.empty() ? std::vector<Measurement>()
