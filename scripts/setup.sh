@@ -28,7 +28,8 @@ case "${1:-}" in
     ) ;;
   --tests)
     PACKAGES+=(
-      clang libclang-rt-dev       # libFuzzer targets of tests/fuzz
+      clang libclang-rt-dev       # the sanitizer build and the libFuzzer targets of tests/fuzz
+      libomp-dev                  # OpenMP for clang
       libopenmpi-dev openmpi-bin  # the CABLECAL_MPI build and its mpirun tests
       locales-all                 # a decimal-comma locale: number parsing must not depend on it
       python3-pytest              # the Python module's tests (tests/python)
