@@ -8,6 +8,7 @@ set -euo pipefail
 
 PACKAGES=(
   build-essential cmake pkg-config git
+  ninja-build            # builds in parallel across targets (scripts/build.sh; make works too)
   libeigen3-dev          # fixed-size 2-D/3-D geometry and small dense linear algebra
   libceres-dev           # identification (Levenberg-Marquardt, autodiff Jets, covariance)
   coinor-libipopt-dev    # experiment design NLP
