@@ -21,6 +21,6 @@ for stage in "${stages[@]}"; do
   wall=$(echo "$(date +%s.%N) - $start" | bc)
   awk -v stage="$stage" -v wall="$wall" '{ cpu[$4] += $1; n[$4]++ }
     END { printf "%s: build %.0f s wall; %d compiles %.0f s CPU, %d links %.0f s CPU\n", stage, wall, n["compile"], cpu["compile"], n["link"], cpu["link"] }' "$out/$stage.log"
-  awk '$4 == "compile" { f = $6; sub(".*/CMakeFiles/", "", f); sub("[.]dir/", ": ", f); sub("__/generated/", "", f); sub("[.]o$", "", f); print $1, f }' \
+  awk '$4 == "compile" { f = $6; sub("^(.*/)?CMakeFiles/", "", f); sub("[.]dir/", ": ", f); sub("__/generated/", "", f); sub("[.]o$", "", f); print $1, f }' \
     "$out/$stage.log" | sort -rn | head -n "$top" | awk '{ printf "  %6.1f s  %s %s\n", $1, $2, $3 }'
 done

@@ -2,8 +2,9 @@
 # Compiler and linker launcher that logs what each step costs (bench/compile_times.sh sets it
 # through CMake's CMAKE_CXX_COMPILER_LAUNCHER and CMAKE_CXX_LINKER_LAUNCHER). Each compile or
 # link appends one line to $CABLECAL_TU_LOG:
-#   <user+sys CPU s> <wall s> <peak RSS kB> <compile|link> <folder it ran in> <output file>
-# CPU time is the figure to compare: wall time on a shared machine depends on the load.
+#   <user+sys CPU s> <wall s> <peak RSS kB> <compile|link> <folder it ran in> <output file> <start> <end>
+# (start and end in seconds since the epoch, for how many ran at once). CPU time is the figure
+# to compare: wall time on a shared machine depends on the load.
 set -u
 log="${CABLECAL_TU_LOG:?set CABLECAL_TU_LOG to the log file}"
 out="?" kind="link" prev=""
@@ -14,9 +15,10 @@ for a in "$@"; do
 done
 case "$PWD" in */CMakeScratch/*|*/CMakeTmp*) exec "$@" ;; esac  # CMake's own compiler checks
 t="$(mktemp)"
+start="$(date +%s.%N)"
 /usr/bin/time -f '%U %S %e %M' -o "$t" "$@"
 rc=$?
 read -r user sys wall rss < <(tail -n 1 "$t")
 rm -f "$t"
-printf '%s %s %s %s %s %s\n' "$(echo "$user + $sys" | bc)" "$wall" "$rss" "$kind" "$PWD" "$out" >> "$log"
+printf '%s %s %s %s %s %s %s %s\n' "$(echo "$user + $sys" | bc)" "$wall" "$rss" "$kind" "$PWD" "$out" "$start" "$(date +%s.%N)" >> "$log"
 exit $rc

@@ -49,7 +49,7 @@ namespace {
 // it out of line, which made M = 2 a third slower. Not under AddressSanitizer: instrumented,
 // the seven flattened instances took over 17 minutes to compile (2 without flatten), and that
 // build is for correctness, not speed.
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(CABLECAL_ADDRESS_SANITIZER)
 #define CABLECAL_FLATTEN
 #else
 #define CABLECAL_FLATTEN __attribute__((flatten))

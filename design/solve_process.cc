@@ -146,7 +146,7 @@ bool WriteAll(int fd, const std::string& bytes) {
 std::optional<StartOutcome> SolveDesignNlpInChildProcess(const Robot& robot, const DesignOptions& options,
                                                          const std::vector<PlanPose>& start,
                                                          const std::vector<double>* widening) {
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(CABLECAL_ADDRESS_SANITIZER)
   // A child forked while another thread holds AddressSanitizer's allocator lock waits for it
   // forever (seen in CI: a design test's child stuck in the allocator): the instrumented build
   // solves in this process, taking turns, which gives the same outcome.

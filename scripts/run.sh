@@ -3,7 +3,9 @@
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 "$root/scripts/setup.sh"
-"$root/scripts/build.sh" -DCABLECAL_MPI=OFF  # the default build (test.sh turns MPI on in the same folder)
+# The default build (test.sh turns MPI on in the same folder), of the CLI alone: the main job
+# needs nothing else (the tests, benchmarks and Python module are built by test.sh or build.sh).
+CABLECAL_BUILD_TARGETS=cablecal "$root/scripts/build.sh" -DCABLECAL_MPI=OFF
 build="${CABLECAL_BUILD_DIR:-$root/build}"
 cd "$root"
 mkdir -p results

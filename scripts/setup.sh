@@ -8,6 +8,7 @@ set -euo pipefail
 
 PACKAGES=(
   build-essential cmake pkg-config git
+  ninja-build            # builds in parallel across targets (scripts/build.sh; make works too)
   libeigen3-dev          # fixed-size 2-D/3-D geometry and small dense linear algebra
   libceres-dev           # identification (Levenberg-Marquardt, autodiff Jets, covariance)
   coinor-libipopt-dev    # experiment design NLP
@@ -28,7 +29,8 @@ case "${1:-}" in
     ) ;;
   --tests)
     PACKAGES+=(
-      clang libclang-rt-dev       # libFuzzer targets of tests/fuzz
+      clang libclang-rt-dev       # the sanitizer build and the libFuzzer targets of tests/fuzz
+      libomp-dev                  # OpenMP for clang
       libopenmpi-dev openmpi-bin  # the CABLECAL_MPI build and its mpirun tests
       locales-all                 # a decimal-comma locale: number parsing must not depend on it
       python3-pytest              # the Python module's tests (tests/python)

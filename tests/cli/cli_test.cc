@@ -855,7 +855,7 @@ TEST_F(Cli, InterruptedReproduceWritesNothingInAnyPhase) {
 }
 
 TEST_F(Cli, OutOfMemoryIsExitTwoNamingTheSize) {
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(CABLECAL_ADDRESS_SANITIZER)
   GTEST_SKIP() << "AddressSanitizer reserves terabytes of address space: no ulimit -v under it";
 #endif
   // A grid just under the cap (1.9 million points, 194 MB of them) in a process limited to
