@@ -31,6 +31,7 @@
 #include "experiment/experiment.h"
 #include "identify/identify.h"
 #include "identify/validate.h"
+#include "model/sensors.h"
 #include "model/statics.h"
 #include "sensors/sensors.h"
 #include "workspace/workspace.h"
@@ -476,19 +477,18 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   // readings, per sensor; result.yaml has each reading's).
   if (!result.readings.empty() && result.readings.front().min_detectable_sigmas.size() > 0) {
     const int m = nominal.num_cables();
-    std::vector<std::vector<double>> by_sensor(3);
+    std::vector<std::vector<double>> by_sensor(1 + kNumPlanarSensors);  // the encoders, then each sensor
     for (const ReadingFit& f : result.readings) {
-      for (int i = 0; i < m + 2; ++i) {
+      for (int i = 0; i < m + kNumPlanarSensors; ++i) {
         if (f.HasValue(i)) by_sensor[i < m ? 0 : i - m + 1].push_back(f.min_detectable_sigmas(i));
       }
     }
     std::printf("  a single wrong reading shows beyond %s sigma from (median):", Rounded(kOutlierSigmas).c_str());
-    const char* sensor_names[] = {"encoders", "laser", "inclinometer"};
-    for (int k = 0; k < 3; ++k) {
+    for (int k = 0; k < 1 + kNumPlanarSensors; ++k) {
       std::vector<double>& v = by_sensor[k];
       if (v.empty()) continue;
       std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-      std::printf("%s %s %.3g sigma", k ? "," : "", sensor_names[k], v[v.size() / 2]);
+      std::printf("%s %s %.3g sigma", k ? "," : "", k ? kPlanarSensors[k - 1].name : "encoders", v[v.size() / 2]);
     }
     std::printf("\n");
   }

@@ -26,6 +26,7 @@
 #include "experiment/experiment.h"
 #include "identify/identify.h"
 #include "model/cable.h"
+#include "model/kind.h"
 #include "model/statics.h"
 
 namespace cablecal {
@@ -91,8 +92,8 @@ double Median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-std::vector<Eigen::Vector3d> PosesOf(const std::vector<PlanPose>& plan) {
-  std::vector<Eigen::Vector3d> q;
+std::vector<PlanarPose> PosesOf(const std::vector<PlanPose>& plan) {
+  std::vector<PlanarPose> q;
   for (const PlanPose& p : plan) q.push_back(p.q);
   return q;
 }
@@ -104,11 +105,11 @@ std::vector<Eigen::Vector3d> PosesOf(const std::vector<PlanPose>& plan) {
 // tensions Ipopt found) must balance gravity to the same tolerance and is what the plan
 // lists. Then every workspace bound held exactly, and the spacing kept. Returns "" when all
 // hold, else the first failure.
-std::string VerifyPoses(const Robot& robot, const DesignOptions& options, const std::vector<Eigen::Vector3d>& ipopt_poses,
+std::string VerifyPoses(const Robot& robot, const DesignOptions& options, const std::vector<PlanarPose>& ipopt_poses,
                         const Eigen::VectorXd& l0, std::vector<PlanPose>* verified) {
   verified->clear();
   for (std::size_t j = 0; j < ipopt_poses.size(); ++j) {
-    const Eigen::Vector3d& q = ipopt_poses[j];
+    const PlanarPose& q = ipopt_poses[j];
     const std::string pose = "pose " + std::to_string(j + 1) + ": ";
     if (robot.theta_is_free()) {
       const PoseEvaluation e = EvaluatePose(robot, q);
@@ -295,13 +296,18 @@ std::string EmptyRobustWorkspaceHint(const Robot& robot, const DesignOptions& op
          "--geometry-sigma (a better-known geometry) or --robust-sigmas may leave room";
 }
 
+// The geometric parameters the default gauge leaves to identify (3m - 1: all but a1x).
+int GaugeFixedCount(int num_cables) {
+  return static_cast<int>(PlanarKind::FreeByDefault(PlanarLayout(num_cables)).size());
+}
+
 }  // namespace
 
 int MinDesignPoses(int num_cables) {
   // Each pose adds m length equations for its one unknown beyond the readings (x): n (m - 1)
   // >= the gauge-fixed geometry's 3m - 1, so n = ceil((3m - 1) / (m - 1)).
   const int m = num_cables;
-  const int gauge_fixed = PlanarLayout(m).size() - 1;
+  const int gauge_fixed = GaugeFixedCount(m);
   return (gauge_fixed + (m - 2)) / (m - 1);
 }
 
@@ -313,7 +319,7 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
   const int m = robot.num_cables();
   if (n < MinDesignPoses(m)) {
     throw InputError("--poses", "", "at least " + std::to_string(MinDesignPoses(m)) + " poses are needed to identify the " +
-                                        std::to_string(PlanarLayout(m).size() - 1) +
+                                        std::to_string(GaugeFixedCount(m)) +
                                         " gauge-fixed geometric parameters and the per-pose unknowns (got " +
                                         std::to_string(n) + ")");
   }
@@ -337,7 +343,7 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
                                     "information: use --criterion a, d or e");
   }
   if (options.prior_information) {
-    const int gauge_fixed = PlanarLayout(m).size() - 1;
+    const int gauge_fixed = GaugeFixedCount(m);
     CABLECAL_CHECK(options.prior_information->rows() == gauge_fixed && options.prior_information->cols() == gauge_fixed,
                    "the prior information is (3m - 1) x (3m - 1) for the robot's m cables");
   }
@@ -481,7 +487,7 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
     a.push_back(v.a_trace_covariance_m2);
     e.push_back(v.e_min_eigenvalue);
   }
-  result.random_median = {Median(c), Median(d), Median(a), Median(e), PlanarLayout(m).size() - 1};
+  result.random_median = {Median(c), Median(d), Median(a), Median(e), GaugeFixedCount(m)};
   result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;
 }

@@ -23,6 +23,7 @@
 
 #include "model/robot.h"
 #include "experiment/plan.h"
+#include "model/kind.h"
 
 namespace cablecal {
 
@@ -45,7 +46,7 @@ using PriorInformation = Eigen::MatrixXd;
 
 // Poses as (x, z, theta) equilibria; fewer than MinDesignPoses(m) poses cannot identify the
 // geometry (the criteria are then infinite or zero, as appropriate). With `prior`, D, A and E count it too.
-CriteriaValues EvaluateCriteria(const Robot& robot, const std::vector<Eigen::Vector3d>& poses,
+CriteriaValues EvaluateCriteria(const Robot& robot, const std::vector<PlanarPose>& poses,
                                 const PriorInformation* prior = nullptr);
 
 // Calibrating in rounds (design --prior): an identification's result.yaml (status converged,

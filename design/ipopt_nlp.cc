@@ -9,12 +9,16 @@
 
 #include "design/objective.h"
 #include "design/robust.h"
+#include "model/kind.h"
 
 namespace cablecal::internal {
 namespace {
 
 using Ipopt::Index;
 using Ipopt::Number;
+
+constexpr int kPose = PlanarKind::kPoseDim;        // a pose's variables come first in its V
+constexpr int kWrench = PlanarKind::kWrenchDim;  // its equilibrium rows come first in its R
 
 // Variables: per pose j, [x, z, theta, t1..tm] at V j, V = 3 + m (for every m theta is a variable:
 // with m = 2 the equilibrium rows tie it to (x, z), with m >= 3 it is free within the band the
@@ -39,7 +43,7 @@ class DesignNlp : public Ipopt::TNLP {
       if (std::isfinite(q.lo)) rows_.push_back({k, -1});
       if (std::isfinite(q.hi)) rows_.push_back({k, +1});
     }
-    R = 3 + static_cast<int>(rows_.size());
+    R = kWrench + static_cast<int>(rows_.size());
   }
 
   bool get_nlp_info(Index& n, Index& m, Index& nnz_jac_g, Index& nnz_h_lag, IndexStyleEnum& index_style) override {
@@ -64,13 +68,13 @@ class DesignNlp : public Ipopt::TNLP {
       x_l[V * j + 2] = -robot_.theta_max_rad + kBoundMargin_rad;
       x_u[V * j + 2] = robot_.theta_max_rad - kBoundMargin_rad;
       for (int i = 0; i < robot_.num_cables(); ++i) {
-        x_l[V * j + 3 + i] = robot_.tension_min_N + kBoundMargin_N;
-        x_u[V * j + 3 + i] = robot_.tension_max_N - kBoundMargin_N;
+        x_l[V * j + kPose + i] = robot_.tension_min_N + kBoundMargin_N;
+        x_u[V * j + kPose + i] = robot_.tension_max_N - kBoundMargin_N;
       }
-      for (int r = 0; r < 3; ++r) g_l[R * j + r] = g_u[R * j + r] = 0.0;
+      for (int r = 0; r < kWrench; ++r) g_l[R * j + r] = g_u[R * j + r] = 0.0;
       for (int r = 0; r < static_cast<int>(rows_.size()); ++r) {
         const PoseQuantity& q = quantities_[rows_[r].quantity];
-        const int row = R * j + 3 + r;
+        const int row = R * j + kWrench + r;
         if (rows_[r].sign < 0) {
           g_l[row] = q.lo + q.bound_margin;
           g_u[row] = kIpoptInf;
@@ -95,8 +99,8 @@ class DesignNlp : public Ipopt::TNLP {
                           Number*) override {
     if (!init_x || init_z || init_lambda) return false;
     for (int j = 0; j < n_; ++j) {
-      for (int k = 0; k < 3; ++k) x[V * j + k] = start_[j].q(k);
-      for (int i = 0; i < robot_.num_cables(); ++i) x[V * j + 3 + i] = start_[j].tensions_N(i);
+      for (int k = 0; k < kPose; ++k) x[V * j + k] = start_[j].q(k);
+      for (int i = 0; i < robot_.num_cables(); ++i) x[V * j + kPose + i] = start_[j].tensions_N(i);
     }
     (void)n;
     return true;
@@ -112,7 +116,7 @@ class DesignNlp : public Ipopt::TNLP {
     if (!std::isfinite(Objective(x, &g))) return false;
     std::fill(grad_f, grad_f + n, 0.0);
     for (int j = 0; j < n_; ++j) {
-      for (int k = 0; k < 3; ++k) grad_f[V * j + k] = g(3 * j + k);
+      for (int k = 0; k < kPose; ++k) grad_f[V * j + k] = g(kPose * j + k);
     }
     return true;
   }
@@ -178,13 +182,13 @@ class DesignNlp : public Ipopt::TNLP {
     const double weight_N = robot_.platform_mass_kg * robot_.gravity_mps2;
     obj_scaling = 1.0;
     use_x_scaling = true;
-    for (Index k = 0; k < n; ++k) x_scaling[k] = (k % V >= 3) ? 1.0 / weight_N : 1.0;
+    for (Index k = 0; k < n; ++k) x_scaling[k] = (k % V >= kPose) ? 1.0 / weight_N : 1.0;
     use_g_scaling = true;
     for (Index k = 0; k < m; ++k) g_scaling[k] = 1.0;
     for (int j = 0; j < n_; ++j) {
-      for (int r = 0; r < 3; ++r) g_scaling[R * j + r] = 1.0 / weight_N;
+      for (int r = 0; r < kWrench; ++r) g_scaling[R * j + r] = 1.0 / weight_N;
       for (int r = 0; r < static_cast<int>(rows_.size()); ++r) {
-        if (rows_[r].quantity < robot_.num_cables()) g_scaling[R * j + 3 + r] = 1.0 / weight_N;  // tensions
+        if (rows_[r].quantity < robot_.num_cables()) g_scaling[R * j + kWrench + r] = 1.0 / weight_N;  // tensions
       }
     }
     return true;
@@ -204,13 +208,13 @@ class DesignNlp : public Ipopt::TNLP {
     tensions_.clear();
     for (int j = 0; j < n_; ++j) {
       poses_.emplace_back(x[V * j], x[V * j + 1], x[V * j + 2]);
-      tensions_.push_back(Eigen::Map<const Eigen::VectorXd>(x + V * j + 3, robot_.num_cables()));
+      tensions_.push_back(Eigen::Map<const Eigen::VectorXd>(x + V * j + kPose, robot_.num_cables()));
     }
   }
   const std::vector<Eigen::VectorXd>& tensions() const { return tensions_; }
 
   Ipopt::SolverReturn final_status() const { return final_status_; }
-  const std::vector<Eigen::Vector3d>& poses() const { return poses_; }
+  const std::vector<PlanarPose>& poses() const { return poses_; }
 
  private:
   struct Row {
@@ -227,7 +231,7 @@ class DesignNlp : public Ipopt::TNLP {
     const Eigen::VectorXd y = Eigen::Map<const Eigen::VectorXd>(xj, V);
     PoseRobustness at;
     if (!RobustQuantities(robot_, points_, y, &at, jac != nullptr)) return false;
-    for (int r = 0; r < 3; ++r) {
+    for (int r = 0; r < kWrench; ++r) {
       g[r] = at.equilibrium_N(r);
       if (jac) {
         for (int c = 0; c < V; ++c) jac[V * r + c] = at.dequilibrium_dy(r, c);
@@ -235,9 +239,9 @@ class DesignNlp : public Ipopt::TNLP {
     }
     for (int r = 0; r < static_cast<int>(rows_.size()); ++r) {
       const int k = rows_[r].quantity;
-      g[3 + r] = at.value[k] + rows_[r].sign * k_sigma_m * at.spread[k];
+      g[kWrench + r] = at.value[k] + rows_[r].sign * k_sigma_m * at.spread[k];
       if (jac) {
-        for (int c = 0; c < V; ++c) jac[V * (3 + r) + c] = at.dvalue_dy(k, c);
+        for (int c = 0; c < V; ++c) jac[V * (kWrench + r) + c] = at.dvalue_dy(k, c);
       }
     }
     for (int r = 0; r < R; ++r) {
@@ -247,7 +251,7 @@ class DesignNlp : public Ipopt::TNLP {
       // d spread / dy by central differences; steps of ~cbrt(eps) of each variable's scale.
       const double weight_N = robot_.platform_mass_kg * robot_.gravity_mps2;
       for (int c = 0; c < V; ++c) {
-        const double h = 6e-6 * (c >= 3 ? weight_N : 1.0);
+        const double h = 6e-6 * (c >= kPose ? weight_N : 1.0);
         Eigen::VectorXd yp = y, ym = y;
         yp(c) += h;
         ym(c) -= h;
@@ -257,7 +261,7 @@ class DesignNlp : public Ipopt::TNLP {
         }
         for (int r = 0; r < static_cast<int>(rows_.size()); ++r) {
           const int k = rows_[r].quantity;
-          jac[V * (3 + r) + c] += rows_[r].sign * k_sigma_m * (plus.spread[k] - minus.spread[k]) / (2.0 * h);
+          jac[V * (kWrench + r) + c] += rows_[r].sign * k_sigma_m * (plus.spread[k] - minus.spread[k]) / (2.0 * h);
         }
       }
     }
@@ -265,8 +269,8 @@ class DesignNlp : public Ipopt::TNLP {
   }
 
   double Objective(const Number* x, Eigen::VectorXd* gradient) const {
-    std::vector<Eigen::Vector3d> q(n_);
-    for (int j = 0; j < n_; ++j) q[j] = Eigen::Vector3d(x[V * j], x[V * j + 1], x[V * j + 2]);
+    std::vector<PlanarPose> q(n_);
+    for (int j = 0; j < n_; ++j) q[j] = PlanarPose(x + V * j);
     return DesignObjective(robot_, options_.criterion, q, gradient, power_,
                            options_.prior_information ? &*options_.prior_information : nullptr);
   }
@@ -284,7 +288,7 @@ class DesignNlp : public Ipopt::TNLP {
   std::vector<Row> rows_;
   int R = 0;  // constraint rows per pose: 3 equilibrium, then rows_
   Ipopt::SolverReturn final_status_ = Ipopt::INTERNAL_ERROR;
-  std::vector<Eigen::Vector3d> poses_;
+  std::vector<PlanarPose> poses_;
   std::vector<Eigen::VectorXd> tensions_;
 };
 

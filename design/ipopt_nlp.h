@@ -19,7 +19,7 @@ struct StartOutcome {
   std::string status;
   int iterations = 0;
   bool converged = false;
-  std::vector<Eigen::Vector3d> poses;       // Ipopt's (x, z, theta)
+  std::vector<PlanarPose> poses;       // Ipopt's (x, z, theta)
   std::vector<Eigen::VectorXd> tensions_N;  // Ipopt's tensions, one per cable
 };
 

@@ -9,18 +9,28 @@
 #include "common/error.h"
 #include "identify/jacobian.h"
 #include "identify/nested_jet.h"
+#include "model/kind.h"
 
 namespace cablecal {
 namespace internal {
+
+// The geometry columns the default gauge leaves free (3m - 1: a1x held).
+std::vector<int> FreeColumns(const Robot& robot) { return PlanarKind::FreeByDefault(LayoutOf(robot)); }
+
 namespace {
 
 // The pose's own coordinates as Jets (identify/nested_jet.h): the rows of identify/jacobian.h
 // then carry their exact derivatives with respect to x, z, theta.
-using PoseJet = nested_jet::InnerJet<3>;
+constexpr int kPose = PlanarKind::kPoseDim;
+using PoseJet = nested_jet::InnerJet<kPose>;
 
-Pose<PoseJet> Seeded(const Eigen::Vector3d& q) {
-  return Pose<PoseJet>(PoseJet(q(0), 0), PoseJet(q(1), 1), PoseJet(q(2), 2));
+Pose<PoseJet> Seeded(const PlanarPose& q) {
+  Pose<PoseJet> seeded;
+  for (int k = 0; k < kPose; ++k) seeded(k) = PoseJet(q(k), k);
+  return seeded;
 }
+
+
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
@@ -37,10 +47,11 @@ double LogSumPow(const Eigen::VectorXd& log_mu, double p) {
 // hence the surrogate's minimiser has kappa within d^(1/p) of the optimum (README).
 // The gradient follows from d mu_k = 2 sigma_k u_k' dJ v_k, exact for a spectral function.
 // J: per pose the m length rows, columns a1z .. lm0 (3m - 1, a1x held) and every pose's x.
-double ConditionObjective(const Robot& robot, const std::vector<Eigen::Vector3d>& poses, Eigen::VectorXd* gradient,
+double ConditionObjective(const Robot& robot, const std::vector<PlanarPose>& poses, Eigen::VectorXd* gradient,
                           double p) {
   const int num_cables = robot.num_cables();
-  const int G = PlanarLayout(num_cables).size() - 1;  // geometry columns (a1x held)
+  const std::vector<int> free = FreeColumns(robot);
+  const int G = static_cast<int>(free.size());  // geometry columns
   const int x_column = PlanarLayout(num_cables).size();  // the x column of identify/jacobian.h's rows
   const int n = static_cast<int>(poses.size());
   if (num_cables * n < G + n) return kInf;
@@ -59,7 +70,7 @@ double ConditionObjective(const Robot& robot, const std::vector<Eigen::Vector3d>
       values = LengthResidualRows<double>(robot, poses[j]);
     }
     for (int i = 0; i < num_cables; ++i) {
-      for (int c = 0; c < G; ++c) J(num_cables * j + i, c) = values(i, 1 + c);
+      for (int c = 0; c < G; ++c) J(num_cables * j + i, c) = values(i, free[c]);
       J(num_cables * j + i, G + j) = values(i, x_column);
     }
   }
@@ -81,23 +92,23 @@ double ConditionObjective(const Robot& robot, const std::vector<Eigen::Vector3d>
     for (int k = 0; k < d; ++k) {
       w(k) = std::exp(p * log_mu(k) - lse_plus) - std::exp(-p * log_mu(k) - lse_minus);
     }
-    gradient->setZero(3 * n);
+    gradient->setZero(kPose * n);
     const Eigen::MatrixXd V = eig.eigenvectors().rowwise().reverse();
     const Eigen::MatrixXd U = (J * V) * s.cwiseInverse().asDiagonal();
     for (int j = 0; j < n; ++j) {
-      for (int k = 0; k < 3; ++k) {
+      for (int k = 0; k < kPose; ++k) {
         double total = 0.0;
         for (int m = 0; m < d; ++m) {
           if (w(m) == 0.0) continue;
           double d_sigma = 0.0;  // u_m' dJ v_m over pose j's num_cables rows
           for (int i = 0; i < num_cables; ++i) {
             double row_v = rows[j](i, x_column).v(k) * V(G + j, m);
-            for (int c = 0; c < G; ++c) row_v += rows[j](i, 1 + c).v(k) * V(c, m);
+            for (int c = 0; c < G; ++c) row_v += rows[j](i, free[c]).v(k) * V(c, m);
             d_sigma += U(num_cables * j + i, m) * row_v;
           }
           total += w(m) * d_sigma / s(m);  // d mu / mu / 2 = d sigma / sigma
         }
-        (*gradient)(3 * j + k) = total;
+        (*gradient)(kPose * j + k) = total;
       }
     }
   }
@@ -105,9 +116,9 @@ double ConditionObjective(const Robot& robot, const std::vector<Eigen::Vector3d>
 }
 
 // D, A, E objectives of S = sum_j S_j(q_j) (3m - 1 square) and their gradients through dS_j/dq_j.
-double InformationObjective(const Robot& robot, Criterion criterion, const std::vector<Eigen::Vector3d>& poses,
+double InformationObjective(const Robot& robot, Criterion criterion, const std::vector<PlanarPose>& poses,
                             Eigen::VectorXd* gradient, double e_power, const PriorInformation* prior) {
-  const int G = 3 * robot.num_cables() - 1;
+  const int G = static_cast<int>(FreeColumns(robot).size());
   using Information = Eigen::MatrixXd;
   const int n = static_cast<int>(poses.size());
   std::vector<Rows<PoseJet>> parts(gradient ? n : 0);  // as in ConditionObjective
@@ -172,14 +183,14 @@ double InformationObjective(const Robot& robot, Criterion criterion, const std::
       return kInf;  // not an information criterion
   }
   if (gradient) {
-    gradient->setZero(3 * n);
+    gradient->setZero(kPose * n);
     for (int j = 0; j < n; ++j) {
-      for (int k = 0; k < 3; ++k) {
+      for (int k = 0; k < kPose; ++k) {
         double d = 0.0;
         for (int a = 0; a < G; ++a) {
           for (int b = 0; b < G; ++b) d += Gbar(a, b) * parts[j](a, b).v(k);
         }
-        (*gradient)(3 * j + k) = d;
+        (*gradient)(kPose * j + k) = d;
       }
     }
   }
@@ -188,7 +199,7 @@ double InformationObjective(const Robot& robot, Criterion criterion, const std::
 
 }  // namespace
 
-double DesignObjective(const Robot& robot, Criterion criterion, const std::vector<Eigen::Vector3d>& poses,
+double DesignObjective(const Robot& robot, Criterion criterion, const std::vector<PlanarPose>& poses,
                        Eigen::VectorXd* gradient, double power, const PriorInformation* prior) {
   if (criterion == Criterion::kCondition) {
     return ConditionObjective(robot, poses, gradient, power > 0.0 ? power : kConditionPower);
@@ -196,7 +207,7 @@ double DesignObjective(const Robot& robot, Criterion criterion, const std::vecto
   return InformationObjective(robot, criterion, poses, gradient, power > 0.0 ? power : kEigenvaluePower, prior);
 }
 
-double ExactObjective(const Robot& robot, Criterion criterion, const std::vector<Eigen::Vector3d>& poses,
+double ExactObjective(const Robot& robot, Criterion criterion, const std::vector<PlanarPose>& poses,
                       const PriorInformation* prior) {
   if (criterion == Criterion::kCondition) return ConditionObjective(robot, poses, nullptr, 0.0);
   return InformationObjective(robot, criterion, poses, nullptr, 0.0, prior);
@@ -204,14 +215,14 @@ double ExactObjective(const Robot& robot, Criterion criterion, const std::vector
 
 }  // namespace internal
 
-CriteriaValues EvaluateCriteria(const Robot& robot, const std::vector<Eigen::Vector3d>& poses,
+CriteriaValues EvaluateCriteria(const Robot& robot, const std::vector<PlanarPose>& poses,
                                 const PriorInformation* prior) {
   CriteriaValues v;
   v.condition_number = std::exp(internal::ExactObjective(robot, Criterion::kCondition, poses));
   v.d_log_det_information = -internal::ExactObjective(robot, Criterion::kD, poses, prior);
   v.a_trace_covariance_m2 = std::exp(internal::ExactObjective(robot, Criterion::kA, poses, prior));
   v.e_min_eigenvalue = std::exp(-internal::ExactObjective(robot, Criterion::kE, poses, prior));
-  v.information_size = 3 * robot.num_cables() - 1;
+  v.information_size = static_cast<int>(internal::FreeColumns(robot).size());
   return v;
 }
 

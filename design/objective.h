@@ -25,11 +25,11 @@ constexpr double kEigenvaluePower = 32.0;
 // with a smoother surrogate and sharpens it (continuation, kContinuationPower).
 constexpr double kContinuationPower = 8.0;
 // `prior` (D, A, E only): information already gathered, added to the poses' (design --prior).
-double DesignObjective(const Robot& robot, Criterion criterion, const std::vector<Eigen::Vector3d>& poses,
+double DesignObjective(const Robot& robot, Criterion criterion, const std::vector<PlanarPose>& poses,
                        Eigen::VectorXd* gradient, double power = 0.0, const PriorInformation* prior = nullptr);
 
 // The same criteria exactly (log kappa, -log lambda_min without surrogate), for reporting.
-double ExactObjective(const Robot& robot, Criterion criterion, const std::vector<Eigen::Vector3d>& poses,
+double ExactObjective(const Robot& robot, Criterion criterion, const std::vector<PlanarPose>& poses,
                       const PriorInformation* prior = nullptr);
 
 }  // namespace cablecal::internal

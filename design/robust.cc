@@ -60,7 +60,8 @@ namespace {
 template <int M>
 CABLECAL_FLATTEN bool RobustQuantitiesM(const Robot& robot, const std::vector<Eigen::Vector2d>& points, const Eigen::VectorXd& y_in,
                        PoseRobustness* out, bool with_derivatives) {
-  constexpr int P = 3 + M;  // pose variables x, z, theta, t1..tM
+  constexpr int kPose = PlanarKind::kPoseDim, kWrench = PlanarKind::kWrenchDim;
+  constexpr int P = kPose + M;  // pose variables x, z, theta, t1..tM
   constexpr GeometryLayout kLayout = PlanarLayout(M);
   constexpr int G = kLayout.size();  // geometry a1x a1z .. aMx aMz l10 .. lM0
   constexpr int N = P + G;
@@ -75,14 +76,14 @@ CABLECAL_FLATTEN bool RobustQuantitiesM(const Robot& robot, const std::vector<Ei
     for (int c = 0; c < kLayout.point_dim; ++c) exits[i](c) = U(robot.cables[i].p_F_exit_m(c), P + kLayout.exit(i, c));
     l0[i] = U(0.0, P + kLayout.initial_length(i));  // only its derivative matters: dl_i is fixed
   }
-  const Pose<U> q = yu.template head<3>();
+  const Pose<U> q = yu.template head<kPose>();
   const Eigen::Matrix<U, 2, 2> rot = Rotation(q(2));
   const Vec2<U> p(q(0), q(1));
 
   // R(y, g) = [l_i(q; a_i) - l_i0 - dl_i; W(q; a) t + w_g(q)] and the quantities c(y, g).
   Eigen::Matrix<U, P, 1> R;
   std::vector<U> c;
-  for (int i = 0; i < m; ++i) c.push_back(yu(3 + i));  // t_i
+  for (int i = 0; i < m; ++i) c.push_back(yu(kPose + i));  // t_i
   c.push_back(q(2));                                    // theta
   c.push_back(q(1));                                    // z against the laser range
   Eigen::Matrix<U, Eigen::Dynamic, 1> t(m);
@@ -91,10 +92,10 @@ CABLECAL_FLATTEN bool RobustQuantitiesM(const Robot& robot, const std::vector<Ei
     const Vec2<U> anchor = p + rot * cable.p_P_anchor_m.cast<U>();
     const CableState<U> s = CableGeometry<U>(exits[i], U(cable.pulley_radius_m), SignsOf(cable), anchor);
     R(i) = s.length_m - l0[i];
-    t(i) = yu(3 + i);
+    t(i) = yu(kPose + i);
     c.push_back(s.centre_distance_m - U(cable.pulley_radius_m));  // clearance of anchor i from its pulley
   }
-  R.template tail<3>() = WrenchMatrix<U>(robot, q, exits) * t + GravityWrench<U>(robot, q);
+  R.template tail<kWrench>() = WrenchMatrix<U>(robot, q, exits) * t + GravityWrench<U>(robot, q);
   for (const Eigen::Vector2d& b : points) {
     const Vec2<U> point = p + rot * b.cast<U>();
     c.push_back(point.x());
@@ -107,10 +108,10 @@ CABLECAL_FLATTEN bool RobustQuantitiesM(const Robot& robot, const std::vector<Ei
     A.row(r) = R(r).v.template head<P>().transpose();
     B.row(r) = R(r).v.template tail<G>().transpose();
   }
-  for (int r = 0; r < 3; ++r) out->equilibrium_N(r) = R(m + r).a;
-  if (with_derivatives) out->dequilibrium_dy = A.template bottomRows<3>();
+  for (int r = 0; r < kWrench; ++r) out->equilibrium_N(r) = R(m + r).a;
+  if (with_derivatives) out->dequilibrium_dy = A.template bottomRows<kWrench>();
   Eigen::Matrix<double, P, G> dy_dg;
-  if constexpr (M <= 3) {
+  if constexpr (M <= kPose) {
     // Square: the implicit function theorem.
     Eigen::FullPivLU<Eigen::Matrix<double, P, P>> lu(A);
     if (!lu.isInvertible()) return false;
@@ -118,15 +119,15 @@ CABLECAL_FLATTEN bool RobustQuantitiesM(const Robot& robot, const std::vector<Ei
   } else {
     // Least-squares pose of the commanded lengths, then the least tension change that restores
     // the equilibrium there (header).
-    const Eigen::Matrix<double, M, 3> J = A.template topLeftCorner<M, 3>();  // dl/dq
-    const Eigen::Matrix<double, 3, 3> K = A.template bottomLeftCorner<3, 3>();  // d(W t + w_g)/dq
-    const Eigen::Matrix<double, 3, M> W = A.template bottomRightCorner<3, M>();  // d(W t + w_g)/dt
-    Eigen::FullPivLU<Eigen::Matrix3d> normal(J.transpose() * J);
-    Eigen::FullPivLU<Eigen::Matrix3d> wwt(W * W.transpose());
+    const Eigen::Matrix<double, M, kPose> J = A.template topLeftCorner<M, kPose>();  // dl/dq
+    const Eigen::Matrix<double, kWrench, kPose> K = A.template bottomLeftCorner<kWrench, kPose>();  // d(W t + w_g)/dq
+    const Eigen::Matrix<double, kWrench, M> W = A.template bottomRightCorner<kWrench, M>();  // d(W t + w_g)/dt
+    Eigen::FullPivLU<Eigen::Matrix<double, kPose, kPose>> normal(J.transpose() * J);
+    Eigen::FullPivLU<Eigen::Matrix<double, kWrench, kWrench>> wwt(W * W.transpose());
     if (!normal.isInvertible() || !wwt.isInvertible()) return false;
-    const Eigen::Matrix<double, 3, G> dq_dg = -normal.solve(J.transpose() * B.template topRows<M>());
-    const Eigen::Matrix<double, 3, G> imbalance = K * dq_dg + B.template bottomRows<3>();
-    dy_dg.template topRows<3>() = dq_dg;
+    const Eigen::Matrix<double, kPose, G> dq_dg = -normal.solve(J.transpose() * B.template topRows<M>());
+    const Eigen::Matrix<double, kWrench, G> imbalance = K * dq_dg + B.template bottomRows<kWrench>();
+    dy_dg.template topRows<kPose>() = dq_dg;
     dy_dg.template bottomRows<M>() = -W.transpose() * wwt.solve(imbalance);
   }
   out->value.resize(c.size());

@@ -49,12 +49,13 @@
 
 #include "model/cable.h"
 #include "model/geometry.h"
+#include "model/kind.h"
 #include "model/robot.h"
 
 namespace cablecal::internal {
 
 // Sizes for m cables: y = (x, z, theta, t1..tm), g = (a1x a1z .. amx amz l10 .. lm0).
-inline int PoseVariables(int num_cables) { return 3 + num_cables; }
+inline int PoseVariables(int num_cables) { return PlanarKind::kPoseDim + num_cables; }
 inline int GeometryParameters(int num_cables) { return PlanarLayout(num_cables).size(); }
 
 // One bounded quantity of a pose; lo or hi may be infinite.
@@ -79,7 +80,8 @@ struct PoseRobustness {
   std::vector<double> value;   // c, per quantity (PoseQuantities' order)
   std::vector<double> spread;  // |dc/dg|_2, per quantity
   Eigen::MatrixXd dvalue_dy;   // dc/dy, one row per quantity, 3 + m columns (only with derivatives)
-  Eigen::Vector3d equilibrium_N = Eigen::Vector3d::Zero();  // W t + w_g at y (the NLP's equality rows)
+  // W t + w_g at y (the NLP's equality rows)
+  Eigen::Matrix<double, PlanarKind::kWrenchDim, 1> equilibrium_N = Eigen::Matrix<double, PlanarKind::kWrenchDim, 1>::Zero();
   Eigen::MatrixXd dequilibrium_dy;  // its Jacobian, 3 x (3 + m) (only with derivatives)
 };
 

@@ -66,8 +66,8 @@ std::string Encode(const StartOutcome& o) {
   w.Put(static_cast<std::int32_t>(o.iterations));
   w.Put(static_cast<std::int32_t>(o.converged));
   w.Put(static_cast<std::int64_t>(o.poses.size()));
-  for (const Eigen::Vector3d& q : o.poses) {
-    for (int i = 0; i < 3; ++i) w.Put(q(i));
+  for (const PlanarPose& q : o.poses) {
+    for (int i = 0; i < PlanarKind::kPoseDim; ++i) w.Put(q(i));
   }
   w.Put(static_cast<std::int64_t>(o.tensions_N.size()));
   for (const Eigen::VectorXd& t : o.tensions_N) {
@@ -94,8 +94,8 @@ StartOutcome Decode(const std::string& bytes) {
   o.iterations = r.Get<std::int32_t>();
   o.converged = r.Get<std::int32_t>() != 0;
   o.poses.resize(static_cast<std::size_t>(r.Get<std::int64_t>()));
-  for (Eigen::Vector3d& q : o.poses) {
-    for (int i = 0; i < 3; ++i) q(i) = r.Get<double>();
+  for (PlanarPose& q : o.poses) {
+    for (int i = 0; i < PlanarKind::kPoseDim; ++i) q(i) = r.Get<double>();
   }
   o.tensions_N.resize(static_cast<std::size_t>(r.Get<std::int64_t>()));
   for (Eigen::VectorXd& t : o.tensions_N) {

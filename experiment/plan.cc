@@ -12,6 +12,7 @@
 #include "common/random.h"
 #include "common/yaml_writer.h"
 #include "model/cable.h"
+#include "model/kind.h"
 #include "workspace/workspace.h"
 
 namespace cablecal {
@@ -44,7 +45,7 @@ std::vector<PlanPose> SampleFeasiblePoses(const Robot& robot, int n, std::uint64
     const double x = rng.Uniform(x_lo, x_hi);
     const double z = rng.Uniform(z_lo, z_hi);
     const PoseEvaluation e = robot.theta_is_free()
-                                 ? EvaluatePose(robot, Eigen::Vector3d(x, z, rng.Uniform(-robot.theta_max_rad,
+                                 ? EvaluatePose(robot, PlanarPose(x, z, rng.Uniform(-robot.theta_max_rad,
                                                                                          robot.theta_max_rad)))
                                  : EvaluatePose(robot, x, z);
     if (e.feasible()) plan.push_back(MakePlanPose(robot, e.equilibrium, l0));
@@ -53,7 +54,8 @@ std::vector<PlanPose> SampleFeasiblePoses(const Robot& robot, int n, std::uint64
 }
 
 std::string PosePlanCsv(const std::vector<PlanPose>& plan, const std::string& provenance) {
-  std::string out = provenance + "pose,x,z,theta";
+  std::string out = provenance + "pose";
+  for (const char* name : PlanarKind::kPoseNames) out += std::string(",") + name;
   const int m = plan.empty() ? 2 : static_cast<int>(plan.front().lengths_m.size());
   for (const char* prefix : {"t", "l", "dl"}) {
     for (int i = 1; i <= m; ++i) out += "," + std::string(prefix) + std::to_string(i);
@@ -66,7 +68,7 @@ std::string PosePlanCsv(const std::vector<PlanPose>& plan, const std::string& pr
   for (std::size_t j = 0; j < plan.size(); ++j) {
     const PlanPose& p = plan[j];
     out += std::to_string(j + 1);
-    for (int k = 0; k < 3; ++k) out += "," + FormatDouble(p.q(k));
+    for (int k = 0; k < PlanarKind::kPoseDim; ++k) out += "," + FormatDouble(p.q(k));
     for (int i = 0; i < m; ++i) out += "," + FormatDouble(p.tensions_N(i));
     for (int i = 0; i < m; ++i) out += "," + FormatDouble(p.lengths_m(i));
     for (int i = 0; i < m; ++i) out += "," + FormatDouble(p.length_change_m(i));
@@ -136,8 +138,9 @@ std::string PosePlanJsonYaml(const std::vector<PlanPose>& poses) {
   for (std::size_t j = 0; j < poses.size(); ++j) {
     const PlanPose& p = poses[j];
     o << YAML::Flow << YAML::BeginMap << YAML::Key << "pose" << YAML::Value << j + 1;
-    const char* names[3] = {"x", "z", "theta"};
-    for (int k = 0; k < 3; ++k) o << YAML::Key << names[k] << YAML::Value << YamlNumber{p.q(k)};
+    for (int k = 0; k < PlanarKind::kPoseDim; ++k) {
+      o << YAML::Key << PlanarKind::kPoseNames[k] << YAML::Value << YamlNumber{p.q(k)};
+    }
     const std::pair<const char*, const Eigen::VectorXd*> columns[3] = {
         {"t", &p.tensions_N}, {"l", &p.lengths_m}, {"dl", &p.length_change_m}};
     for (const auto& [prefix, values] : columns) {
@@ -158,7 +161,9 @@ std::vector<PlanPose> ReadPosePlanCsv(const std::string& path, int num_cables) {
 }
 
 std::vector<PlanPose> ReadPosePlanCsv(std::istream& in, const std::string& path, int num_cables) {
-  std::vector<std::string> header = {"pose", "x", "z", "theta"};
+  std::vector<std::string> header = {"pose"};
+  for (const char* name : PlanarKind::kPoseNames) header.push_back(name);
+  const int first = 1 + PlanarKind::kPoseDim;  // t1's column
   for (const char* prefix : {"t", "l", "dl"}) {
     for (int i = 1; i <= num_cables; ++i) header.push_back(prefix + std::to_string(i));
   }
@@ -178,21 +183,21 @@ std::vector<PlanPose> ReadPosePlanCsv(std::istream& in, const std::string& path,
       throw InputError(row.Where(), "column 'pose'", "duplicate pose id " + std::to_string(id));
     }
     PlanPose p;
-    for (int k = 0; k < 3; ++k) p.q(k) = row.Number(1 + k);
+    for (int k = 0; k < PlanarKind::kPoseDim; ++k) p.q(k) = row.Number(1 + k);
     p.tensions_N.resize(num_cables);
     p.lengths_m.resize(num_cables);
     p.length_change_m.resize(num_cables);
     for (int i = 0; i < num_cables; ++i) {
-      p.tensions_N(i) = row.Number(4 + i);
-      p.lengths_m(i) = row.Number(4 + num_cables + i);
-      p.length_change_m(i) = row.Number(4 + 2 * num_cables + i);
+      p.tensions_N(i) = row.Number(first + i);
+      p.lengths_m(i) = row.Number(first + num_cables + i);
+      p.length_change_m(i) = row.Number(first + 2 * num_cables + i);
     }
     if (row.cells.size() > header.size()) {
       p.tensions_worst_min_N.resize(num_cables);
       p.tensions_worst_max_N.resize(num_cables);
       for (int i = 0; i < num_cables; ++i) {
-        p.tensions_worst_min_N(i) = row.Number(4 + 3 * num_cables + 2 * i);
-        p.tensions_worst_max_N(i) = row.Number(5 + 3 * num_cables + 2 * i);
+        p.tensions_worst_min_N(i) = row.Number(first + 3 * num_cables + 2 * i);
+        p.tensions_worst_max_N(i) = row.Number(first + 3 * num_cables + 2 * i + 1);
       }
     }
     plan.push_back(p);

@@ -14,13 +14,14 @@
 #include <vector>
 
 #include "model/robot.h"
+#include "model/kind.h"
 #include "model/statics.h"
 
 namespace cablecal {
 
 // One measurement pose of a plan.
 struct PlanPose {
-  Eigen::Vector3d q = Eigen::Vector3d::Zero();  // (x_m, z_m, theta_rad), an equilibrium
+  PlanarPose q = PlanarPose::Zero();  // (x_m, z_m, theta_rad), an equilibrium
   Eigen::VectorXd tensions_N;
   Eigen::VectorXd lengths_m;        // l_i, exit point -> anchor
   Eigen::VectorXd length_change_m;  // dl_i = l_i - l_i0: the encoder command from home

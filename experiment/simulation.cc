@@ -174,7 +174,7 @@ void AddOutliers(std::vector<Measurement>& readings, const SensorNoise& sensors,
 }
 
 std::string TruthYaml(const Robot& truth, const std::vector<Measurement>& measurements,
-                      const std::vector<Eigen::Vector3d>& true_poses) {
+                      const std::vector<PlanarPose>& true_poses) {
   YAML::Emitter o;
   o << YAML::BeginMap;
   EmitRobotFields(o, truth);

@@ -25,6 +25,7 @@
 #include "common/random.h"
 #include "experiment/measurements.h"
 #include "model/geometry.h"
+#include "model/kind.h"
 #include "model/robot.h"
 #include "model/statics.h"
 #include "experiment/plan.h"
@@ -79,7 +80,7 @@ struct SkippedPose {
 
 struct SimulatedExperiment {
   std::vector<Measurement> measurements;
-  std::vector<Eigen::Vector3d> true_poses;  // (x, z, theta) where the platform settled
+  std::vector<PlanarPose> true_poses;  // (x, z, theta) where the platform settled
   std::vector<SkippedPose> skipped;         // with skip_infeasible: the poses left out, in plan order
 };
 
@@ -125,6 +126,6 @@ void AddOutliers(std::vector<Measurement>& readings, const SensorNoise& sensors,
 
 // Truth file: the true robot in the robot-file format plus its `true_poses` list.
 std::string TruthYaml(const Robot& truth, const std::vector<Measurement>& measurements,
-                      const std::vector<Eigen::Vector3d>& true_poses);
+                      const std::vector<PlanarPose>& true_poses);
 
 }  // namespace cablecal

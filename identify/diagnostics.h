@@ -60,7 +60,7 @@ const LostFitDiagnosis<M>& DiagnoseLostFit(const IdentificationProblem<M>& p, Lo
       double r[M];
       const Measurement& m = p.measurements[k];
       LengthResiduals<M, double>(p.nominal, p.nominal_geometry.data(),
-                                 Eigen::Vector3d(p.start_poses[j][0], p.start_poses[j][1], p.start_poses[j][2]),
+                                 PlanarPose(p.start_poses[j].data()),
                                  m.dl_m.data(), r);
       for (int i = 0; i < M; ++i) {
         if (std::isfinite(r[i])) continue;
@@ -352,7 +352,7 @@ std::optional<IdentifyResult> FitWithoutLeftOut(const IdentificationProblem<M>& 
       if (left[j]) {
         PoseEstimate e;
         e.pose_id = p.pose_id_of(j);
-        e.q = Eigen::Vector3d(q[j][0], q[j][1], q[j][2]);
+        e.q = PlanarPose(q[j].data());
         all.push_back(e);
       } else if (next < without.poses.size()) {
         all.push_back(without.poses[next++]);

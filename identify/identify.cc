@@ -9,6 +9,7 @@
 
 #include "common/error.h"
 #include "common/format.h"
+#include "model/sensors.h"
 
 namespace cablecal {
 
@@ -71,7 +72,10 @@ double LossWeight(const RobustLoss& loss, double sigmas) {
 std::string MissingSensorsText(const std::vector<std::string>& missing_sensors) {
   std::string text;
   for (const std::string& sensor : missing_sensors) {
-    const std::string column = sensor == "laser" ? "z" : "theta";
+    std::string column;
+    for (const SensorUnit& u : kPlanarSensors) {
+      if (sensor == u.name) column = u.column;
+    }
     text += (text.empty() ? "no '" : " and no '") + column + "' column (" + sensor + ")";
   }
   return text;
@@ -112,7 +116,7 @@ template <int M>
 IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measurement>& measurements,
                                   const IdentifyOptions& options);
 template <int M>
-Eigen::Vector3d StartingPose(const Robot& robot, const GeometryVector& g, const Measurement& m);
+PlanarPose StartingPose(const Robot& robot, const GeometryVector& g, const Measurement& m);
 
 }  // namespace internal
 
@@ -132,7 +136,7 @@ IdentifyResult Identify(const Robot& nominal, const std::vector<Measurement>& me
   return result;
 }
 
-Eigen::Vector3d StartingPose(const Robot& robot, const GeometryVector& geometry, const Measurement& reading) {
+PlanarPose StartingPose(const Robot& robot, const GeometryVector& geometry, const Measurement& reading) {
   CABLECAL_CHECK(reading.dl_m.size() == robot.num_cables() && geometry.size() == GeometrySize(robot.num_cables()),
                  "one encoder reading and three geometry entries per cable");
   return WithCableCount(robot.num_cables(), [&](auto m) {

@@ -26,6 +26,7 @@
 
 #include "experiment/experiment.h"
 #include "model/robot.h"
+#include "model/kind.h"
 #include "model/sensors.h"
 
 namespace YAML {
@@ -156,8 +157,8 @@ struct ReadingFit {
 
 struct PoseEstimate {
   int pose_id = 0;
-  Eigen::Vector3d q = Eigen::Vector3d::Zero();          // (x, z, theta) estimated (paper: z, theta measured)
-  Eigen::Vector3d std_dev = Eigen::Vector3d::Zero();    // 0 where not estimated
+  PlanarPose q = PlanarPose::Zero();          // (x, z, theta) estimated (paper: z, theta measured)
+  PlanarPose std_dev = PlanarPose::Zero();    // 0 where not estimated
   // With the equilibrium row (IdentifyOptions::equilibrium, m = 2): its residual at the
   // estimate over its sigma, and as an angle, theta minus the equilibrium angle at (x, z)
   // (residuals.h, EquilibriumThetaError).
@@ -197,7 +198,9 @@ struct IdentifyResult {
   std::array<double, kNumSensorIds> rms_sensor = {0.0, 0.0};  // by SensorId, in the sensor's unit
   GeometryVector geometry;  // 3m entries, GeometryNames(m) order (model/geometry.h)
   bool has_covariance = false;
-  GeometryVector geometry_std;           // 3m entries, 0 for a held a1x (all 0 without covariance)
+  // The entries the gauge held at their nominal values (gauge a1x: a1x), increasing: no unknowns.
+  std::vector<int> held_geometry;
+  GeometryVector geometry_std;           // 3m entries, 0 for a held entry (all 0 without covariance)
   Eigen::MatrixXd geometry_correlation;  // 3m x 3m, the same order (identity without covariance)
   std::vector<PoseEstimate> poses;  // one per pose id, in the order of their first reading
   std::vector<ReadingFit> readings;  // one per reading, in the data's order (empty if not converged)
@@ -235,7 +238,7 @@ IdentifyResult Identify(const Robot& nominal, const std::vector<Measurement>& me
 // or theta from where the robot settles with these lengths. Identify's start for each pose, and
 // Validate's start for the forward model (both need a start near the platform's real pose; home
 // is too far for some poses, and some lengths hold the platform in two places).
-Eigen::Vector3d StartingPose(const Robot& robot, const GeometryVector& geometry, const Measurement& reading);
+PlanarPose StartingPose(const Robot& robot, const GeometryVector& geometry, const Measurement& reading);
 
 // What `identify` (the CLI and the Python module) makes of a result that is not one: a
 // rank-deficient or poor fit is an InputError naming `source` (the data cannot calibrate
@@ -253,7 +256,7 @@ void EmitSensorCorrection(YAML::Emitter& out, const SystematicSensorErrors& erro
 void RequireResultOfRobot(const std::string& result_source, const std::string& result_robot_name,
                           int result_cables, const Robot& robot);
 
-// Whether geometric parameter k was held rather than estimated (a1x under gauge a1x): its std
+// Whether geometric parameter k was held rather than estimated (held_geometry): its std
 // is then 0 by construction, and what a person reads says "held", not "std 0".
 bool IsHeld(const IdentifyResult& result, int k);
 

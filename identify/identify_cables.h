@@ -90,15 +90,15 @@ double StartingX(const Robot& nominal, const GeometryVector& g, const Measuremen
 // sensor read starts where `robot` settles with these lengths (a cold forward model; home,
 // level, if it finds nothing).
 template <int M>
-Eigen::Vector3d StartingPose(const Robot& robot, const GeometryVector& g, const Measurement& m) {
-  Eigen::Vector3d q = Eigen::Vector3d::Zero();
+PlanarPose StartingPose(const Robot& robot, const GeometryVector& g, const Measurement& m) {
+  PlanarPose q = PlanarPose::Zero();
   bool every_sensor = true;
   for (const SensorUnit& u : kPlanarSensors) every_sensor = every_sensor && m.has(u.id);
   if (!every_sensor) {
     const Eigen::VectorXd lengths = g.tail<M>() + m.dl_m;
     const ForwardResult fwd = SolveForwardGeometricoStatic(robot, lengths);
     q = fwd.status == ForwardStatus::kConverged ? fwd.equilibrium.q
-                                                : Eigen::Vector3d(robot.p_F_home_m.x(), robot.p_F_home_m.y(), 0.0);
+                                                : PlanarPose(robot.p_F_home_m.x(), robot.p_F_home_m.y(), 0.0);
   }
   for (const SensorUnit& u : kPlanarSensors) {
     if (m.has(u.id)) q(u.pose_coordinate) = m.value(u.id);
@@ -113,6 +113,7 @@ IdentifyResult EmptyResult(const IdentificationProblem<M>& p) {
   IdentifyResult result;
   result.estimator = p.options.estimator;
   result.gauge = p.options.gauge;
+  result.held_geometry = p.held;
   result.loss = p.options.loss;
   result.missing_sensors = p.missing_sensors;
   if (p.equilibrium_rows > 0) result.equilibrium_com_sigma_m = EquilibriumSigma(p.nominal);
@@ -158,7 +159,7 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   std::vector<Reading> tripped = Beyond(readings);
 
   PoseChecks checks;
-  if (p.ml && options.gauge == Gauge::kA1x && (options.compute_covariance || p.robust) && !least_squares_lost) {
+  if (p.ml && !p.held.empty() && (options.compute_covariance || p.robust) && !least_squares_lost) {
     checks = CheckPoses(p, problem_at_estimate(), geometry, poses);
   }
   std::optional<LeftOut<M>> left_out;
@@ -212,7 +213,9 @@ IdentifyResult IdentifyWithCables(const Robot& nominal, const std::vector<Measur
   const BlockJacobian blocks =
       reuse ? std::move(*checks.blocks) : p.JacobianBlocks(problem_at_estimate(), geometry, poses, p.robust, nullptr);
   const BlockAnalysis analysis = reuse ? std::move(*checks.analysis) : AnalyzeBlocks(blocks, 1e-9);
-  const int expected_null = options.gauge == Gauge::kNone ? 1 : 0;
+  // Gauge none: the directions the default gauge would hold are expected null.
+  const int expected_null =
+      options.gauge == Gauge::kNone ? static_cast<int>(PlanarKind::HeldByDefault(p.kLayout).size()) : 0;
   if (options.compute_identifiability && !AddIdentifiability(p, analysis, expected_null, result)) return result;
   if (options.compute_covariance && static_cast<int>(analysis.null_vectors.size()) == expected_null) {
     AddCovariance(p, blocks, analysis, expected_null, geometry, poses, summary.final_cost, result);

@@ -59,13 +59,14 @@ Rows<T> LengthResidualRows(const Robot& robot, const Pose<T>& q) {
 
 template <typename T>
 Rows<T> MlResidualRows(const Robot& robot, const Pose<T>& q) {
-  using J = ceres::Jet<T, 3>;
+  using J = ceres::Jet<T, PlanarKind::kPoseDim>;
   const int m = robot.num_cables();
   const ReadingWeights weights = WeightsOf(robot.sensors);
   Rows<T> rows = Rows<T>::Zero(m + kNumPlanarSensors, RowColumns(m));
   rows.topRows(m) = LengthResidualRows<T>(robot, q) * weights.inv_sigma_encoder;
   // MlSensorResiduals reads no encoder reading: any PoseReadings will do.
-  const J pose[3] = {J(q(0), 0), J(q(1), 1), J(q(2), 2)};
+  J pose[PlanarKind::kPoseDim];
+  for (int k = 0; k < PlanarKind::kPoseDim; ++k) pose[k] = J(q(k), k);
   J sensor[kNumPlanarSensors];
   MlSensorResiduals<1, J>(PoseReadings<1>{}, weights, pose, sensor);
   for (int r = 0; r < kNumPlanarSensors; ++r) {
@@ -78,10 +79,11 @@ template <typename T>
 Rows<T> ReducedInformation(const Rows<T>& ml_rows) {
   using std::sqrt;
   const int m = static_cast<int>(ml_rows.rows()) - kNumPlanarSensors;
-  const int g = PlanarLayout(m).size() - 1;  // a1z .. lm0: column 1 + c of the rows (a1x held)
+  const std::vector<int> free = PlanarKind::FreeByDefault(PlanarLayout(m));  // a1z .. lm0 (a1x held)
+  const int g = static_cast<int>(free.size());
   const int r_count = m + kNumPlanarSensors;
   Rows<T> E = ml_rows.block(0, PlanarLayout(m).size(), r_count, PlanarKind::kPoseDim);
-  for (int k = 0; k < 3; ++k) {
+  for (int k = 0; k < PlanarKind::kPoseDim; ++k) {
     for (int pass = 0; pass < 2; ++pass) {
       for (int l = 0; l < k; ++l) {
         T projection(0.0);
@@ -98,15 +100,15 @@ Rows<T> ReducedInformation(const Rows<T>& ml_rows) {
   }
   Rows<T> G_perp(r_count, g);
   for (int c = 0; c < g; ++c) {
-    T EtG[3];
-    for (int k = 0; k < 3; ++k) {
+    T EtG[PlanarKind::kPoseDim];
+    for (int k = 0; k < PlanarKind::kPoseDim; ++k) {
       EtG[k] = T(0.0);
-      for (int r = 0; r < r_count; ++r) EtG[k] += E(r, k) * ml_rows(r, 1 + c);
+      for (int r = 0; r < r_count; ++r) EtG[k] += E(r, k) * ml_rows(r, free[c]);
     }
     for (int r = 0; r < r_count; ++r) {
       T projected(0.0);
-      for (int k = 0; k < 3; ++k) projected += E(r, k) * EtG[k];
-      G_perp(r, c) = ml_rows(r, 1 + c) - projected;
+      for (int k = 0; k < PlanarKind::kPoseDim; ++k) projected += E(r, k) * EtG[k];
+      G_perp(r, c) = ml_rows(r, free[c]) - projected;
     }
   }
   Rows<T> S(g, g);
@@ -121,7 +123,7 @@ Rows<T> ReducedInformation(const Rows<T>& ml_rows) {
   return S;
 }
 
-using PoseJet = nested_jet::InnerJet<3>;
+using PoseJet = nested_jet::InnerJet<PlanarKind::kPoseDim>;
 template Rows<double> LengthResidualRows<double>(const Robot&, const Pose<double>&);
 template Rows<PoseJet> LengthResidualRows<PoseJet>(const Robot&, const Pose<PoseJet>&);
 template Rows<double> MlResidualRows<double>(const Robot&, const Pose<double>&);

@@ -32,13 +32,14 @@
 #include "identify/residuals.h"
 #include "model/cable.h"
 #include "model/geometry.h"
+#include "model/kind.h"
 #include "model/robot.h"
 
 namespace cablecal::internal {
 
 // The problem: readings grouped by pose (readings_of[j]: indices into measurements), the
 // weights that whiten them (a missing sensor's weight is 0; weights.inv_sigma_equilibrium > 0
-// adds each pose's equilibrium row when M < 3), whether a1x is held (gauge a1x)
+// adds each pose's equilibrium row when M < 3), the entries the gauge holds
 // and the priors on the geometry: the tracker's on the exit points (gauge prior) and
 // --geometry-prior's on every parameter, as one inverse sigma per coordinate (0: none).
 template <int M>
@@ -48,7 +49,7 @@ struct MlLeastSquaresProblem {
   const std::vector<Measurement>* measurements = nullptr;
   const std::vector<std::vector<int>>* readings_of = nullptr;
   ReadingWeights weights;
-  bool hold_a1x = true;
+  std::vector<int> held;  // geometry entries the gauge holds (gauge a1x: a1x): no unknowns
   Eigen::Matrix<double, kLayout.size(), 1> prior_geometry = Eigen::Matrix<double, kLayout.size(), 1>::Zero();
   Eigen::Matrix<double, kLayout.size(), 1> prior_inv_sigma = Eigen::Matrix<double, kLayout.size(), 1>::Zero();
   int max_iterations = 100;
@@ -76,22 +77,25 @@ struct LeastSquaresSummary {
 
 namespace least_squares {
 
-using PoseValues = std::vector<std::array<double, 3>>;
+using PoseValues = std::vector<PlanarPoseValues>;
 
-// One pose's share of the normal equations J^T J and J^T r: its own block A (3 x 3), its
-// coupling with the geometry B (3M x 3) and its gradient b (3).
+constexpr int kPose = PlanarKind::kPoseDim;
+using PoseMatrix = Eigen::Matrix<double, kPose, kPose>;
+
+// One pose's share of the normal equations J^T J and J^T r: its own block A (pose x pose), its
+// coupling with the geometry B (3M x pose) and its gradient b (pose).
 template <int M>
 struct PoseNormal {
-  Eigen::Matrix3d a;
-  Eigen::Matrix<double, PlanarLayout(M).size(), 3> b;
-  Eigen::Vector3d gradient;
-  Eigen::Matrix3d damped_inverse;  // (A + mu D)^-1 of the current step
+  PoseMatrix a;
+  Eigen::Matrix<double, PlanarLayout(M).size(), kPose> b;
+  PlanarPose gradient;
+  PoseMatrix damped_inverse;  // (A + mu D)^-1 of the current step
 };
 
 // A reading's sensor residuals at pose q (residuals.h, MlSensorResiduals), in kPlanarSensors' order.
 template <int M>
 Eigen::Matrix<double, kNumPlanarSensors, 1> SensorResiduals(const MlLeastSquaresProblem<M>& p, const Measurement& m,
-                                                            const std::array<double, 3>& q) {
+                                                            const PlanarPoseValues& q) {
   PoseReadings<M> readings;
   for (int k = 0; k < kNumSensorIds; ++k) readings.sensor_values[k] = m.value(static_cast<SensorId>(k));
   Eigen::Matrix<double, kNumPlanarSensors, 1> r;
@@ -144,7 +148,7 @@ double Normal(const MlLeastSquaresProblem<M>& p, const double* g, const PoseValu
   constexpr GeometryLayout kLayout = PlanarLayout(M);
   constexpr int kExits = kLayout.exit_coordinates();
   using Jet2 = ceres::Jet<double, 2>;
-  using Jet3 = ceres::Jet<double, 3>;
+  using Jet3 = ceres::Jet<double, kPose>;
   const ReadingWeights& w = p.weights;
   h_gg.setZero();
   gradient_g.setZero();
@@ -161,7 +165,7 @@ double Normal(const MlLeastSquaresProblem<M>& p, const double* g, const PoseValu
     const Eigen::Matrix<Jet3, 2, 2> R = Rotation(Jet3(q[j][2], 2));
     const Vec2<Jet3> position(Jet3(q[j][0], 0), Jet3(q[j][1], 1));
     Vec2<double> anchor[M];
-    Eigen::Matrix<double, 2, 3> anchor_by_pose[M];
+    Eigen::Matrix<double, kLayout.point_dim, kPose> anchor_by_pose[M];
     for (int i = 0; i < M; ++i) {
       const Vec2<Jet3> b = position + R * p.robot->cables[i].p_P_anchor_m.template cast<Jet3>();
       anchor[i] = Vec2<double>(b.x().a, b.y().a);
@@ -177,16 +181,19 @@ double Normal(const MlLeastSquaresProblem<M>& p, const double* g, const PoseValu
                                            Vec2<Jet2>(Jet2(anchor[i].x(), 0), Jet2(anchor[i].y(), 1)), m.dl_m(i));
         const double residual = r.a * w.inv_sigma_encoder;
         const Eigen::Vector2d by_anchor = r.v * w.inv_sigma_encoder;
-        const Eigen::Vector3d row_pose = anchor_by_pose[i].transpose() * by_anchor;
-        const Eigen::Vector3d row_cable(-by_anchor.x(), -by_anchor.y(), -w.inv_sigma_encoder);  // a_ix, a_iz, l_i0
-        const int cols[3] = {kLayout.exit(i, 0), kLayout.exit(i, 1), kLayout.initial_length(i)};
+        const PlanarPose row_pose = anchor_by_pose[i].transpose() * by_anchor;
+        // a_ix, a_iz, l_i0
+        const Eigen::Matrix<double, kLayout.point_dim + 1, 1> row_cable(-by_anchor.x(), -by_anchor.y(),
+                                                                        -w.inv_sigma_encoder);
+        constexpr int kPerCable = kLayout.point_dim + 1;
+        const int cols[kPerCable] = {kLayout.exit(i, 0), kLayout.exit(i, 1), kLayout.initial_length(i)};
         sum += residual * residual;
         pose.a.noalias() += row_pose * row_pose.transpose();
         pose.gradient += row_pose * residual;
-        for (int c = 0; c < 3; ++c) {
+        for (int c = 0; c < kPerCable; ++c) {
           pose.b.row(cols[c]) += row_cable(c) * row_pose.transpose();
           gradient_g(cols[c]) += row_cable(c) * residual;
-          for (int d = 0; d < 3; ++d) h_gg(cols[c], cols[d]) += row_cable(c) * row_cable(d);
+          for (int d = 0; d < kPerCable; ++d) h_gg(cols[c], cols[d]) += row_cable(c) * row_cable(d);
         }
       }
       // Each sensor reads one pose coordinate c (the laser z, the inclinometer theta): a row w e_c.
@@ -203,14 +210,14 @@ double Normal(const MlLeastSquaresProblem<M>& p, const double* g, const PoseValu
     // whatever its readings, on the exit points and the pose, by a Jet over those 2M + 3.
     if constexpr (EquilibriumRows(M) > 0) {
       if (w.inv_sigma_equilibrium > 0.0) {
-        using JetE = ceres::Jet<double, kExits + 3>;
-        JetE exits[kExits], pose_jet[3];
+        using JetE = ceres::Jet<double, kExits + kPose>;
+        JetE exits[kExits], pose_jet[kPose];
         for (int k = 0; k < kExits; ++k) exits[k] = JetE(g[k], k);
-        for (int c = 0; c < 3; ++c) pose_jet[c] = JetE(q[j][c], kExits + c);
+        for (int c = 0; c < kPose; ++c) pose_jet[c] = JetE(q[j][c], kExits + c);
         JetE r;
         MlEquilibriumResidual<M, JetE>(*p.robot, w, exits, pose_jet, &r);
         const Eigen::Matrix<double, kExits, 1> row_exits = r.v.template head<kExits>();
-        const Eigen::Vector3d row_pose = r.v.template tail<3>();
+        const PlanarPose row_pose = r.v.template tail<kPose>();
         sum += r.a * r.a;
         pose.a.noalias() += row_pose * row_pose.transpose();
         pose.gradient += row_pose * r.a;
@@ -227,12 +234,12 @@ double Normal(const MlLeastSquaresProblem<M>& p, const double* g, const PoseValu
     h_gg(k, k) += p.prior_inv_sigma(k) * p.prior_inv_sigma(k);
     gradient_g(k) += p.prior_inv_sigma(k) * r;
   }
-  if (p.hold_a1x) {  // a held a1x is no unknown: its column is out of J
-    h_gg.row(0).setZero();
-    h_gg.col(0).setZero();
-    gradient_g(0) = 0.0;
+  for (const int k : p.held) {  // a held entry is no unknown: its column is out of J
+    h_gg.row(k).setZero();
+    h_gg.col(k).setZero();
+    gradient_g(k) = 0.0;
     for (int j = 0; j < n; ++j) {
-      if (use[j]) poses[j].b.row(0).setZero();
+      if (use[j]) poses[j].b.row(k).setZero();
     }
   }
   return std::isfinite(sum) ? 0.5 * sum : std::numeric_limits<double>::infinity();
@@ -253,7 +260,7 @@ auto LmDiagonal(const Eigen::MatrixBase<Derived>& normal) {
 // the poses in `use` (q[j] = x, z, theta), in place, from their values on entry.
 template <int M>
 LeastSquaresSummary SolveMlLeastSquares(const MlLeastSquaresProblem<M>& p, double* g,
-                                        std::vector<std::array<double, 3>>& q, const std::vector<char>& use) {
+                                        std::vector<PlanarPoseValues>& q, const std::vector<char>& use) {
   using namespace least_squares;
   constexpr int G = PlanarLayout(M).size();
   using MatrixG = Eigen::Matrix<double, G, G>;
@@ -292,7 +299,7 @@ LeastSquaresSummary SolveMlLeastSquares(const MlLeastSquaresProblem<M>& p, doubl
   if (gradient_small()) return stop(true, "gradient tolerance reached");
 
   PoseValues candidate_q = q;
-  std::vector<Eigen::Vector3d> step_q(n);
+  std::vector<PlanarPose> step_q(n);
   int invalid_steps = 0;
   // The limit counts the steps taken or rejected; a step that only finds the minimum reached
   // (a tolerance met, not counted) is still computed at the limit, so that a solve that
@@ -301,7 +308,7 @@ LeastSquaresSummary SolveMlLeastSquares(const MlLeastSquaresProblem<M>& p, doubl
   const std::string limit_reached = "the iteration limit was reached";
   for (;;) {
     // The damped step: eliminate each pose's block, solve the geometry's Schur complement,
-    // back-substitute (a held a1x: its row and column of S the identity, its step 0).
+    // back-substitute (a held entry: its row and column of S the identity, its step 0).
     const double mu = 1.0 / radius;
     bool valid = true;
     MatrixG s = h_gg;
@@ -310,25 +317,25 @@ LeastSquaresSummary SolveMlLeastSquares(const MlLeastSquaresProblem<M>& p, doubl
     for (int j = 0; j < n && valid; ++j) {
       if (!use[j]) continue;
       PoseNormal<M>& pose = poses[j];
-      Eigen::Matrix3d damped = pose.a;
+      PoseMatrix damped = pose.a;
       damped.diagonal() += mu * LmDiagonal(pose.a);
-      const Eigen::LLT<Eigen::Matrix3d> llt(damped);
+      const Eigen::LLT<PoseMatrix> llt(damped);
       if (llt.info() != Eigen::Success) {
         valid = false;
         break;
       }
-      pose.damped_inverse = llt.solve(Eigen::Matrix3d::Identity());
-      const Eigen::Matrix<double, G, 3> bc = pose.b * pose.damped_inverse;
+      pose.damped_inverse = llt.solve(PoseMatrix::Identity());
+      const Eigen::Matrix<double, G, kPose> bc = pose.b * pose.damped_inverse;
       s.noalias() -= bc * pose.b.transpose();
       rhs.noalias() -= bc * pose.gradient;
     }
     VectorG step_g = VectorG::Zero();
     if (valid) {
-      if (p.hold_a1x) {
-        s.row(0).setZero();
-        s.col(0).setZero();
-        s(0, 0) = 1.0;
-        rhs(0) = 0.0;
+      for (const int k : p.held) {
+        s.row(k).setZero();
+        s.col(k).setZero();
+        s(k, k) = 1.0;
+        rhs(k) = 0.0;
       }
       const Eigen::LDLT<MatrixG> ldlt(s);
       step_g = -ldlt.solve(rhs);
@@ -374,7 +381,7 @@ LeastSquaresSummary SolveMlLeastSquares(const MlLeastSquaresProblem<M>& p, doubl
     for (int k = 0; k < G; ++k) candidate_g[k] = g[k] + step_g(k);
     for (int j = 0; j < n; ++j) {
       if (!use[j]) continue;
-      for (int c = 0; c < 3; ++c) candidate_q[j][c] = q[j][c] + step_q[j](c);
+      for (int c = 0; c < least_squares::kPose; ++c) candidate_q[j][c] = q[j][c] + step_q[j](c);
     }
     const double candidate_cost = Cost<M>(p, candidate_g, candidate_q, use);
     const double cost_change = cost - candidate_cost;

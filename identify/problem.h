@@ -29,6 +29,7 @@
 #include "identify/residuals.h"
 #include "identify/schur.h"
 #include "model/geometry.h"
+#include "model/kind.h"
 #include "model/sensors.h"
 
 namespace cablecal::internal {
@@ -45,7 +46,7 @@ inline void ApplyLevenbergMarquardt(ceres::Solver::Options* options) {
 }
 
 template <int M>
-Eigen::Vector3d StartingPose(const Robot& robot, const GeometryVector& g, const Measurement& m);
+PlanarPose StartingPose(const Robot& robot, const GeometryVector& g, const Measurement& m);
 
 // One reading's whitened residual, |r| / sigma.
 struct Reading {
@@ -64,12 +65,13 @@ inline std::vector<Reading> Beyond(const std::vector<Reading>& readings) {
   return out;
 }
 
-using PoseValues = std::vector<std::array<double, 3>>;
+using PoseValues = std::vector<PlanarPoseValues>;
 
 template <int M>
 struct IdentificationProblem {
   static constexpr GeometryLayout kLayout = PlanarLayout(M);
   static constexpr int kGeometry = kLayout.size();
+  static constexpr int kPose = PlanarKind::kPoseDim;
 
   const Robot& nominal;
   const std::vector<Measurement>& measurements;
@@ -93,15 +95,20 @@ struct IdentificationProblem {
   std::vector<std::string> copied;
   int copied_count = 0;
 
-  // Equations and unknowns (paper, Eq. 7; the gauge removes one unknown).
-  int per_pose_unknowns = 3;
+  // The geometry entries the gauge holds at their nominal values (PlanarKind::HeldByDefault
+  // under gauge a1x; none under prior or none), in increasing order: no unknowns.
+  std::vector<int> held;
+  bool IsHeld(int k) const { return std::find(held.begin(), held.end(), k) != held.end(); }
+
+  // Equations and unknowns (paper, Eq. 7; the gauge removes the held entries).
+  int per_pose_unknowns = PlanarKind::kPoseDim;
   int values_per_reading = M + kNumPlanarSensors;
   bool geometry_prior = false;
   double prior_sigma_m = 0.0;
-  int geometry_cols = kGeometry;  // the tangent space's: a held a1x has no column
+  int geometry_cols = kGeometry;  // the tangent space's: a held entry has no column
   int equilibrium_rows = 0;       // per pose
   int prior_rows = 0;             // Ceres' rows of the prior blocks
-  int prior_equations = 0;        // the equations they add (a held a1x's row is zero)
+  int prior_equations = 0;        // the equations they add (a held entry's row is zero)
   int equations = 0, unknowns = 0;
 
   GeometryVector nominal_geometry;
@@ -229,7 +236,7 @@ void IdentificationProblem<M>::CheckOptions() {
                          FormatDouble(kMaxGeometryPriorSigma_m) + " m (the standard deviation of the nominal geometry), not " +
                          FormatDouble(*options.geometry_prior_sigma_m));
   }
-  if (options.equilibrium && (!ml || M >= 3)) {
+  if (options.equilibrium && (!ml || EquilibriumRows(M) == 0)) {
     throw InputError("--equilibrium", "",
                      !ml ? std::string("needs --estimator ml (the paper estimator fixes theta at the inclinometer's reading)")
                          : "applies to robots with fewer cables than the pose's 3 degrees of freedom (2 cables): with " +
@@ -279,12 +286,13 @@ void IdentificationProblem<M>::CountEquations() {
   // with a1x held; the tracker prior adds 2M equations, the geometry prior one per geometric
   // unknown (any pose count is then determined). Repeated readings add equations, not
   // information on other poses: the rank test judges them.
-  per_pose_unknowns = ml ? 3 : 1;
+  per_pose_unknowns = ml ? PlanarKind::kPoseDim : 1;
   values_per_reading = M;
   for (const SensorUnit& u : kPlanarSensors) values_per_reading += ml && present[static_cast<int>(u.id)] ? 1 : 0;
   geometry_prior = options.geometry_prior_sigma_m.has_value();
   prior_sigma_m = options.geometry_prior_sigma_m.value_or(0.0);
-  geometry_cols = options.gauge == Gauge::kA1x ? kGeometry - 1 : kGeometry;
+  if (options.gauge == Gauge::kA1x) held = PlanarKind::HeldByDefault(kLayout);
+  geometry_cols = kGeometry - static_cast<int>(held.size());
   // ml with fewer cables than the pose's 3 DoF: each pose's static equilibrium, 3 - M rows of its
   // block (residuals.h, MlEquilibriumResidual), whatever the number of its readings.
   equilibrium_rows = ml && options.equilibrium ? EquilibriumRows(M) : 0;
@@ -348,7 +356,7 @@ void IdentificationProblem<M>::SetUpPriorsStartAndWeights() {
   }
   start_poses.resize(n);
   for (int j = 0; j < n; ++j) {
-    const Eigen::Vector3d start = StartingPose<M>(nominal, nominal_geometry, measurements[readings_of[j].front()]);
+    const PlanarPose start = StartingPose<M>(nominal, nominal_geometry, measurements[readings_of[j].front()]);
     start_poses[j] = {start(0), start(1), start(2)};
   }
 
@@ -365,7 +373,7 @@ void IdentificationProblem<M>::SetUpPriorsStartAndWeights() {
   ml_problem.measurements = &measurements;
   ml_problem.readings_of = &readings_of;
   ml_problem.weights = weights;
-  ml_problem.hold_a1x = options.gauge == Gauge::kA1x;
+  ml_problem.held = held;
   ml_problem.prior_geometry = nominal_geometry;
   ml_problem.prior_inv_sigma = prior_inv_sigma;
 }
@@ -375,7 +383,7 @@ std::unique_ptr<ceres::Problem> IdentificationProblem<M>::Build(double* g, PoseV
                                                                const RobustLoss& loss_kind) const {
   auto problem = std::make_unique<ceres::Problem>();
   problem->AddParameterBlock(g, kGeometry);
-  if (options.gauge == Gauge::kA1x) problem->SetManifold(g, new ceres::SubsetManifold(kGeometry, {0}));
+  if (!held.empty()) problem->SetManifold(g, new ceres::SubsetManifold(kGeometry, held));
   ceres::LossFunction* loss = nullptr;  // shared by every reading's block
   if (loss_kind.kind == LossKind::kHuber) loss = new ceres::HuberLoss(loss_kind.scale_sigmas);
   if (loss_kind.kind == LossKind::kCauchy) loss = new ceres::CauchyLoss(loss_kind.scale_sigmas);
@@ -385,21 +393,21 @@ std::unique_ptr<ceres::Problem> IdentificationProblem<M>::Build(double* g, PoseV
       const PoseReadings<M> readings = ReadingsOf<M>(measurements[k]);
       if (ml && loss) {
         for (int i = 0; i < M; ++i) {
-          problem->AddResidualBlock(new ceres::AutoDiffCostFunction<MlCableCost<M>, 1, kGeometry, 3>(
+          problem->AddResidualBlock(new ceres::AutoDiffCostFunction<MlCableCost<M>, 1, kGeometry, kPose>(
                                         new MlCableCost<M>{&nominal, readings, weights, i}),
                                     loss, g, q[j].data());
         }
         for (int sensor = 0; sensor < kNumPlanarSensors; ++sensor) {
           if (!present[static_cast<int>(kPlanarSensors[sensor].id)]) continue;
-          problem->AddResidualBlock(new ceres::AutoDiffCostFunction<MlOneSensorCost<M>, 1, 3>(
+          problem->AddResidualBlock(new ceres::AutoDiffCostFunction<MlOneSensorCost<M>, 1, kPose>(
                                         new MlOneSensorCost<M>{readings, weights, sensor}),
                                     loss, q[j].data());
         }
       } else if (ml) {
-        auto* lengths = new ceres::AutoDiffCostFunction<MlLengthCost<M>, M, kGeometry, 3>(
+        auto* lengths = new ceres::AutoDiffCostFunction<MlLengthCost<M>, M, kGeometry, kPose>(
             new MlLengthCost<M>{&nominal, readings, weights});
         problem->AddResidualBlock(lengths, nullptr, g, q[j].data());
-        auto* sensors = new ceres::AutoDiffCostFunction<MlSensorCost<M>, kNumPlanarSensors, 3>(
+        auto* sensors = new ceres::AutoDiffCostFunction<MlSensorCost<M>, kNumPlanarSensors, kPose>(
             new MlSensorCost<M>{readings, weights});
         problem->AddResidualBlock(sensors, nullptr, q[j].data());
       } else {
@@ -410,7 +418,7 @@ std::unique_ptr<ceres::Problem> IdentificationProblem<M>::Build(double* g, PoseV
     }
     if constexpr (EquilibriumRows(M) > 0) {
       if (equilibrium_rows > 0) {  // after the pose's readings: the last row of its block
-        problem->AddResidualBlock(new ceres::AutoDiffCostFunction<MlEquilibriumCost<M>, 1, kGeometry, 3>(
+        problem->AddResidualBlock(new ceres::AutoDiffCostFunction<MlEquilibriumCost<M>, 1, kGeometry, kPose>(
                                       new MlEquilibriumCost<M>{&nominal, weights}),
                                   nullptr, g, q[j].data());
       }
@@ -515,9 +523,9 @@ std::vector<Reading> IdentificationProblem<M>::ResidualsAt(const double* g, cons
     PoseEstimate e;
     e.pose_id = pose_id_of(j);
     if (ml) {
-      e.q = Eigen::Vector3d(q[j][0], q[j][1], q[j][2]);
+      e.q = PlanarPose(q[j].data());
     } else {  // z and theta as measured: their mean over the pose's readings
-      e.q = Eigen::Vector3d(q[j][0], 0.0, 0.0);
+      e.q = PlanarPose(q[j][0], 0.0, 0.0);
       for (const int k : readings_of[j]) {
         e.q.tail<2>() += Eigen::Vector2d(measurements[k].value(SensorId::kLaser), measurements[k].value(SensorId::kInclinometer));
       }
@@ -525,8 +533,8 @@ std::vector<Reading> IdentificationProblem<M>::ResidualsAt(const double* g, cons
     }
     for (const int k : readings_of[j]) {
       const Measurement& m = measurements[k];
-      const Eigen::Vector3d q_k =
-          ml ? e.q : Eigen::Vector3d(q[j][0], m.value(SensorId::kLaser), m.value(SensorId::kInclinometer));
+      const PlanarPose q_k =
+          ml ? e.q : PlanarPose(q[j][0], m.value(SensorId::kLaser), m.value(SensorId::kInclinometer));
       double length_residuals[M];
       LengthResiduals<M, double>(nominal, g, q_k, m.dl_m.data(), length_residuals);
       for (int i = 0; i < M; ++i) {

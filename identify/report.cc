@@ -10,6 +10,7 @@
 #include "common/version.h"
 #include "identify/identify.h"
 #include "model/geometry.h"
+#include "model/kind.h"
 
 namespace cablecal {
 namespace {
@@ -33,7 +34,9 @@ void EmitSensorCorrection(YAML::Emitter& o, const SystematicSensorErrors& e, con
     << YamlNumber{e.inclinometer_sec_coefficient_rad} << EndMap;
 }
 
-bool IsHeld(const IdentifyResult& r, int k) { return k == 0 && r.gauge == Gauge::kA1x; }
+bool IsHeld(const IdentifyResult& r, int k) {
+  return std::find(r.held_geometry.begin(), r.held_geometry.end(), k) != r.held_geometry.end();
+}
 
 namespace {
 
@@ -152,20 +155,20 @@ ResultParts IdentifyResultParts(const IdentifyResult& r, const std::string& comm
   const FlowRows::Syntax syntax = json ? FlowRows::Syntax::kJson : FlowRows::Syntax::kYaml;
   const bool ml = r.estimator == Estimator::kMaximumLikelihood;
   FlowRows poses(syntax);
-  const auto number = [](FlowRows& rows, const char* key, double value) {
-    rows.Key(key);
+  const auto number = [](FlowRows& rows, const std::string& key, double value) {
+    rows.Key(key.c_str());
     rows.Number(value);
   };
   for (const PoseEstimate& p : r.poses) {
     poses.BeginRow();
     poses.Key("pose");
     poses.Int(p.pose_id);
-    number(poses, "x", p.q(0));
-    if (r.has_covariance) number(poses, "x_std", p.std_dev(0));
-    number(poses, "z", p.q(1));
-    if (r.has_covariance && ml) number(poses, "z_std", p.std_dev(1));
-    number(poses, "theta", p.q(2));
-    if (r.has_covariance && ml) number(poses, "theta_std", p.std_dev(2));
+    // The paper estimator estimates x alone (z and theta are the laser's and inclinometer's).
+    for (int k = 0; k < PlanarKind::kPoseDim; ++k) {
+      const std::string name = PlanarKind::kPoseNames[k];
+      number(poses, name, p.q(k));
+      if (r.has_covariance && (ml || k == 0)) number(poses, name + "_std", p.std_dev(k));
+    }
     if (p.equilibrium_sigmas) number(poses, "equilibrium_sigmas", *p.equilibrium_sigmas);
     if (p.equilibrium_theta_error_rad) number(poses, "theta_minus_equilibrium_rad", *p.equilibrium_theta_error_rad);
     poses.EndRow();
@@ -190,13 +193,13 @@ ResultParts IdentifyResultParts(const IdentifyResult& r, const std::string& comm
       list("encoder_sigmas", f.encoder_sigmas);
       for (const SensorUnit& u : kPlanarSensors) {
         const std::optional<double>& sigmas = f.sensor_sigmas[static_cast<int>(u.id)];
-        if (sigmas) number(readings, (std::string(u.name) + "_sigmas").c_str(), *sigmas);
+        if (sigmas) number(readings, std::string(u.name) + "_sigmas", *sigmas);
       }
       if (robust) {
         list("encoder_weights", f.encoder_weights);
         for (const SensorUnit& u : kPlanarSensors) {
           const int id = static_cast<int>(u.id);
-          if (f.sensor_sigmas[id]) number(readings, (std::string(u.name) + "_weight").c_str(), f.sensor_weights[id]);
+          if (f.sensor_sigmas[id]) number(readings, std::string(u.name) + "_weight", f.sensor_weights[id]);
         }
       }
       if (f.min_detectable_sigmas.size() > 0) {
@@ -301,6 +304,9 @@ IdentifiedGeometry ReadIdentifiedGeometry(const Robot& nominal, const std::strin
                                              "): a result for another robot?");
   }
   const std::vector<std::string> names = GeometryNames(m);
+  // The default gauge's free entries (all but a1x): held a1x, or a tracked exit point's a1x, has
+  // no standard deviation a prior could use.
+  const std::vector<int> free = PlanarKind::FreeByDefault(LayoutOf(nominal));
   GeometryVector g(np);
   Eigen::VectorXd sd(np);
   for (int k = 0; k < np; ++k) {
@@ -309,9 +315,10 @@ IdentifiedGeometry ReadIdentifiedGeometry(const Robot& nominal, const std::strin
     const std::string key = "parameters." + name;
     if (!p || !p["value"]) throw InputError(path, key, "missing");
     g(k) = p["value"].as<double>(NAN);
-    sd(k) = p["std"] ? p["std"].as<double>(NAN) : (k == 0 ? 0.0 : NAN);
+    const bool held = !std::binary_search(free.begin(), free.end(), k);
+    sd(k) = p["std"] ? p["std"].as<double>(NAN) : (held ? 0.0 : NAN);
     if (!std::isfinite(g(k))) throw InputError(path, key + ".value", "must be a finite number");
-    if (k > 0 && !(sd(k) > 0.0 && std::isfinite(sd(k)))) {
+    if (!held && !(sd(k) > 0.0 && std::isfinite(sd(k)))) {
       throw InputError(path, key + ".std", "needs a positive standard deviation (identify computes it by default)");
     }
   }
@@ -323,13 +330,13 @@ IdentifiedGeometry ReadIdentifiedGeometry(const Robot& nominal, const std::strin
     if (!corr[a].IsSequence() || static_cast<int>(corr[a].size()) != np) throw InputError(path, "correlation", matrix);
     for (int b = 0; b < np; ++b) C(a, b) = corr[a][b].as<double>(NAN);
   }
-  // Covariance of every parameter but a1x (the gauge or a tracked exit point).
-  const int nr = np - 1;
+  // Covariance of the free parameters.
+  const int nr = static_cast<int>(free.size());
   IdentifiedGeometry known;
   known.geometry = g;
   known.covariance.resize(nr, nr);
   for (int a = 0; a < nr; ++a) {
-    for (int b = 0; b < nr; ++b) known.covariance(a, b) = C(a + 1, b + 1) * sd(a + 1) * sd(b + 1);
+    for (int b = 0; b < nr; ++b) known.covariance(a, b) = C(free[a], free[b]) * sd(free[a]) * sd(free[b]);
   }
   return known;
 }

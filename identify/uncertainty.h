@@ -28,17 +28,13 @@ template <int M>
 bool AddIdentifiability(const IdentificationProblem<M>& p, const BlockAnalysis& analysis, int expected_null,
                         IdentifyResult& result) {
   Identifiability& id = result.identifiability;
-  for (int k = (p.options.gauge == Gauge::kA1x ? 1 : 0); k < p.kGeometry; ++k) {
-    id.geometry_names.push_back(p.geometry_names[k]);
+  for (int k = 0; k < p.kGeometry; ++k) {
+    if (!p.IsHeld(k)) id.geometry_names.push_back(p.geometry_names[k]);
   }
   id.names = id.geometry_names;
   for (int j = 0; j < p.n; ++j) {
     const std::string pose = std::to_string(p.pose_id_of(j));
-    id.names.push_back("x" + pose);
-    if (p.ml) {
-      id.names.push_back("z" + pose);
-      id.names.push_back("theta" + pose);
-    }
+    for (int k = 0; k < p.per_pose_unknowns; ++k) id.names.push_back(PlanarKind::kPoseNames[k] + pose);
   }
   id.singular_values = analysis.singular_values;
   const double s_min = id.singular_values(id.singular_values.size() - 1);
@@ -186,9 +182,16 @@ void AddCovariance(const IdentificationProblem<M>& p, const BlockJacobian& block
     const int dof = M * p.num_readings - (kGeometry + p.n - expected_null);
     scale = dof > 0 ? 2.0 * final_cost / dof : std::numeric_limits<double>::quiet_NaN();
   }
-  // Back from the tangent space: a held a1x has no variance.
+  // Back from the tangent space (SubsetManifold: the free entries in order): a held entry has
+  // no variance.
+  std::vector<int> free;
+  for (int k = 0; k < kGeometry; ++k) {
+    if (!p.IsHeld(k)) free.push_back(k);
+  }
   Eigen::MatrixXd C = Eigen::MatrixXd::Zero(kGeometry, kGeometry);
-  C.bottomRightCorner(p.geometry_cols, p.geometry_cols) = scale * cov->geometry;
+  for (std::size_t a = 0; a < free.size(); ++a) {
+    for (std::size_t b = 0; b < free.size(); ++b) C(free[a], free[b]) = scale * (*cov).geometry(a, b);
+  }
   result.geometry_std = C.diagonal().cwiseMax(0.0).cwiseSqrt();
   for (int a = 0; a < kGeometry; ++a) {
     for (int b = 0; b < kGeometry; ++b) {

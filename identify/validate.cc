@@ -38,9 +38,9 @@ std::string RobotLabel(const std::string& role, const Robot& robot) { return "th
 // robot's.
 // Returns false with `why` (the message after the reading's place) when it cannot.
 bool PredictPose(const Robot& robot, const std::string& role, const GeometryVector& geometry, const Measurement& m,
-                 Eigen::Vector3d* q_out, std::string* why) {
+                 PlanarPose* q_out, std::string* why) {
   const int cables = robot.num_cables();
-  const Eigen::Vector3d start = StartingPose(robot, geometry, m);
+  const PlanarPose start = StartingPose(robot, geometry, m);
   const Eigen::VectorXd lengths = geometry.tail(cables) + m.dl_m;  // l_i0 + dl_i
   const ForwardResult fwd = SolveForwardGeometricoStatic(robot, lengths, &start);
   const std::string hint = ": readings of another robot, or a pose outside its workspace?";
@@ -52,7 +52,7 @@ bool PredictPose(const Robot& robot, const std::string& role, const GeometryVect
   // With 2 cables the forward model falls back on cold starts and keeps any stable
   // equilibrium: the bounds 3 or more cables get (kOtherAssembly) keep it honest. Only what
   // was measured is compared: a missing reading's start came from the model itself.
-  const Eigen::Vector3d& q = fwd.equilibrium.q;
+  const PlanarPose& q = fwd.equilibrium.q;
   const double dz_m = q(1) - m.value(SensorId::kLaser), dtheta_rad = q(2) - m.value(SensorId::kInclinometer);
   if ((m.has(SensorId::kLaser) && std::abs(dz_m) > kOtherAssemblyDistance_m) ||
       (m.has(SensorId::kInclinometer) && std::abs(dtheta_rad) > kOtherAssemblyAngle_rad)) {
@@ -81,7 +81,7 @@ ErrorSummary Stats(const std::vector<double>& errors) {
 
 // One robot's predictions of the readings `keep` says to keep.
 RobotPrediction Predict(const Robot& robot, const std::string& role, const std::vector<Measurement>& measurements,
-                        const std::vector<Eigen::Vector3d>& q, const std::vector<bool>& keep) {
+                        const std::vector<PlanarPose>& q, const std::vector<bool>& keep) {
   RobotPrediction p;
   p.name = role;
   p.robot = robot.name;
@@ -169,7 +169,7 @@ ValidationResult Validate(const Robot& calibrated, const std::optional<Robot>& n
   std::vector<const Robot*> robots = {&calibrated};
   std::vector<std::string> roles = {"calibrated"};
   if (nominal) robots.push_back(&*nominal), roles.push_back("nominal");
-  std::vector<std::vector<Eigen::Vector3d>> q(robots.size(), std::vector<Eigen::Vector3d>(measurements.size()));
+  std::vector<std::vector<PlanarPose>> q(robots.size(), std::vector<PlanarPose>(measurements.size()));
   std::vector<bool> keep(measurements.size(), true);
   for (std::size_t k = 0; k < robots.size(); ++k) {
     const GeometryVector geometry = GeometryOf(*robots[k]);

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "experiment/experiment.h"
+#include "model/kind.h"
 #include "model/robot.h"
 
 namespace cablecal {
@@ -28,7 +29,7 @@ struct RobotPrediction {
   std::string name;    // "calibrated" or "nominal": the role, used in CSV columns and summary keys
   std::string robot;   // the robot's own name and file, for the summary
   std::string source;
-  std::vector<Eigen::Vector3d> q;  // predicted (x, z, theta), m and rad
+  std::vector<PlanarPose> q;  // predicted (x, z, theta), m and rad
   // Predicted - measured, per reading; empty (and no summary) for a sensor the data lack.
   std::vector<double> z_error_m, theta_error_rad;
   std::optional<ErrorSummary> z_m, theta_rad;

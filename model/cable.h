@@ -31,6 +31,7 @@
 #include <array>
 #include <cmath>
 
+#include "model/kind.h"
 #include "model/robot.h"
 
 namespace cablecal {
@@ -42,7 +43,7 @@ using Vec3 = Eigen::Matrix<T, 3, 1>;
 
 // Platform pose q = (x_m, z_m, theta_rad) in F; theta counter-clockwise (x toward z).
 template <typename T>
-using Pose = Vec3<T>;
+using Pose = Eigen::Matrix<T, PlanarKind::kPoseDim, 1>;
 
 template <typename T>
 Eigen::Matrix<T, 2, 2> Rotation(const T& theta_rad) {

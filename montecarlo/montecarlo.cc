@@ -16,6 +16,7 @@
 #include "common/parallel.h"
 #include "common/random.h"
 #include "design/design.h"
+#include "model/geometry.h"
 
 namespace cablecal {
 
@@ -198,7 +199,7 @@ void ValidateOptions(const MonteCarloOptions& o, const Robot* nominal) {
   }
   // Every successful trial keeps 3m + n errors (8 bytes each): refuse a study that would not
   // fit in memory before starting it, naming the size.
-  const int geometry_count = 3 * (nominal ? nominal->num_cables() : 2);
+  const int geometry_count = PlanarLayout(nominal ? nominal->num_cables() : 2).size();
   double bytes = 0.0;
   for (const int n : o.pose_counts) {
     bytes += 8.0 * (geometry_count + n) * o.trials * static_cast<double>(o.designs.size());

@@ -5,6 +5,8 @@
 #include <stdexcept>
 
 #include "common/error.h"
+#include "model/geometry.h"
+#include "model/kind.h"
 #include "montecarlo/montecarlo.h"
 
 namespace cablecal {
@@ -176,7 +178,7 @@ std::string EncodePoses(const std::vector<PlanPose>& poses) {
   std::string out;
   Put<std::uint64_t>(&out, poses.size());
   for (const PlanPose& p : poses) {
-    for (int i = 0; i < 3; ++i) Put(&out, p.q(i));
+    for (int i = 0; i < PlanarKind::kPoseDim; ++i) Put(&out, p.q(i));
     PutVector(&out, p.tensions_N);
     PutVector(&out, p.lengths_m);
     PutVector(&out, p.length_change_m);
@@ -186,9 +188,9 @@ std::string EncodePoses(const std::vector<PlanPose>& poses) {
 
 std::vector<PlanPose> DecodePoses(const std::string& bytes) {
   Reader in(bytes);
-  std::vector<PlanPose> poses(in.GetCount(3 * sizeof(double) + 3 * sizeof(std::uint64_t)));
+  std::vector<PlanPose> poses(in.GetCount(PlanarKind::kPoseDim * sizeof(double) + 3 * sizeof(std::uint64_t)));
   for (PlanPose& p : poses) {
-    for (int i = 0; i < 3; ++i) p.q(i) = in.Get<double>();
+    for (int i = 0; i < PlanarKind::kPoseDim; ++i) p.q(i) = in.Get<double>();
     p.tensions_N = GetVector(&in);
     p.lengths_m = GetVector(&in);
     p.length_change_m = GetVector(&in);

@@ -259,7 +259,9 @@ TEST_F(Cli, SimulateSkipInfeasibleSkipsAndNamesThePoses) {
   ASSERT_EQ(ids.size() + skipped.size(), 10u);
   for (int id = 1, k = 0; id <= 10; ++id) {
     const bool was_skipped = std::find(skipped.begin(), skipped.end(), id) != skipped.end();
-    if (!was_skipped) EXPECT_EQ(ids[k++], id);
+    if (!was_skipped) {
+      EXPECT_EQ(ids[k++], id);
+    }
   }
   EXPECT_EQ(YAML::LoadFile(Path("t.yaml"))["true_poses"].size(), ids.size());
   // The skipped poses alone (renumbered from 1): the same true robot (seed 8) holds none.

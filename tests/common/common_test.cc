@@ -88,7 +88,8 @@ TEST(FlowRows, SameTextAsTheEmitterAndTheSameJsonAsToJson) {
   Rng rng(24);
   const auto number = [&]() {
     if (rng.Uniform() < 0.3) return specials[static_cast<std::size_t>(rng.Uniform() * specials.size())];
-    return rng.Normal() * std::pow(10.0, std::floor(rng.Uniform(-12.0, 12.0)));
+    const double mantissa = rng.Normal();  // sequenced: the operands of * are not
+    return mantissa * std::pow(10.0, std::floor(rng.Uniform(-12.0, 12.0)));
   };
   for (const int rows : {0, 1, 40}) {
     for (const std::string comment : {"", "per reading (data row), model - reading; 1 = full"}) {

@@ -89,10 +89,10 @@ Start<M> MakeStart(const Robot& nominal, const std::vector<Measurement>& measure
   s.problem.weights = WeightsOf(nominal.sensors);
   if (!measurements.front().has(SensorId::kLaser)) s.problem.weights.inv_sigma_sensor[static_cast<int>(SensorId::kLaser)] = 0.0;
   if (equilibrium) s.problem.weights.inv_sigma_equilibrium = 1.0 / EquilibriumSigma(nominal);
-  s.problem.hold_a1x = gauge == Gauge::kA1x;
+  if (gauge == Gauge::kA1x) s.problem.held = PlanarKind::HeldByDefault(PlanarLayout(M));
   if (gauge == Gauge::kPrior) {
     s.problem.prior_geometry = g;
-    s.problem.prior_inv_sigma.template head<2 * M>().setConstant(1.0 / *nominal.sensors.tracker_sigma_m);
+    s.problem.prior_inv_sigma.template head<PlanarLayout(M).exit_coordinates()>().setConstant(1.0 / *nominal.sensors.tracker_sigma_m);
   }
   return s;
 }
@@ -141,7 +141,7 @@ Solution SolveCeres(const Robot& nominal, const std::vector<Measurement>& measur
   ordering->AddElementToGroup(g, 1);
   if (gauge == Gauge::kPrior) {
     problem.AddResidualBlock(new ceres::AutoDiffCostFunction<internal::ExitPointPriorCost<M>, 2 * M, 3 * M>(
-                                 new internal::ExitPointPriorCost<M>{s.problem.prior_geometry.template head<2 * M>(), s.problem.prior_inv_sigma(0)}),
+                                 new internal::ExitPointPriorCost<M>{s.problem.prior_geometry.template head<PlanarLayout(M).exit_coordinates()>(), s.problem.prior_inv_sigma(0)}),
                              nullptr, g);
   }
   ceres::Solver::Options options;

@@ -28,7 +28,9 @@ TEST(CableGeometry, MatchesIndependentTangencyConstructionBothSides) {
       const PulleySide ps = side == 0 ? PulleySide::kLeft : PulleySide::kRight;
       for (int k = 0; k < 300; ++k) {
         // Anchors anywhere in the frame below the pulley's top, outside the pulley.
-        const Eigen::Vector2d B(rng.Uniform(0.05, robot.frame_width_m - 0.05), rng.Uniform(0.0, 2.8 + 0.5 * r));
+        // Drawn z first (GCC's order of the arguments this replaced: tests/support/random_robot.h).
+        const double z = rng.Uniform(0.0, 2.8 + 0.5 * r);
+        const Eigen::Vector2d B(rng.Uniform(0.05, robot.frame_width_m - 0.05), z);
         const Eigen::Vector2d C(A.x() + SideSign(ps) * r, A.y());
         if ((B - C).norm() < 1.5 * r) continue;
         const CableState<double> s = CableGeometry<double>(A, r, PulleySigns{SideSign(ps), 1.0}, B);
@@ -56,7 +58,8 @@ TEST(CableGeometry, UnderWrapMatchesIndependentTangencyConstruction) {
       const PulleySide ps = side == 0 ? PulleySide::kLeft : PulleySide::kRight;
       const Eigen::Vector2d C(A.x() + SideSign(ps) * r, A.y());
       for (int k = 0; k < 300; ++k) {
-        const Eigen::Vector2d B(rng.Uniform(0.05, 3.95), rng.Uniform(0.1 - 0.5 * r, 2.5));
+        const double z = rng.Uniform(0.1 - 0.5 * r, 2.5);  // z first, as above
+        const Eigen::Vector2d B(rng.Uniform(0.05, 3.95), z);
         if ((B - C).norm() < 1.5 * r) continue;
         const CableState<double> s = CableGeometry<double>(A, r, PulleySigns{SideSign(ps), -1.0}, B);
         ASSERT_TRUE(CableGeometryValid(s, r)) << "B = " << B.transpose();
@@ -142,7 +145,9 @@ TEST(Wrench, WrenchMatrixIsMinusLengthGradient) {
   using Jet3 = ceres::Jet<double, 3>;
   Rng rng(3);
   for (int k = 0; k < 200; ++k) {
-    const Eigen::Vector3d q(rng.Uniform(0.5, 4.7), rng.Uniform(0.2, 2.4), rng.Uniform(-1.0, 1.0));
+    // theta, z, x: the order GCC drew the arguments this replaced (tests/support/random_robot.h).
+    const double theta = rng.Uniform(-1.0, 1.0), z = rng.Uniform(0.2, 2.4), x = rng.Uniform(0.5, 4.7);
+    const Eigen::Vector3d q(x, z, theta);
     Pose<Jet3> qj;
     for (int i = 0; i < 3; ++i) qj(i) = Jet3(q(i), i);
     const Eigen::Matrix<double, 3, Eigen::Dynamic> W = WrenchMatrix<double>(robot, q);

@@ -30,9 +30,11 @@ std::vector<Robot> ManyCableRobots() {
 
 // A pose drawn over the frame box and the inclinometer range.
 Eigen::Vector3d RandomPose(const Robot& r, Rng& rng) {
-  return Eigen::Vector3d(rng.Uniform(r.margin_m, r.frame_width_m - r.margin_m),
-                         rng.Uniform(r.margin_m, std::min(r.frame_height_m - r.margin_m, r.laser_range_m)),
-                         rng.Uniform(-r.theta_max_rad, r.theta_max_rad));
+  // theta, z, x: the order GCC drew the arguments this replaced (tests/support/random_robot.h).
+  const double theta = rng.Uniform(-r.theta_max_rad, r.theta_max_rad);
+  const double z = rng.Uniform(r.margin_m, std::min(r.frame_height_m - r.margin_m, r.laser_range_m));
+  const double x = rng.Uniform(r.margin_m, r.frame_width_m - r.margin_m);
+  return Eigen::Vector3d(x, z, theta);
 }
 
 // The exact minimum-norm distribution of a 4-cable robot, independently of the LDP: the null

@@ -19,6 +19,16 @@
 
 namespace cablecal::testing {
 
+// The draws below are sequenced by hand: a function's arguments are evaluated in an unspecified
+// order (GCC right to left, clang left to right), so Vector2d(rng.Uniform(..), rng.Uniform(..))
+// drew other robots under clang. Each pair draws its second coordinate first, as GCC did, so
+// that the robots the tests were written against stay the same.
+inline Eigen::Vector2d DrawPair(Rng& rng, double x_lo, double x_hi, double z_lo, double z_hi) {
+  const double z = rng.Uniform(z_lo, z_hi);
+  const double x = rng.Uniform(x_lo, x_hi);
+  return Eigen::Vector2d(x, z);
+}
+
 inline Robot RandomValidRobot(Rng& rng, const std::string& name) {
   for (int attempt = 0; attempt < 1000; ++attempt) {
     Robot r = BuiltinRobot();
@@ -27,10 +37,10 @@ inline Robot RandomValidRobot(Rng& rng, const std::string& name) {
     r.frame_width_m = rng.Uniform(2.5, 5.5);
     r.frame_height_m = rng.Uniform(2.0, 3.0);
     r.platform_mass_kg = rng.Uniform(0.5, 10.0);
-    r.p_P_com_m = Eigen::Vector2d(rng.Uniform(-0.1, 0.1), rng.Uniform(-0.1, 0.1));
+    r.p_P_com_m = DrawPair(rng, -0.1, 0.1, -0.1, 0.1);
     const double half_bar = rng.Uniform(0.15, 0.3);
-    r.cables[0].p_P_anchor_m = Eigen::Vector2d(-half_bar + rng.Uniform(-0.1, 0.1), rng.Uniform(-0.1, 0.1));
-    r.cables[1].p_P_anchor_m = Eigen::Vector2d(half_bar + rng.Uniform(-0.1, 0.1), rng.Uniform(-0.1, 0.1));
+    r.cables[0].p_P_anchor_m = Eigen::Vector2d(-half_bar, 0.0) + DrawPair(rng, -0.1, 0.1, -0.1, 0.1);
+    r.cables[1].p_P_anchor_m = Eigen::Vector2d(half_bar, 0.0) + DrawPair(rng, -0.1, 0.1, -0.1, 0.1);
     r.cables[0].p_F_exit_m = Eigen::Vector2d(0.0, r.frame_height_m - rng.Uniform(0.0, 0.3));
     r.cables[1].p_F_exit_m = Eigen::Vector2d(r.frame_width_m, r.frame_height_m - rng.Uniform(0.0, 0.3));
     for (Cable& c : r.cables) {
@@ -85,8 +95,7 @@ inline Robot RandomRobotWithCables(Rng& rng, const std::string& name, int m, boo
       c.side = top_x[i] < W / 2 ? PulleySide::kLeft : PulleySide::kRight;
       c.wrap = PulleyWrap::kOver;
       const double along = top == 1 ? 0.0 : -half_w + 2.0 * half_w * i / (top - 1);
-      c.p_P_anchor_m = Eigen::Vector2d(along + rng.Uniform(-0.03, 0.03),
-                                       (fully_constrained ? half_h : 0.0) + rng.Uniform(0.0, 0.05));
+      c.p_P_anchor_m = Eigen::Vector2d(along, fully_constrained ? half_h : 0.0) + DrawPair(rng, -0.03, 0.03, 0.0, 0.05);
     }
     if (fully_constrained) {
       const std::vector<double> bottom_x = beam(m - top);
@@ -96,15 +105,15 @@ inline Robot RandomRobotWithCables(Rng& rng, const std::string& name, int m, boo
         c.side = bottom_x[k] < W / 2 ? PulleySide::kLeft : PulleySide::kRight;
         c.wrap = PulleyWrap::kUnder;
         const double along = m - top == 1 ? 0.0 : -half_w + 2.0 * half_w * k / (m - top - 1);
-        c.p_P_anchor_m = Eigen::Vector2d(along + rng.Uniform(-0.03, 0.03), -half_h - rng.Uniform(0.0, 0.05));
+        const Eigen::Vector2d d = DrawPair(rng, -0.03, 0.03, 0.0, 0.05);
+        c.p_P_anchor_m = Eigen::Vector2d(along + d.x(), -half_h - d.y());
       }
     }
     for (Cable& c : r.cables) {
       c.pulley_radius_m = rng.Uniform(0.010, 0.050);
       c.initial_length_m.reset();
     }
-    r.p_P_com_m = Eigen::Vector2d(rng.Uniform(-0.05, 0.05), fully_constrained ? rng.Uniform(-0.05, 0.05)
-                                                                              : rng.Uniform(-0.12, -0.02));
+    r.p_P_com_m = fully_constrained ? DrawPair(rng, -0.05, 0.05, -0.05, 0.05) : DrawPair(rng, -0.05, 0.05, -0.12, -0.02);
     const double weight_N = r.platform_mass_kg * r.gravity_mps2;
     r.tension_min_N = weight_N * rng.Uniform(0.02, 0.1);
     r.tension_max_N = weight_N * rng.Uniform(fully_constrained ? 6.0 : 3.5, fully_constrained ? 10.0 : 6.0);
