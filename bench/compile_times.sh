@@ -1,15 +1,15 @@
 #!/usr/bin/env bash
-# What each translation unit of CI's three builds costs to compile: runs scripts/test.sh's
+# What each translation unit of CI's two builds costs to compile: runs scripts/test.sh's
 # builds (not its tests) from scratch in OUT_DIR with bench/time_tu.sh as compiler and linker
 # launcher, then prints, per stage, the build's wall time, the CPU time of its compiles and
 # links, and the costliest translation units. No ccache (CCACHE_DISABLE), so every unit compiles.
-#   bench/compile_times.sh OUT_DIR [STAGE...]     STAGE: release sanitize fuzz (default: all three)
+#   bench/compile_times.sh OUT_DIR [STAGE...]     STAGE: release or sanitize (default: both)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 out="$(mkdir -p "$1" && cd "$1" && pwd)"
 shift
 stages=("$@")
-[ ${#stages[@]} -gt 0 ] || stages=(release sanitize fuzz)
+[ ${#stages[@]} -gt 0 ] || stages=(release sanitize)
 top="${CABLECAL_TOP:-15}"
 export CCACHE_DISABLE=1
 export CMAKE_CXX_COMPILER_LAUNCHER="$root/bench/time_tu.sh" CMAKE_CXX_LINKER_LAUNCHER="$root/bench/time_tu.sh"

@@ -112,6 +112,12 @@ struct TensionDistribution {
 };
 TensionDistribution DistributeTensions(const Robot& robot, const Eigen::Vector3d& q);
 
+// The same for any kind of robot: a wrench matrix W (d x m, d the platform's wrench size, m >= d
+// cables) and the gravity wrench w_g at one pose, the tension bounds, and the platform's weight
+// (the scale of "taut" and of the least-distance problem). m = d: the unique solution.
+TensionDistribution DistributeTensions(const Eigen::MatrixXd& W, const Eigen::VectorXd& gravity_wrench,
+                                       double tension_min_N, double tension_max_N, double weight_N);
+
 // Checks the conditions of EvaluatePose for an already known equilibrium (q, t), e.g. one
 // returned by the design optimiser. Does not re-solve.
 Feasibility CheckFeasibility(const Robot& robot, const Eigen::Vector3d& q,

@@ -1,7 +1,8 @@
-// Tension distribution of a robot with m >= 3 cables (statics.h, DistributeTensions).
+// Tension distribution of a robot with at least as many cables m as its wrench has rows d
+// (planar d = 3, spatial d = 6; statics.h, DistributeTensions).
 //
 // W t = b (b = -w_g) has the solutions t = t_p + N lambda, with t_p = W^+ b the minimum-norm
-// one and N an orthonormal basis of W's null space (m - 3 columns). t_p is orthogonal to N's
+// one and N an orthonormal basis of W's null space (m - d columns). t_p is orthogonal to N's
 // columns, so |t|^2 = |t_p|^2 + |lambda|^2: the minimum-norm t within the bounds is the
 // lambda of least norm with lo - t_p <= N lambda <= hi - t_p, a least-distance problem (LDP).
 // Lawson & Hanson (Solving Least Squares Problems, 1974, ch. 23) solve LDP exactly through one
@@ -119,36 +120,37 @@ std::optional<Eigen::VectorXd> MinimumNormWithin(const Eigen::VectorXd& t_p, con
 
 }  // namespace
 
-TensionDistribution DistributeTensions(const Robot& robot, const Eigen::Vector3d& q) {
-  const int m = robot.num_cables();
-  CABLECAL_CHECK(m >= 3, "a tension distribution is chosen for 3 or more cables; 2 cables fix theta");
+TensionDistribution DistributeTensions(const Eigen::MatrixXd& W, const Eigen::VectorXd& gravity_wrench,
+                                       double tension_min_N, double tension_max_N, double weight_N) {
+  const int d = static_cast<int>(W.rows());
+  const int m = static_cast<int>(W.cols());
+  CABLECAL_CHECK(m >= d && gravity_wrench.size() == d, "a tension distribution needs at least as many cables as "
+                                                       "the wrench has rows, and a gravity wrench of that size");
   TensionDistribution out;
-  const Eigen::Matrix<double, 3, Eigen::Dynamic> W = WrenchMatrix<double>(robot, q);
-  const Eigen::Vector3d b = -GravityWrench<double>(robot, q);
+  const Eigen::VectorXd b = -gravity_wrench;
   if (!W.allFinite()) return out;
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(W, Eigen::ComputeFullU | Eigen::ComputeFullV);
   const Eigen::VectorXd& sv = svd.singularValues();
   // Force rows are unit vectors and moment rows lever arms of the platform's size: a
   // singular value this small is a singular pose (cables in a line), not a small lever.
-  if (!(sv(2) > 1e-9 * std::max(1.0, sv(0)))) return out;
-  const double weight_N = robot.platform_mass_kg * robot.gravity_mps2;
+  if (!(sv(d - 1) > 1e-9 * std::max(1.0, sv(0)))) return out;
   const double positive_N = 1e-9 * weight_N;  // "taut": strictly above 0, beyond rounding
-  if (m == 3) {
+  if (m == d) {
     const Eigen::VectorXd t = svd.solve(b);
     if (!(t.minCoeff() > positive_N)) return out;
     out.tensions_N = t;
-    out.feasibility = t.minCoeff() < robot.tension_min_N   ? Feasibility::kTensionLow
-                      : t.maxCoeff() > robot.tension_max_N ? Feasibility::kTensionHigh
-                                                           : Feasibility::kFeasible;
+    out.feasibility = t.minCoeff() < tension_min_N   ? Feasibility::kTensionLow
+                      : t.maxCoeff() > tension_max_N ? Feasibility::kTensionHigh
+                                                     : Feasibility::kFeasible;
     return out;
   }
   const Eigen::VectorXd t_p = svd.solve(b);
-  const Eigen::MatrixXd N = svd.matrixV().rightCols(m - 3);
+  const Eigen::MatrixXd N = svd.matrixV().rightCols(m - d);
   constexpr double kInf = std::numeric_limits<double>::infinity();
-  if (auto t = MinimumNormWithin(t_p, N, robot.tension_min_N, robot.tension_max_N, weight_N)) {
+  if (auto t = MinimumNormWithin(t_p, N, tension_min_N, tension_max_N, weight_N)) {
     out.feasibility = Feasibility::kFeasible;
     out.tensions_N = *t;
-  } else if (auto t_low = MinimumNormWithin(t_p, N, robot.tension_min_N, kInf, weight_N)) {
+  } else if (auto t_low = MinimumNormWithin(t_p, N, tension_min_N, kInf, weight_N)) {
     out.feasibility = Feasibility::kTensionHigh;
     out.tensions_N = *t_low;
   } else if (auto t_pos = MinimumNormWithin(t_p, N, positive_N, kInf, weight_N)) {
@@ -156,6 +158,12 @@ TensionDistribution DistributeTensions(const Robot& robot, const Eigen::Vector3d
     out.tensions_N = *t_pos;
   }
   return out;
+}
+
+TensionDistribution DistributeTensions(const Robot& robot, const Eigen::Vector3d& q) {
+  CABLECAL_CHECK(robot.num_cables() >= 3, "a tension distribution is chosen for 3 or more cables; 2 cables fix theta");
+  return DistributeTensions(WrenchMatrix<double>(robot, q), GravityWrench<double>(robot, q), robot.tension_min_N,
+                            robot.tension_max_N, robot.platform_mass_kg * robot.gravity_mps2);
 }
 
 }  // namespace cablecal

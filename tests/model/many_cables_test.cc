@@ -4,7 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <vector>
 
 #include "common/random.h"
@@ -129,6 +131,84 @@ TEST(ManyCables, DistributionBalancesWithinBoundsAndNoSampleIsShorter) {
     }
   }
   EXPECT_GT(feasible, 100);
+}
+
+// The distribution written for any kind of robot, on 6-row wrench matrices (a spatial platform:
+// force and moment) built from random cable directions and anchors, m = 6 to 12: m = 6 the
+// unique solution of W t = -w_g; m = 7 the exact minimum norm by the one-line construction above,
+// independent of the LDP; every m balances within bounds and no sampled balancing t within
+// bounds is shorter. The planar robots' distribution is this function with 3 rows (above).
+TEST(ManyCables, SixRowWrenchDistributionForAnyCableCount) {
+  Rng rng(77);
+  int feasible = 0, checked_exact = 0;
+  for (int trial = 0; trial < 1400; ++trial) {
+    const int m = trial < 400 ? 7 : 6 + trial % 7;  // m = 7 often: the exact comparison
+    Eigen::MatrixXd W(6, m);
+    for (int i = 0; i < m; ++i) {
+      Eigen::Vector3d u(rng.Normal(), rng.Normal(), rng.Normal());
+      u = u.normalized();
+      u.z() = std::abs(u.z()) + 0.2;  // mostly upward: a suspended platform's cables
+      u.normalize();
+      const Eigen::Vector3d b(rng.Uniform(-0.3, 0.3), rng.Uniform(-0.3, 0.3), rng.Uniform(-0.1, 0.1));
+      W.col(i) << u, b.cross(u);
+    }
+    const double weight_N = rng.Uniform(10.0, 500.0);
+    Eigen::VectorXd w_g(6);
+    const Eigen::Vector3d com(rng.Uniform(-0.05, 0.05), rng.Uniform(-0.05, 0.05), rng.Uniform(-0.05, 0.05));
+    const Eigen::Vector3d f_g(0.0, 0.0, -weight_N);
+    w_g << f_g, com.cross(f_g);
+    const double lo = 0.02 * weight_N, hi = 4.0 * weight_N;
+    const TensionDistribution d = DistributeTensions(W, w_g, lo, hi, weight_N);
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd(W, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    const Eigen::VectorXd t_p = svd.solve(-w_g);
+    const bool ok = d.feasibility == Feasibility::kFeasible;
+    if (ok) {
+      ++feasible;
+      EXPECT_LT((W * d.tensions_N + w_g).norm(), 1e-9 * weight_N) << "m = " << m;
+      EXPECT_GE(d.tensions_N.minCoeff(), lo);
+      EXPECT_LE(d.tensions_N.maxCoeff(), hi);
+    }
+    if (m == 6) {
+      const bool within = t_p.minCoeff() >= lo && t_p.maxCoeff() <= hi;
+      EXPECT_EQ(ok, within) << "m = 6: the unique solution decides";
+      if (ok) {
+        EXPECT_LT((d.tensions_N - t_p).cwiseAbs().maxCoeff(), 1e-9 * weight_N);
+      }
+      continue;
+    }
+    const Eigen::MatrixXd N = svd.matrixV().rightCols(m - 6);
+    if (m == 7) {
+      const Eigen::VectorXd n = N.col(0);
+      double lambda_lo = -1e300, lambda_hi = 1e300;
+      for (int i = 0; i < m; ++i) {
+        const double a = (lo - t_p(i)) / n(i), b = (hi - t_p(i)) / n(i);
+        lambda_lo = std::max(lambda_lo, std::min(a, b));
+        lambda_hi = std::min(lambda_hi, std::max(a, b));
+      }
+      const bool exists = lambda_lo <= lambda_hi;
+      EXPECT_EQ(ok, exists) << "m = 7";
+      if (exists && ok) {
+        const Eigen::VectorXd exact = t_p + n * std::clamp(0.0, lambda_lo, lambda_hi);
+        EXPECT_LT((d.tensions_N - exact).cwiseAbs().maxCoeff(), 1e-9 * hi);
+        ++checked_exact;
+      }
+    }
+    for (int s = 0; s < 200; ++s) {
+      Eigen::VectorXd lambda(N.cols());
+      for (int c = 0; c < N.cols(); ++c) lambda(c) = rng.Normal(0.0, ok ? d.tensions_N.norm() : hi);
+      Eigen::VectorXd t = t_p + N * lambda;
+      if (ok) t = d.tensions_N + N * (lambda * rng.Uniform(0.0, 0.05));
+      if (t.minCoeff() < lo || t.maxCoeff() > hi) continue;
+      EXPECT_TRUE(ok) << "m = " << m << ": a sample within bounds where the verdict is " << ToString(d.feasibility);
+      if (ok) {
+        EXPECT_GE(t.norm(), d.tensions_N.norm() - 1e-9 * weight_N);
+      }
+    }
+  }
+  EXPECT_GT(feasible, 150);
+  EXPECT_GT(checked_exact, 30);
+  std::printf("six-row distributions: %d feasible of 1400, %d compared with the exact one (m = 7)\n", feasible,
+              checked_exact);
 }
 
 // Forward kinematics: from the lengths at a feasible pose, with and without a guess, back to
