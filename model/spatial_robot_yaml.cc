@@ -154,7 +154,8 @@ SpatialRobot Parse(const YAML::Node& root, const Reader& rd) {
       rd.Fail(c["swivel_axis"], key + ".swivel_axis",
               "has zero length: it is the direction in which the cable arrives at the exit point, e.g. [0, 0, 1]");
     }
-    cable.k_F_swivel_axis = axis.normalized();
+    // Normalised, unless unit already to rounding: a written robot then reads back bit for bit.
+    cable.k_F_swivel_axis = std::abs(axis.squaredNorm() - 1.0) > 1e-14 ? axis.normalized() : axis;
     cable.pulley_radius_m = rd.Number(c, key, "pulley_radius");
     rd.NonNegative(c["pulley_radius"], key + ".pulley_radius", cable.pulley_radius_m);
     if (cable.pulley_radius_m > 0.25 * smallest_side) {
@@ -264,7 +265,7 @@ SpatialRobot Parse(const YAML::Node& root, const Reader& rd) {
   const auto check_point = [&](const Eigen::Vector3d& p_P, const std::string& what) {
     const Eigen::Vector3d p_F = AnchorInF<double>(home, R, p_P);
     if (!InBox(p_F, robot.p_F_frame_min_m, robot.p_F_frame_max_m, -robot.margin_m)) {
-      rd.Fail(home_node, "home",
+      rd.Fail(root["home"], "home",
               "the platform's " + what + " is at " + Point(p_F) + " m at home, within limits.margin (" +
                   FormatDouble(robot.margin_m) + " m) of the frame box or outside it");
     }
@@ -273,7 +274,7 @@ SpatialRobot Parse(const YAML::Node& root, const Reader& rd) {
   check_point(robot.p_P_com_m, "centre of mass");
   const CableGeometryCheck geometry = CableGeometryAt(robot, home);
   if (!geometry.valid()) {
-    rd.Fail(home_node, "home",
+    rd.Fail(root["home"], "home",
             "cable " + std::to_string(geometry.cable) + " has invalid geometry at home: " + ToString(geometry.geometry) +
                 (geometry.geometry == SwivelGeometry::kSwivelAxis     ? " (its anchor is on the swivel axis)"
                  : geometry.geometry == SwivelGeometry::kInsidePulley ? " (its anchor is inside the pulley)"

@@ -35,7 +35,7 @@
 #pragma once
 
 #include <Eigen/Core>
-#include <array>
+#include <algorithm>
 #include <cmath>
 
 #include "model/kind.h"
