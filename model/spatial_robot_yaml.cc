@@ -3,6 +3,8 @@
 // loader's, model/yaml_reader.h.
 #include <yaml-cpp/yaml.h>
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <set>

@@ -35,6 +35,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>  // cross products
 #include <algorithm>
 #include <cmath>
 

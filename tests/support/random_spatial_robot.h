@@ -19,6 +19,7 @@
 // home); a draw the loader refuses is drawn again. Fixed seeds in the tests: deterministic.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <stdexcept>
 #include <string>
