@@ -105,9 +105,9 @@ TEST(SwivelPlanarEquivalence, BuiltInPlanarRobotsAtSampledFeasiblePoses) {
     const Robot robot = RobotFile(file);
     const std::vector<Eigen::Vector3d> poses = SampledPoses(robot, 60, 5);
     const int compared = ExpectPlanarEquivalence(robot, poses);
-    // planar3's middle pulley, at x = 0.5 m, has the platform's apex on its far side at some
-    // poses; every other robot's anchors are always on the inner side.
-    EXPECT_GE(compared, std::string(file) == "planar3_suspended.yaml" ? 30 : 60) << file;
+    // Every anchor of these robots' feasible poses is on its pulley's inner side (planar3's
+    // middle pulley, at x = 0.5 m, could see the apex on its far side; its samples do not).
+    EXPECT_EQ(compared, 60) << file;
   }
 }
 
@@ -118,10 +118,12 @@ TEST(SwivelPlanarEquivalence, RandomPlanarRobots) {
     for (const bool fully_constrained : {false, true}) {
       if (fully_constrained && m < 4) continue;
       const Robot robot = testing::RandomRobotWithCables(rng, "random" + std::to_string(m), m, fully_constrained);
-      compared += ExpectPlanarEquivalence(robot, SampledPoses(robot, 20, 100 + m));
+      compared += ExpectPlanarEquivalence(robot, SampledPoses(robot, 40, 100 + m));
     }
   }
-  EXPECT_GE(compared, 150);
+  // Pulleys on the beams between the corners have anchors on either side: about half the
+  // poses have every anchor on its pulley's inner side.
+  EXPECT_GE(compared, 200);
 }
 
 // The swivel pulley of a planar cable wraps like it: arriving up (k = +z, over) or down (k = -z,
@@ -208,9 +210,17 @@ TEST(SwivelCable, MatchesNumericalTangencyForRandomAxesAndAnchors) {
     const Vec3d D(rng.Uniform(-3.0, 3.0), rng.Uniform(-3.0, 3.0), rng.Uniform(0.0, 3.0));
     const Vec3d axis = RandomUnit(rng);
     const double r = rng.Uniform(0.01, 0.2);
-    // Anchors near the pulley too (a third of them), where the wrap is largest.
-    const double reach = k % 3 == 0 ? 4.0 * r : 3.0;
-    const Vec3d B = D + Vec3d(rng.Uniform(-reach, reach), rng.Uniform(-reach, reach), rng.Uniform(-reach, reach));
+    // Anchors anywhere within 3 m, near the pulley (a third), or behind it close to the axis
+    // (a third: where the wrap passes 3 pi / 2).
+    Vec3d B;
+    if (k % 3 == 0) {
+      B = D + Vec3d(rng.Uniform(-3.0, 3.0), rng.Uniform(-3.0, 3.0), rng.Uniform(-3.0, 3.0));
+    } else if (k % 3 == 1) {
+      B = D + 4.0 * r * Vec3d(rng.Uniform(-1.0, 1.0), rng.Uniform(-1.0, 1.0), rng.Uniform(-1.0, 1.0));
+    } else {
+      const Vec3d w = axis.cross(RandomUnit(rng)).normalized();
+      B = D + rng.Uniform(0.0, 1.5 * r) * w + rng.Uniform(-3.0 * r, 0.0) * axis;
+    }
     const SwivelCableState<double> s = SwivelCable<double>(D, axis, r, B);
     ASSERT_TRUE(AllFinite(s));
     if (s.geometry == SwivelGeometry::kSwivelAxis || s.geometry == SwivelGeometry::kInsidePulley) continue;
@@ -229,11 +239,12 @@ TEST(SwivelCable, MatchesNumericalTangencyForRandomAxesAndAnchors) {
     // The state's own invariants: T on the circle, the segment tangent there, u normal to k.
     EXPECT_NEAR((s.p_F_tangent_m - s.p_F_centre_m).norm(), r, 1e-13);
     EXPECT_NEAR((B - s.p_F_tangent_m).dot(s.p_F_tangent_m - s.p_F_centre_m), 0.0, 1e-12);
-    EXPECT_NEAR(s.u_F.dot(axis), 0.0, 1e-15);
+    // rho_perp loses digits to cancellation when the anchor is near the axis: |rho| / |rho_perp| ulps.
+    EXPECT_NEAR(s.u_F.dot(axis), 0.0, 1e-15 * (1.0 + 4.0 * (B - D).norm() / s.axis_distance_m));
     ++compared;
   }
-  EXPECT_GE(compared, 3000);
-  EXPECT_GE(wraps, 5);  // the wrap bound was exercised
+  EXPECT_GE(compared, 2000);
+  EXPECT_GE(wraps, 40);  // the wrap bound was exercised
 }
 
 // Poses of random spatial robots near home: every valid cable against the construction.
