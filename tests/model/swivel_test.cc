@@ -457,6 +457,7 @@ TEST(SwivelCable, InvalidConfigurationsAreNamedNeverNaN) {
       {Vec3d(0.0, 0.0, 1.0), SwivelGeometry::kSwivelAxis},          // straight below the exit point
       {Vec3d(0.0, 0.0, 3.0), SwivelGeometry::kSwivelAxis},          // straight ahead of it
       {D, SwivelGeometry::kSwivelAxis},                              // at it
+      {Vec3d(1e-8, 0.0, 1.0), SwivelGeometry::kSwivelAxis},         // within the tolerance of the axis
       {Vec3d(0.06, 0.0, 2.01), SwivelGeometry::kInsidePulley},      // |m| = 0.0141 < r
       {Vec3d(0.05, 0.0, 2.0), SwivelGeometry::kInsidePulley},       // at the centre
       {Vec3d(0.01, 0.0, 2.0 - 0.045), SwivelGeometry::kWrap},       // under the pulley, near the axis: 278 degrees
@@ -473,6 +474,11 @@ TEST(SwivelCable, InvalidConfigurationsAreNamedNeverNaN) {
     EXPECT_EQ(sj.geometry, c.expected);
     EXPECT_TRUE(std::isfinite(sj.length_m.a) && sj.length_m.v.allFinite()) << "B = " << c.B.transpose();
   }
+  // On a tilted axis, where rounding leaves |rho_perp| at 1e-16 m rather than 0.
+  const Vec3d tilted = Vec3d(1.0, 2.0, 3.0).normalized();
+  const SwivelCableState<double> rounded = SwivelCable<double>(D, tilted, r, Vec3d(D + 1.7 * tilted));
+  EXPECT_EQ(rounded.geometry, SwivelGeometry::kSwivelAxis) << "|rho_perp| = " << rounded.axis_distance_m;
+  EXPECT_TRUE(AllFinite(rounded));
   EXPECT_STREQ(ToString(SwivelGeometry::kSwivelAxis), "swivel_axis");
   EXPECT_STREQ(ToString(SwivelGeometry::kInsidePulley), "inside_pulley");
   EXPECT_STREQ(ToString(SwivelGeometry::kWrap), "wrap");
