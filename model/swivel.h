@@ -20,10 +20,11 @@
 //
 // Validity (SwivelGeometry): the anchor off the swivel axis (|rho_perp| > kSwivelAxisTolerance_m,
 // else u is undefined: kSwivelAxis), outside the pulley (|m| > r: kInsidePulley), and a wrap
-// angle 0 <= beta <= 3 pi / 2 (kWrap otherwise: beta < 0 would bend the cable away from the
-// pulley, which it cannot touch there; beyond 3 pi / 2 the free segment runs back across the
-// arriving cable; the planar model's range, model/cable.h). An invalid configuration is a
-// named reason and finite numbers, never a NaN.
+// angle 0 <= beta <= 3 pi / 2 (kWrap otherwise; the planar model's range, model/cable.h).
+// beta > 3 pi / 2 happens for an anchor behind the pulley close to the axis: the free segment
+// would run back across the arriving cable. beta < 0 would bend the cable away from the
+// pulley; the swivel keeps the anchor on the pulley's side of the axis, so only rounding could
+// give it. An invalid configuration is a named reason and finite numbers, never a NaN.
 //
 // Eyelet (r = 0): l = |rho|, the cable runs straight from D_i; valid unless B_i = D_i.
 //
