@@ -8,9 +8,12 @@
 #include <regex>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "common/error.h"
 #include "common/random.h"
+#include "model/geometry.h"
+#include "model/kind.h"
 #include "model/robot.h"
 #include "model/spatial_robot.h"
 #include "model/swivel.h"
@@ -56,6 +59,23 @@ int LineOf(const std::string& yaml, const std::string& text, int occurrence = 1)
   EXPECT_NE(at, std::string::npos) << text;
   if (at == std::string::npos) return -1;
   return 1 + static_cast<int>(std::count(yaml.begin(), yaml.begin() + static_cast<long>(at), '\n'));
+}
+
+// The spatial kind: 6 pose coordinates, 3-D points and wrenches, and a geometry layout whose
+// names run over three axes.
+TEST(SpatialKind, PoseAndLayout) {
+  static_assert(SpatialKind::kPoseDim == 6 && SpatialKind::kPointDim == 3 && SpatialKind::kWrenchDim == 6);
+  EXPECT_STREQ(SpatialKind::kPoseNames[4], "pitch");
+  EXPECT_STREQ(SpatialKind::kPoseUnits[5], "rad");
+  const GeometryLayout layout = SpatialKind::Layout(2);
+  EXPECT_EQ(layout.size(), 8);
+  EXPECT_EQ(layout.exit(1, 2), 5);
+  EXPECT_EQ(layout.initial_length(1), 7);
+  EXPECT_EQ(layout.axis_of(5), 2);
+  const std::vector<std::string> expected = {"a1x", "a1y", "a1z", "a2x", "a2y", "a2z", "l10", "l20"};
+  EXPECT_EQ(layout.names(), expected);
+  EXPECT_EQ(SpatialKind::Layout(10).names()[29], "a10z");
+  EXPECT_EQ(SpatialKind::Layout(10).names()[39], "l100");
 }
 
 TEST(SpatialRobotFile, BuiltInFilesLoadWithValidGeometryAtHome) {
