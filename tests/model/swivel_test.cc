@@ -126,6 +126,28 @@ TEST(SwivelPlanarEquivalence, RandomPlanarRobots) {
   EXPECT_GE(compared, 200);
 }
 
+// PlanarAsSpatial keeps the home pose (theta from the equilibrium with 2 cables), the sensors'
+// sigmas and the exits; a converted robot with 3 or more cables is a valid spatial robot file.
+TEST(SwivelPlanarEquivalence, PlanarAsSpatialKeepsHomeSensorsAndExits) {
+  for (const char* file : {"wang2022.yaml", "planar3_suspended.yaml", "planar4_fully_constrained.yaml",
+                           "asymmetric.yaml"}) {
+    const Robot planar = RobotFile(file);
+    const SpatialRobot s = PlanarAsSpatial(planar);
+    const Eigen::Vector3d home = EvaluateHome(planar).equilibrium.q;
+    EXPECT_LT((s.home_pose() - SpatialOfPlanar(home)).cwiseAbs().maxCoeff(), 1e-15) << file;
+    EXPECT_NEAR(s.sensors.laser_m->sigma(), planar.sensors.laser_sigma_m(), 1e-18) << file;
+    EXPECT_NEAR(s.sensors.inclinometer_rad->sigma(), planar.sensors.inclinometer_sigma_rad(), 1e-18) << file;
+    EXPECT_EQ(s.sensors.encoder_sigma_m, planar.sensors.encoder_sigma_m);
+    for (int i = 0; i < planar.num_cables(); ++i) {
+      EXPECT_EQ(s.cables[i].p_F_exit_m, Vec3d(planar.cables[i].p_F_exit_m.x(), 0.0, planar.cables[i].p_F_exit_m.y()));
+    }
+    EXPECT_TRUE(CableGeometryAt(s, s.home_pose()).valid()) << file;
+    if (planar.num_cables() >= kMinSpatialCables) {
+      EXPECT_NO_THROW(LoadSpatialRobotFromString(SpatialRobotToYaml(s), file)) << file;
+    }
+  }
+}
+
 // The swivel pulley of a planar cable wraps like it: arriving up (k = +z, over) or down (k = -z,
 // under), whichever side the anchor is on, in closed form against cable.h's both signs.
 TEST(SwivelPlanarEquivalence, BothWrapsAndSidesAgainstCableH) {
