@@ -56,7 +56,7 @@ struct SpatialSensors {
   std::optional<RangedNoise> laser_m;         // height of p above the floor z = frame min z
   struct Position {                           // a tracker reading the point `target` of P in F
     RangedNoise noise_m;
-    Eigen::Vector3d p_P_target_m = Eigen::Vector3d::Zero();
+    Eigen::Vector3d p_P_target_m = Eigen::Vector3d::Zero();  // optional in the file: default p
   };
   std::optional<Position> position;
   std::optional<RangedNoise> swivel_rad;      // swivel-angle encoders, relative to home
