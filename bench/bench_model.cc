@@ -1,8 +1,13 @@
 // Model and workspace timings (see bench/README.md for the figures and the command).
 #include <benchmark/benchmark.h>
+#include <ceres/jet.h>
 
+#include "common/random.h"
 #include "model/cable.h"
+#include "model/spatial_robot.h"
 #include "model/statics.h"
+#include "model/swivel.h"
+#include "tests/support/random_spatial_robot.h"
 #include "workspace/workspace.h"
 
 namespace {
@@ -66,6 +71,41 @@ void BM_WorkspaceGridManyCables(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(ComputeWorkspaceGrid(robot, 0.05));
 }
 BENCHMARK(BM_WorkspaceGridManyCables)->Arg(3)->Arg(4)->Unit(benchmark::kMillisecond);
+
+// Spatial robots: every cable's length through its swivel pulley at a pose near home, in
+// doubles, and with its Jacobian with respect to the pose (ceres::Jet of dimension 6, what the
+// spatial identification will evaluate), for m = 4 (irma4u), 6 (a random robot, seed 6) and 8
+// (ipanema1).
+SpatialRobot SpatialBenchRobot(int m) {
+  if (m == 6) {
+    Rng rng(6);
+    return testing::RandomSpatialRobot(rng, "random6", 6);
+  }
+  return LoadSpatialRobotFile(std::string(CABLECAL_SOURCE_DIR) + (m == 4 ? "/robots/irma4u.yaml" : "/robots/ipanema1.yaml"));
+}
+
+SpatialPose<double> NearHome(const SpatialRobot& robot) {
+  SpatialPose<double> q = robot.home_pose();
+  q += (SpatialPose<double>() << 0.1, -0.05, 0.08, 0.02, -0.03, 0.05).finished();
+  return q;
+}
+
+void BM_SpatialCableLengths(benchmark::State& state) {
+  const SpatialRobot robot = SpatialBenchRobot(static_cast<int>(state.range(0)));
+  const SpatialPose<double> q = NearHome(robot);
+  for (auto _ : state) benchmark::DoNotOptimize(CableLengths<double>(robot, q));
+}
+BENCHMARK(BM_SpatialCableLengths)->Arg(4)->Arg(6)->Arg(8);
+
+void BM_SpatialCableLengthsJacobian(benchmark::State& state) {
+  using J = ceres::Jet<double, 6>;
+  const SpatialRobot robot = SpatialBenchRobot(static_cast<int>(state.range(0)));
+  const SpatialPose<double> q = NearHome(robot);
+  SpatialPose<J> qj;
+  for (int j = 0; j < 6; ++j) qj(j) = J(q(j), j);
+  for (auto _ : state) benchmark::DoNotOptimize(CableLengths<J>(robot, qj));
+}
+BENCHMARK(BM_SpatialCableLengthsJacobian)->Arg(4)->Arg(6)->Arg(8);
 
 }  // namespace
 

@@ -33,13 +33,9 @@
 
 #include "model/kind.h"
 #include "model/robot.h"
+#include "model/vectors.h"
 
 namespace cablecal {
-
-template <typename T>
-using Vec2 = Eigen::Matrix<T, 2, 1>;
-template <typename T>
-using Vec3 = Eigen::Matrix<T, 3, 1>;
 
 // Platform pose q = (x_m, z_m, theta_rad) in F; theta counter-clockwise (x toward z).
 template <typename T>

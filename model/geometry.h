@@ -34,6 +34,9 @@ struct GeometryLayout {
 };
 
 constexpr GeometryLayout PlanarLayout(int num_cables) { return GeometryLayout{num_cables, kPlanarPointDim, "xz"}; }
+// Spatial robots: exit points (x, y, z) in F; a1x a1y a1z ... amx amy amz, then l10 ... lm0.
+inline constexpr int kSpatialPointDim = 3;
+constexpr GeometryLayout SpatialLayout(int num_cables) { return GeometryLayout{num_cables, kSpatialPointDim, "xyz"}; }
 inline GeometryLayout LayoutOf(const Robot& robot) { return PlanarLayout(robot.num_cables()); }
 
 // The geometry vector is dynamic: the cable count lives in the robot alone (the

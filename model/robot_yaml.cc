@@ -1,14 +1,9 @@
 // Robot file parsing and validation (format: README, "Robot file").
 #include <yaml-cpp/yaml.h>
 
-#include <cctype>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
-#include <fstream>
-#include <map>
 #include <set>
-#include <sstream>
 
 #include "common/error.h"
 #include "common/format.h"
@@ -16,93 +11,12 @@
 #include "model/robot.h"
 #include "model/sensor_model.h"
 #include "model/statics.h"
+#include "model/yaml_reader.h"
 
 namespace cablecal {
 namespace {
 
-// Walks the YAML tree and turns every problem into one InputError "file:line: key: problem".
-class Reader {
- public:
-  explicit Reader(std::string source) : source_(std::move(source)) {}
-
-  [[noreturn]] void Fail(const YAML::Node& node, const std::string& key,
-                         const std::string& problem) const {
-    std::string where = source_;
-    if (node && node.Mark().line >= 0) where += ":" + std::to_string(node.Mark().line + 1);
-    throw InputError(where, key, problem);
-  }
-
-  // A mapping with exactly the allowed keys (those in `required` must be present).
-  void ExpectMap(const YAML::Node& node, const std::string& key,
-                 const std::set<std::string>& required, const std::set<std::string>& optional) const {
-    if (!node.IsMap()) Fail(node, key, "must be a mapping");
-    std::map<std::string, int> seen_line;  // a repeated key would silently lose one value
-    for (const auto& kv : node) {
-      const std::string name = kv.first.as<std::string>();
-      const auto [it, fresh] = seen_line.emplace(name, kv.first.Mark().line + 1);
-      if (!fresh) Fail(kv.first, Join(key, name), "given twice (first at line " + std::to_string(it->second) + ")");
-      if (!required.count(name) && !optional.count(name)) {
-        // Quoted at most 40 characters long: a file that is not a robot file at all (a
-        // password file given by mistake) is not echoed into the message.
-        const std::string shown = name.size() > 40 ? name.substr(0, 40) + "..." : name;
-        Fail(kv.first, Join(key, shown), "unknown key (misspelt?)");
-      }
-    }
-    for (const std::string& name : required) {
-      if (!node[name]) Fail(node, Join(key, name), "missing");
-    }
-  }
-
-  double Number(const YAML::Node& parent, const std::string& parent_key, const std::string& name) const {
-    return NumberNode(parent[name], Join(parent_key, name));
-  }
-
-  double NumberNode(const YAML::Node& node, const std::string& key) const {
-    if (!node.IsScalar()) Fail(node, key, "must be a number");
-    double value = 0.0;
-    const std::string text = node.Scalar();
-    if (!ParseFiniteDouble(text, &value)) {
-      Fail(node, key, "must be a finite number (got '" + text + "')");
-    }
-    return value;
-  }
-
-  Eigen::Vector2d Vector2(const YAML::Node& node, const std::string& key) const {
-    if (!node.IsSequence() || node.size() != 2) Fail(node, key, "must be a list of two numbers [x, z]");
-    return Eigen::Vector2d(NumberNode(node[0], key + "[0]"), NumberNode(node[1], key + "[1]"));
-  }
-
-  std::string String(const YAML::Node& node, const std::string& key) const {
-    if (!node.IsScalar()) Fail(node, key, "must be a string");
-    return node.Scalar();
-  }
-
-  void Positive(const YAML::Node& node, const std::string& key, double v) const {
-    if (!(v > 0.0)) Fail(node, key, "must be > 0 (got " + FormatDouble(v) + ")");
-  }
-  // A bound far beyond any robot this tool is for: a value past it is a typo or a unit slip
-  // (981 for 9.81, a frame in mm), and would overflow the statics silently.
-  void AtMost(const YAML::Node& node, const std::string& key, double v, double most, const std::string& unit) const {
-    if (!(v <= most)) {
-      Fail(node, key, "must be at most " + FormatDouble(most) + " " + unit + " (got " + FormatDouble(v) + "): units?");
-    }
-  }
-  void AtLeast(const YAML::Node& node, const std::string& key, double v, double least, const std::string& unit) const {
-    if (!(v >= least)) Fail(node, key, "must be at least " + FormatDouble(least) + " " + unit + " (got " + FormatDouble(v) + ")");
-  }
-  void NonNegative(const YAML::Node& node, const std::string& key, double v) const {
-    if (!(v >= 0.0)) Fail(node, key, "must be >= 0 (got " + FormatDouble(v) + ")");
-  }
-
-  static std::string Join(const std::string& a, const std::string& b) {
-    return a.empty() ? b : a + "." + b;
-  }
-
-  const std::string& source() const { return source_; }
-
- private:
-  std::string source_;
-};
+using internal::Reader;
 
 // The node of a key of the sensors block ("sensors.laser" or "sensors.laser.accuracy"), for the
 // line of a message.
@@ -119,8 +33,18 @@ YAML::Node SensorsNode(const YAML::Node& sensors, const std::string& key) {
 Robot Parse(const YAML::Node& root, const Reader& rd) {
   Robot robot;
   robot.source = rd.source();
+  // `kind` absent or `planar`: this loader's file. A spatial robot's file has keys of its own,
+  // so it is refused by its kind before any of them is called unknown.
+  const std::string kind = internal::KindOf(root, rd);
+  if (kind == "spatial") {
+    rd.Fail(root["kind"], "kind", "a spatial robot: this command serves planar robots only so far");
+  }
+  if (!kind.empty() && kind != "planar") {
+    rd.Fail(root["kind"], "kind",
+            "must be 'planar' or 'spatial' (got '" + PrintableText(kind.substr(0, 40)) + "')");
+  }
   rd.ExpectMap(root, "", {"name", "gravity", "frame", "platform", "cables", "tension", "limits", "home", "sensors"},
-               {"true_poses", "home_theta_deg"});
+               {"true_poses", "home_theta_deg", "kind"});
 
   robot.name = rd.String(root["name"], "name");
   if (robot.name.empty()) rd.Fail(root["name"], "name", "must not be empty");
@@ -364,43 +288,12 @@ Robot Parse(const YAML::Node& root, const Reader& rd) {
 
 }  // namespace
 
-// Degrees for the file: the radians divided back, rounded to 12 significant digits so that a
-// value typed as 60 is written as 60 and not 59.99999999999999.
-static double Degrees(double rad) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof(buffer), "%.12g", rad / kDegToRad);
-  double degrees = 0.0;
-  CABLECAL_CHECK(ParseFiniteDouble(buffer, &degrees), "a finite angle formats and parses back");
-  return degrees;
-}
+// Degrees for the file, as the spatial loader writes them too (model/yaml_reader.h).
+static double Degrees(double rad) { return internal::DegreesForFile(rad); }
 
 Robot LoadRobotFromString(const std::string& yaml_text, const std::string& source) {
   const Reader rd(source);
-  // A second document would be silently ignored by YAML::Load. Found from the text: a line
-  // starting with a document marker ("---" or "...") after content. (yaml-cpp 0.7's LoadAll
-  // loops forever on some malformed inputs, which the fuzzer found.)
-  {
-    std::istringstream lines(yaml_text);
-    std::string line;
-    bool content = false;
-    for (int number = 1; std::getline(lines, line); ++number) {
-      const bool marker = (line.rfind("---", 0) == 0 || line.rfind("...", 0) == 0) &&
-                          (line.size() == 3 || std::isspace(static_cast<unsigned char>(line[3])));
-      if (marker && content) {
-        throw InputError(source + ":" + std::to_string(number), "",
-                         "a second YAML document ('" + line.substr(0, 3) + "'): a robot file holds one robot");
-      }
-      const std::size_t first = line.find_first_not_of(" \t\r");
-      if (!marker && first != std::string::npos && line[first] != '#') content = true;
-    }
-  }
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml_text);
-  } catch (const YAML::ParserException& e) {
-    throw InputError(source + ":" + std::to_string(e.mark.line + 1), "", "not valid YAML: " + e.msg);
-  }
-  if (!root || root.IsNull()) throw InputError(source, "", "the robot file is empty");
+  const YAML::Node root = internal::LoadRobotDocument(yaml_text, source);
   try {
     return Parse(root, rd);
   } catch (const YAML::Exception& e) {
@@ -410,23 +303,7 @@ Robot LoadRobotFromString(const std::string& yaml_text, const std::string& sourc
 }
 
 Robot LoadRobotFile(const std::string& path) {
-  // A robot file is a page of YAML: refuse devices (/dev/zero would be read forever) and
-  // anything over kMaxRobotFileBytes before reading it.
-  std::error_code ec;
-  const std::filesystem::file_status st = std::filesystem::status(path, ec);
-  if (std::filesystem::exists(st) && !std::filesystem::is_regular_file(st)) {
-    throw InputError(path, "", "is not a regular file (a folder, a device or a pipe)");
-  }
-  if (std::filesystem::exists(st) && std::filesystem::file_size(path, ec) > kMaxRobotFileBytes) {
-    throw InputError(path, "", "is larger than " + std::to_string(kMaxRobotFileBytes / 1024) +
-                                   " KiB: not a robot file");
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, "", "cannot open the robot file");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  if (in.bad()) throw InputError(path, "", "cannot read the robot file");
-  return LoadRobotFromString(buffer.str(), path);
+  return LoadRobotFromString(internal::ReadRobotFileText(path), path);
 }
 
 const Robot& BuiltinRobot() {

@@ -1,0 +1,431 @@
+// Spatial robot file parsing, validation and writing (format: README, "Spatial robots"). The
+// reading machinery (file checks, one YAML document, file:line:key messages) is the planar
+// loader's, model/yaml_reader.h.
+#include <yaml-cpp/yaml.h>
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include "common/error.h"
+#include "common/format.h"
+#include "common/yaml_writer.h"
+#include "model/sensor_model.h"
+#include "model/spatial_robot.h"
+#include "model/swivel.h"
+#include "model/yaml_reader.h"
+
+namespace cablecal {
+namespace {
+
+using internal::Reader;
+
+// Two points closer than this are one (anchors, exit points), as in the planar loader.
+constexpr double kSamePoint_m = 1e-6;
+// The least load-cell sigma: a milli-newton is finer than any load cell of a cable robot.
+constexpr double kMinLoadCellSigma_N = 1e-3;
+// The least stiffness, as a multiple of tension.max: a cable stretching more than a tenth of
+// its length at the largest tension is a unit slip (kN typed for N), not a cable.
+constexpr double kMinStiffnessOverMaxTension = 10.0;
+
+std::string Point(const Eigen::Vector3d& v) {
+  return "(" + FormatDouble(v.x()) + ", " + FormatDouble(v.y()) + ", " + FormatDouble(v.z()) + ")";
+}
+
+// A sensor's two +- ranges (accuracy, repeatability; `_deg` keys for angles), each within
+// [0, most] as typed, and the sigma they give at least `least` (in SI).
+RangedNoise ReadRanged(const Reader& rd, const YAML::Node& node, const std::string& key, bool degrees, double most,
+                       double least, const char* unit, const std::set<std::string>& extra_keys = {}) {
+  const std::string acc = degrees ? "accuracy_deg" : "accuracy";
+  const std::string rep = degrees ? "repeatability_deg" : "repeatability";
+  rd.ExpectMap(node, key, {acc, rep}, extra_keys);
+  const double to_si = degrees ? kDegToRad : 1.0;
+  const char* typed_unit = degrees ? "degrees" : unit;
+  RangedNoise noise;
+  for (const std::string& name : {acc, rep}) {
+    const double v = rd.Number(node, key, name);
+    if (!(v >= 0.0 && v <= most)) {
+      rd.Fail(node[name], Reader::Join(key, name),
+              "must be from 0 to " + FormatDouble(most) + " " + typed_unit + ", a +- range taken as 3 sigma (got " +
+                  FormatDouble(v) + ")" + (v > most ? ": units?" : ""));
+    }
+    (name == acc ? noise.accuracy : noise.repeatability) = v * to_si;
+  }
+  if (!(noise.sigma() >= least)) {
+    rd.Fail(node, key, "accuracy and repeatability give a sigma of " + Rounded(noise.sigma(), 6) + " " + unit +
+                           " (hypot(accuracy, repeatability) / 3), below " + Rounded(least, 6) + " " + unit +
+                           ": every reading is weighed by 1/sigma, and no sensor is that precise");
+  }
+  return noise;
+}
+
+double ReadSigma(const Reader& rd, const YAML::Node& node, const std::string& key) {
+  rd.ExpectMap(node, key, {"sigma"}, {});
+  const double sigma = rd.Number(node, key, "sigma");
+  if (!(sigma >= kMinSensorSigma_m && sigma <= kMaxSensorLength_m)) {
+    rd.Fail(node["sigma"], key + ".sigma",
+            "must be from " + Rounded(kMinSensorSigma_m, 6) + " to " + Rounded(kMaxSensorLength_m, 6) +
+                " m, one standard deviation (got " + FormatDouble(sigma) + ")" +
+                (sigma > kMaxSensorLength_m ? ": units? (lengths are in m)"
+                                            : ": every reading is weighed by 1/sigma, and no sensor is that precise"));
+  }
+  return sigma;
+}
+
+bool InBox(const Eigen::Vector3d& p, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, double slack) {
+  return (p.array() >= lo.array() - slack).all() && (p.array() <= hi.array() + slack).all();
+}
+
+// Long for the same reason as the planar Parse (robot_yaml.cc): the file's keys in the file's
+// order, each read, range-checked and placed once, to be read against the README's format.
+SpatialRobot Parse(const YAML::Node& root, const Reader& rd) {
+  SpatialRobot robot;
+  robot.source = rd.source();
+  if (!root.IsMap()) rd.Fail(root, "", "must be a mapping");
+  const std::string kind = internal::KindOf(root, rd);
+  if (kind != "spatial") {
+    rd.Fail(root["kind"] ? root["kind"] : root, "kind",
+            kind.empty() || kind == "planar"
+                ? "a planar robot (" + std::string(kind.empty() ? "no kind" : "kind: planar") +
+                      "): this reads spatial robots only (kind: spatial)"
+                : "must be 'planar' or 'spatial' (got '" + PrintableText(kind.substr(0, 40)) + "')");
+  }
+  rd.ExpectMap(root, "", {"name", "kind", "gravity", "frame", "platform", "cables", "tension", "limits", "home", "sensors"},
+               {"home_rpy_deg"});
+
+  robot.name = rd.String(root["name"], "name");
+  if (robot.name.empty()) rd.Fail(root["name"], "name", "must not be empty");
+  robot.gravity_mps2 = rd.Number(root, "", "gravity");
+  rd.Positive(root["gravity"], "gravity", robot.gravity_mps2);
+  rd.AtMost(root["gravity"], "gravity", robot.gravity_mps2, kMaxGravity_mps2, "m/s^2");
+
+  const YAML::Node frame = root["frame"];
+  rd.ExpectMap(frame, "frame", {"min", "max"}, {});
+  robot.p_F_frame_min_m = rd.Vector3(frame["min"], "frame.min");
+  robot.p_F_frame_max_m = rd.Vector3(frame["max"], "frame.max");
+  const Eigen::Vector3d side = robot.p_F_frame_max_m - robot.p_F_frame_min_m;
+  if (!(side.array() > 0.0).all()) {
+    rd.Fail(frame["max"], "frame.max", Point(robot.p_F_frame_max_m) + " must exceed frame.min " +
+                                           Point(robot.p_F_frame_min_m) + " in x, y and z");
+  }
+  if (!(side.maxCoeff() <= kMaxFrameSide_m)) {
+    rd.Fail(frame["max"], "frame.max", "the frame's sides " + Point(side) + " m must be at most " +
+                                           FormatDouble(kMaxFrameSide_m) + " m: units?");
+  }
+
+  const YAML::Node platform = root["platform"];
+  rd.ExpectMap(platform, "platform", {"mass", "com", "anchors"}, {});
+  robot.platform_mass_kg = rd.Number(platform, "platform", "mass");
+  rd.Positive(platform["mass"], "platform.mass", robot.platform_mass_kg);
+  rd.AtMost(platform["mass"], "platform.mass", robot.platform_mass_kg, kMaxPlatformMass_kg, "kg");
+  robot.p_P_com_m = rd.Vector3(platform["com"], "platform.com");
+  const YAML::Node anchors = platform["anchors"];
+  if (!anchors.IsSequence()) rd.Fail(anchors, "platform.anchors", "must be a list of [x, y, z] points");
+
+  const YAML::Node cables = root["cables"];
+  if (!cables.IsSequence()) rd.Fail(cables, "cables", "must be a list of cables");
+  if (cables.size() < static_cast<std::size_t>(kMinSpatialCables) ||
+      cables.size() > static_cast<std::size_t>(kMaxSpatialCables)) {
+    rd.Fail(cables, "cables", "must list " + std::to_string(kMinSpatialCables) + " to " +
+                                  std::to_string(kMaxSpatialCables) + " cables (got " + std::to_string(cables.size()) +
+                                  ")");
+  }
+  if (anchors.size() != cables.size()) {
+    rd.Fail(anchors, "platform.anchors", "needs one anchor per cable (" + std::to_string(cables.size()) + "), got " +
+                                             std::to_string(anchors.size()));
+  }
+  const double smallest_side = side.minCoeff();
+  for (std::size_t i = 0; i < cables.size(); ++i) {
+    const std::string key = "cables[" + std::to_string(i) + "]";
+    const YAML::Node c = cables[i];
+    rd.ExpectMap(c, key, {"exit", "swivel_axis", "pulley_radius"}, {"stiffness"});
+    SpatialCable cable;
+    cable.p_F_exit_m = rd.Vector3(c["exit"], key + ".exit");
+    // Exit points are on the frame: one well outside the box is a typo or a unit slip; the
+    // tolerance leaves room for calibrated exit points, as in the planar file.
+    if (!InBox(cable.p_F_exit_m, robot.p_F_frame_min_m, robot.p_F_frame_max_m, kExitOffFrameTolerance_m)) {
+      rd.Fail(c["exit"], key + ".exit",
+              Point(cable.p_F_exit_m) + " m is outside the frame box " + Point(robot.p_F_frame_min_m) + " to " +
+                  Point(robot.p_F_frame_max_m) + " m by more than " + FormatDouble(kExitOffFrameTolerance_m) +
+                  " m: exit points are on the frame");
+    }
+    const Eigen::Vector3d axis = rd.Vector3(c["swivel_axis"], key + ".swivel_axis");
+    if (!(axis.norm() > kMinSwivelAxisLength)) {
+      rd.Fail(c["swivel_axis"], key + ".swivel_axis",
+              "has zero length: it is the direction in which the cable arrives at the exit point, e.g. [0, 0, 1]");
+    }
+    // Normalised, unless unit already to rounding: a written robot then reads back bit for bit.
+    cable.k_F_swivel_axis = std::abs(axis.squaredNorm() - 1.0) > 1e-14 ? axis.normalized() : axis;
+    cable.pulley_radius_m = rd.Number(c, key, "pulley_radius");
+    rd.NonNegative(c["pulley_radius"], key + ".pulley_radius", cable.pulley_radius_m);
+    if (cable.pulley_radius_m > 0.25 * smallest_side) {
+      rd.Fail(c["pulley_radius"], key + ".pulley_radius",
+              FormatDouble(cable.pulley_radius_m) +
+                  " m is more than a quarter of the frame's smallest side: radii are in metres (25 mm is 0.025)");
+    }
+    if (c["stiffness"]) {
+      cable.stiffness_N = rd.Number(c, key, "stiffness");
+      rd.Positive(c["stiffness"], key + ".stiffness", *cable.stiffness_N);
+    }
+    cable.p_P_anchor_m = rd.Vector3(anchors[i], "platform.anchors[" + std::to_string(i) + "]");
+    robot.cables.push_back(cable);
+  }
+  for (std::size_t i = 0; i < robot.cables.size(); ++i) {
+    for (std::size_t j = i + 1; j < robot.cables.size(); ++j) {
+      if ((robot.cables[i].p_F_exit_m - robot.cables[j].p_F_exit_m).norm() < kSamePoint_m) {
+        rd.Fail(cables[j]["exit"], "cables[" + std::to_string(j) + "].exit",
+                "coincides with the exit point of cable " + std::to_string(i));
+      }
+    }
+  }
+  // Anchors: cables may share one, but they must span a plane: anchors all on one line (or at
+  // one point) leave the platform's rotation about that line undetermined.
+  {
+    const Eigen::Vector3d b0 = robot.cables[0].p_P_anchor_m;
+    Eigen::Vector3d far = b0;
+    for (const SpatialCable& c : robot.cables) {
+      if ((c.p_P_anchor_m - b0).norm() > (far - b0).norm()) far = c.p_P_anchor_m;
+    }
+    double off_line = 0.0;
+    if ((far - b0).norm() >= kSamePoint_m) {
+      const Eigen::Vector3d dir = (far - b0).normalized();
+      for (const SpatialCable& c : robot.cables) {
+        const Eigen::Vector3d v = c.p_P_anchor_m - b0;
+        off_line = std::max(off_line, (v - v.dot(dir) * dir).norm());
+      }
+    }
+    if (!(off_line >= kSamePoint_m)) {
+      rd.Fail(anchors, "platform.anchors",
+              "all anchors lie on one line: the platform's rotation about it would be undetermined (they must span a "
+              "plane)");
+    }
+  }
+
+  const YAML::Node tension = root["tension"];
+  rd.ExpectMap(tension, "tension", {"min", "max"}, {});
+  robot.tension_min_N = rd.Number(tension, "tension", "min");
+  // A slack cable sags: its direction is no longer the straight free segment the model
+  // assumes, so a pose held only with a cable at 0 N is not one the model describes.
+  if (!(robot.tension_min_N > 0.0)) {
+    rd.Fail(tension["min"], "tension.min",
+            "must be > 0 (got " + FormatDouble(robot.tension_min_N) +
+                "): a slack cable sags, and the model's straight cable needs a least pretension");
+  }
+  robot.tension_max_N = rd.Number(tension, "tension", "max");
+  if (!(robot.tension_min_N < robot.tension_max_N)) {
+    rd.Fail(tension, "tension", "min must be < max (got min " + FormatDouble(robot.tension_min_N) + " N, max " +
+                                    FormatDouble(robot.tension_max_N) + " N)");
+  }
+  for (std::size_t i = 0; i < robot.cables.size(); ++i) {
+    const std::optional<double>& ea = robot.cables[i].stiffness_N;
+    if (ea && !(*ea >= kMinStiffnessOverMaxTension * robot.tension_max_N)) {
+      const std::string key = "cables[" + std::to_string(i) + "].stiffness";
+      rd.Fail(cables[i]["stiffness"], key,
+              FormatDouble(*ea) + " N (E*A) would stretch the cable by more than " +
+                  FormatDouble(100.0 / kMinStiffnessOverMaxTension) + " % at tension.max: units? (E*A is in N)");
+    }
+  }
+
+  const YAML::Node limits = root["limits"];
+  rd.ExpectMap(limits, "limits", {"tilt_max_deg", "margin"}, {});
+  const double tilt_max_deg = rd.Number(limits, "limits", "tilt_max_deg");
+  if (!(tilt_max_deg > 0.0 && tilt_max_deg < 89.0)) {
+    rd.Fail(limits["tilt_max_deg"], "limits.tilt_max_deg",
+            "must be in (0, 89) degrees (got " + FormatDouble(tilt_max_deg) + ")");
+  }
+  robot.tilt_max_rad = tilt_max_deg * kDegToRad;
+  robot.margin_m = rd.Number(limits, "limits", "margin");
+  rd.NonNegative(limits["margin"], "limits.margin", robot.margin_m);
+  if (!(2.0 * robot.margin_m < smallest_side)) {
+    rd.Fail(limits["margin"], "limits.margin",
+            FormatDouble(robot.margin_m) + " m leaves no room in the frame box (smallest side " +
+                FormatDouble(smallest_side) + " m)");
+  }
+
+  robot.p_F_home_m = rd.Vector3(root["home"], "home");
+  if (!InBox(robot.p_F_home_m, robot.p_F_frame_min_m, robot.p_F_frame_max_m, 0.0)) {
+    rd.Fail(root["home"], "home", Point(robot.p_F_home_m) + " m is outside the frame box " +
+                                      Point(robot.p_F_frame_min_m) + " to " + Point(robot.p_F_frame_max_m) + " m");
+  }
+  if (root["home_rpy_deg"]) {
+    const Eigen::Vector3d rpy_deg = rd.Vector3(root["home_rpy_deg"], "home_rpy_deg");
+    if (!(rpy_deg.cwiseAbs().maxCoeff() <= 180.0)) {
+      rd.Fail(root["home_rpy_deg"], "home_rpy_deg", "each angle must be within +-180 degrees (got " + Point(rpy_deg) + ")");
+    }
+    robot.home_rpy_rad = rpy_deg * kDegToRad;
+  }
+  const YAML::Node home_node = root["home_rpy_deg"] ? root["home_rpy_deg"] : root["home"];
+  const SpatialPose<double> home = robot.home_pose();
+  const double tilt = TiltAngle(home);
+  if (!(tilt <= robot.tilt_max_rad)) {
+    rd.Fail(home_node, "home_rpy_deg", "the platform's tilt at home, " + Rounded(tilt / kDegToRad, 6) +
+                                           " degrees, is beyond limits.tilt_max_deg (" + FormatDouble(tilt_max_deg) + ")");
+  }
+  const Eigen::Matrix3d R = Rotation<double>(home);
+  const auto check_point = [&](const Eigen::Vector3d& p_P, const std::string& what) {
+    const Eigen::Vector3d p_F = AnchorInF<double>(home, R, p_P);
+    if (!InBox(p_F, robot.p_F_frame_min_m, robot.p_F_frame_max_m, -robot.margin_m)) {
+      rd.Fail(root["home"], "home",
+              "the platform's " + what + " is at " + Point(p_F) + " m at home, within limits.margin (" +
+                  FormatDouble(robot.margin_m) + " m) of the frame box or outside it");
+    }
+  };
+  for (int i = 0; i < robot.num_cables(); ++i) check_point(robot.cables[i].p_P_anchor_m, "anchors[" + std::to_string(i) + "]");
+  check_point(robot.p_P_com_m, "centre of mass");
+  const CableGeometryCheck geometry = CableGeometryAt(robot, home);
+  if (!geometry.valid()) {
+    rd.Fail(root["home"], "home",
+            "cable " + std::to_string(geometry.cable) + " has invalid geometry at home: " + ToString(geometry.geometry) +
+                (geometry.geometry == SwivelGeometry::kSwivelAxis     ? " (its anchor is on the swivel axis)"
+                 : geometry.geometry == SwivelGeometry::kInsidePulley ? " (its anchor is inside the pulley)"
+                                                                       : " (the wrap angle is outside [0, 270] degrees: "
+                                                                         "is the swivel axis the way the cable arrives?)"));
+  }
+
+  const YAML::Node sensors = root["sensors"];
+  rd.ExpectMap(sensors, "sensors", {"encoder"},
+               {"inclinometer", "laser", "position", "swivel", "heading", "load_cell", "tracker"});
+  SpatialSensors& s = robot.sensors;
+  s.encoder_sigma_m = ReadSigma(rd, sensors["encoder"], "sensors.encoder");
+  if (sensors["inclinometer"]) {
+    s.inclinometer_rad = ReadRanged(rd, sensors["inclinometer"], "sensors.inclinometer", true,
+                                    kMaxInclinometerRange_deg, kMinSensorSigma_rad, "rad");
+  }
+  if (sensors["laser"]) {
+    s.laser_m = ReadRanged(rd, sensors["laser"], "sensors.laser", false, kMaxSensorLength_m, kMinSensorSigma_m, "m");
+  }
+  if (sensors["position"]) {
+    SpatialSensors::Position position;
+    position.noise_m = ReadRanged(rd, sensors["position"], "sensors.position", false, kMaxSensorLength_m,
+                                  kMinSensorSigma_m, "m", {"target"});
+    if (sensors["position"]["target"]) {
+      position.p_P_target_m = rd.Vector3(sensors["position"]["target"], "sensors.position.target");
+    }
+    s.position = position;
+  }
+  if (sensors["swivel"]) {
+    s.swivel_rad = ReadRanged(rd, sensors["swivel"], "sensors.swivel", true, kMaxInclinometerRange_deg,
+                              kMinSensorSigma_rad, "rad");
+  }
+  if (sensors["heading"]) {
+    s.heading_rad = ReadRanged(rd, sensors["heading"], "sensors.heading", true, kMaxInclinometerRange_deg,
+                               kMinSensorSigma_rad, "rad");
+  }
+  if (sensors["load_cell"]) {
+    s.load_cell_N = ReadRanged(rd, sensors["load_cell"], "sensors.load_cell", false, robot.tension_max_N,
+                               kMinLoadCellSigma_N, "N");
+  }
+  if (sensors["tracker"]) s.tracker_sigma_m = ReadSigma(rd, sensors["tracker"], "sensors.tracker");
+  return robot;
+}
+
+}  // namespace
+
+SpatialRobot LoadSpatialRobotFromString(const std::string& yaml_text, const std::string& source) {
+  const Reader rd(source);
+  const YAML::Node root = internal::LoadRobotDocument(yaml_text, source);
+  try {
+    return Parse(root, rd);
+  } catch (const YAML::Exception& e) {
+    throw InputError(source + ":" + std::to_string(e.mark.line + 1), "", e.msg);
+  }
+}
+
+SpatialRobot LoadSpatialRobotFile(const std::string& path) {
+  return LoadSpatialRobotFromString(internal::ReadRobotFileText(path), path);
+}
+
+RobotKind RobotKindOfText(const std::string& yaml_text, const std::string& source) {
+  const Reader rd(source);
+  const YAML::Node root = internal::LoadRobotDocument(yaml_text, source);
+  try {
+    const std::string kind = internal::KindOf(root, rd);
+    if (kind.empty() || kind == "planar") return RobotKind::kPlanar;
+    if (kind == "spatial") return RobotKind::kSpatial;
+    rd.Fail(root["kind"], "kind", "must be 'planar' or 'spatial' (got '" + PrintableText(kind.substr(0, 40)) + "')");
+  } catch (const YAML::Exception& e) {
+    throw InputError(source + ":" + std::to_string(e.mark.line + 1), "", e.msg);
+  }
+}
+
+RobotKind RobotKindOfFile(const std::string& path) { return RobotKindOfText(internal::ReadRobotFileText(path), path); }
+
+std::string SpatialRobotToYaml(const SpatialRobot& robot) {
+  using internal::DegreesForFile;
+  YAML::Emitter o;
+  const auto v3 = [&o](const Eigen::Vector3d& v) {
+    o << YAML::Flow << YAML::BeginSeq << YamlNumber{v.x()} << YamlNumber{v.y()} << YamlNumber{v.z()} << YAML::EndSeq;
+  };
+  // A ranged sensor's flow map; the position sensor's target point after its ranges.
+  const auto ranged = [&o, &v3](const char* key, const RangedNoise& n, bool degrees,
+                                const Eigen::Vector3d* target = nullptr) {
+    o << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginMap;
+    o << YAML::Key << (degrees ? "accuracy_deg" : "accuracy") << YAML::Value
+      << YamlNumber{degrees ? DegreesForFile(n.accuracy) : n.accuracy};
+    o << YAML::Key << (degrees ? "repeatability_deg" : "repeatability") << YAML::Value
+      << YamlNumber{degrees ? DegreesForFile(n.repeatability) : n.repeatability};
+    if (target) {
+      o << YAML::Key << "target" << YAML::Value;
+      v3(*target);
+    }
+    o << YAML::EndMap;
+  };
+  o << YAML::BeginMap;
+  o << YAML::Key << "name" << YAML::Value << YamlString{robot.name};
+  o << YAML::Key << "kind" << YAML::Value << "spatial";
+  o << YAML::Key << "gravity" << YAML::Value << YamlNumber{robot.gravity_mps2};
+  o << YAML::Key << "frame" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "min" << YAML::Value;
+  v3(robot.p_F_frame_min_m);
+  o << YAML::Key << "max" << YAML::Value;
+  v3(robot.p_F_frame_max_m);
+  o << YAML::EndMap;
+  o << YAML::Key << "platform" << YAML::Value << YAML::BeginMap;
+  o << YAML::Key << "mass" << YAML::Value << YamlNumber{robot.platform_mass_kg};
+  o << YAML::Key << "com" << YAML::Value;
+  v3(robot.p_P_com_m);
+  o << YAML::Key << "anchors" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+  for (const SpatialCable& c : robot.cables) v3(c.p_P_anchor_m);
+  o << YAML::EndSeq << YAML::EndMap;
+  o << YAML::Key << "cables" << YAML::Value << YAML::BeginSeq;
+  for (const SpatialCable& c : robot.cables) {
+    o << YAML::Flow << YAML::BeginMap << YAML::Key << "exit" << YAML::Value;
+    v3(c.p_F_exit_m);
+    o << YAML::Key << "swivel_axis" << YAML::Value;
+    v3(c.k_F_swivel_axis);
+    o << YAML::Key << "pulley_radius" << YAML::Value << YamlNumber{c.pulley_radius_m};
+    if (c.stiffness_N) o << YAML::Key << "stiffness" << YAML::Value << YamlNumber{*c.stiffness_N};
+    o << YAML::EndMap;
+  }
+  o << YAML::EndSeq;
+  o << YAML::Key << "tension" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "min" << YAML::Value
+    << YamlNumber{robot.tension_min_N} << YAML::Key << "max" << YAML::Value << YamlNumber{robot.tension_max_N}
+    << YAML::EndMap;
+  o << YAML::Key << "limits" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "tilt_max_deg"
+    << YAML::Value << YamlNumber{DegreesForFile(robot.tilt_max_rad)} << YAML::Key << "margin" << YAML::Value
+    << YamlNumber{robot.margin_m} << YAML::EndMap;
+  o << YAML::Key << "home" << YAML::Value;
+  v3(robot.p_F_home_m);
+  o << YAML::Key << "home_rpy_deg" << YAML::Value;
+  v3(Eigen::Vector3d(DegreesForFile(robot.home_rpy_rad.x()), DegreesForFile(robot.home_rpy_rad.y()),
+                     DegreesForFile(robot.home_rpy_rad.z())));
+  const SpatialSensors& s = robot.sensors;
+  o << YAML::Key << "sensors" << YAML::Value << YAML::BeginMap;
+  o << YAML::Key << "encoder" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "sigma" << YAML::Value
+    << YamlNumber{s.encoder_sigma_m} << YAML::EndMap;
+  if (s.inclinometer_rad) ranged("inclinometer", *s.inclinometer_rad, true);
+  if (s.laser_m) ranged("laser", *s.laser_m, false);
+  if (s.position) ranged("position", s.position->noise_m, false, &s.position->p_P_target_m);
+  if (s.swivel_rad) ranged("swivel", *s.swivel_rad, true);
+  if (s.heading_rad) ranged("heading", *s.heading_rad, true);
+  if (s.load_cell_N) ranged("load_cell", *s.load_cell_N, false);
+  if (s.tracker_sigma_m) {
+    o << YAML::Key << "tracker" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "sigma" << YAML::Value
+      << YamlNumber{*s.tracker_sigma_m} << YAML::EndMap;
+  }
+  o << YAML::EndMap << YAML::EndMap;
+  return YamlText(o);
+}
+
+}  // namespace cablecal

@@ -1,0 +1,105 @@
+// Test support: spatial robots drawn at random, so that no spatial test depends on a built-in
+// robot's symmetry. Ranges (all uniform unless said):
+//   frame box   x from -[1.5, 3.5] to +[1.5, 3.5] m and y from -[1.0, 3.0] to +[1.0, 3.0] m, each
+//               side drawn on its own (asymmetric), z from 0 to [2.0, 4.0] m;
+//   cables      m given (3 to 12); about 2/3 "upper" exits at z in [H - 0.6, H], the rest
+//               "lower" at z in [0, 0.5], each on a random point of the box's side faces;
+//   swivel axes upper: +z tilted by up to 40 degrees toward a random direction; lower: -z tilted
+//               likewise; one cable in four instead horizontal, pointing away from the frame's
+//               centre (IRMA4U's arrangement: the cable arrives travelling outward);
+//   pulleys     radius [0.01, 0.08] m; one in eight an eyelet (r = 0);
+//   platform    anchors anywhere in a box of half-sides [0.1, 0.4] x [0.1, 0.4] x [0.05, 0.3] m;
+//               centre of mass offset by up to 0.1 m in each axis; mass [1, 100] kg;
+//   tensions    min [1, 20] N, max min + [200, 2000] N; optional stiffness on half the cables,
+//               E*A in [1e5, 1e7] N;
+//   home        the frame's centre +-0.3 m in x and y, z in [0.35, 0.6] of the height, roll and
+//               pitch +-10 degrees, yaw +-30 degrees.
+// Each draw goes through the spatial robot file (SpatialRobotToYaml, LoadSpatialRobotFromString),
+// so it is a valid robot file (home inside the frame with the margin, valid cable geometry at
+// home); a draw the loader refuses is drawn again. Fixed seeds in the tests: deterministic.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "common/error.h"
+#include "common/random.h"
+#include "model/spatial_robot.h"
+
+namespace cablecal::testing {
+
+// A unit vector `base` tilted by up to max_tilt_rad toward a random direction.
+inline Eigen::Vector3d TiltedAxis(Rng& rng, const Eigen::Vector3d& base, double max_tilt_rad) {
+  const Eigen::Vector3d any = std::abs(base.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d e1 = base.cross(any).normalized();
+  const Eigen::Vector3d e2 = base.cross(e1);
+  const double tilt = rng.Uniform(0.0, max_tilt_rad), around = rng.Uniform(-M_PI, M_PI);
+  return (std::cos(tilt) * base + std::sin(tilt) * (std::cos(around) * e1 + std::sin(around) * e2)).normalized();
+}
+
+// A random point on the side faces of the box [lo, hi] (x-y rectangle's perimeter) at height z.
+inline Eigen::Vector3d PointOnSideFaces(Rng& rng, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, double z) {
+  const double wx = hi.x() - lo.x(), wy = hi.y() - lo.y();
+  double s = rng.Uniform(0.0, 2.0 * (wx + wy));
+  if (s < wx) return Eigen::Vector3d(lo.x() + s, lo.y(), z);
+  s -= wx;
+  if (s < wy) return Eigen::Vector3d(hi.x(), lo.y() + s, z);
+  s -= wy;
+  if (s < wx) return Eigen::Vector3d(hi.x() - s, hi.y(), z);
+  s -= wx;
+  return Eigen::Vector3d(lo.x(), hi.y() - s, z);
+}
+
+inline SpatialRobot RandomSpatialRobot(Rng& rng, const std::string& name, int num_cables) {
+  for (int attempt = 0; attempt < 1000; ++attempt) {
+    SpatialRobot r;
+    r.name = name;
+    r.gravity_mps2 = 9.81;
+    const double H = rng.Uniform(2.0, 4.0);
+    r.p_F_frame_min_m = Eigen::Vector3d(-rng.Uniform(1.5, 3.5), -rng.Uniform(1.0, 3.0), 0.0);
+    r.p_F_frame_max_m = Eigen::Vector3d(rng.Uniform(1.5, 3.5), rng.Uniform(1.0, 3.0), H);
+    const Eigen::Vector3d centre = 0.5 * (r.p_F_frame_min_m + r.p_F_frame_max_m);
+    r.platform_mass_kg = rng.Uniform(1.0, 100.0);
+    r.p_P_com_m = Eigen::Vector3d(rng.Uniform(-0.1, 0.1), rng.Uniform(-0.1, 0.1), rng.Uniform(-0.1, 0.1));
+    const Eigen::Vector3d half(rng.Uniform(0.1, 0.4), rng.Uniform(0.1, 0.4), rng.Uniform(0.05, 0.3));
+    for (int i = 0; i < num_cables; ++i) {
+      SpatialCable c;
+      const bool upper = rng.Uniform() < 2.0 / 3.0;
+      const double z = upper ? rng.Uniform(H - 0.6, H) : rng.Uniform(0.0, 0.5);
+      c.p_F_exit_m = PointOnSideFaces(rng, r.p_F_frame_min_m, r.p_F_frame_max_m, z);
+      if (rng.Uniform() < 0.25) {
+        Eigen::Vector3d outward = c.p_F_exit_m - centre;
+        outward.z() = 0.0;
+        c.k_F_swivel_axis = outward.normalized();
+      } else {
+        c.k_F_swivel_axis = TiltedAxis(rng, Eigen::Vector3d(0.0, 0.0, upper ? 1.0 : -1.0), 40.0 * M_PI / 180.0);
+      }
+      c.pulley_radius_m = rng.Uniform() < 0.125 ? 0.0 : rng.Uniform(0.01, 0.08);
+      if (rng.Uniform() < 0.5) c.stiffness_N = rng.Uniform(1e5, 1e7);
+      c.p_P_anchor_m = Eigen::Vector3d(rng.Uniform(-half.x(), half.x()), rng.Uniform(-half.y(), half.y()),
+                                       rng.Uniform(-half.z(), half.z()));
+      r.cables.push_back(c);
+    }
+    r.tension_min_N = rng.Uniform(1.0, 20.0);
+    r.tension_max_N = r.tension_min_N + rng.Uniform(200.0, 2000.0);
+    r.tilt_max_rad = 30.0 * M_PI / 180.0;
+    r.margin_m = 0.05;
+    r.p_F_home_m = Eigen::Vector3d(centre.x() + rng.Uniform(-0.3, 0.3), centre.y() + rng.Uniform(-0.3, 0.3),
+                                   H * rng.Uniform(0.35, 0.6));
+    const double deg = M_PI / 180.0;
+    r.home_rpy_rad = Eigen::Vector3d(rng.Uniform(-10.0, 10.0) * deg, rng.Uniform(-10.0, 10.0) * deg,
+                                     rng.Uniform(-30.0, 30.0) * deg);
+    r.sensors.encoder_sigma_m = 5e-5;
+    r.sensors.tracker_sigma_m = 5e-4;
+    try {
+      return LoadSpatialRobotFromString(SpatialRobotToYaml(r), name);
+    } catch (const InputError&) {
+      // refused (a coincident exit, invalid geometry at home, ...): draw again
+    }
+  }
+  throw std::runtime_error("no valid random spatial robot in 1000 draws");
+}
+
+}  // namespace cablecal::testing
