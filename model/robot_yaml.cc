@@ -292,14 +292,7 @@ Robot Parse(const YAML::Node& root, const Reader& rd) {
 static double Degrees(double rad) { return internal::DegreesForFile(rad); }
 
 Robot LoadRobotFromString(const std::string& yaml_text, const std::string& source) {
-  const Reader rd(source);
-  const YAML::Node root = internal::LoadRobotDocument(yaml_text, source);
-  try {
-    return Parse(root, rd);
-  } catch (const YAML::Exception& e) {
-    // Anything yaml-cpp itself rejects (e.g. a key that is not a scalar).
-    throw InputError(source + ":" + std::to_string(e.mark.line + 1), "", e.msg);
-  }
+  return internal::ParseRobotText(yaml_text, source, Parse);
 }
 
 Robot LoadRobotFile(const std::string& path) {

@@ -324,13 +324,7 @@ SpatialRobot Parse(const YAML::Node& root, const Reader& rd) {
 }  // namespace
 
 SpatialRobot LoadSpatialRobotFromString(const std::string& yaml_text, const std::string& source) {
-  const Reader rd(source);
-  const YAML::Node root = internal::LoadRobotDocument(yaml_text, source);
-  try {
-    return Parse(root, rd);
-  } catch (const YAML::Exception& e) {
-    throw InputError(source + ":" + std::to_string(e.mark.line + 1), "", e.msg);
-  }
+  return internal::ParseRobotText(yaml_text, source, Parse);
 }
 
 SpatialRobot LoadSpatialRobotFile(const std::string& path) {
@@ -338,16 +332,14 @@ SpatialRobot LoadSpatialRobotFile(const std::string& path) {
 }
 
 RobotKind RobotKindOfText(const std::string& yaml_text, const std::string& source) {
-  const Reader rd(source);
-  const YAML::Node root = internal::LoadRobotDocument(yaml_text, source);
-  try {
+  return internal::ParseRobotText(yaml_text, source, [](const YAML::Node& root, const Reader& rd) {
     const std::string kind = internal::KindOf(root, rd);
     if (kind.empty() || kind == "planar") return RobotKind::kPlanar;
-    if (kind == "spatial") return RobotKind::kSpatial;
-    rd.Fail(root["kind"], "kind", "must be 'planar' or 'spatial' (got '" + PrintableText(kind.substr(0, 40)) + "')");
-  } catch (const YAML::Exception& e) {
-    throw InputError(source + ":" + std::to_string(e.mark.line + 1), "", e.msg);
-  }
+    if (kind != "spatial") {
+      rd.Fail(root["kind"], "kind", "must be 'planar' or 'spatial' (got '" + PrintableText(kind.substr(0, 40)) + "')");
+    }
+    return RobotKind::kSpatial;
+  });
 }
 
 RobotKind RobotKindOfFile(const std::string& path) { return RobotKindOfText(internal::ReadRobotFileText(path), path); }

@@ -63,6 +63,20 @@ std::string ReadRobotFileText(const std::string& path);
 // `source` and the line.
 YAML::Node LoadRobotDocument(const std::string& yaml_text, const std::string& source);
 
+// `parse(root, reader)` on the robot file's document (LoadRobotDocument), with what yaml-cpp
+// itself rejects while it reads (e.g. a key that is not a scalar) as an InputError at its line:
+// every loader's one entry (the planar and spatial robots, the kind alone).
+template <typename Parse>
+auto ParseRobotText(const std::string& yaml_text, const std::string& source, Parse&& parse) {
+  const Reader rd(source);
+  const YAML::Node root = LoadRobotDocument(yaml_text, source);
+  try {
+    return parse(root, rd);
+  } catch (const YAML::Exception& e) {
+    throw InputError(source + ":" + std::to_string(e.mark.line + 1), "", e.msg);
+  }
+}
+
 // Degrees for a file's *_deg key: the radians divided back, rounded to 12 significant digits
 // so that a value typed as 60 is written as 60 and not 59.99999999999999.
 double DegreesForFile(double rad);

@@ -11,6 +11,7 @@
 #include "common/error.h"
 #include "model/robot.h"
 #include "model/statics.h"
+#include "tests/support/readme.h"
 #include "tests/support/temp_dir.h"
 #include "tests/support/load_error.h"
 
@@ -294,18 +295,8 @@ TEST(RobotFile, ManyCableFilesLoadAndRoundTrip) {
 // README's "A complete robot file": the yaml block after that heading loads as it is, sets
 // every optional key it shows, and its initial_length is the one the home equilibrium gives.
 TEST(RobotFile, ReadmeExampleLoads) {
-  std::ifstream in(std::string(CABLECAL_SOURCE_DIR) + "/README.md");
-  ASSERT_TRUE(in.good());
-  std::stringstream readme;
-  readme << in.rdbuf();
-  const std::string text = readme.str();
-  const std::size_t heading = text.find("**A complete robot file**");
-  ASSERT_NE(heading, std::string::npos);
-  const std::size_t begin = text.find("```yaml\n", heading);
-  ASSERT_NE(begin, std::string::npos);
-  const std::size_t end = text.find("```\n", begin + 8);
-  ASSERT_NE(end, std::string::npos);
-  const std::string yaml = text.substr(begin + 8, end - begin - 8);
+  const std::string yaml = testing::ReadmeYamlAfter("**A complete robot file**");
+  ASSERT_FALSE(yaml.empty()) << "no yaml block after the heading in README.md";
   EXPECT_EQ(LoadError(yaml), "");
   const Robot r = LoadRobotFromString(yaml, "README.md");
   ASSERT_EQ(r.num_cables(), 3);

@@ -17,6 +17,7 @@
 #include "model/robot.h"
 #include "model/spatial_robot.h"
 #include "model/swivel.h"
+#include "tests/support/readme.h"
 #include "tests/support/random_spatial_robot.h"
 
 namespace cablecal {
@@ -313,18 +314,8 @@ TEST(SpatialRobotFile, CableCountsAndCollinearAnchorsAreRefused) {
 
 // The README's spatial file (section "Spatial robots") is a valid robot file with every sensor.
 TEST(SpatialRobotFile, ReadmeExampleLoads) {
-  std::ifstream in(std::string(CABLECAL_SOURCE_DIR) + "/README.md");
-  ASSERT_TRUE(in.good());
-  std::stringstream readme;
-  readme << in.rdbuf();
-  const std::string text = readme.str();
-  const std::size_t heading = text.find("**The file** (`kind: spatial`");
-  ASSERT_NE(heading, std::string::npos);
-  const std::size_t begin = text.find("```yaml\n", heading);
-  ASSERT_NE(begin, std::string::npos);
-  const std::size_t end = text.find("```\n", begin + 8);
-  ASSERT_NE(end, std::string::npos);
-  const std::string yaml = text.substr(begin + 8, end - begin - 8);
+  const std::string yaml = testing::ReadmeYamlAfter("**The file** (`kind: spatial`");
+  ASSERT_FALSE(yaml.empty()) << "no yaml block after the heading in README.md";
   EXPECT_EQ(SpatialLoadError(yaml), "");
   const SpatialRobot r = LoadSpatialRobotFromString(yaml, "README.md");
   ASSERT_EQ(r.num_cables(), 3);
