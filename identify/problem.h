@@ -229,6 +229,9 @@ void IdentificationProblem<M>::CheckOptions() {
   if (options.geometry_prior_sigma_m && !ml) {
     throw InputError("--geometry-prior", "", "needs --estimator ml (the paper estimator's residuals are not in sigmas)");
   }
+  // A new user's trial: paper with the tracker prior returned the file's exit points to 1e-9 m,
+  // 24 sigma from the truth, with no warning.
+  if (options.gauge == Gauge::kPrior && !ml) throw InputError("--gauge prior", "", "needs --estimator ml: the paper estimator's residuals are not in sigmas, so the tracker's prior, in sigmas, would outweigh every reading (the exits would stay at the robot file's)");
   if (options.geometry_prior_sigma_m &&
       !(*options.geometry_prior_sigma_m >= kMinGeometryPriorSigma_m && *options.geometry_prior_sigma_m <= kMaxGeometryPriorSigma_m)) {
     throw InputError("--geometry-prior", "",

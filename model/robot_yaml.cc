@@ -37,7 +37,14 @@ Robot Parse(const YAML::Node& root, const Reader& rd) {
   // so it is refused by its kind before any of them is called unknown.
   const std::string kind = internal::KindOf(root, rd);
   if (kind == "spatial") {
+    // Its own mistakes first (a new user's trial: 23 broken spatial files all got only this line).
+    internal::CheckSpatialRobotDocument(root, rd);
     rd.Fail(root["kind"], "kind", "a spatial robot: this command serves planar robots only so far");
+  }
+  if (kind.empty() && internal::LooksSpatial(root)) {
+    rd.Fail(root, "kind",
+            "missing: the file has a spatial robot's keys (frame min/max, home_rpy_deg or a cable's swivel_axis); "
+            "add kind: spatial (without kind a file is a planar robot's)");
   }
   if (!kind.empty() && kind != "planar") {
     rd.Fail(root["kind"], "kind",

@@ -323,6 +323,22 @@ SpatialRobot Parse(const YAML::Node& root, const Reader& rd) {
 
 }  // namespace
 
+namespace internal {
+
+void CheckSpatialRobotDocument(const YAML::Node& root, const Reader& rd) { (void)Parse(root, rd); }
+
+bool LooksSpatial(const YAML::Node& root) {
+  if (!root.IsMap()) return false;
+  const YAML::Node frame = root["frame"], cables = root["cables"];
+  bool spatial = static_cast<bool>(root["home_rpy_deg"]) || (frame.IsMap() && (frame["min"] || frame["max"]));
+  if (cables.IsSequence()) {
+    for (const YAML::Node& c : cables) spatial = spatial || (c.IsMap() && c["swivel_axis"]);
+  }
+  return spatial;
+}
+
+}  // namespace internal
+
 SpatialRobot LoadSpatialRobotFromString(const std::string& yaml_text, const std::string& source) {
   return internal::ParseRobotText(yaml_text, source, Parse);
 }

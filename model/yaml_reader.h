@@ -84,4 +84,14 @@ double DegreesForFile(double rad);
 // The file's `kind` as typed ("" when absent), refusing a non-scalar with file, line and key.
 std::string KindOf(const YAML::Node& root, const Reader& rd);
 
+// Reads a spatial robot's document, throwing what its loader would (model/spatial_robot_yaml.cc):
+// the planar loader checks a spatial file this way before refusing it, so that a command that
+// serves planar robots only still tells a user what is wrong in their spatial file.
+void CheckSpatialRobotDocument(const YAML::Node& root, const Reader& rd);
+
+// Whether a file without `kind` has keys only a spatial robot's file has (frame min/max,
+// home_rpy_deg, a cable's swivel_axis): the planar loader then says to add `kind: spatial`
+// rather than call the first such key unknown.
+bool LooksSpatial(const YAML::Node& root);
+
 }  // namespace cablecal::internal

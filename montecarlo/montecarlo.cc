@@ -183,6 +183,9 @@ void ValidateOptions(const MonteCarloOptions& o, const Robot* nominal) {
   if (o.geometry_prior && o.estimator != Estimator::kMaximumLikelihood) {
     throw InputError("--geometry-prior", "", "needs --estimator ml (the paper estimator's residuals are not in sigmas)");
   }
+  if (o.gauge == Gauge::kPrior && o.estimator != Estimator::kMaximumLikelihood) {
+    throw InputError("--gauge prior", "", "needs --estimator ml: the paper estimator's residuals are not in sigmas, so the tracker's prior, in sigmas, would outweigh every reading (the exits would stay at the robot file's)");
+  }
   if (o.equilibrium && (o.estimator != Estimator::kMaximumLikelihood || (nominal && nominal->num_cables() >= 3))) {
     throw InputError("--equilibrium", "",
                      o.estimator != Estimator::kMaximumLikelihood

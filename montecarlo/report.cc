@@ -99,8 +99,12 @@ std::string SummaryCsv(const MonteCarloResult& r) {
   for (const MonteCarloCell& c : r.cells) {
     for (const std::string& p : SummaryParameters(r.num_cables)) {
       const ErrorStats s = Summarise(c, r.num_cables, p);
-      // No successful trial: no statistic (empty cells), never a zero; one trial: no std.
-      auto stat = [&](double v, int needed) { return s.count >= needed ? FormatDouble(v) : std::string(); };
+      // No successful trial: no statistic (empty cells), never a zero; one trial: no std (x_all
+      // pools a trial's poses, whose spread within one trial is not the spread over trials).
+      const int successes = static_cast<int>(c.trials.size()) - c.failures();
+      auto stat = [&](double v, int needed) {
+        return s.count >= needed && successes >= needed ? FormatDouble(v) : std::string();
+      };
       out += std::to_string(c.n) + "," + ToString(c.design) + "," + p + "," + stat(s.mean, 1) + "," + stat(s.std, 2) +
              "," + stat(s.rms, 1) + "," + stat(s.max_abs, 1) + "," + stat(s.share_within_5mm, 1) + "," +
              std::to_string(c.failures());
@@ -128,9 +132,12 @@ std::string SummaryMarkdown(const MonteCarloResult& r, const std::string& title)
   for (const MonteCarloCell& c : r.cells) {
     o << "| " << c.n << " | " << ToString(c.design) << " |";
     int within = 0, count = 0;
+    // Fewer than two successful trials: n/a everywhere (README), x_all too, whose poses pooled
+    // from one trial would read as a spread over trials (a new user's trial: 0.76 mm from one).
+    const bool spread = static_cast<int>(c.trials.size()) - c.failures() > 1;
     for (const std::string& p : SummaryParameters(r.num_cables)) {
       const ErrorStats s = Summarise(c, r.num_cables, p);
-      if (s.count > 1) {
+      if (spread && s.count > 1) {
         std::snprintf(buf, sizeof(buf), " %.3f |", 1e3 * s.std);
         o << buf;
       } else {
@@ -144,7 +151,11 @@ std::string SummaryMarkdown(const MonteCarloResult& r, const std::string& title)
     const ErrorStats xs = Summarise(c, r.num_cables, "x_all");
     within += static_cast<int>(std::lround(xs.share_within_5mm * xs.count));
     count += xs.count;
-    std::snprintf(buf, sizeof(buf), " %.1f %% |", count ? 100.0 * within / count : 0.0);
+    if (spread) {
+      std::snprintf(buf, sizeof(buf), " %.1f %% |", count ? 100.0 * within / count : 0.0);
+    } else {
+      std::snprintf(buf, sizeof(buf), " n/a |");
+    }
     o << buf << " " << c.failures() << " / " << c.trials.size();
     std::string causes;
     for (const std::string& cause : FailureCauses()) {

@@ -590,6 +590,17 @@ TEST(GeometryPrior, NeverLessInformedThanThePriorAndSaysWhenTheDataAddLittle) {
   paper.estimator = Estimator::kPaper;
   paper.geometry_prior_sigma_m = kPrior_m;
   EXPECT_THROW(Identify(BuiltinRobot(), Simulated(BuiltinRobot(), 10, 1).readings, paper), InputError);
+  // The tracker's prior is in sigmas too: with the paper estimator it outweighed every reading
+  // (a new user's trial: the exits came back as the file's, 24 sigma from the truth).
+  IdentifyOptions paper_tracker;
+  paper_tracker.estimator = Estimator::kPaper;
+  paper_tracker.gauge = Gauge::kPrior;
+  try {
+    Identify(BuiltinRobot(), Simulated(BuiltinRobot(), 10, 1).readings, paper_tracker);
+    ADD_FAILURE() << "the paper estimator ran with the tracker prior";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("--gauge prior"), std::string::npos) << e.what();
+  }
   for (const double bad : {2.0, 0.0, -0.01}) {  // 0 is refused, not taken for "no prior"
     IdentifyOptions o;
     o.geometry_prior_sigma_m = bad;

@@ -367,5 +367,32 @@ TEST(SpatialRobotFile, EachLoaderRefusesTheOtherKind) {
   EXPECT_THROW(RobotKindOfFile("/nonexistent/robot.yaml"), InputError);
 }
 
+// A planar command given a spatial file names the file's own mistake first, as the spatial
+// loader would, and only a valid spatial file gets "serves planar robots only" (a new user's
+// trial: 23 broken spatial files got that one line). A spatial file without `kind` is told to
+// add it rather than have its first spatial key called unknown.
+TEST(SpatialRobotFile, PlanarLoaderNamesASpatialFilesOwnMistakesAndAMissingKind) {
+  const std::string ipanema = TextOf("ipanema1.yaml");
+  const std::string broken = Replace(ipanema, "swivel_axis: [0, 0, 1]", "swivel_axis: [0, 0, 0]");
+  const std::string spatial_error = SpatialLoadError(broken);
+  ASSERT_NE(spatial_error.find("swivel_axis: has zero length"), std::string::npos) << spatial_error;
+  try {
+    LoadRobotFromString(broken, "bad.yaml");
+    FAIL() << "the planar loader loaded a spatial file";
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()), spatial_error);
+  }
+  const std::string no_kind = Replace(ipanema, "kind: spatial\n", "");
+  try {
+    LoadRobotFromString(no_kind, "nokind.yaml");
+    FAIL() << "the planar loader loaded a spatial file without kind";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(": kind: missing: the file has a spatial robot's keys"),
+              std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("add kind: spatial"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace cablecal

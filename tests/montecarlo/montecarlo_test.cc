@@ -4,6 +4,9 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "common/error.h"
 #include "montecarlo/montecarlo.h"
@@ -184,6 +187,39 @@ TEST(MonteCarlo, AFailedDesignFailsOnlyItsCell) {
   EXPECT_NE(SummaryCsv(r).find("\n6,optimized,a2x,,,,,,6,6,0,0,0\n"), std::string::npos) << SummaryCsv(r);
 }
 
+// One successful trial has no spread over trials: every column n/a, x_all too, whose pooled
+// poses from that one trial once read as a sigma (a new user's trial: "0.761" from one trial).
+TEST(MonteCarlo, OneSuccessfulTrialShowsNoSpreadAnywhere) {
+  MonteCarloResult r;
+  r.num_cables = 2;
+  MonteCarloCell one;
+  one.n = 6;
+  TrialOutcome ok;
+  ok.ok = true;
+  for (int k = 0; k < 6 + 6; ++k) ok.errors_m.push_back(0.014 + 0.001 * k);
+  TrialOutcome failed;
+  failed.failure = "simulation: pose 3";
+  one.trials = {ok, failed, failed};
+  MonteCarloCell two = one;
+  two.n = 8;
+  ok.errors_m.assign(6 + 8, 0.002);
+  two.trials = {ok, ok, failed};
+  r.cells = {one, two};
+  const std::string md = SummaryMarkdown(r, "t");
+  EXPECT_NE(md.find("| 6 | random | n/a | n/a | n/a | n/a | n/a | n/a | n/a | n/a | n/a | 2 / 3"), std::string::npos)
+      << md;
+  EXPECT_EQ(md.find("| 8 | random | n/a"), std::string::npos) << md;  // two trials: a spread
+  const std::string csv = SummaryCsv(r);
+  const std::size_t row = csv.find("\n6,random,x_all,");
+  ASSERT_NE(row, std::string::npos) << csv;
+  std::vector<std::string> cells;
+  std::stringstream line(csv.substr(row + 1, csv.find('\n', row + 1) - row - 1));
+  for (std::string cell; std::getline(line, cell, ',');) cells.push_back(cell);
+  ASSERT_GE(cells.size(), 5u);
+  EXPECT_FALSE(cells[3].empty()) << "a mean from the one trial";
+  EXPECT_TRUE(cells[4].empty()) << "no std from one trial: " << cells[4];
+}
+
 TEST(MonteCarlo, AStudyTooLargeForMemoryIsRefusedWithItsSize) {
   MonteCarloOptions o;
   o.pose_counts = ParsePoseCounts("6:50");
@@ -197,6 +233,18 @@ TEST(MonteCarlo, AStudyTooLargeForMemoryIsRefusedWithItsSize) {
   }
   o.trials = 1000;
   EXPECT_NO_THROW(ValidateOptions(o));
+}
+
+TEST(MonteCarlo, GaugePriorWithThePaperEstimatorIsBadInput) {
+  MonteCarloOptions o = Small();
+  o.gauge = Gauge::kPrior;
+  o.estimator = Estimator::kPaper;
+  try {
+    RunMonteCarlo(BuiltinRobot(), o);
+    FAIL() << "ran the paper estimator with the tracker prior";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("--gauge prior"), std::string::npos) << e.what();
+  }
 }
 
 TEST(MonteCarlo, GaugePriorWithoutATrackerIsBadInput) {
