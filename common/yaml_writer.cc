@@ -17,6 +17,13 @@ YAML::Emitter& operator<<(YAML::Emitter& out, YamlNumber number) {
 
 YAML::Emitter& operator<<(YAML::Emitter& out, YamlString text) { return out << YAML::DoubleQuoted << text.value; }
 
+void EmitNumberMap(YAML::Emitter& out, const char* key,
+                   std::initializer_list<std::pair<const char*, double>> entries) {
+  out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginMap;
+  for (const auto& [name, value] : entries) out << YAML::Key << name << YAML::Value << YamlNumber{value};
+  out << YAML::EndMap;
+}
+
 std::string YamlText(const YAML::Emitter& out) {
   CABLECAL_CHECK(out.good(), "the YAML emitter was given a malformed sequence: " + out.GetLastError());
   return std::string(out.c_str()) + "\n";

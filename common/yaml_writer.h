@@ -9,7 +9,9 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <initializer_list>
 #include <string>
+#include <utility>
 
 namespace cablecal {
 
@@ -22,6 +24,11 @@ struct YamlString {
 
 YAML::Emitter& operator<<(YAML::Emitter& out, YamlNumber number);
 YAML::Emitter& operator<<(YAML::Emitter& out, YamlString text);
+
+// `key: {a: 1.0, b: 2.0}`: a key whose value is a one-line map of numbers (YamlNumber), the
+// robot files' `tension`, `encoder`, `tracker`.
+void EmitNumberMap(YAML::Emitter& out, const char* key,
+                   std::initializer_list<std::pair<const char*, double>> entries);
 
 // The finished document, ending in a newline. A malformed emitter sequence is a bug (checked).
 std::string YamlText(const YAML::Emitter& out);

@@ -339,9 +339,7 @@ void EmitRobotFields(YAML::Emitter& o, const Robot& robot) {
     o << YAML::EndMap;
   }
   o << YAML::EndSeq;
-  o << YAML::Key << "tension" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "min" << YAML::Value
-    << YamlNumber{robot.tension_min_N} << YAML::Key << "max" << YAML::Value << YamlNumber{robot.tension_max_N}
-    << YAML::EndMap;
+  EmitNumberMap(o, "tension", {{"min", robot.tension_min_N}, {"max", robot.tension_max_N}});
   o << YAML::Key << "limits" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "theta_max_deg"
     << YAML::Value << YamlNumber{Degrees(robot.theta_max_rad)} << YAML::Key << "laser_range" << YAML::Value
     << YamlNumber{robot.laser_range_m} << YAML::Key << "margin" << YAML::Value << YamlNumber{robot.margin_m}
@@ -375,12 +373,8 @@ void EmitSensors(YAML::Emitter& o, const SensorNoise& s) {
     o << YAML::Key << "sec_coefficient_deg" << YAML::Value << YamlNumber{Degrees(sys.inclinometer_sec_coefficient_rad)};
   }
   o << YAML::EndMap;
-  o << YAML::Key << "encoder" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "sigma" << YAML::Value
-    << YamlNumber{s.encoder_sigma_m} << YAML::EndMap;
-  if (s.tracker_sigma_m) {
-    o << YAML::Key << "tracker" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "sigma" << YAML::Value
-      << YamlNumber{*s.tracker_sigma_m} << YAML::EndMap;
-  }
+  EmitNumberMap(o, "encoder", {{"sigma", s.encoder_sigma_m}});
+  if (s.tracker_sigma_m) EmitNumberMap(o, "tracker", {{"sigma", *s.tracker_sigma_m}});
   o << YAML::EndMap;
 }
 

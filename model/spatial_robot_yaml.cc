@@ -407,9 +407,7 @@ std::string SpatialRobotToYaml(const SpatialRobot& robot) {
     o << YAML::EndMap;
   }
   o << YAML::EndSeq;
-  o << YAML::Key << "tension" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "min" << YAML::Value
-    << YamlNumber{robot.tension_min_N} << YAML::Key << "max" << YAML::Value << YamlNumber{robot.tension_max_N}
-    << YAML::EndMap;
+  EmitNumberMap(o, "tension", {{"min", robot.tension_min_N}, {"max", robot.tension_max_N}});
   o << YAML::Key << "limits" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "tilt_max_deg"
     << YAML::Value << YamlNumber{DegreesForFile(robot.tilt_max_rad)} << YAML::Key << "margin" << YAML::Value
     << YamlNumber{robot.margin_m} << YAML::EndMap;
@@ -420,18 +418,14 @@ std::string SpatialRobotToYaml(const SpatialRobot& robot) {
                      DegreesForFile(robot.home_rpy_rad.z())));
   const SpatialSensors& s = robot.sensors;
   o << YAML::Key << "sensors" << YAML::Value << YAML::BeginMap;
-  o << YAML::Key << "encoder" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "sigma" << YAML::Value
-    << YamlNumber{s.encoder_sigma_m} << YAML::EndMap;
+  EmitNumberMap(o, "encoder", {{"sigma", s.encoder_sigma_m}});
   if (s.inclinometer_rad) ranged("inclinometer", *s.inclinometer_rad, true);
   if (s.laser_m) ranged("laser", *s.laser_m, false);
   if (s.position) ranged("position", s.position->noise_m, false, &s.position->p_P_target_m);
   if (s.swivel_rad) ranged("swivel", *s.swivel_rad, true);
   if (s.heading_rad) ranged("heading", *s.heading_rad, true);
   if (s.load_cell_N) ranged("load_cell", *s.load_cell_N, false);
-  if (s.tracker_sigma_m) {
-    o << YAML::Key << "tracker" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "sigma" << YAML::Value
-      << YamlNumber{*s.tracker_sigma_m} << YAML::EndMap;
-  }
+  if (s.tracker_sigma_m) EmitNumberMap(o, "tracker", {{"sigma", *s.tracker_sigma_m}});
   o << YAML::EndMap << YAML::EndMap;
   return YamlText(o);
 }

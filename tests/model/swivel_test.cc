@@ -22,6 +22,15 @@
 namespace cablecal {
 namespace {
 
+// A pose near the robot's home: each position coordinate within +-position_m of home's, each
+// angle within +-angle_rad (drawn x, y, z, roll, pitch, yaw in that order).
+SpatialPose<double> PoseNearHome(const SpatialRobot& robot, Rng& rng, double position_m, double angle_rad) {
+  SpatialPose<double> q = robot.home_pose();
+  for (int j = 0; j < 3; ++j) q(j) += rng.Uniform(-position_m, position_m);
+  for (int j = 3; j < 6; ++j) q(j) += rng.Uniform(-angle_rad, angle_rad);
+  return q;
+}
+
 // The same geometry by two formulas (planar closed form, spatial closed form): rounding only.
 constexpr double kEquivalenceTol = 1e-12;
 // Closed form against the numerical construction: bisection to ~1e-16 rad on the circle, then
@@ -276,9 +285,7 @@ TEST(SwivelCable, RandomSpatialRobotsMatchTheConstruction) {
   for (int robot_index = 0; robot_index < 20; ++robot_index) {
     const SpatialRobot robot = testing::RandomSpatialRobot(rng, "random", 3 + robot_index % 10);
     for (int pose = 0; pose < 10; ++pose) {
-      SpatialPose<double> q = robot.home_pose();
-      for (int j = 0; j < 3; ++j) q(j) += rng.Uniform(-0.4, 0.4);
-      for (int j = 3; j < 6; ++j) q(j) += rng.Uniform(-0.3, 0.3);
+      const SpatialPose<double> q = PoseNearHome(robot, rng, 0.4, 0.3);
       const Eigen::Matrix3d R = Rotation<double>(q);
       for (const SpatialCable& c : robot.cables) {
         const SwivelCableState<double> s = SwivelCableAtPose<double>(c, q, R);
@@ -397,9 +404,7 @@ TEST(SpatialPlatform, WrenchMatrixIsMinusTheLengthJacobianOfARigidDisplacement) 
   for (int robot_index = 0; robot_index < 20; ++robot_index) {
     const SpatialRobot robot = testing::RandomSpatialRobot(rng, "random", 3 + robot_index % 10);
     for (int pose = 0; pose < 5; ++pose) {
-      SpatialPose<double> q = robot.home_pose();
-      for (int j = 0; j < 3; ++j) q(j) += rng.Uniform(-0.3, 0.3);
-      for (int j = 3; j < 6; ++j) q(j) += rng.Uniform(-0.2, 0.2);
+      const SpatialPose<double> q = PoseNearHome(robot, rng, 0.3, 0.2);
       if (!CableGeometryAt(robot, q).valid()) continue;
       const Eigen::Matrix3d R = Rotation<double>(q);
       Vec3<Jet<6>> dp, dphi;
