@@ -234,6 +234,10 @@ const char* ToString(Feasibility f) {
     case Feasibility::kThetaLimit: return "theta_limit";
     case Feasibility::kTensionLow: return "tension_low";
     case Feasibility::kTensionHigh: return "tension_high";
+    case Feasibility::kTiltLimit: return "tilt_limit";
+    case Feasibility::kSwivelAxis: return "swivel_axis";
+    case Feasibility::kInsidePulley: return "inside_pulley";
+    case Feasibility::kWrap: return "wrap";
   }
   return "unknown";
 }
@@ -368,7 +372,7 @@ ThetaScan ScanTheta(const Robot& robot, double x_m, double z_m) {
     return scan;
   }
   // Nothing feasible: the reason most orientations give (the first in scan order on a tie).
-  int counts[16] = {0};
+  int counts[kNumFeasibility] = {0};
   for (const PoseEvaluation& e : evaluations) ++counts[static_cast<int>(e.feasibility)];
   int best = 0;
   for (std::size_t k = 1; k < evaluations.size(); ++k) {
