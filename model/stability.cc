@@ -39,6 +39,11 @@ SpatialPose<T> GeneralizedForce(const SpatialRobot& robot, const SpatialPose<T>&
 // leaves rounding, some 1e-16 of the largest.
 constexpr double kRankTolerance = 1e-9;
 
+// A curvature this small against the Hessian's largest entry is rounding of a zero: a neutral
+// direction (a bar whose centre of mass lies on its anchors' line spins freely about that line),
+// which holds the platform no more than a negative one. Rounding leaves some 1e-15 of it.
+constexpr double kNeutralCurvature = 1e-9;
+
 template <int D, typename RobotT>
 StabilityResult Stability(const RobotT& robot, const Eigen::Matrix<double, D, 1>& q, const Eigen::VectorXd& tensions_N,
                           const Eigen::VectorXd& axial_stiffness_Npm) {
@@ -91,7 +96,7 @@ StabilityResult Stability(const RobotT& robot, const Eigen::Matrix<double, D, 1>
   const Eigen::MatrixXd H_reduced = N.transpose() * H * N;
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(H_reduced, Eigen::EigenvaluesOnly);
   result.min_eigenvalue = eig.eigenvalues()(0);
-  result.stable = result.min_eigenvalue > 0.0;
+  result.stable = result.min_eigenvalue > kNeutralCurvature * H.cwiseAbs().maxCoeff();
   return result;
 }
 

@@ -28,9 +28,11 @@ struct StabilityResult {
   // orthonormal in q's coordinates: m and rad). NaN when no motion is free.
   double min_eigenvalue = std::numeric_limits<double>::quiet_NaN();
   int free_motions = 0;  // the dimension of the null space of the inextensible cables' dl/dq
-  // The reduced Hessian is positive definite (min_eigenvalue > 0), or no motion is free: the
-  // inextensible cables hold the pose (a motion shortening no taut cable raises the potential
-  // by t' dl >= 0 to first order).
+  // The reduced Hessian is positive definite, or no motion is free: the inextensible cables hold
+  // the pose (a motion shortening no taut cable raises the potential by t' dl >= 0 to first
+  // order). Positive: min_eigenvalue above 1e-9 of the Hessian's largest entry; a neutral
+  // direction (zero but for rounding, e.g. a bar spinning freely about the line of its two
+  // anchors when its centre of mass lies on it) is not stable.
   bool stable = false;
 };
 

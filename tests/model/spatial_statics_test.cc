@@ -240,15 +240,17 @@ TEST(SpatialStability, ReducedHessianMatchesThePotentialAlongTheManifold) {
 }
 
 // Three cables from exits at 120 degrees to anchors at 120 degrees, the centre of mass on the
-// axis: level is an equilibrium with equal tensions by symmetry. Centre of mass far below the
-// anchors: a pendulum, stable; far above (an inverted pendulum on cables): unstable.
+// axis: level is an equilibrium with equal tensions by symmetry. Centre of mass below the
+// anchors: a pendulum, stable; 0.6 m above them (an inverted pendulum on cables; the least
+// curvature changes sign at about 0.24 m): unstable.
 SpatialRobot SymmetricThreeCables(double com_height_m) {
   SpatialRobot r;
   r.name = "symmetric3";
   r.source = "symmetric3";
   r.p_F_frame_min_m = Eigen::Vector3d(-2.0, -2.0, 0.0);
-  r.p_F_frame_max_m = Eigen::Vector3d(2.0, 2.0, 3.0);
+  r.p_F_frame_max_m = Eigen::Vector3d(2.0, 2.0, 4.0);
   r.platform_mass_kg = 20.0;
+  r.sensors.encoder_sigma_m = 1e-4;
   r.p_P_com_m = Eigen::Vector3d(0.0, 0.0, com_height_m);
   for (int i = 0; i < 3; ++i) {
     const double a = 2.0 * M_PI * i / 3.0;
@@ -275,7 +277,7 @@ Eigen::VectorXd LevelTensions(const SpatialRobot& r) {
 }
 
 TEST(SpatialStability, HighCentreOfMassIsUnstableAndLowIsStable) {
-  for (const double com_height : {-0.5, 2.0}) {
+  for (const double com_height : {-0.5, 0.6}) {
     const SpatialRobot r = SymmetricThreeCables(com_height);
     const Pose6 q = r.home_pose();
     const Eigen::VectorXd t = LevelTensions(r);
@@ -357,6 +359,280 @@ TEST(SpatialStability, PlanarReducedStiffnessAgreesWithTheNormalOfW) {
     }
   }
   EXPECT_GE(compared, 10);
+}
+
+// ---- (d): planar robots placed in space --------------------------------------------------
+
+// The planar pose (x, z, theta) as the spatial pose (x, 0, z, 0, -theta, 0) (model/kind.h).
+Pose6 SpatialOfPlanar(const Eigen::Vector3d& q) {
+  Pose6 s;
+  s << q(0), 0.0, q(1), 0.0, -q(2), 0.0;
+  return s;
+}
+
+// The planar equilibria of a grid of positions (m = 2: the equilibrium's theta; m >= 3: the
+// feasible theta at the middle of the band ScanTheta finds).
+std::vector<PoseEvaluation> PlanarEquilibria(const Robot& robot) {
+  std::vector<PoseEvaluation> out;
+  for (double x = 0.1; x < 1.0; x += 0.1) {
+    for (double z = 0.1; z < 1.0; z += 0.1) {
+      const double px = x * robot.frame_width_m, pz = z * robot.frame_height_m;
+      const PoseEvaluation e = robot.theta_is_free() ? ScanTheta(robot, px, pz).evaluation : EvaluatePose(robot, px, pz);
+      if (e.feasible()) out.push_back(e);
+    }
+  }
+  return out;
+}
+
+// Placed in space, a planar robot's equilibria are spatial ones: the same pose and tensions
+// where the spatial solver finds them, and it finds them wherever they are stable in space too.
+// What is true out of the plane, measured: the asymmetric 2-cable and the 3-cable suspended
+// robots hang like pendulums, stable at every planar equilibrium sampled; wang2022's bar has its
+// centre of mass on its anchors' line, so it spins freely about that line (neutral: the least
+// curvature is rounding, +-1e-14, not stable); the 4-cable fully constrained robot's lower
+// cables tip it out of the plane (unstable; SwivelPlanarEquivalence in swivel_test).
+TEST(SpatialStatics, PlanarRobotsInSpaceHaveThePlanarEquilibria) {
+  for (const char* file : {"wang2022.yaml", "asymmetric.yaml", "planar3_suspended.yaml", "planar4_fully_constrained.yaml"}) {
+    const Robot planar = PlanarFile(file);
+    const SpatialRobot spatial = PlanarAsSpatial(planar);
+    const double weight = planar.platform_mass_kg * planar.gravity_mps2;
+    int found = 0, unstable_in_space = 0;
+    for (const PoseEvaluation& e : PlanarEquilibria(planar)) {
+      const Pose6 q = SpatialOfPlanar(e.equilibrium.q);
+      const Eigen::VectorXd& t = e.equilibrium.tensions_N;
+      // The planar equilibrium balances the spatial platform.
+      EXPECT_LT(EquilibriumResidual<double>(spatial, q, t).norm(), 1e-9 * weight) << file;
+      const StabilityResult s = StaticStability(spatial, q, t, InextensibleCables(planar.num_cables()));
+      if (!s.stable) {
+        ++unstable_in_space;
+        continue;
+      }
+      // m = 2: the solver starts level and must find theta; m >= 3: the planar theta is one
+      // of a band, so the guess carries it.
+      Pose6 guess = q;
+      if (planar.num_cables() == 2) guess(4) = 0.0;
+      const SpatialEquilibriumResult r = SolveSpatialEquilibrium(spatial, guess);
+      ASSERT_EQ(r.status, EquilibriumStatus::kFound) << file << " at " << q.transpose();
+      EXPECT_LT((r.equilibrium.q - q).cwiseAbs().maxCoeff(), 1e-9) << file << " at " << q.transpose();
+      EXPECT_LT((r.equilibrium.tensions_N - t).cwiseAbs().maxCoeff(), 1e-9 * weight) << file;
+      // In space the in-plane motion is one of the free ones: its curvature bounds the least.
+      if (planar.num_cables() == 2) {
+        EXPECT_LE(r.equilibrium.reduced_stiffness, e.equilibrium.reduced_stiffness * (1.0 + 1e-9)) << file;
+      }
+      ++found;
+    }
+    std::printf("%s in space: %d planar equilibria found stable, %d unstable out of the plane\n", file, found,
+                unstable_in_space);
+    if (std::string(file) == "wang2022.yaml") {
+      EXPECT_EQ(found, 0);
+      EXPECT_GE(unstable_in_space, 15);
+      EXPECT_EQ(EvaluateSpatialPose(spatial, spatial.home_pose()).feasibility, Feasibility::kUnstable);
+    } else if (planar.num_cables() <= 3) {
+      EXPECT_GE(found, 15) << file;
+      EXPECT_EQ(unstable_in_space, 0) << file;
+    } else {
+      EXPECT_EQ(found, 0) << file;
+      EXPECT_GE(unstable_in_space, 15) << file;
+    }
+  }
+}
+
+// ---- (e): each feasibility reason at a pose built for it -----------------------------------
+
+// A 6-cable robot in general position: a random one (its home is feasible: the loader says so).
+SpatialRobot SixCables() {
+  Rng rng(61);
+  return testing::RandomSpatialRobot(rng, "six", 6);
+}
+
+// The pose, near `q`, that puts cable i's anchor at the point p_F (the position moved).
+Pose6 WithAnchorAt(const SpatialRobot& r, const Pose6& q, int i, const Eigen::Vector3d& p_F) {
+  Pose6 out = q;
+  out.head<3>() = p_F - Rotation<double>(q) * r.cables[i].p_P_anchor_m;
+  return out;
+}
+
+TEST(SpatialFeasibility, EachReasonAtAPoseBuiltForIt) {
+  const SpatialRobot six = SixCables();
+  const Pose6 home = six.home_pose();
+  const SpatialPoseEvaluation at_home = EvaluateSpatialHome(six);
+  ASSERT_TRUE(at_home.feasible()) << ToString(at_home.feasibility);
+  EXPECT_EQ(at_home.cable, -1);
+
+  // outside_frame: the reference point, then only an anchor, beyond the box less the margin.
+  Pose6 q = home;
+  q(0) = six.p_F_frame_max_m.x() - 0.04;
+  EXPECT_EQ(EvaluateSpatialPose(six, q).feasibility, Feasibility::kOutsideFrame);
+  double reach_x = 0.0;  // the anchors' largest x offset from p at home
+  for (const SpatialCable& c : six.cables) reach_x = std::max(reach_x, (Rotation<double>(home) * c.p_P_anchor_m).x());
+  ASSERT_GT(reach_x, 0.02);
+  q(0) = six.p_F_frame_max_m.x() - six.margin_m - 0.5 * reach_x;  // p inside, that anchor beyond
+  ASSERT_TRUE(CableGeometryAt(six, q).valid());
+  EXPECT_EQ(EvaluateSpatialPose(six, q).feasibility, Feasibility::kOutsideFrame);
+
+  // tilt_limit: a roll 5 degrees beyond the limit, every cable valid and the platform inside.
+  q = home;
+  q(3) = six.tilt_max_rad + 5.0 * kDegToRad;
+  EXPECT_TRUE(CableGeometryAt(six, q).valid());
+  EXPECT_EQ(EvaluateSpatialPose(six, q).feasibility, Feasibility::kTiltLimit);
+
+  // Cable geometry: cable 0 (an upper exit, axis +z; the pulley beside its exit) with its anchor
+  // on the swivel axis below the exit, within the pulley's circle, and behind the pulley near the
+  // axis (a wrap beyond 270 degrees). Checked against model/swivel.h's own reason first.
+  SpatialRobot inner = six;  // an exit inside the frame so that the platform can reach it
+  inner.cables[0].p_F_exit_m = home.head<3>() + Eigen::Vector3d(-0.6, -0.4, 0.9);
+  inner.cables[0].k_F_swivel_axis = Eigen::Vector3d::UnitZ();
+  inner.cables[0].pulley_radius_m = 0.04;
+  const SpatialCable& c0 = inner.cables[0];
+  const double r0 = c0.pulley_radius_m;
+  const Eigen::Vector3d u = Eigen::Vector3d(1.0, 0.0, 0.0);  // toward the anchor, normal to k
+  const struct {
+    Eigen::Vector3d p_F_anchor;
+    SwivelGeometry geometry;
+    Feasibility reason;
+  } cases[] = {
+      {c0.p_F_exit_m - 0.8 * c0.k_F_swivel_axis, SwivelGeometry::kSwivelAxis, Feasibility::kSwivelAxis},
+      {c0.p_F_exit_m + r0 * u - 0.5 * r0 * c0.k_F_swivel_axis, SwivelGeometry::kInsidePulley,
+       Feasibility::kInsidePulley},
+      // m = (-0.9 r, -0.5 r) in the pulley plane: just outside the pulley, wrapped 317 degrees.
+      {c0.p_F_exit_m + 0.1 * r0 * u - 0.5 * r0 * c0.k_F_swivel_axis, SwivelGeometry::kWrap, Feasibility::kWrap},
+  };
+  for (const auto& k : cases) {
+    const Pose6 at = WithAnchorAt(inner, home, 0, k.p_F_anchor);
+    ASSERT_EQ(SwivelCable<double>(c0.p_F_exit_m, c0.k_F_swivel_axis, r0, k.p_F_anchor).geometry, k.geometry);
+    const SpatialPoseEvaluation e = EvaluateSpatialPose(inner, at);
+    EXPECT_EQ(e.feasibility, k.reason) << ToString(k.geometry);
+    EXPECT_EQ(e.cable, 0);
+    int cable = -1;
+    EXPECT_EQ(CheckSpatialFeasibility(inner, at, at_home.equilibrium.tensions_N, &cable), k.reason);
+    EXPECT_EQ(cable, 0);
+  }
+  // inside_pulley by the clearance alone: valid geometry, the anchor 0.03 m from the pulley.
+  {
+    const Eigen::Vector3d p = c0.p_F_exit_m + r0 * u + (r0 + 0.03) * Eigen::Vector3d(1.0, 0.0, -1.0).normalized();
+    const Pose6 at = WithAnchorAt(inner, home, 0, p);
+    ASSERT_TRUE(SwivelCable<double>(c0.p_F_exit_m, c0.k_F_swivel_axis, r0, p).valid());
+    const SpatialPoseEvaluation e = EvaluateSpatialPose(inner, at);
+    EXPECT_EQ(e.feasibility, Feasibility::kInsidePulley);
+    EXPECT_EQ(e.cable, 0);
+  }
+
+  // no_equilibrium: every exit on the x = -2 wall (at various heights), the platform at x = 1:
+  // each cable pulls toward -x and nothing pulls toward +x, so no t > 0 balances the force.
+  SpatialRobot wall = six;
+  const Eigen::Vector3d lo = six.p_F_frame_min_m, hi = six.p_F_frame_max_m;
+  for (int i = 0; i < 6; ++i) {
+    wall.cables[i].p_F_exit_m = Eigen::Vector3d(lo.x(), lo.y() + (hi.y() - lo.y()) * (i + 0.5) / 6.0, i % 2 ? hi.z() : lo.z());
+    wall.cables[i].k_F_swivel_axis = Eigen::Vector3d(0.0, 0.0, i % 2 ? 1.0 : -1.0);
+  }
+  q = home;
+  q(0) = hi.x() - 0.5;
+  ASSERT_TRUE(CableGeometryAt(wall, q).valid());
+  EXPECT_EQ(EvaluateSpatialPose(wall, q).feasibility, Feasibility::kNoEquilibrium);
+
+  // tension_low, tension_high: the unique tensions at home against bounds moved past them.
+  const Eigen::VectorXd t = at_home.equilibrium.tensions_N;
+  SpatialRobot low = six, high = six;
+  low.tension_min_N = t.minCoeff() + 1.0;
+  high.tension_max_N = t.maxCoeff() - 1.0;
+  EXPECT_EQ(EvaluateSpatialPose(low, home).feasibility, Feasibility::kTensionLow);
+  EXPECT_EQ(EvaluateSpatialPose(high, home).feasibility, Feasibility::kTensionHigh);
+  EXPECT_EQ(CheckSpatialFeasibility(low, home, t), Feasibility::kTensionLow);
+  EXPECT_EQ(CheckSpatialFeasibility(high, home, t), Feasibility::kTensionHigh);
+
+  // Underactuated: unstable (the inverted pendulum above), tension_high and tilt_limit at
+  // the equilibrium, and the frame test on the requested position.
+  EXPECT_EQ(EvaluateSpatialPose(SymmetricThreeCables(0.6), SymmetricThreeCables(0.6).home_pose()).feasibility,
+            Feasibility::kUnstable);
+  SpatialRobot heavy = SymmetricThreeCables(-0.5);
+  heavy.tension_max_N = 50.0;
+  const SpatialPoseEvaluation h = EvaluateSpatialPose(heavy, heavy.home_pose());
+  EXPECT_EQ(h.feasibility, Feasibility::kTensionHigh);
+  EXPECT_TRUE(h.has_equilibrium);
+  SpatialRobot lopsided = SymmetricThreeCables(-0.5);
+  lopsided.p_P_com_m.x() = 0.6;  // the platform tilts until the centre of mass hangs below the cables' meeting point
+  const SpatialPoseEvaluation tilted = EvaluateSpatialPose(lopsided, lopsided.home_pose());
+  EXPECT_EQ(tilted.feasibility, Feasibility::kTiltLimit);
+  EXPECT_GT(TiltAngle(tilted.equilibrium.q), lopsided.tilt_max_rad);
+  q = heavy.home_pose();
+  q(2) = heavy.p_F_frame_min_m.z() + 0.01;
+  EXPECT_EQ(EvaluateSpatialPose(heavy, q).feasibility, Feasibility::kOutsideFrame);
+
+  // The names.
+  EXPECT_STREQ(ToString(Feasibility::kTiltLimit), "tilt_limit");
+  EXPECT_STREQ(ToString(Feasibility::kSwivelAxis), "swivel_axis");
+  EXPECT_STREQ(ToString(Feasibility::kInsidePulley), "inside_pulley");
+  EXPECT_STREQ(ToString(Feasibility::kWrap), "wrap");
+}
+
+// The loader refuses a home that is not a feasible, stable equilibrium, naming `home`.
+TEST(SpatialFeasibility, LoaderRefusesAnInfeasibleHome) {
+  const auto message = [](const SpatialRobot& r) {
+    try {
+      LoadSpatialRobotFromString(SpatialRobotToYaml(r), "bad.yaml");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(message(SymmetricThreeCables(-0.5)), "");
+  const std::string unstable = message(SymmetricThreeCables(0.6));
+  EXPECT_NE(unstable.find(": home: the home pose (0, 0, 1.5) m is not in the feasible workspace: unstable"),
+            std::string::npos)
+      << unstable;
+  SpatialRobot high = SixCables();
+  high.tension_max_N = EvaluateSpatialHome(high).equilibrium.tensions_N.maxCoeff() - 1.0;
+  const std::string tension = message(high);
+  EXPECT_NE(tension.find(": home: the home pose ("), std::string::npos) << tension;
+  EXPECT_NE(tension.find(" m is not in the feasible workspace: tension_high; tensions ("), std::string::npos) << tension;
+  EXPECT_THROW(SpatialHomeEvaluation(high), InputError);
+  EXPECT_THROW(SpatialHomeLengths(high), InputError);
+  const SpatialRobot six = SixCables();
+  EXPECT_EQ(SpatialHomeLengths(six), CableLengths<double>(six, six.home_pose()));
+}
+
+// ---- (f): m >= 7, the minimum-norm tensions within bounds ---------------------------------
+
+// The point of {W t = b, lo <= t <= hi} nearest 0, by Dykstra's alternating projections onto
+// the affine set and the box (no least-distance solver, no active set).
+Eigen::VectorXd NearestToZeroByDykstra(const Eigen::MatrixXd& W, const Eigen::VectorXd& b, double lo, double hi) {
+  const Eigen::MatrixXd WWt_inv = (W * W.transpose()).inverse();
+  const auto affine = [&](const Eigen::VectorXd& x) { return Eigen::VectorXd(x - W.transpose() * (WWt_inv * (W * x - b))); };
+  const int m = static_cast<int>(W.cols());
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(m), p = Eigen::VectorXd::Zero(m), q = Eigen::VectorXd::Zero(m);
+  for (int it = 0; it < 200000; ++it) {
+    const Eigen::VectorXd y = affine(x + p);
+    p = x + p - y;
+    const Eigen::VectorXd x_new = (y + q).cwiseMax(lo).cwiseMin(hi);
+    q = y + q - x_new;
+    const double change = (x_new - x).norm();
+    x = x_new;
+    if (change < 1e-13 * (1.0 + x.norm()) && (W * x - b).norm() < 1e-11 * (1.0 + b.norm())) break;
+  }
+  return x;
+}
+
+TEST(SpatialStatics, RedundantRobotsTakeTheMinimumNormTensionsWithinBounds) {
+  Rng rng(53);
+  int compared = 0;
+  double worst = 0.0;
+  for (const SpatialRobot& robot : TestRobots()) {
+    if (robot.num_cables() < 7) continue;
+    for (const SpatialPoseEvaluation& e : FeasibleEquilibria(robot, rng, 6)) {
+      const Pose6& q = e.equilibrium.q;
+      const Eigen::VectorXd& t = e.equilibrium.tensions_N;
+      const Eigen::VectorXd expected = NearestToZeroByDykstra(WrenchMatrix<double>(robot, q), -GravityWrench<double>(robot, q),
+                                                              robot.tension_min_N, robot.tension_max_N);
+      EXPECT_LT((t - expected).norm(), 1e-6 * expected.norm()) << robot.name;
+      EXPECT_GE(t.minCoeff(), robot.tension_min_N);
+      EXPECT_LE(t.maxCoeff(), robot.tension_max_N);
+      worst = std::max(worst, (t - expected).norm() / expected.norm());
+      ++compared;
+    }
+  }
+  EXPECT_GE(compared, 40);
+  std::printf("m >= 7 tension distributions compared %d: worst relative difference from Dykstra's %.2e\n", compared,
+              worst);
 }
 
 }  // namespace
