@@ -10,6 +10,7 @@
 #include "common/error.h"
 #include "common/format.h"
 #include "common/yaml_writer.h"
+#include "model/forward_statics.h"
 #include "model/sensor_model.h"
 #include "model/statics.h"
 
@@ -53,9 +54,28 @@ std::string CannotHoldReason(ForwardStatus status, const std::string& expected_p
   return why;
 }
 
+CableCommands::CableCommands(const Robot& nominal_robot) : nominal(nominal_robot), elastic(HasStiffness(nominal_robot)) {
+  if (!elastic) return;
+  home_tensions_N = HomeEvaluation(nominal).equilibrium.tensions_N;
+  home_unstretched_m = CommandedUnstretchedLengths(nominal, InitialLengths(nominal), home_tensions_N);
+}
+
+Eigen::VectorXd CableCommands::PaidOutFromHome(const PlanPose& pose) const {
+  if (!elastic) return pose.length_change_m;
+  return CommandedUnstretchedLengths(nominal, pose.lengths_m, pose.tensions_N) - home_unstretched_m;
+}
+
+Eigen::VectorXd CableCommands::TrueUnstretchedLengths(const Robot& truth, const Eigen::VectorXd& true_initial_lengths_m,
+                                                      const Eigen::VectorXd& paid_out_m) const {
+  if (!elastic) return true_initial_lengths_m + paid_out_m;
+  return CommandedUnstretchedLengths(truth, true_initial_lengths_m, home_tensions_N) + paid_out_m;
+}
+
 SimulatedExperiment SimulateExperiment(const Robot& nominal, const Robot& truth,
                                        const std::vector<PlanPose>& plan, const SimulationOptions& options,
                                        Rng& rng) {
+  CheckSimulatable(truth);
+  const CableCommands commands(nominal);
   const Eigen::VectorXd l0_true = InitialLengths(truth);
   const bool laser = options.noisy == NoisySensors::kBoth || options.noisy == NoisySensors::kLaser;
   const bool inclinometer = options.noisy == NoisySensors::kBoth || options.noisy == NoisySensors::kInclinometer;
@@ -63,9 +83,10 @@ SimulatedExperiment SimulateExperiment(const Robot& nominal, const Robot& truth,
   SimulatedExperiment out;
   for (std::size_t j = 0; j < plan.size(); ++j) {
     const PlanPose& p = plan[j];
-    const Eigen::VectorXd lengths_true = l0_true + p.length_change_m;
+    const Eigen::VectorXd paid_out_m = commands.PaidOutFromHome(p);
+    const Eigen::VectorXd lengths_true = commands.TrueUnstretchedLengths(truth, l0_true, paid_out_m);
     // The commanded (nominal) pose is a good start: the true one is millimetres away.
-    const ForwardResult fwd = SolveForwardGeometricoStatic(truth, lengths_true, &p.q);
+    const ForwardResult fwd = SettlePlanar(truth, lengths_true, &p.q);
     std::string infeasible;
     if (fwd.status != ForwardStatus::kConverged) {
       infeasible = "the true robot cannot hold the commanded lengths (" +
@@ -85,9 +106,7 @@ SimulatedExperiment SimulateExperiment(const Robot& nominal, const Robot& truth,
     }
     Measurement m;
     m.pose_id = static_cast<int>(j + 1);
-    // m >= 4: the lengths the cables have at the least-squares pose (experiment.h).
-    m.dl_m = truth.num_cables() >= 4 ? Eigen::VectorXd(CableLengths(truth, fwd.equilibrium.q) - l0_true)
-                                     : p.length_change_m;
+    m.dl_m = paid_out_m;  // the cable paid out (the file comment)
     // Draw order is fixed (encoders, laser accuracy, repeatability, inclinometer accuracy,
     // repeatability) and every draw is made whether or not it is used, so that switching
     // a sensor's noise off leaves the other sensors' noise unchanged.
@@ -115,6 +134,7 @@ SimulatedExperiment SimulateExperiment(const Robot& nominal, const Robot& truth,
 PlanSimulation SimulatePlan(const Robot& nominal, const std::optional<Robot>& truth, double geometry_sigma_m,
                             const std::vector<PlanPose>& plan, const SimulationOptions& options, std::uint64_t seed,
                             const std::string& plan_source) {
+  CheckSimulatable(nominal);
   Rng geometry_rng(StreamSeed(seed, {0}));
   Rng noise_rng(StreamSeed(seed, {1}));
   PlanSimulation run{nominal, {}};

@@ -69,6 +69,11 @@ constexpr double kMaxGravity_mps2 = 100.0;
 constexpr double kMaxFrameSide_m = 100.0;
 constexpr double kMaxPlatformMass_kg = 10000.0;
 
+// The least cable stiffness E*A a robot file (either kind) accepts, as a multiple of
+// tension.max: a cable stretching more than a tenth of its length at the largest tension is a
+// unit slip (kN typed for N), not a cable.
+constexpr double kMinStiffnessOverMaxTension = 10.0;
+
 struct Cable {
   Eigen::Vector2d p_F_exit_m;        // exit point A_i: the pulley's outermost point at centre height
   double pulley_radius_m = 0.0;
