@@ -2,6 +2,7 @@
 
 
 #include <cctype>
+#include <cmath>
 #include <fstream>
 #include <optional>
 #include <unordered_map>
@@ -71,6 +72,24 @@ Eigen::VectorXd CableCommands::TrueUnstretchedLengths(const Robot& truth, const 
   return CommandedUnstretchedLengths(truth, true_initial_lengths_m, home_tensions_N) + paid_out_m;
 }
 
+namespace {
+
+// An elastic robot's tensions come from its stretch, EA (l / L - 1): a plan's tension at a bound
+// (the minimum-norm distribution puts some there) comes back a few ulps of EA off it, which is
+// not a lab's tension limit broken. Within this fraction of tension.max of a bound, on it.
+constexpr double kTensionRounding = 1e-9;
+Eigen::VectorXd SnapToBounds(const Robot& robot, Eigen::VectorXd tensions_N) {
+  if (!HasStiffness(robot)) return tensions_N;
+  const double tol_N = kTensionRounding * robot.tension_max_N;
+  for (double& t : tensions_N) {
+    if (std::abs(t - robot.tension_min_N) < tol_N) t = robot.tension_min_N;
+    if (std::abs(t - robot.tension_max_N) < tol_N) t = robot.tension_max_N;
+  }
+  return tensions_N;
+}
+
+}  // namespace
+
 SimulatedExperiment SimulateExperiment(const Robot& nominal, const Robot& truth,
                                        const std::vector<PlanPose>& plan, const SimulationOptions& options,
                                        Rng& rng) {
@@ -92,7 +111,7 @@ SimulatedExperiment SimulateExperiment(const Robot& nominal, const Robot& truth,
       infeasible = "the true robot cannot hold the commanded lengths (" +
                    CannotHoldReason(fwd.status, "the commanded pose") + ")";
     } else if (options.require_feasible) {
-      const Feasibility f = CheckFeasibility(truth, fwd.equilibrium.q, fwd.equilibrium.tensions_N);
+      const Feasibility f = CheckFeasibility(truth, fwd.equilibrium.q, SnapToBounds(truth, fwd.equilibrium.tensions_N));
       if (f != Feasibility::kFeasible) {
         infeasible = "the true robot settles outside its workspace (" + std::string(ToString(f)) + ")";
       }
