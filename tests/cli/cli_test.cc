@@ -2036,6 +2036,35 @@ INSTANTIATE_TEST_SUITE_P(Robots, ManyCableCli,
                            return std::string(info.param).substr(0, 7);
                          });
 
+// A planar robot with more rigid cables than the platform's 3 freedoms cannot be simulated (the
+// commanded lengths cannot all hold on a true robot that differs from the nominal one):
+// simulate and montecarlo exit 2 naming the file and the key `stiffness`, nothing written.
+TEST_F(Cli, RigidOverconstrainedPlanarRobotIsNotSimulated) {
+  std::ifstream in(std::string(CABLECAL_SOURCE_DIR) + "/robots/planar4_fully_constrained.yaml");
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string elastic = text.str();
+  std::string rigid = elastic;
+  for (std::size_t at; (at = rigid.find(", stiffness: 5.0e4")) != std::string::npos;) rigid.erase(at, 18);
+  ASSERT_EQ(rigid.find("stiffness:"), std::string::npos);
+  std::ofstream(Path("rigid.yaml")) << rigid;
+  std::ofstream(Path("elastic.yaml")) << elastic;
+  ASSERT_EQ(RunCablecal("sample --robot " + Path("elastic.yaml") + " --poses 5 --seed 2 --out " + Path("plan.csv")).exit_code, 0);
+  // The plan runs on the elastic robot (the nominal one as the truth: every pose held).
+  const RunResult ok = RunCablecal("simulate --robot " + Path("elastic.yaml") + " --plan " + Path("plan.csv") + " --out " + Path("meas.csv"));
+  EXPECT_EQ(ok.exit_code, 0) << ok.output;
+  const RunResult r = RunCablecal("simulate --robot " + Path("rigid.yaml") + " --plan " + Path("plan.csv") +
+                                  " --geometry-sigma 0.001 --out " + Path("rigid_meas.csv"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("rigid.yaml: cables[0].stiffness:"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("cannot be simulated"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(Path("rigid_meas.csv")));
+  const RunResult mc = RunCablecal("montecarlo --robot " + Path("rigid.yaml") + " --poses 8 --trials 2 --no-plot --out " + Path("mc"));
+  EXPECT_EQ(mc.exit_code, 2) << mc.output;
+  EXPECT_NE(mc.output.find("cables[0].stiffness"), std::string::npos) << mc.output;
+  EXPECT_FALSE(fs::exists(Path("mc")));
+}
+
 // Hostile robot files end in one clear message and exit 2, with nothing written: the issue's
 // list (1 and 9 cables, an anchor count that differs from the cables', wrap: sideways,
 // home_theta_deg with 2 cables, an infeasible home), each through a command that writes.
@@ -2061,7 +2090,9 @@ TEST_F(Cli, HostileCableCountsAndKeysAreRefused) {
       {replaced(wang, right, nine), "cables: must list 2 to 8 cables (got 9)"},
       {replaced(p3, "[[-0.35, 0.0], [0.0, 0.25], [0.35, 0.0]]", "[[-0.35, 0.0], [0.35, 0.0]]"),
        "platform.anchors: needs one anchor per cable (3), got 2"},
-      {replaced(p4, "wrap: under}", "wrap: sideways}"), "cables[2].wrap: must be 'over' or 'under' (got 'sideways')"},
+      {replaced(p4, "wrap: under, stiffness", "wrap: sideways, stiffness"), "cables[2].wrap: must be 'over' or 'under' (got 'sideways')"},
+      {replaced(p4, "side: right, stiffness: 5.0e4}", "side: right, stiffness: 150}"),
+       "cables[1].stiffness: 150 N (E*A) would stretch the cable by more than 10 % at tension.max"},
       {replaced(wang, "home: [2.6045, 1.4]", "home: [2.6045, 1.4]\nhome_theta_deg: 2"),
        "home_theta_deg: is for robots with 3 or more cables"},
       {replaced(p3, "home_theta_deg: 18 ", "home_theta_deg: -25 "), "is not in the feasible workspace: no_equilibrium"},
