@@ -400,7 +400,7 @@ def test_repeated_readings_and_a_missing_inclinometer(tmp_path):
     # (README, "Any number of cables").
     robot = cablecal.Robot.load(robot_file("planar3_suspended"))
     plan = cablecal.sample(robot, 12, seed=4)
-    m = cablecal.simulate(robot, plan, geometry_sigma=0.01, seed=5).measurements
+    m = cablecal.simulate(robot, plan, geometry_sigma=0.002, seed=5).measurements
     twice = cablecal.Measurements(robot, np.vstack([m.dl, m.dl]), np.concatenate([m.z, m.z]), None,
                                   pose_ids=list(m.pose_ids) * 2)
     assert twice.theta is None and len(twice) == 24
