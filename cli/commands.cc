@@ -318,7 +318,6 @@ int RunSimulate(const Context& ctx, const SimulateOptions& options) {
   CheckCommandPaths({{"--robot", options.robot_path}, {"--truth", options.truth_path}, {"--plan", options.plan_path}},
                     {{"--out", options.out_path}, {"--truth-out", options.truth_out_path}});
   const Robot nominal = LoadRobotOption(options.robot_path);
-  CheckSimulatable(nominal);  // before the plan: the robot file is what must change
   // A pose where the true robot settles outside its own workspace (beyond a tension limit,
   // the inclinometer range or the margin) would stop a lab's experiment: exit 2 naming the
   // plan's pose (the Monte Carlo counts such a trial as failed).

@@ -342,9 +342,6 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
   if (!(options.robust_sigmas >= 0.0 && options.robust_sigmas <= 10.0)) {
     throw InputError("--robust-sigmas", "", "must be between 0 and 10 (got " + FormatDouble(options.robust_sigmas) + ")");
   }
-  // The robust design's scenario robots settle as simulated true robots do: rigid cables beyond
-  // the platform's degrees of freedom cannot (CheckSimulatable).
-  if (options.robust_sigmas > 0.0 && options.geometry_sigma_m > 0.0) CheckSimulatable(robot);
   if (options.prior_information && options.criterion == Criterion::kCondition) {
     throw InputError("--prior", "", "the condition-number criterion cannot count an earlier identification's "
                                     "information: use --criterion a, d or e");

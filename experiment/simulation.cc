@@ -92,7 +92,6 @@ Eigen::VectorXd SnapToBounds(const Robot& robot, Eigen::VectorXd tensions_N) {
 SimulatedExperiment SimulateExperiment(const Robot& nominal, const Robot& truth,
                                        const std::vector<PlanPose>& plan, const SimulationOptions& options,
                                        Rng& rng) {
-  CheckSimulatable(truth);
   const CableCommands commands(nominal);
   const Eigen::VectorXd l0_true = InitialLengths(truth);
   const Eigen::VectorXd home_unstretched_true = HomeUnstretchedLengths(truth, l0_true);
@@ -125,7 +124,11 @@ SimulatedExperiment SimulateExperiment(const Robot& nominal, const Robot& truth,
     }
     Measurement m;
     m.pose_id = static_cast<int>(j + 1);
-    m.dl_m = paid_out_m;  // the cable paid out (the file comment)
+    // The cable paid out (the file comment); rigid m >= 4: the length changes the cables have at
+    // the least-squares pose (the rigid-cable convention, simulation.h).
+    m.dl_m = !HasStiffness(truth) && truth.num_cables() > PlanarKind::kPoseDim
+                 ? Eigen::VectorXd(CableLengths(truth, fwd.equilibrium.q) - l0_true)
+                 : paid_out_m;
     // Draw order is fixed (encoders, laser accuracy, repeatability, inclinometer accuracy,
     // repeatability) and every draw is made whether or not it is used, so that switching
     // a sensor's noise off leaves the other sensors' noise unchanged.
@@ -153,7 +156,6 @@ SimulatedExperiment SimulateExperiment(const Robot& nominal, const Robot& truth,
 PlanSimulation SimulatePlan(const Robot& nominal, const std::optional<Robot>& truth, double geometry_sigma_m,
                             const std::vector<PlanPose>& plan, const SimulationOptions& options, std::uint64_t seed,
                             const std::string& plan_source) {
-  CheckSimulatable(nominal);
   Rng geometry_rng(StreamSeed(seed, {0}));
   Rng noise_rng(StreamSeed(seed, {1}));
   PlanSimulation run{nominal, {}};

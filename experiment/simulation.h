@@ -11,12 +11,14 @@
 // at home (HomeUnstretchedLengths) plus the commanded change from home, L_ij - L_i(home)
 // (CableCommands below), and the encoders, on the motor side, read that change: for
 // inextensible cables exactly the plan's dl_ij.
-// Planar robots without stiffness and with 2 or 3 cables settle by the inextensible
-// geometrico-static model as they always did (SettlePlanar); a robot with more inextensible
-// cables than the platform's degrees of freedom (planar m >= 4 without stiffness) cannot be
-// simulated: its rigid cables could not all have the commanded lengths on a true robot that
-// differs from the nominal one (CheckSimulatable, exit 2 naming the key `stiffness`). Sensors
-// read the settled pose with the paper's noise.
+// Planar robots without stiffness settle by the inextensible geometrico-static model as they
+// always did (SettlePlanar). With 4 or more such rigid cables the commanded lengths
+// over-determine the pose and, on a true geometry that differs from the nominal one, cannot
+// all hold: the rigid-cable convention settles the platform at their least-squares pose and
+// the encoders read the length changes the cables have there, l_i(true, q) - l_i0(true). That
+// convention stays until the planar identification models stretch: with elastic physics such a
+// robot could not be calibrated (README, "Any number of cables"). Sensors read the settled pose
+// with the paper's noise.
 #pragma once
 
 

@@ -434,7 +434,6 @@ Eigen::VectorXd CommandedUnstretchedLengths(const SpatialRobot& robot, const Eig
   return CommandedLengths<SpatialAdapter>(robot, lengths_m, tensions_N);
 }
 
-void CheckSimulatable(const Robot& robot) { CheckSimulatableKind<PlanarAdapter>(robot, "planar"); }
 void CheckSimulatable(const SpatialRobot& robot) { CheckSimulatableKind<SpatialAdapter>(robot, "spatial"); }
 
 bool HasStiffness(const Robot& robot) {
@@ -446,8 +445,6 @@ bool HasStiffness(const Robot& robot) {
 
 ForwardResult SettlePlanar(const Robot& robot, const Eigen::VectorXd& unstretched_lengths_m, const PlanarPose* guess) {
   if (HasStiffness(robot)) return SolveForwardStatics(robot, unstretched_lengths_m, guess);
-  CABLECAL_CHECK(robot.num_cables() <= PlanarKind::kPoseDim,
-                 "a planar robot with more than 3 inextensible cables cannot be simulated (CheckSimulatable)");
   return SolveForwardGeometricoStatic(robot, unstretched_lengths_m, guess);
 }
 

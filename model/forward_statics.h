@@ -21,7 +21,10 @@
 // Why elastic cables: with more inextensible cables than the platform's degrees of freedom the
 // commanded lengths, computed on the nominal model, cannot all hold on a true robot that differs
 // from it; an elastic cable takes up the difference, as a real cable does. CheckSimulatable
-// refuses a robot without enough of them.
+// refuses a spatial robot without enough of them. A planar robot of 4 or more cables without
+// stiffness keeps the rigid-cable convention (SettlePlanar): the planar identification does not
+// model stretch yet, and with elastic physics such a robot could not be calibrated at all
+// (README, "Any number of cables", measured there).
 //
 // Depends on model/statics.h (planar), model/swivel.h and model/spatial_statics.h (spatial),
 // model/stability.h (the stability test of a solution).
@@ -67,18 +70,16 @@ Eigen::VectorXd CommandedUnstretchedLengths(const Robot& robot, const Eigen::Vec
 Eigen::VectorXd CommandedUnstretchedLengths(const SpatialRobot& robot, const Eigen::VectorXd& lengths_m,
                                             const Eigen::VectorXd& tensions_N);
 
-// Whether the robot can be simulated: at most as many inextensible cables as the platform has
-// degrees of freedom (planar 3, spatial 6). Throws InputError naming robot.source and the key
+// Whether a spatial robot can be simulated: at most as many inextensible cables as the
+// platform's 6 degrees of freedom. Throws InputError naming robot.source and the key
 // cables[i].stiffness of the first cable without it, saying why, otherwise.
-void CheckSimulatable(const Robot& robot);
 void CheckSimulatable(const SpatialRobot& robot);
 
 // Where a planar true robot settles with the given unstretched lengths, the one rule every
-// physical stage uses: a robot without stiffness and 2 or 3 cables keeps the inextensible
-// geometrico-static model (SolveForwardGeometricoStatic, the same numbers as before elastic
-// cables existed); any robot with stiffness uses SolveForwardStatics. A robot with more than 3
-// inextensible cables cannot be simulated (CheckSimulatable: callers check first; here it is
-// a programming error).
+// physical stage uses: any robot with stiffness settles by SolveForwardStatics; a robot without
+// keeps the inextensible model (SolveForwardGeometricoStatic, the same numbers as before
+// elastic cables existed), for 4 or more cables the rigid-cable convention: the least-squares
+// pose of the commanded lengths (model/statics.h).
 ForwardResult SettlePlanar(const Robot& robot, const Eigen::VectorXd& unstretched_lengths_m,
                            const PlanarPose* guess = nullptr);
 

@@ -641,7 +641,6 @@ ForwardResult LeastSquaresPoseGuess(const Robot& robot, const Eigen::VectorXd& l
 ForwardResult SolveForwardGeometricoStatic(const Robot& robot, const Eigen::VectorXd& lengths_m,
                                            const Eigen::Vector3d* guess) {
   CABLECAL_CHECK(lengths_m.size() == robot.num_cables(), "one length per cable");
-  CABLECAL_CHECK(robot.num_cables() <= 3, "more than 3 inextensible cables over-determine the pose (forward_statics.h)");
   if (robot.theta_is_free()) return ForwardKinematics(robot, lengths_m, guess);
   ForwardResult last;
   if (guess) {

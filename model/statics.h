@@ -165,13 +165,15 @@ struct ForwardResult {
 };
 
 // Forward geometrico-static model of inextensible cables: cable lengths (exit point -> anchor)
-// -> the pose where the platform settles. Requires m = 2 or 3 (more rigid cables over-determine
-// the pose: a true robot with them is elastic, model/forward_statics.h).
+// -> the pose where the platform settles. m >= 4 rigid cables over-determine the pose: the
+// rigid-cable convention is their least-squares pose (README, "Any number of cables"; a robot
+// with stiffness settles by model/forward_statics.h instead).
 // m = 2: Newton on the square system [l(q) - L; W(q) t + w_g(q)] = 0 in (x, z, theta, t),
 // started from `guess` (e.g. the commanded pose) and, if that fails or no guess is given,
 // from the intersections of the length circles at a few orientations.
-// m = 3 (forward kinematics): Gauss-Newton on l(q) = L from `guess` (else the home pose, then
-// circle intersections); then the tension distribution there (kSlack when no t > 0 holds it). A
+// m >= 3 (forward kinematics): Gauss-Newton on l(q) = L from `guess` (else the home pose, then
+// circle intersections), the least-squares pose when m >= 4 lengths are not all consistent
+// (length_residual_m says by how much); then the tension distribution there (kSlack when no t > 0 holds it). A
 // solution more than kOtherAssemblyDistance from the guess, with a cable off its pulley or the
 // platform outside the frame is kOtherAssembly.
 ForwardResult SolveForwardGeometricoStatic(const Robot& robot, const Eigen::VectorXd& lengths_m,
