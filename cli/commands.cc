@@ -280,6 +280,8 @@ int RunWorkspace(const Context& ctx, const WorkspaceOptions& options) {
   CheckCommandPaths({{"--robot", options.robot_path}},
                     {{"--out", options.out_path}, {"--plot", options.plot_path}});
   CheckPngPath("--plot", options.plot_path);
+  if (IsSpatialRobotFile(options.robot_path)) return RunSpatialWorkspace(ctx, options);
+  RefuseSpatialOnlyFlag(!options.rpy_deg.empty(), "--rpy-deg");
   const Robot robot = LoadRobotOption(options.robot_path);
   const WorkspaceGrid grid = ComputeWorkspaceGrid(robot, options.step_m);
   AtomicOutput output;
@@ -303,6 +305,8 @@ int RunWorkspace(const Context& ctx, const WorkspaceOptions& options) {
 
 int RunSample(const Context& ctx, const SampleOptions& options) {
   CheckCommandPaths({{"--robot", options.robot_path}}, {{"--out", options.out_path}});
+  if (IsSpatialRobotFile(options.robot_path)) return RunSpatialSample(ctx, options);
+  RefuseSpatialOnlyFlag(options.yaw_range_deg >= 0.0, "--yaw-range-deg");
   const Robot robot = LoadRobotOption(options.robot_path);
   const std::vector<PlanPose> plan = SampleFeasiblePoses(robot, options.poses, options.seed);
   AtomicOutput output;
@@ -316,6 +320,7 @@ int RunSample(const Context& ctx, const SampleOptions& options) {
 int RunSimulate(const Context& ctx, const SimulateOptions& options) {
   CheckCommandPaths({{"--robot", options.robot_path}, {"--truth", options.truth_path}, {"--plan", options.plan_path}},
                     {{"--out", options.out_path}, {"--truth-out", options.truth_out_path}});
+  if (IsSpatialRobotFile(options.robot_path)) return RunSpatialSimulate(ctx, options);
   const Robot nominal = LoadRobotOption(options.robot_path);
   // A pose where the true robot settles outside its own workspace (beyond a tension limit,
   // the inclinometer range or the margin) would stop a lab's experiment: exit 2 naming the
