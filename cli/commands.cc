@@ -283,7 +283,8 @@ int RunWorkspace(const Context& ctx, const WorkspaceOptions& options) {
   if (IsSpatialRobotFile(options.robot_path)) return RunSpatialWorkspace(ctx, options);
   RefuseSpatialOnlyFlag(!options.rpy_deg.empty(), "--rpy-deg");
   const Robot robot = LoadRobotOption(options.robot_path);
-  const WorkspaceGrid grid = ComputeWorkspaceGrid(robot, options.step_m);
+  const double step_m = options.step_m < 0.0 ? 0.05 : options.step_m;
+  const WorkspaceGrid grid = ComputeWorkspaceGrid(robot, step_m);
   AtomicOutput output;
   std::string figure_error;
   const std::string temp_csv =
@@ -298,7 +299,7 @@ int RunWorkspace(const Context& ctx, const WorkspaceOptions& options) {
   }
   output.Commit();
   std::printf("workspace of %s: %d of %zu grid points feasible (step %s m), area ~ %.4g m^2\n", PrintableText(robot.name).c_str(),
-              grid.num_feasible, grid.points.size(), FormatDouble(options.step_m).c_str(), grid.feasible_area_m2());
+              grid.num_feasible, grid.points.size(), FormatDouble(step_m).c_str(), grid.feasible_area_m2());
   if (!figure_error.empty()) throw FigureFailure(figure_error + "; " + options.out_path + " was written");
   return kExitOk;
 }

@@ -33,7 +33,7 @@ Robot LoadRobotOption(const std::string& robot_path);
 
 struct WorkspaceOptions {
   std::string robot_path, out_path, plot_path;
-  double step_m = 0.05;
+  double step_m = -1.0;  // < 0: not given (planar 0.05 m, spatial DefaultSpatialStep)
   std::string rpy_deg;  // spatial robots: --rpy-deg R,P,Y (empty: home's orientation)
 };
 int RunWorkspace(const Context& ctx, const WorkspaceOptions& options);

@@ -98,7 +98,10 @@ int main(int argc, char** argv) {
   cablecal::cli::WorkspaceOptions ws;
   CLI::App* ws_cmd = app.add_subcommand("workspace", "grid the feasible cable-tension workspace to CSV (and PNG)");
   AddRobotOption(ws_cmd, &ws.robot_path);
-  ws_cmd->add_option("--step", ws.step_m, "grid spacing in m")->capture_default_str()->check(kPositive);
+  ws_cmd->add_option("--step", ws.step_m,
+                     "grid spacing in m (default 0.05; spatial robots: the frame box's longest side / 40, rounded up "
+                     "to 1, 2 or 5 times a power of ten)")
+      ->check(kPositive);
   ws_cmd->add_option("--out", ws.out_path,
                      "workspace CSV (x,z,theta,t1..tm,feasible,reason; theta_min,theta_max with 3 or more cables; "
                      "spatial robots: x,y,z,roll,pitch,yaw,t1..tm,feasible,reason)")

@@ -64,7 +64,8 @@ void RefuseSpatialOnlyFlag(bool given, const std::string& flag) {
 int RunSpatialWorkspace(const Context& ctx, const WorkspaceOptions& options) {
   const SpatialRobot robot = LoadSpatialRobotFile(options.robot_path);
   const Eigen::Vector3d rpy_rad = options.rpy_deg.empty() ? robot.home_rpy_rad : ParseRpyDeg(options.rpy_deg);
-  const SpatialWorkspaceGrid grid = ComputeSpatialWorkspace(robot, rpy_rad, options.step_m);
+  const double step_m = options.step_m < 0.0 ? DefaultSpatialStep(robot) : options.step_m;
+  const SpatialWorkspaceGrid grid = ComputeSpatialWorkspace(robot, rpy_rad, step_m);
   AtomicOutput output;
   std::string figure_error;
   const std::string temp_csv =
@@ -80,13 +81,13 @@ int RunSpatialWorkspace(const Context& ctx, const WorkspaceOptions& options) {
                          : "roll, pitch and yaw") +
                      std::string(" from each point's equilibrium (") + std::to_string(m) + " cables)";
     args.push_back("--title=" + robot.name + ", constant orientation: " + orientation + "; step " +
-                   FormatDouble(options.step_m) + " m");
+                   FormatDouble(step_m) + " m");
     figure_error = TryPlot(output, options.plot_path, "plot_spatial_workspace.py", args);
   }
   output.Commit();
   std::printf("workspace of %s at %s: %d of %zu grid points feasible (step %s m), volume ~ %.4g m^3\n",
               PrintableText(robot.name).c_str(), DegreesText(rpy_rad).c_str(), grid.num_feasible, grid.points.size(),
-              FormatDouble(options.step_m).c_str(), grid.feasible_volume_m3());
+              FormatDouble(step_m).c_str(), grid.feasible_volume_m3());
   if (robot.num_cables() < 6) {
     std::printf("  %d cables: %s each point's equilibrium (the CSV's orientation columns)\n", robot.num_cables(),
                 robot.num_cables() >= 4 ? "roll and pitch follow from" : "the orientation follows from");

@@ -12,6 +12,7 @@
 #include "model/statics.h"
 #include "python/bindings.h"
 #include "python/converters.h"
+#include "workspace/spatial_workspace.h"
 #include "workspace/workspace.h"
 
 namespace cablecal::python {
@@ -73,9 +74,13 @@ void BindModel(py::module_& m) {
   m.def(
       "workspace",
       [](py::handle robot_arg, py::handle step, py::handle rpy_deg) -> py::object {
-        const double step_m = AsNumber(step, "step");
+        const bool spatial = py::isinstance<SpatialRobot>(robot_arg);
+        // None: the CLI's default (planar 0.05 m; spatial DefaultSpatialStep).
+        const double step_m = !step.is_none() ? AsNumber(step, "step")
+                              : spatial       ? DefaultSpatialStep(robot_arg.cast<const SpatialRobot&>())
+                                              : 0.05;
         if (!(step_m > 0.0)) Bad("step", "must be positive (m)");
-        if (py::isinstance<SpatialRobot>(robot_arg)) return SpatialWorkspace(robot_arg.cast<const SpatialRobot&>(), step_m, rpy_deg);
+        if (spatial) return SpatialWorkspace(robot_arg.cast<const SpatialRobot&>(), step_m, rpy_deg);
         if (!rpy_deg.is_none()) Bad("rpy_deg", "serves spatial robots only (a cablecal.SpatialRobot)");
         const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
         WorkspaceGrid grid;
@@ -110,7 +115,7 @@ void BindModel(py::module_& m) {
         d["csv"] = WorkspaceCsv(robot, grid, "");
         return d;
       },
-      py::arg("robot"), py::arg("step") = 0.05, py::arg("rpy_deg") = py::none(),
+      py::arg("robot"), py::arg("step") = py::none(), py::arg("rpy_deg") = py::none(),
       "The feasible workspace on a grid: x, z, theta, tensions (NaN without equilibrium), feasible, reason, "
       "area_m2, and csv (the CLI's file). For a SpatialRobot the constant-orientation workspace at rpy_deg "
       "(roll, pitch, yaw in degrees; default home's): xyz (n, 3), rpy (n, 3), tensions, feasible, reason, volume_m3, csv.");

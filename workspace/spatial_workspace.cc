@@ -10,6 +10,15 @@
 
 namespace cablecal {
 
+double DefaultSpatialStep(const SpatialRobot& robot) {
+  const double finest_m = (robot.p_F_frame_max_m - robot.p_F_frame_min_m).maxCoeff() / 40.0;
+  const double decade = std::pow(10.0, std::floor(std::log10(finest_m)));
+  for (const double mantissa : {1.0, 2.0, 5.0, 10.0}) {
+    if (mantissa * decade >= finest_m * (1.0 - 1e-12)) return mantissa * decade;
+  }
+  return 10.0 * decade;
+}
+
 SpatialWorkspaceGrid ComputeSpatialWorkspace(const SpatialRobot& robot, const Eigen::Vector3d& rpy_rad, double step_m) {
   if (!(step_m > 0.0) || !std::isfinite(step_m)) {
     throw InputError("--step", "", "must be a positive number of metres (got " + FormatDouble(step_m) + ")");

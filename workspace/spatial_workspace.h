@@ -36,6 +36,11 @@ struct SpatialWorkspaceGrid {
 // a minute on 2 cores and write a 40 MB CSV (bench/README.md).
 constexpr double kMaxSpatialGridPoints = 2e5;
 
+// workspace's default step for a spatial robot: the frame box's longest side / 40, rounded up
+// to 1, 2 or 5 times a power of ten (cogiro 0.5 m, ipanema1 0.1 m): at most 41 points along
+// a side, so that the default runs in seconds on any frame size.
+double DefaultSpatialStep(const SpatialRobot& robot);
+
 // The grid frame.min + k step (k = 0, 1, ... while inside the frame box) at orientation
 // rpy_rad (roll, pitch, yaw), evaluated in parallel (OpenMP); the result does not depend on the
 // thread count. InputError naming --step for a step that is not positive, leaves fewer than 5
