@@ -20,28 +20,6 @@ SpatialRobot PerturbSpatialGeometry(const SpatialRobot& nominal, double sigma_m,
 
 namespace {
 
-// Why the true robot's settled pose (q, t) is outside its feasible workspace; empty when it is
-// inside. The reasons' names are the workspace's (model/statics.h ToString(Feasibility)).
-std::string OutsideWorkspace(const SpatialRobot& robot, const SpatialPose<double>& q, const Eigen::VectorXd& t) {
-  const CableGeometryCheck geometry = CableGeometryAt(robot, q);
-  if (!geometry.valid()) return std::string(ToString(geometry.geometry)) + " (cable " + std::to_string(geometry.cable + 1) + ")";
-  if (TiltAngle(q) > robot.tilt_max_rad) return "tilt_limit";
-  const Eigen::Matrix3d R = Rotation<double>(q);
-  const Eigen::Vector3d lo = robot.p_F_frame_min_m.array() + robot.margin_m;
-  const Eigen::Vector3d hi = robot.p_F_frame_max_m.array() - robot.margin_m;
-  std::vector<Eigen::Vector3d> points = {robot.p_P_com_m};
-  for (const SpatialCable& c : robot.cables) points.push_back(c.p_P_anchor_m);
-  for (const Eigen::Vector3d& b : points) {
-    const Eigen::Vector3d B = AnchorInF<double>(q, R, b);
-    if ((B.array() < lo.array()).any() || (B.array() > hi.array()).any()) return "outside_frame";
-  }
-  for (int i = 0; i < t.size(); ++i) {
-    if (t(i) < robot.tension_min_N) return "tension_low (cable " + std::to_string(i + 1) + ")";
-    if (t(i) > robot.tension_max_N) return "tension_high (cable " + std::to_string(i + 1) + ")";
-  }
-  return "";
-}
-
 // The draws one pose's readings take (SimulateSpatialExperiment's order).
 int DrawsPerPose(int num_cables) {
   int draws = num_cables;
@@ -89,8 +67,12 @@ SimulatedSpatialExperiment SimulateSpatialExperiment(const SpatialRobot& nominal
       infeasible = "the true robot cannot hold the commanded lengths (" +
                    CannotHoldReason(fwd.status, "the commanded pose") + ")";
     } else if (options.require_feasible) {
-      const std::string why = OutsideWorkspace(truth, fwd.equilibrium.q, fwd.equilibrium.tensions_N);
-      if (!why.empty()) infeasible = "the true robot settles outside its workspace (" + why + ")";
+      int cable = -1;
+      const Feasibility f = CheckSpatialFeasibility(truth, fwd.equilibrium.q, fwd.equilibrium.tensions_N, &cable);
+      if (f != Feasibility::kFeasible) {
+        infeasible = "the true robot settles outside its workspace (" + std::string(ToString(f)) +
+                     (cable >= 0 ? ", cable " + std::to_string(cable + 1) : std::string()) + ")";
+      }
     }
     if (!infeasible.empty()) {
       if (!options.skip_infeasible) throw SolverFailure("pose " + std::to_string(j + 1) + ": " + infeasible);
