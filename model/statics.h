@@ -63,7 +63,15 @@ enum class Feasibility {
   kThetaLimit,     // |theta| beyond the inclinometer range
   kTensionLow,
   kTensionHigh,
+  // Spatial robots (model/spatial_statics.h); the planar code reports kCableGeometry and
+  // kThetaLimit instead.
+  kTiltLimit,      // the platform's tilt beyond limits.tilt_max_deg
+  kSwivelAxis,     // an anchor on its swivel axis (model/swivel.h)
+  kInsidePulley,   // an anchor inside its pulley, or closer to it than the margin
+  kWrap,           // a wrap angle outside [0, 270] degrees
 };
+// The number of reasons (kWrap is the last): the size of a table indexed by reason.
+constexpr int kNumFeasibility = static_cast<int>(Feasibility::kWrap) + 1;
 const char* ToString(Feasibility f);  // "feasible", "outside_frame", ...
 
 struct PoseEvaluation {

@@ -18,6 +18,7 @@
 #include "model/swivel.h"
 #include "tests/support/random_robot.h"
 #include "tests/support/random_spatial_robot.h"
+#include "tests/support/swivel_construction.h"
 
 namespace cablecal {
 namespace {
@@ -42,6 +43,8 @@ constexpr double kGradientTol = 1e-12;
 constexpr double kWrenchTol = 1e-10;
 
 using Vec3d = Eigen::Vector3d;
+using testing::Tangency;
+using testing::TangencyConstruction;
 
 Robot RobotFile(const std::string& name) {
   return LoadRobotFile(std::string(CABLECAL_SOURCE_DIR) + "/robots/" + name);
@@ -136,7 +139,8 @@ TEST(SwivelPlanarEquivalence, RandomPlanarRobots) {
 }
 
 // PlanarAsSpatial keeps the home pose (theta from the equilibrium with 2 cables), the sensors'
-// sigmas and the exits; a converted robot with 3 or more cables is a valid spatial robot file.
+// sigmas and the exits; a converted robot with 3 or more cables is a valid spatial robot file
+// unless its home is not a stable equilibrium in space (the fully constrained one).
 TEST(SwivelPlanarEquivalence, PlanarAsSpatialKeepsHomeSensorsAndExits) {
   for (const char* file : {"wang2022.yaml", "planar3_suspended.yaml", "planar4_fully_constrained.yaml",
                            "asymmetric.yaml"}) {
@@ -151,7 +155,19 @@ TEST(SwivelPlanarEquivalence, PlanarAsSpatialKeepsHomeSensorsAndExits) {
       EXPECT_EQ(s.cables[i].p_F_exit_m, Vec3d(planar.cables[i].p_F_exit_m.x(), 0.0, planar.cables[i].p_F_exit_m.y()));
     }
     EXPECT_TRUE(CableGeometryAt(s, s.home_pose()).valid()) << file;
-    if (planar.num_cables() >= kMinSpatialCables) {
+    if (planar.num_cables() < kMinSpatialCables) continue;
+    if (std::string(file) == "planar4_fully_constrained.yaml") {
+      // In space its four coplanar cables, two of them pulling down, hold the platform at home
+      // only unstably: out of the plane the lower cables tip it (tests/model/spatial_statics_test.cc).
+      try {
+        LoadSpatialRobotFromString(SpatialRobotToYaml(s), file);
+        ADD_FAILURE() << file << " loaded as a spatial robot";
+      } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find(": home: the home pose (1.5, 0, 1) m is not in the feasible workspace: unstable"),
+                  std::string::npos)
+            << e.what();
+      }
+    } else {
       EXPECT_NO_THROW(LoadSpatialRobotFromString(SpatialRobotToYaml(s), file)) << file;
     }
   }
@@ -185,47 +201,6 @@ TEST(SwivelPlanarEquivalence, BothWrapsAndSidesAgainstCableH) {
 }
 
 // ---- Closed form against a numerical tangency construction in 3-D --------------------------
-
-struct Tangency {
-  bool found = false;
-  double length_m = 0.0;
-  double arc_rad = 0.0;  // from D to T in the cable's direction, in [0, 2 pi)
-  Vec3d p_F_tangent_m = Vec3d::Zero();
-};
-
-// Independent construction: the pulley circle in 3-D (centre C = D + r u, u toward the anchor
-// off the axis, normal k x u) parameterised from D by the angle a travelled in the cable's
-// direction (a = 0 at D, increasing along k there); the tangent point T solves
-// (T - C) . (B - T) = 0 (a scan for sign changes, then bisection), on the branch where the
-// cable leaves toward B (dT/da . (B - T) > 0); l = r a_T + |B - T|.
-Tangency TangencyConstruction(const Vec3d& D, const Vec3d& k, double r, const Vec3d& B) {
-  const Vec3d rho = B - D;
-  const Vec3d u = (rho - rho.dot(k) * k).normalized();
-  const Vec3d C = D + r * u;
-  const Vec3d e1 = (D - C) / r;
-  const Vec3d e2 = k.cross(u).normalized().cross(e1);  // = k: the cable's direction at D
-  const auto point = [&](double a) { return Vec3d(C + r * (std::cos(a) * e1 + std::sin(a) * e2)); };
-  const auto along = [&](double a) { return Vec3d(-std::sin(a) * e1 + std::cos(a) * e2); };
-  const auto f = [&](double a) { return (point(a) - C).dot(B - point(a)); };
-  Tangency t;
-  constexpr int kSteps = 1440;
-  for (int s = 0; s < kSteps; ++s) {
-    double lo = -M_PI + 2.0 * M_PI * s / kSteps, hi = -M_PI + 2.0 * M_PI * (s + 1) / kSteps;
-    if ((f(lo) < 0.0) == (f(hi) < 0.0)) continue;
-    for (int it = 0; it < 200 && hi - lo > 1e-16; ++it) {
-      const double mid = 0.5 * (lo + hi);
-      ((f(mid) < 0.0) == (f(lo) < 0.0) ? lo : hi) = mid;
-    }
-    const double a = 0.5 * (lo + hi);
-    if (along(a).dot(B - point(a)) <= 0.0) continue;  // the other tangent
-    t.found = true;
-    t.arc_rad = std::fmod(a + 2.0 * M_PI, 2.0 * M_PI);
-    t.p_F_tangent_m = point(a);
-    t.length_m = r * t.arc_rad + (B - t.p_F_tangent_m).norm();
-    return t;
-  }
-  return t;
-}
 
 Vec3d RandomUnit(Rng& rng) {
   for (;;) {
