@@ -27,9 +27,6 @@ using internal::Reader;
 constexpr double kSamePoint_m = 1e-6;
 // The least load-cell sigma: a milli-newton is finer than any load cell of a cable robot.
 constexpr double kMinLoadCellSigma_N = 1e-3;
-// The least stiffness, as a multiple of tension.max: a cable stretching more than a tenth of
-// its length at the largest tension is a unit slip (kN typed for N), not a cable.
-constexpr double kMinStiffnessOverMaxTension = 10.0;
 
 std::string Point(const Eigen::Vector3d& v) {
   return "(" + FormatDouble(v.x()) + ", " + FormatDouble(v.y()) + ", " + FormatDouble(v.z()) + ")";

@@ -541,7 +541,8 @@ ForwardResult ForwardNewton(const Robot& robot, const Eigen::VectorXd& lengths_m
 }
 
 
-// m >= 3: Gauss-Newton on l(q) = L from one start (dl/dq = -W', model/cable.h).
+// m >= 3: Gauss-Newton on l(q) = L from one start (dl/dq = -W', model/cable.h); the
+// least-squares pose when m >= 4 lengths are inconsistent.
 ForwardResult GaussNewtonLengths(const Robot& robot, const Eigen::VectorXd& lengths_m, const Eigen::Vector3d& start) {
   constexpr int kMaxIterations = 60;
   constexpr double kStepTol = 1e-13;  // m and rad: at the least-squares minimum to rounding
@@ -630,9 +631,17 @@ ForwardResult ForwardKinematics(const Robot& robot, const Eigen::VectorXd& lengt
 
 }  // namespace
 
+ForwardResult LeastSquaresPoseGuess(const Robot& robot, const Eigen::VectorXd& lengths_m,
+                                    const Eigen::Vector3d* guess) {
+  CABLECAL_CHECK(lengths_m.size() == robot.num_cables(), "one length per cable");
+  if (robot.theta_is_free()) return ForwardKinematics(robot, lengths_m, guess);
+  return SolveForwardGeometricoStatic(robot, lengths_m, guess);
+}
+
 ForwardResult SolveForwardGeometricoStatic(const Robot& robot, const Eigen::VectorXd& lengths_m,
                                            const Eigen::Vector3d* guess) {
   CABLECAL_CHECK(lengths_m.size() == robot.num_cables(), "one length per cable");
+  CABLECAL_CHECK(robot.num_cables() <= 3, "more than 3 inextensible cables over-determine the pose (forward_statics.h)");
   if (robot.theta_is_free()) return ForwardKinematics(robot, lengths_m, guess);
   ForwardResult last;
   if (guess) {
