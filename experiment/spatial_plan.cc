@@ -4,6 +4,10 @@
 #include <fstream>
 #include <set>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 #include "common/csv.h"
 #include "common/error.h"
 #include "common/format.h"
@@ -55,13 +59,26 @@ std::vector<SpatialPlanPose> SampleSpatialPoses(const SpatialRobot& robot, int n
       q_home(5) + yaw_range_rad;
   // As the planar sample's with a free orientation: the orientation is drawn too.
   const long max_draws = 10L * (10000L + 1000L * n);
-  constexpr int kBatch = 256;  // candidates evaluated in parallel, kept in draw order
+  // Candidates are drawn in order, evaluated a batch at a time in parallel and kept in draw
+  // order up to the n-th feasible one: the batch's size changes only how many evaluations past
+  // it are wasted, never the plan. It follows the acceptance rate so far (an underactuated
+  // robot's evaluation solves for its equilibrium: milliseconds).
+#ifdef _OPENMP
+  const long threads = omp_get_max_threads();
+#else
+  const long threads = 1;
+#endif
   Rng rng(seed);
   std::vector<SpatialPlanPose> plan;
-  std::vector<SpatialPose<double>> candidates(kBatch);
-  std::vector<SpatialPoseEvaluation> evaluations(kBatch);
+  std::vector<SpatialPose<double>> candidates;
+  std::vector<SpatialPoseEvaluation> evaluations;
   long draws = 0;
   while (static_cast<int>(plan.size()) < n) {
+    const double rate = (plan.size() + 1.0) / (draws + 1.0);
+    const long wanted = static_cast<long>(std::ceil(1.2 * (n - plan.size()) / std::min(1.0, rate)));
+    const int batch = static_cast<int>(std::clamp(wanted, 2 * threads, 1024L));
+    candidates.resize(batch);
+    evaluations.resize(batch);
     if (draws >= max_draws) {
       throw SolverFailure("found only " + std::to_string(plan.size()) + " feasible poses of " + robot.name + " in " +
                           std::to_string(max_draws) + " random draws: the feasible workspace is empty or tiny");
@@ -72,8 +89,8 @@ std::vector<SpatialPlanPose> SampleSpatialPoses(const SpatialRobot& robot, int n
       q = q_home;  // the uncontrolled coordinates' first guess
       for (const int k : controlled) q(k) = draw(k);
     }
-    ParallelFor(kBatch, 4, [&](long k) { evaluations[k] = EvaluateSpatialPose(robot, candidates[k]); });
-    for (int k = 0; k < kBatch && static_cast<int>(plan.size()) < n && draws < max_draws; ++k, ++draws) {
+    ParallelFor(batch, 4, [&](long k) { evaluations[k] = EvaluateSpatialPose(robot, candidates[k]); });
+    for (int k = 0; k < batch && static_cast<int>(plan.size()) < n && draws < max_draws; ++k, ++draws) {
       if (evaluations[k].feasible()) plan.push_back(MakeSpatialPlanPose(robot, evaluations[k].equilibrium, home));
     }
   }

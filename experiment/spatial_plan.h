@@ -48,7 +48,7 @@ constexpr double kDefaultSampleYawRange_rad = 30.0 * M_PI / 180.0;
 // cables only the controlled coordinates (ControlledCoordinates) are the draw's; the others
 // are home's as the solver's first guess and come out of the equilibrium. Six uniforms are drawn
 // per candidate whatever the cable count, from Rng(seed), and candidates are evaluated in
-// batches in parallel and kept in draw order: the plan does not depend on the thread count.
+// batches in parallel but kept in draw order: the plan does not depend on the thread count.
 // InputError for n < 1 or a yaw range outside (0, pi]; SolverFailure if no more than n - 1
 // feasible poses turn up in 10 (10000 + 1000 n) draws: an empty or tiny workspace.
 std::vector<SpatialPlanPose> SampleSpatialPoses(const SpatialRobot& robot, int n, std::uint64_t seed,

