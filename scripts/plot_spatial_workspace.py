@@ -2,7 +2,8 @@
 """Draws a spatial workspace CSV written by `cablecal workspace` for a spatial robot: four
 horizontal slices of the constant-orientation workspace, seen from above, each with the frame
 box's outline, the exit points (drawn down-pointing above the slice, up-pointing below it) and
-home; feasible cells coloured by their smallest cable tension, the others by why they are not.
+home; feasible cells coloured by their smallest cable tension (by the largest where the smallest
+is the same everywhere, as on a fully constrained robot), the others by why they are not.
 
 Called by `cablecal workspace --plot` for a `kind: spatial` robot; usable alone:
   /usr/bin/python3 scripts/plot_spatial_workspace.py ws.csv out.png --frame-min=-2,-1.5,0 \
@@ -88,8 +89,25 @@ def main():
     feasible_by_z = {z: sum(r["feasible"] == "1" for r in rs) for z, rs in by_z.items()}
     heights = slice_heights(zs, feasible_by_z)
 
-    tmin_all = [min(float(r[c]) for c in tension_cols) for r in rows if r["feasible"] == "1"]
-    vmin, vmax = (min(tmin_all), max(tmin_all)) if tmin_all else (0.0, 1.0)
+    # The smallest tension says how far a suspended robot is from a slack cable; a fully
+    # constrained robot's tension distribution keeps it on tension.min everywhere, and then the
+    # largest tension (how far from the upper limit) is what varies and is drawn instead.
+    def smallest(r):
+        return min(float(r[c]) for c in tension_cols)
+
+    def largest(r):
+        return max(float(r[c]) for c in tension_cols)
+
+    shown = [r for z in heights for r in by_z[z] if r["feasible"] == "1"]
+    measure, measure_label = smallest, "smallest cable tension (N), feasible points"
+    if shown:
+        lo, hi = min(map(smallest, shown)), max(map(smallest, shown))
+        if hi - lo <= 1e-6 * max(abs(hi), 1.0):
+            measure, measure_label = largest, (f"largest cable tension (N), feasible points\n"
+                                               f"(the smallest is {lo:.4g} N at every one)")
+    # One colour scale over the slices drawn, so that equal colours are equal tensions.
+    values = [measure(r) for r in shown]
+    vmin, vmax = (min(values), max(values)) if values else (0.0, 1.0)
     if vmax <= vmin:
         vmax = vmin + 1.0
     reason_cmap = ListedColormap([REASON_COLOURS.get(s, "#c0c0c0") for s in reasons] or ["#ffffff"])
@@ -99,12 +117,18 @@ def main():
     cols = 2 if n > 1 else 1
     rows_n = (n + 1) // 2
     span_x, span_y = x1 - x0, y1 - y0
-    panel_w = 5.0
-    panel_h = panel_w * span_y / span_x + 0.7
-    fig, axes = plt.subplots(rows_n, cols, figsize=(cols * panel_w + 1.4, rows_n * panel_h + 1.6), squeeze=False)
+    panel_w = 4.6
+    panel_h = panel_w * span_y / span_x
+    top_in, bottom_in, gap_in = 1.0, 1.3, 0.75  # suptitle; x label and legend; a panel's title and labels
+    fig_w = cols * panel_w + (cols - 1) * 0.9 + 2.2
+    fig_h = rows_n * panel_h + (rows_n - 1) * gap_in + top_in + bottom_in
+    fig, axes = plt.subplots(rows_n, cols, figsize=(fig_w, fig_h), squeeze=False)
+    fig.subplots_adjust(left=0.9 / fig_w, right=1 - 1.3 / fig_w, top=1 - top_in / fig_h, bottom=bottom_in / fig_h,
+                        hspace=gap_in / panel_h, wspace=0.9 / panel_w)
     step = xs[1] - xs[0] if len(xs) > 1 else 0.1
     extent = (xs[0] - step / 2, xs[-1] + step / 2, ys[0] - step / 2, ys[-1] + step / 2)
     image = None
+    any_below = False
     for k, z in enumerate(heights):
         ax = axes[k // cols][k % cols]
         tmin = np.full((len(ys), len(xs)), np.nan)
@@ -112,7 +136,7 @@ def main():
         for r in by_z[z]:
             i, j = iy[float(r["y"])], ix[float(r["x"])]
             if r["feasible"] == "1":
-                tmin[i, j] = min(float(r[c]) for c in tension_cols)
+                tmin[i, j] = measure(r)
             else:
                 why[i, j] = reason_index[r["reason"]]
         if reasons:
@@ -123,13 +147,16 @@ def main():
         ax.plot([x0, x1, x1, x0, x0], [y0, y0, y1, y1, y0], color="black", lw=1.5)
         for e in args.exit:
             above = e[2] >= z
+            any_below |= not above
             ax.plot(e[0], e[1], "v" if above else "^", color="red" if above else "tab:blue", ms=8, mec="black",
                     mew=0.6, clip_on=False)
         if args.home:
             ax.plot(args.home[0], args.home[1], "*", color="white", ms=13, mec="black", clip_on=False)
-        ax.set_title(f"z = {z:.3g} m: {feasible_by_z.get(z, 0)} feasible of {len(by_z[z])}", fontsize=10)
-        ax.set_xlabel("x (m)")
-        ax.set_ylabel("y (m)")
+        ax.set_title(f"z = {z:.3g} m: {feasible_by_z.get(z, 0)} of {len(by_z[z])} points feasible", fontsize=10)
+        if k // cols == rows_n - 1 or k + cols >= n:
+            ax.set_xlabel("x (m)")
+        if k % cols == 0:
+            ax.set_ylabel("y (m)")
         pad = 0.04 * max(span_x, span_y)
         ax.set_xlim(x0 - pad, x1 + pad)
         ax.set_ylim(y0 - pad, y1 + pad)
@@ -140,17 +167,18 @@ def main():
     step_z = zs[1] - zs[0] if len(zs) > 1 else step
     volume = feasible * step * step * step_z
     fig.suptitle(f"{args.title}\n{feasible} of {len(rows)} grid points feasible, volume ~ {volume:.3g} m$^3$; "
-                 f"{n} horizontal slices seen from above", fontsize=11)
-    handles = [plt.Line2D([], [], marker="v", ls="", color="red", mec="black", ms=8, label="exit above the slice"),
-               plt.Line2D([], [], marker="^", ls="", color="tab:blue", mec="black", ms=8, label="exit below it"),
-               plt.Line2D([], [], marker="*", ls="", color="white", mec="black", ms=12, label="home (x, y)"),
-               plt.Line2D([], [], color="black", lw=1.5, label="frame")]
-    handles += [Patch(facecolor=REASON_COLOURS.get(s, "#c0c0c0"), edgecolor="0.5", label=s.replace("_", " "))
+                 f"horizontal slices at {n} heights, seen from above", fontsize=10)
+    handles = [plt.Line2D([], [], marker="v", ls="", color="red", mec="black", ms=8, label="exit above the slice")]
+    if any_below:
+        handles.append(plt.Line2D([], [], marker="^", ls="", color="tab:blue", mec="black", ms=8, label="exit below it"))
+    handles += [plt.Line2D([], [], marker="*", ls="", color="white", mec="black", ms=12, label="home (x, y)"),
+                plt.Line2D([], [], color="black", lw=1.5, label="frame box")]
+    handles += [Patch(facecolor=REASON_COLOURS.get(s, "#c0c0c0"), edgecolor="0.5", label="infeasible: " + s.replace("_", " "))
                 for s in reasons]
-    fig.legend(handles=handles, loc="lower center", ncol=min(len(handles), 5), fontsize=8, frameon=False)
-    fig.tight_layout(rect=(0, 0.08 + 0.03 * (len(handles) > 5), 0.9, 0.93))
-    cax = fig.add_axes((0.91, 0.2, 0.015, 0.6))
-    fig.colorbar(image, cax=cax, label="smallest cable tension (N)")
+    fig.legend(handles=handles, loc="lower center", ncol=min(len(handles), 4), fontsize=8, frameon=False,
+               bbox_to_anchor=(0.5, 0.0))
+    cax = fig.add_axes((1 - 1.0 / fig_w, bottom_in / fig_h + 0.1, 0.18 / fig_w, 1 - (top_in + bottom_in) / fig_h - 0.2))
+    fig.colorbar(image, cax=cax, label=measure_label)
     fig.savefig(args.png, dpi=110, format="png")
     return 0
 
