@@ -91,7 +91,7 @@ TEST_F(SpatialCli, SampleWorkspaceSimulateOnEveryBuiltInAndARandomRobot) {
     std::string sigma;
   };
   const std::vector<Robot> robots = {{Builtin("cogiro"), 8, "0.002"},
-                                     {Builtin("ipanema1"), 8, "0.00002"},
+                                     {Builtin("ipanema1"), 8, "0.000001"},
                                      {Builtin("irma4u"), 4, "0.000001"},
                                      {RandomRobotFile(7), 7, "0.00002"},
                                      {RandomRobotFile(5), 5, "0.000001"}};
