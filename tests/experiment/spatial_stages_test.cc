@@ -74,7 +74,7 @@ TEST(SpatialSensors, ReadingsMatchAnIndependentConstruction) {
       SpatialPose<double> q = home;
       for (int k = 0; k < 3; ++k) q(k) += rng.Uniform(-0.2, 0.2);
       for (int k = 3; k < 6; ++k) q(k) += rng.Uniform(-0.2, 0.2);
-      q(5) += trial == 0 ? 3.0 : 0.0;  // a yaw beyond pi from home: the heading wraps
+      q(5) += trial == 0 ? 4.0 : 0.0;  // a yaw beyond pi from home: the heading wraps
       Eigen::VectorXd t(m);
       for (int i = 0; i < m; ++i) t(i) = rng.Uniform(10.0, 100.0);
       const auto read = SpatialSensorReadings<double>(robot, q, t, zero);
