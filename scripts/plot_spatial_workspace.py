@@ -57,8 +57,12 @@ def slice_heights(zs, feasible_by_z, count=4):
     levels = [z for z in zs if feasible_by_z.get(z, 0) > 0] or list(zs)
     if len(levels) <= count:
         return levels
-    picks = np.linspace(0, len(levels) - 1, count + 2)[1:-1] if len(levels) > count + 1 else np.linspace(0, len(levels) - 1, count)
-    return [levels[int(round(k))] for k in picks]
+    # Inside the band rather than on its edges, where the feasible region thins to a few cells,
+    # when the band has room for that many distinct levels.
+    inner = [levels[int(round(k))] for k in np.linspace(0, len(levels) - 1, count + 2)[1:-1]]
+    if len(set(inner)) == count:
+        return inner
+    return [levels[int(round(k))] for k in np.linspace(0, len(levels) - 1, count)]
 
 
 def main():
@@ -112,7 +116,7 @@ def main():
         vmax = vmin + 1.0
     reason_cmap = ListedColormap([REASON_COLOURS.get(s, "#c0c0c0") for s in reasons] or ["#ffffff"])
 
-    (x0, y0, z0), (x1, y1, z1) = args.frame_min, args.frame_max
+    (x0, y0, _), (x1, y1, _) = args.frame_min, args.frame_max
     n = len(heights)
     cols = 2 if n > 1 else 1
     rows_n = (n + 1) // 2
