@@ -4,6 +4,7 @@
 
 #include "common/random.h"
 #include "model/cable.h"
+#include "model/forward_statics.h"
 #include "model/spatial_robot.h"
 #include "model/statics.h"
 #include "model/swivel.h"
@@ -57,12 +58,20 @@ void BM_EvaluateFullPose(benchmark::State& state) {
 }
 BENCHMARK(BM_EvaluateFullPose)->Arg(3)->Arg(4);
 
+// planar3: the inextensible forward kinematics; planar4 (elastic cables): the forward model of
+// model/forward_statics.h, from the unstretched lengths commanded for the pose's tensions.
 void BM_ForwardKinematics(benchmark::State& state) {
   const Robot robot = ManyCableRobot(static_cast<int>(state.range(0)));
   const Eigen::Vector3d q(robot.p_F_home_m.x() - 0.2, robot.p_F_home_m.y() + 0.1, robot.home_theta_rad);
   const Eigen::VectorXd lengths = CableLengths(robot, q);
   const Eigen::Vector3d guess = q + Eigen::Vector3d(0.005, -0.005, 0.01);
-  for (auto _ : state) benchmark::DoNotOptimize(SolveForwardGeometricoStatic(robot, lengths, &guess));
+  if (robot.num_cables() <= 3) {
+    for (auto _ : state) benchmark::DoNotOptimize(SolveForwardGeometricoStatic(robot, lengths, &guess));
+    return;
+  }
+  const Eigen::VectorXd unstretched =
+      CommandedUnstretchedLengths(robot, lengths, DistributeTensions(robot, q).tensions_N);
+  for (auto _ : state) benchmark::DoNotOptimize(SolveForwardStatics(robot, unstretched, &guess));
 }
 BENCHMARK(BM_ForwardKinematics)->Arg(3)->Arg(4);
 
@@ -106,6 +115,56 @@ void BM_SpatialCableLengthsJacobian(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(CableLengths<J>(robot, qj));
 }
 BENCHMARK(BM_SpatialCableLengthsJacobian)->Arg(4)->Arg(6)->Arg(8);
+
+// One spatial forward solve (model/forward_statics.h) from a guess 5 mm and 0.01 rad off the
+// pose the robot settles in: irma4u (m = 4, underactuated, inextensible: its lengths at home,
+// settled once first), the first 6 cables of ipanema1 (m = 6, its E*A), ipanema1 and cogiro
+// (m = 8): the lengths commanded for the home pose's tension distribution where one exists.
+struct SpatialForwardCase {
+  SpatialRobot robot;
+  Eigen::VectorXd unstretched_m;
+  SpatialPose<double> settled;
+  bool ok = false;
+};
+SpatialForwardCase MakeSpatialForwardCase(const std::string& name, int keep_cables) {
+  SpatialForwardCase c;
+  c.robot = LoadSpatialRobotFile(std::string(CABLECAL_SOURCE_DIR) + "/robots/" + name + ".yaml");
+  c.robot.cables.resize(keep_cables);
+  const SpatialPose<double> home = c.robot.home_pose();
+  const Eigen::VectorXd l = CableLengths<double>(c.robot, home);
+  c.unstretched_m = l;
+  if (keep_cables >= 6) {
+    const TensionDistribution t =
+        DistributeTensions(WrenchMatrix<double>(c.robot, home), GravityWrench<double>(c.robot, home), c.robot.tension_min_N,
+                           c.robot.tension_max_N, c.robot.platform_mass_kg * c.robot.gravity_mps2);
+    if (t.feasibility != Feasibility::kNoEquilibrium) c.unstretched_m = CommandedUnstretchedLengths(c.robot, l, t.tensions_N);
+  }
+  const SpatialForwardResult f = SolveForwardStatics(c.robot, c.unstretched_m, &home);
+  c.settled = f.equilibrium.q;
+  c.ok = f.status == ForwardStatus::kConverged;
+  return c;
+}
+
+void BM_SpatialForwardStatics(benchmark::State& state, const std::string& name, int cables) {
+  const SpatialForwardCase c = MakeSpatialForwardCase(name, cables);
+  if (!c.ok) {
+    state.SkipWithError("the robot does not settle near home");
+    return;
+  }
+  SpatialPose<double> guess = c.settled;
+  guess += (SpatialPose<double>() << 0.005, -0.005, 0.005, 0.01, -0.01, 0.01).finished();
+  int iterations = 0;
+  for (auto _ : state) {
+    const SpatialForwardResult f = SolveForwardStatics(c.robot, c.unstretched_m, &guess);
+    iterations = f.iterations;
+    benchmark::DoNotOptimize(f);
+  }
+  state.counters["newton_iterations"] = iterations;
+}
+BENCHMARK_CAPTURE(BM_SpatialForwardStatics, irma4u_m4, std::string("irma4u"), 4);
+BENCHMARK_CAPTURE(BM_SpatialForwardStatics, ipanema1_first6_m6, std::string("ipanema1"), 6);
+BENCHMARK_CAPTURE(BM_SpatialForwardStatics, ipanema1_m8, std::string("ipanema1"), 8);
+BENCHMARK_CAPTURE(BM_SpatialForwardStatics, cogiro_m8, std::string("cogiro"), 8);
 
 }  // namespace
 

@@ -187,11 +187,12 @@ std::string VerifyRobustness(const Robot& robot, const DesignOptions& options, s
       GeometryVector g = nominal;
       g(k) += sign * k_sigma;
       const Robot truth = WithGeometry(robot, g);
+      const Eigen::VectorXd truth_home_unstretched = HomeUnstretchedLengths(truth, g.tail(m));
       const std::string scenario = names[k] + (sign > 0 ? " +" : " -") + FormatDouble(options.robust_sigmas) + " sigma";
       for (std::size_t j = 0; j < plan->size(); ++j) {
         if (failing && (*failing)[j]) continue;
         PlanPose& pose = (*plan)[j];
-        const Eigen::VectorXd lengths = commands.TrueUnstretchedLengths(truth, g.tail(m), commands.PaidOutFromHome(pose));
+        const Eigen::VectorXd lengths = truth_home_unstretched + commands.PaidOutFromHome(pose);
         const ForwardResult f = SettlePlanar(truth, lengths, &pose.q);
         const std::string where = "pose " + std::to_string(j + 1) + " on a true robot with " + scenario + ": ";
         std::string why;

@@ -10,10 +10,13 @@
 // dy/dg = -(dR/dy)^-1 dR/dg (implicit function theorem). With m = 3 the length rows alone fix
 // q (dR/dy is block-triangular) and the equilibrium rows then fix the unique t.
 // m >= 4: rigid cables make the tensions statically indeterminate and dR/dy singular (m length
-// rows in 3 unknowns). The true robot is modelled as the simulator does (model/statics.h,
-// SolveForwardGeometricoStatic): it settles at the least-squares pose of the commanded lengths,
+// rows in 3 unknowns). The simulator's true robot has elastic cables (model/forward_statics.h:
+// it settles where its energy is least, the stretch taking up what the lengths cannot all
+// meet); the linearisation here keeps its stiff-cable limit for equal cables, the least-squares
+// pose of the commanded lengths,
 //   dq/dg = -(J'J)^-1 J' dr/dg,  J = dl/dq,  r = l(q; a) - l0 - dl,
-// and its tensions are chosen by the controller. Rule for the tensions (m >= 4): the NLP keeps a
+// with the tensions chosen by the controller (an approximation of the elastic robot, whose
+// tensions follow its stretch; the scenario check in design.cc settles the elastic model). Rule for the tensions (m >= 4): the NLP keeps a
 // tension vector t within bounds at the nominal pose (its variables), and the tensions on a true
 // robot are t corrected by the least change that restores its equilibrium there,
 //   dt/dg = -W^+ (d(W t + w_g)/dq dq/dg + d(W t + w_g)/dg),  W^+ = W'(W W')^-1,

@@ -55,21 +55,20 @@ std::string CannotHoldReason(ForwardStatus status, const std::string& expected_p
   return why;
 }
 
+Eigen::VectorXd HomeUnstretchedLengths(const Robot& robot, const Eigen::VectorXd& initial_lengths_m) {
+  if (!HasStiffness(robot)) return initial_lengths_m;
+  const PoseEvaluation home = EvaluateHome(robot);
+  if (!home.has_equilibrium) return initial_lengths_m;
+  return CommandedUnstretchedLengths(robot, initial_lengths_m, home.equilibrium.tensions_N);
+}
+
 CableCommands::CableCommands(const Robot& nominal_robot) : nominal(nominal_robot), elastic(HasStiffness(nominal_robot)) {
-  if (!elastic) return;
-  home_tensions_N = HomeEvaluation(nominal).equilibrium.tensions_N;
-  home_unstretched_m = CommandedUnstretchedLengths(nominal, InitialLengths(nominal), home_tensions_N);
+  if (elastic) home_unstretched_m = HomeUnstretchedLengths(nominal, InitialLengths(nominal));
 }
 
 Eigen::VectorXd CableCommands::PaidOutFromHome(const PlanPose& pose) const {
   if (!elastic) return pose.length_change_m;
   return CommandedUnstretchedLengths(nominal, pose.lengths_m, pose.tensions_N) - home_unstretched_m;
-}
-
-Eigen::VectorXd CableCommands::TrueUnstretchedLengths(const Robot& truth, const Eigen::VectorXd& true_initial_lengths_m,
-                                                      const Eigen::VectorXd& paid_out_m) const {
-  if (!elastic) return true_initial_lengths_m + paid_out_m;
-  return CommandedUnstretchedLengths(truth, true_initial_lengths_m, home_tensions_N) + paid_out_m;
 }
 
 namespace {
@@ -96,6 +95,7 @@ SimulatedExperiment SimulateExperiment(const Robot& nominal, const Robot& truth,
   CheckSimulatable(truth);
   const CableCommands commands(nominal);
   const Eigen::VectorXd l0_true = InitialLengths(truth);
+  const Eigen::VectorXd home_unstretched_true = HomeUnstretchedLengths(truth, l0_true);
   const bool laser = options.noisy == NoisySensors::kBoth || options.noisy == NoisySensors::kLaser;
   const bool inclinometer = options.noisy == NoisySensors::kBoth || options.noisy == NoisySensors::kInclinometer;
   const SensorNoise& s = nominal.sensors;
@@ -103,7 +103,7 @@ SimulatedExperiment SimulateExperiment(const Robot& nominal, const Robot& truth,
   for (std::size_t j = 0; j < plan.size(); ++j) {
     const PlanPose& p = plan[j];
     const Eigen::VectorXd paid_out_m = commands.PaidOutFromHome(p);
-    const Eigen::VectorXd lengths_true = commands.TrueUnstretchedLengths(truth, l0_true, paid_out_m);
+    const Eigen::VectorXd lengths_true = home_unstretched_true + paid_out_m;
     // The commanded (nominal) pose is a good start: the true one is millimetres away.
     const ForwardResult fwd = SettlePlanar(truth, lengths_true, &p.q);
     std::string infeasible;

@@ -8,8 +8,9 @@
 // for an elastic cable (stiffness E*A) the one that is the plan's length l_ij under the plan's
 // tension t_ij on the nominal robot, L_ij = l_ij / (1 + t_ij / EA) (CommandedUnstretchedLengths),
 // for an inextensible one l_ij itself. The true robot's cable i has its own unstretched length
-// at home plus the commanded change from home, L_ij - L_i(home) (CableCommands below), and the
-// encoders, on the motor side, read that change: for inextensible cables exactly the plan's dl_ij.
+// at home (HomeUnstretchedLengths) plus the commanded change from home, L_ij - L_i(home)
+// (CableCommands below), and the encoders, on the motor side, read that change: for
+// inextensible cables exactly the plan's dl_ij.
 // Planar robots without stiffness and with 2 or 3 cables settle by the inextensible
 // geometrico-static model as they always did (SettlePlanar); a robot with more inextensible
 // cables than the platform's degrees of freedom (planar m >= 4 without stiffness) cannot be
@@ -52,21 +53,23 @@ inline Robot PerturbGeometry(const Robot& nominal, double sigma_m, Rng& rng) {
   return PerturbGeometry(nominal, sigma_m, sigma_m, rng);
 }
 
-// The cables the controller commands for a plan on an elastic robot (the file comment): the
-// nominal robot's unstretched lengths at home (its initial lengths under the home tensions).
+// The unstretched lengths of a robot's cables at its home pose: its initial lengths l_i0 (the
+// geometry's, lengths at home) under its own home tensions, L_i0 = l_i0 / (1 + t_i0 / EA)
+// (CommandedUnstretchedLengths); l_i0 for an inextensible cable, and for every cable of a robot
+// whose home the statics cannot hold (a true robot drawn far off).
+Eigen::VectorXd HomeUnstretchedLengths(const Robot& robot, const Eigen::VectorXd& initial_lengths_m);
+
+// The cables the controller commands for a plan (the file comment), from the nominal robot.
 struct CableCommands {
   explicit CableCommands(const Robot& nominal);
-  // L_ij - L_i(home): what the winches pay out from home for a plan pose; the encoders' noise-free
-  // reading. For an inextensible cable the plan's dl_ij (the same bits when no cable is elastic).
+  // L_ij - L_i(home): what the winches pay out from home for a plan pose; the encoders'
+  // noise-free reading. For an inextensible cable the plan's dl_ij (the same bits when no cable
+  // is elastic).
   Eigen::VectorXd PaidOutFromHome(const PlanPose& pose) const;
-  // The unstretched lengths of the true robot's cables at that pose: its initial lengths (the
-  // geometry's l_i0, lengths at home) under the home tensions, plus `paid_out_m`.
-  Eigen::VectorXd TrueUnstretchedLengths(const Robot& truth, const Eigen::VectorXd& true_initial_lengths_m,
-                                         const Eigen::VectorXd& paid_out_m) const;
 
   const Robot& nominal;
   bool elastic = false;  // some cable has a stiffness
-  Eigen::VectorXd home_tensions_N, home_unstretched_m;
+  Eigen::VectorXd home_unstretched_m;
 };
 
 // Which sensors get noise (the paper's Section 4.2 ablation switches laser/inclinometer).

@@ -49,8 +49,7 @@ bool PredictPose(const Robot& robot, const std::string& role, const GeometryVect
   // fix it, and more meet their lengths only in least squares (the rigid model's best pose).
   ForwardResult fwd;
   if (HasStiffness(robot)) {
-    const CableCommands commands(robot);
-    fwd = SolveForwardStatics(robot, commands.TrueUnstretchedLengths(robot, geometry.tail(cables), m.dl_m), &start);
+    fwd = SolveForwardStatics(robot, HomeUnstretchedLengths(robot, geometry.tail(cables)) + m.dl_m, &start);
   } else if (cables <= PlanarKind::kPoseDim) {
     fwd = SolveForwardGeometricoStatic(robot, lengths, &start);
   } else {

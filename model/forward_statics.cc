@@ -4,6 +4,7 @@
 
 #include <Eigen/Dense>
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -113,128 +114,189 @@ struct SpatialAdapter {
 };
 
 // Newton's tolerances: lengths to a few hundred ulps of a 10 m cable; the wrench to 1e-9 of the
-// platform's weight, plus the rounding of an elastic tension EA (l / L - 1) (a stiff cable's
-// tension is known only to EA times a few ulps of its strain).
+// platform's weight.
 constexpr double kLengthTol_m = 1e-11;
 constexpr double kRelativeWrenchTol = 1e-9;
-constexpr double kStrainRounding = 1e-15;
 constexpr int kMaxIterations = 100;
 constexpr int kMaxHalvings = 40;
+constexpr double kMaxPoseStep = 0.1;
+constexpr double kSlackAtStart_m = 0.05;
 
-// The cables' roles, fixed for one solve.
-template <class A>
+// The cables' roles in one Newton solve. Every taut cable's tension is an unknown with the row
+//   l_i(q) - L_i - (L_i / EA_i) t_i = 0
+// (l = L (1 + t / EA); compliance L / EA = 0 for an inextensible cable, whose tension is then
+// its multiplier): the same roots as the energy's t_i = EA (l / L - 1), and well conditioned
+// however stiff the cable (EA -> infinity is the inextensible row). A slack elastic cable
+// (t = 0, l <= L) has neither unknown nor row: the active set below decides which are.
 struct Cables {
-  std::vector<int> inextensible;  // their multipliers are unknowns
+  std::vector<int> taut;                 // cables with a tension unknown and a length row
+  std::vector<double> compliance_mpN;    // per cable, L / EA; 0 for an inextensible one
+  std::vector<bool> elastic;
   double weight_N = 1.0;
   double wrench_tol_N = 0.0;
-  explicit Cables(const typename A::RobotType& robot) {
-    double stiffness_sum_N = 0.0;
-    for (int i = 0; i < robot.num_cables(); ++i) {
-      if (A::Stiffness(robot, i)) {
-        stiffness_sum_N += *A::Stiffness(robot, i);
-      } else {
-        inextensible.push_back(i);
-      }
-    }
-    weight_N = std::max(1e-9, robot.platform_mass_kg * robot.gravity_mps2);
-    wrench_tol_N = kRelativeWrenchTol * weight_N + kStrainRounding * stiffness_sum_N;
-  }
-  int count() const { return static_cast<int>(inextensible.size()); }
+  int count() const { return static_cast<int>(taut.size()); }
 };
 
-// The KKT residual at y = (q, t_inextensible): [(W t + w_g) / weight; l_inext - L_inext] (the
-// wrench rows in units of the platform's weight, so that the merit function weighs metres and
-// newtons alike), its Jacobian (pose columns from Jets, multiplier columns W's), and every
-// cable's tension.
 template <class A>
-bool KktResidual(const typename A::RobotType& robot, const Cables<A>& cables, const Eigen::VectorXd& L,
-                 const Eigen::VectorXd& y, Eigen::VectorXd* r, Eigen::MatrixXd* J, Eigen::VectorXd* tensions_N) {
+Cables CablesOf(const typename A::RobotType& robot, const Eigen::VectorXd& L) {
+  Cables cables;
+  for (int i = 0; i < robot.num_cables(); ++i) {
+    const std::optional<double>& ea = A::Stiffness(robot, i);
+    cables.elastic.push_back(ea.has_value());
+    cables.compliance_mpN.push_back(ea ? L(i) / *ea : 0.0);
+    cables.taut.push_back(i);
+  }
+  cables.weight_N = std::max(1e-9, robot.platform_mass_kg * robot.gravity_mps2);
+  cables.wrench_tol_N = kRelativeWrenchTol * cables.weight_N;
+  return cables;
+}
+
+// The residual at y = (q, t_taut): [(W t + w_g) / weight; l_i - L_i - c_i t_i over the taut
+// cables] (the wrench rows in units of the platform's weight, so that the merit function weighs
+// metres and newtons alike), and its Jacobian (pose columns from Jets, tension columns W's and
+// the compliances).
+template <class A>
+bool NewtonResidual(const typename A::RobotType& robot, const Cables& cables, const Eigen::VectorXd& L,
+                    const Eigen::VectorXd& y, Eigen::VectorXd* r, Eigen::MatrixXd* J) {
   constexpr int d = A::kDim;
   using Jet = ceres::Jet<double, d>;
-  const int m = robot.num_cables(), k = cables.count();
+  const int k = cables.count();
   typename A::template PoseOf<Jet> q;
   for (int c = 0; c < d; ++c) q(c) = Jet(y(c), c);
   const Eigen::Matrix<Jet, Eigen::Dynamic, 1> l = A::template Lengths<Jet>(robot, q);
   const Eigen::Matrix<Jet, d, Eigen::Dynamic> W = A::template Wrench<Jet>(robot, q);
   Eigen::Matrix<Jet, d, 1> f = A::template Gravity<Jet>(robot, q);
-  tensions_N->resize(m);
-  for (int i = 0, j = 0; i < m; ++i) {
-    const std::optional<double>& ea = A::Stiffness(robot, i);
-    const Jet t = ea ? ElasticTension<Jet>(*ea, l(i), Jet(L(i))) : Jet(y(d + j++));
-    f += W.col(i) * t;
-    (*tensions_N)(i) = t.a;
-  }
+  for (int j = 0; j < k; ++j) f += W.col(cables.taut[j]) * Jet(y(d + j));
   r->resize(d + k);
   J->setZero(d + k, d + k);
   for (int row = 0; row < d; ++row) {
     (*r)(row) = f(row).a / cables.weight_N;
     J->row(row).head<d>() = f(row).v.transpose() / cables.weight_N;
-    for (int j = 0; j < k; ++j) (*J)(row, d + j) = W(row, cables.inextensible[j]).a / cables.weight_N;
+    for (int j = 0; j < k; ++j) (*J)(row, d + j) = W(row, cables.taut[j]).a / cables.weight_N;
   }
   for (int j = 0; j < k; ++j) {
-    const int i = cables.inextensible[j];
-    (*r)(d + j) = l(i).a - L(i);
+    const int i = cables.taut[j];
+    (*r)(d + j) = l(i).a - L(i) - cables.compliance_mpN[i] * y(d + j);
     J->row(d + j).head<d>() = l(i).v.transpose();
+    (*J)(d + j, d + j) = -cables.compliance_mpN[i];
   }
   return r->allFinite() && J->allFinite();
 }
 
-template <class A>
-bool Converged(const Cables<A>& cables, const Eigen::VectorXd& r) {
-  constexpr int d = A::kDim;
+template <int d>
+bool Converged(const Cables& cables, const Eigen::VectorXd& r) {
   const double length_residual = cables.count() > 0 ? r.tail(cables.count()).cwiseAbs().maxCoeff() : 0.0;
-  return length_residual < kLengthTol_m && r.head<d>().norm() * cables.weight_N < cables.wrench_tol_N;
+  return length_residual < kLengthTol_m && r.template head<d>().norm() * cables.weight_N < cables.wrench_tol_N;
 }
 
-// Damped Newton on the KKT system from one start; the result's status is kConverged or
-// kNotConverged (the physical checks are the caller's).
+// Damped Newton for one active set from y (updated in place); true when converged.
 template <class A>
-typename A::Result NewtonFrom(const typename A::RobotType& robot, const Cables<A>& cables, const Eigen::VectorXd& L,
-                              const typename A::PoseD& start) {
+bool NewtonSolve(const typename A::RobotType& robot, const Cables& cables, const Eigen::VectorXd& L,
+                 Eigen::VectorXd& y, Eigen::VectorXd& r, int* iterations) {
   constexpr int d = A::kDim;
-  const int k = cables.count();
-  typename A::Result result;
-  Eigen::VectorXd y(d + k), r, tensions;
   Eigen::MatrixXd J;
-  y.head<d>() = start;
-  y.tail(k).setZero();
-  // The multipliers that balance the platform best at the start, the elastic cables as they are.
-  if (k > 0) {
-    if (!KktResidual<A>(robot, cables, L, y, &r, &J, &tensions)) return result;
-    y.tail(k) = J.topRightCorner(d, k).colPivHouseholderQr().solve(-r.head<d>());
-  }
-  if (!KktResidual<A>(robot, cables, L, y, &r, &J, &tensions)) return result;
-  for (int it = 0; it < kMaxIterations; ++it) {
-    result.iterations = it;
-    if (Converged<A>(cables, r)) {
-      result.status = ForwardStatus::kConverged;
-      break;
-    }
+  if (!NewtonResidual<A>(robot, cables, L, y, &r, &J)) return false;
+  for (int it = 0; it < kMaxIterations; ++it, ++*iterations) {
+    if (Converged<d>(cables, r)) return true;
     const Eigen::VectorXd step = J.colPivHouseholderQr().solve(-r);
-    if (!step.allFinite()) break;
-    // Backtracking on |r|^2 keeps Newton on the branch it started on.
-    double lambda = 1.0;
-    Eigen::VectorXd y_new, r_new, t_new;
+    if (!step.allFinite()) return false;
+    // Backtracking on |r|^2 keeps Newton on the branch it started on, and a pose step of at
+    // most kMaxPoseStep (m, rad) keeps it near the start: a platform settles near where it was
+    // commanded, and a long step far from it is the linearisation's, not the robot's.
+    const double largest = step.head<d>().cwiseAbs().maxCoeff();
+    double lambda = largest > kMaxPoseStep ? kMaxPoseStep / largest : 1.0;
+    Eigen::VectorXd y_new, r_new;
     Eigen::MatrixXd J_new;
     bool descent = false;
-    for (int ls = 0; ls < kMaxHalvings && !descent; ++ls, lambda *= 0.5) {
+    for (int ls = 0; ls < kMaxHalvings; ++ls) {
       y_new = y + lambda * step;
-      descent = KktResidual<A>(robot, cables, L, y_new, &r_new, &J_new, &t_new) && r_new.squaredNorm() < r.squaredNorm();
+      descent = NewtonResidual<A>(robot, cables, L, y_new, &r_new, &J_new) && r_new.squaredNorm() < r.squaredNorm();
+      if (descent) break;
+      lambda *= 0.5;
     }
-    if (!descent) break;
+    if (!descent) return Converged<d>(cables, r);
     y = y_new;
     r = r_new;
     J = J_new;
-    tensions = t_new;
   }
-  typename A::PoseD q = y.head<d>();
+  return Converged<d>(cables, r);
+}
+
+// Newton from one start with an active set of elastic cables: an elastic cable whose tension
+// comes out negative goes slack (dropped, the most negative first), a slack one stretched
+// beyond its unstretched length is taut again; repeated until neither happens. The result's
+// status is kConverged or kNotConverged (the physical checks are the caller's).
+template <class A>
+typename A::Result NewtonFrom(const typename A::RobotType& robot, const Cables& all, const Eigen::VectorXd& L,
+                              const typename A::PoseD& start) {
+  constexpr int d = A::kDim;
+  const int m = robot.num_cables();
+  typename A::Result result;
+  Cables cables = all;
+  Eigen::VectorXd tensions = Eigen::VectorXd::Zero(m), r;
+  typename A::PoseD q = start;
+  // The first active set: every cable but the elastic ones paid out more than kSlackAtStart_m
+  // beyond their length at the start (taut, such a cable would start under a compression Newton
+  // creeps out of; one a little long is taut where the platform settles as often as not).
+  {
+    const Eigen::VectorXd l = A::template Lengths<double>(robot, q);
+    cables.taut.clear();
+    for (int i = 0; i < m; ++i) {
+      if (!all.elastic[i] || l(i) > L(i) - kSlackAtStart_m) cables.taut.push_back(i);
+    }
+  }
+  bool converged = false;
+  for (int round = 0; round <= 2 * m && !converged; ++round) {
+    const int k = cables.count();
+    Eigen::VectorXd y(d + k);
+    y.head<d>() = q;
+    for (int j = 0; j < k; ++j) y(d + j) = tensions(cables.taut[j]);
+    // The tensions that balance the platform best at the start.
+    if (round == 0 && k > 0) {
+      Eigen::MatrixXd J;
+      if (!NewtonResidual<A>(robot, cables, L, y, &r, &J)) return result;
+      y.tail(k) = J.topRightCorner(d, k).colPivHouseholderQr().solve(-r.head<d>() + J.topRightCorner(d, k) * y.tail(k));
+    }
+    if (!NewtonSolve<A>(robot, cables, L, y, r, &result.iterations)) break;
+    q = y.head<d>();
+    tensions.setZero();
+    for (int j = 0; j < k; ++j) tensions(cables.taut[j]) = y(d + j);
+    // The active set: the most negative elastic tension goes slack; else a slack cable that
+    // is stretched comes back.
+    int slacken = -1, tighten = -1;
+    for (int j = 0; j < k; ++j) {
+      const int i = cables.taut[j];
+      if (all.elastic[i] && tensions(i) < 0.0 && (slacken < 0 || tensions(i) < tensions(slacken))) slacken = i;
+    }
+    if (slacken < 0) {
+      const Eigen::VectorXd l = A::template Lengths<double>(robot, q);
+      for (int i = 0; i < m; ++i) {
+        const bool is_taut = std::find(cables.taut.begin(), cables.taut.end(), i) != cables.taut.end();
+        if (!is_taut && l(i) > L(i) + kLengthTol_m) tighten = i;
+      }
+    }
+    if (slacken >= 0) {
+      cables.taut.erase(std::find(cables.taut.begin(), cables.taut.end(), slacken));
+      tensions(slacken) = 0.0;
+    } else if (tighten >= 0) {
+      cables.taut.insert(std::upper_bound(cables.taut.begin(), cables.taut.end(), tighten), tighten);
+    } else {
+      converged = true;
+    }
+  }
   A::Normalise(q);
+  result.status = converged ? ForwardStatus::kConverged : ForwardStatus::kNotConverged;
   result.equilibrium.q = q;
   result.equilibrium.tensions_N = tensions;
-  result.equilibrium.residual_N = r.head<d>().norm() * cables.weight_N;
+  result.equilibrium.residual_N = r.size() >= d ? r.head<d>().norm() * cables.weight_N : 0.0;
   result.equilibrium.reduced_stiffness = std::numeric_limits<double>::quiet_NaN();
   result.equilibrium.stable = false;
-  result.length_residual_m = k > 0 ? r.tail(k).cwiseAbs().maxCoeff() : 0.0;
+  // The inextensible cables' length errors (the elastic ones' rows are their tensions).
+  const Eigen::VectorXd l = A::template Lengths<double>(robot, q);
+  result.length_residual_m = 0.0;
+  for (int i = 0; i < m; ++i) {
+    if (!all.elastic[i]) result.length_residual_m = std::max(result.length_residual_m, std::abs(l(i) - L(i)));
+  }
   return result;
 }
 
@@ -300,7 +362,7 @@ template <class A>
 typename A::Result Solve(const typename A::RobotType& robot, const Eigen::VectorXd& L,
                          const typename A::PoseD* guess) {
   CABLECAL_CHECK(L.size() == robot.num_cables(), "one unstretched length per cable");
-  const Cables<A> cables(robot);
+  const Cables cables = CablesOf<A>(robot, L);
   std::vector<typename A::PoseD> starts;
   if (guess) starts.push_back(*guess);
   starts.push_back(A::Home(robot));
@@ -333,16 +395,20 @@ Eigen::VectorXd CommandedLengths(const typename A::RobotType& robot, const Eigen
 
 template <class A>
 void CheckSimulatableKind(const typename A::RobotType& robot, const char* kind) {
-  const Cables<A> cables(robot);
-  if (cables.count() <= A::kDim) return;
-  const int first = cables.inextensible.front();
+  std::vector<int> inextensible;
+  for (int i = 0; i < robot.num_cables(); ++i) {
+    if (!A::Stiffness(robot, i)) inextensible.push_back(i);
+  }
+  const int count = static_cast<int>(inextensible.size());
+  if (count <= A::kDim) return;
+  const int first = inextensible.front();
   throw InputError(robot.source, "cables[" + std::to_string(first) + "].stiffness",
-                   std::to_string(cables.count()) + " of the " + std::to_string(robot.num_cables()) +
+                   std::to_string(count) + " of the " + std::to_string(robot.num_cables()) +
                        " cables have no stiffness (inextensible), more than the " + std::to_string(A::kDim) +
                        " degrees of freedom of a " + kind +
                        " platform: the lengths the controller commands from the nominal model cannot all hold "
                        "on a true robot that differs from it, so it cannot be simulated. Give E*A (N) of at least " +
-                       std::to_string(cables.count() - A::kDim) +
+                       std::to_string(count - A::kDim) +
                        " cables (key stiffness; README, \"Any number of cables\")");
 }
 

@@ -7,12 +7,16 @@
 // Potential energy: gravity m g z_com plus, over the elastic cables (stiffness E*A given), the
 // strain energy EA (l - L)^2 / (2 L) while the cable is stretched (l > L; a slack cable carries
 // nothing); an inextensible cable (no stiffness) is the constraint l_i(q) = L_i. Its stationary
-// points are the roots of the KKT system in (q, t_inext):
-//   W(q) t + w_g(q) = 0,   l_inext(q) - L_inext = 0,
-// where t of an elastic cable is EA (l / L - 1) when l > L and 0 otherwise (the energy's
-// derivative along l), and t of an inextensible cable is its Lagrange multiplier. W = -(dl/dxi)^T
-// is the wrench matrix of the kind (model/cable.h, model/swivel.h), so W t + w_g = 0 says the
-// energy's gradient vanishes.
+// points are where
+//   W(q) t + w_g(q) = 0,
+// t_i = EA (l_i / L_i - 1) for a stretched elastic cable (the energy's derivative along l), 0 for
+// a slack one, and the Lagrange multiplier of l_i(q) = L_i for an inextensible one. W = -(dl/dxi)^T
+// is the wrench matrix of the kind (model/cable.h, model/swivel.h), so this says the gradient
+// vanishes. The solver writes every taut cable's law as one row, l_i(q) - L_i - (L_i / EA_i) t_i
+// = 0 (compliance 0 for an inextensible cable), with t_i an unknown: damped Newton in (q, t_taut)
+// then stays well conditioned however stiff a cable is, and EA -> infinity is the inextensible
+// row itself. Which elastic cables are taut is an active set (a negative tension goes slack, a
+// slack cable stretched comes back).
 //
 // Why elastic cables: with more inextensible cables than the platform's degrees of freedom the
 // commanded lengths, computed on the nominal model, cannot all hold on a true robot that differs
@@ -35,14 +39,15 @@ namespace cablecal {
 
 // The pose where the platform of `robot`, whose cables have the given unstretched lengths (for
 // an inextensible cable, its geometric length exit point -> anchor), settles: damped Newton on
-// the KKT system above from `guess` (the commanded pose), then from the home pose and the
+// the system above from `guess` (the commanded pose), then from the home pose and from the
 // least-squares pose of the lengths (a geometric starting guess, the cables taken as rigid);
-// the first solution that passes the checks is returned. Checks, in order: every inextensible
-// cable's multiplier > 0 (else kSlack: it would go slack), StaticStability stable (else
-// kUnstable), every cable's geometry valid, the platform's reference point inside the frame and
-// within kOtherAssemblyDistance_m / kOtherAssemblyAngle_rad of the guess (else kOtherAssembly).
-// Elastic cables may come back slack (tension 0). length_residual_m: the largest
-// |l_i(q) - L_i| over the inextensible cables.
+// the first solution that passes the checks is returned, else the first that converged, with
+// the check it failed. Checks, in order: every inextensible cable's multiplier > 0 (else
+// kSlack: it would go slack), StaticStability stable (else kUnstable), every cable's geometry
+// valid, the platform's reference point inside the frame and within kOtherAssemblyDistance_m /
+// kOtherAssemblyAngle_rad of the guess (else kOtherAssembly). Elastic cables may come back slack
+// (tension 0). length_residual_m: the largest |l_i(q) - L_i| over the inextensible cables.
+// reduced_stiffness: StaticStability's smallest eigenvalue (NaN when no motion is free).
 ForwardResult SolveForwardStatics(const Robot& robot, const Eigen::VectorXd& unstretched_lengths_m,
                                   const PlanarPose* guess = nullptr);
 

@@ -1973,8 +1973,31 @@ class ManyCableCli : public Cli, public ::testing::WithParamInterface<const char
 
 // workspace --plot, sample, simulate and identify on the 3- and 4-cable robots: every column
 // follows the cable count and the identification names every cable's parameters.
+// planar4 has elastic cables (E*A 5e4 N): the stretch moves by up to 0.5 mm with the tension,
+// ten times the encoders' noise, and the identification, which treats cables as inextensible
+// (README, "Any number of cables"), refuses those readings as a poor fit. That limitation is
+// checked; the rest of the pipeline runs on a copy 2e4 times stiffer (E*A 1e9 N: 0.3 um of
+// stretch change, below the noise).
 TEST_P(ManyCableCli, WorkspaceSampleSimulateIdentify) {
   const int m = std::string(GetParam()).find("planar3") == 0 ? 3 : 4;
+  std::string robot_path = RobotPath();
+  if (m == 4) {
+    RunResult p = RunCablecal("sample --robot " + RobotPath() + " --poses 20 --seed 3 --out " + Path("p4.csv"));
+    ASSERT_EQ(p.exit_code, 0) << p.output;
+    p = RunCablecal("simulate --robot " + RobotPath() + " --plan " + Path("p4.csv") + " --seed 2 --out " + Path("m4.csv"));
+    ASSERT_EQ(p.exit_code, 0) << p.output;
+    p = RunCablecal("identify --robot " + RobotPath() + " --measurements " + Path("m4.csv") + " --out " + Path("r4.yaml"));
+    EXPECT_EQ(p.exit_code, 2) << p.output;
+    EXPECT_NE(p.output.find("do not fit"), std::string::npos) << p.output;
+    std::ifstream in(RobotPath());
+    std::stringstream text;
+    text << in.rdbuf();
+    std::string stiff = text.str();
+    for (std::size_t at; (at = stiff.find("stiffness: 5.0e4")) != std::string::npos;) stiff.replace(at, 16, "stiffness: 1.0e9");
+    robot_path = Path("stiff4.yaml");
+    std::ofstream(robot_path) << stiff;
+  }
+  const auto RobotPath = [&] { return robot_path; };
   RunResult r = RunCablecal("workspace --robot " + RobotPath() + " --step 0.1 --out " + Path("ws.csv") + " --plot " +
                             Path("ws.png"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -2025,9 +2048,12 @@ TEST_P(ManyCableCli, MonteCarloRuns) {
   const std::string summary = Read("mc/summary.csv");
   EXPECT_NE(summary.find(",l" + std::to_string(m) + "0,"), std::string::npos) << summary;
   EXPECT_NE(summary.find(",a" + std::to_string(m) + "z,"), std::string::npos) << summary;
-  // 8,optimized,l<m>0,mean,std,rms,max_abs,share,failures,...: no failed trial.
+  // 8,optimized,l<m>0,mean,std,rms,max_abs,share,failures,...: no failed trial. Not for planar4:
+  // its stiff elastic cables turn the default 5 mm of geometry error into tension errors beyond
+  // its limits, and its readings' stretch beyond what the inextensible identification fits
+  // (README, "Any number of cables"), so its trials fail; their causes are counted.
   const std::regex designed_row("\\n8,optimized,l" + std::to_string(m) + "0,([^,]*,){5}0,");
-  EXPECT_TRUE(std::regex_search(summary, designed_row)) << summary;
+  if (m == 3) EXPECT_TRUE(std::regex_search(summary, designed_row)) << summary;
 }
 
 INSTANTIATE_TEST_SUITE_P(Robots, ManyCableCli,
@@ -2035,6 +2061,35 @@ INSTANTIATE_TEST_SUITE_P(Robots, ManyCableCli,
                          [](const ::testing::TestParamInfo<const char*>& info) {
                            return std::string(info.param).substr(0, 7);
                          });
+
+// A planar robot with more rigid cables than the platform's 3 freedoms cannot be simulated (the
+// commanded lengths cannot all hold on a true robot that differs from the nominal one):
+// simulate and montecarlo exit 2 naming the file and the key `stiffness`, nothing written.
+TEST_F(Cli, RigidOverconstrainedPlanarRobotIsNotSimulated) {
+  std::ifstream in(std::string(CABLECAL_SOURCE_DIR) + "/robots/planar4_fully_constrained.yaml");
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string elastic = text.str();
+  std::string rigid = elastic;
+  for (std::size_t at; (at = rigid.find(", stiffness: 5.0e4")) != std::string::npos;) rigid.erase(at, 18);
+  ASSERT_EQ(rigid.find("stiffness:"), std::string::npos);
+  std::ofstream(Path("rigid.yaml")) << rigid;
+  std::ofstream(Path("elastic.yaml")) << elastic;
+  ASSERT_EQ(RunCablecal("sample --robot " + Path("elastic.yaml") + " --poses 5 --seed 2 --out " + Path("plan.csv")).exit_code, 0);
+  // The plan runs on the elastic robot (the nominal one as the truth: every pose held).
+  const RunResult ok = RunCablecal("simulate --robot " + Path("elastic.yaml") + " --plan " + Path("plan.csv") + " --out " + Path("meas.csv"));
+  EXPECT_EQ(ok.exit_code, 0) << ok.output;
+  const RunResult r = RunCablecal("simulate --robot " + Path("rigid.yaml") + " --plan " + Path("plan.csv") +
+                                  " --geometry-sigma 0.001 --out " + Path("rigid_meas.csv"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("rigid.yaml: cables[0].stiffness:"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("cannot be simulated"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(Path("rigid_meas.csv")));
+  const RunResult mc = RunCablecal("montecarlo --robot " + Path("rigid.yaml") + " --poses 8 --trials 2 --no-plot --out " + Path("mc"));
+  EXPECT_EQ(mc.exit_code, 2) << mc.output;
+  EXPECT_NE(mc.output.find("cables[0].stiffness"), std::string::npos) << mc.output;
+  EXPECT_FALSE(fs::exists(Path("mc")));
+}
 
 // Hostile robot files end in one clear message and exit 2, with nothing written: the issue's
 // list (1 and 9 cables, an anchor count that differs from the cables', wrap: sideways,
@@ -2061,7 +2116,9 @@ TEST_F(Cli, HostileCableCountsAndKeysAreRefused) {
       {replaced(wang, right, nine), "cables: must list 2 to 8 cables (got 9)"},
       {replaced(p3, "[[-0.35, 0.0], [0.0, 0.25], [0.35, 0.0]]", "[[-0.35, 0.0], [0.35, 0.0]]"),
        "platform.anchors: needs one anchor per cable (3), got 2"},
-      {replaced(p4, "wrap: under}", "wrap: sideways}"), "cables[2].wrap: must be 'over' or 'under' (got 'sideways')"},
+      {replaced(p4, "wrap: under, stiffness", "wrap: sideways, stiffness"), "cables[2].wrap: must be 'over' or 'under' (got 'sideways')"},
+      {replaced(p4, "side: right, stiffness: 5.0e4}", "side: right, stiffness: 150}"),
+       "cables[1].stiffness: 150 N (E*A) would stretch the cable by more than 10 % at tension.max"},
       {replaced(wang, "home: [2.6045, 1.4]", "home: [2.6045, 1.4]\nhome_theta_deg: 2"),
        "home_theta_deg: is for robots with 3 or more cables"},
       {replaced(p3, "home_theta_deg: 18 ", "home_theta_deg: -25 "), "is not in the feasible workspace: no_equilibrium"},

@@ -18,6 +18,8 @@
 #include "design/robust.h"
 #include "experiment/experiment.h"
 #include "identify/identify.h"
+#include "experiment/simulation.h"
+#include "model/forward_statics.h"
 #include "model/statics.h"
 #include "tests/support/random_robot.h"
 
@@ -34,6 +36,15 @@ std::vector<Eigen::Vector3d> PosesOf(const std::vector<PlanPose>& plan) {
   return q;
 }
 
+// Where a true robot settles with a plan pose's commands, as simulate's true robot does
+// (experiment/simulation.h): its home unstretched lengths plus the cable paid out.
+ForwardResult Settle(const Robot& nominal, const Robot& truth, const Eigen::VectorXd& true_initial_lengths_m,
+                     const PlanPose& p) {
+  const Eigen::VectorXd lengths =
+      HomeUnstretchedLengths(truth, true_initial_lengths_m) + CableCommands(nominal).PaidOutFromHome(p);
+  return SettlePlanar(truth, lengths, &p.q);
+}
+
 // Share of (true robot, pose) pairs a plan cannot hold: for `robots` true geometries drawn
 // from N(nominal, sigma^2) per parameter, the commanded lengths of every pose are given to the
 // forward model, and the settled pose must be a feasible pose of the true robot.
@@ -45,7 +56,7 @@ double UnholdableShare(const Robot& nominal, const std::vector<PlanPose>& plan, 
     const Eigen::VectorXd l0 = InitialLengths(truth);
     for (const PlanPose& p : plan) {
       ++total;
-      const ForwardResult f = SolveForwardGeometricoStatic(truth, Eigen::VectorXd(p.length_change_m + l0), &p.q);
+      const ForwardResult f = Settle(nominal, truth, l0, p);
       if (f.status != ForwardStatus::kConverged ||
           CheckFeasibility(truth, f.equilibrium.q, f.equilibrium.tensions_N) != Feasibility::kFeasible) {
         ++bad;
@@ -211,7 +222,7 @@ int UnholdableOnScenarioRobots(const Robot& robot, const std::vector<PlanPose>& 
       const Robot truth = WithGeometry(robot, g);
       const Eigen::VectorXd l0 = InitialLengths(truth);
       for (const PlanPose& p : plan) {
-        const ForwardResult f = SolveForwardGeometricoStatic(truth, Eigen::VectorXd(p.length_change_m + l0), &p.q);
+        const ForwardResult f = Settle(robot, truth, l0, p);
         if (f.status != ForwardStatus::kConverged ||
             CheckFeasibility(truth, f.equilibrium.q, f.equilibrium.tensions_N) != Feasibility::kFeasible ||
             (f.equilibrium.q - p.q).head<2>().norm() > 0.1) {
@@ -334,7 +345,7 @@ Eigen::VectorXd ForwardDifference(const Robot& robot, const PlanPose& p, int k, 
     Eigen::VectorXd g = GeometryOf(robot);
     g(k) += s ? h : -h;
     const Robot truth = WithGeometry(robot, g);
-    const ForwardResult f = SolveForwardGeometricoStatic(truth, Eigen::VectorXd(p.length_change_m + InitialLengths(truth)), &p.q);
+    const ForwardResult f = Settle(robot, truth, InitialLengths(truth), p);
     EXPECT_EQ(f.status, ForwardStatus::kConverged);
     at[s] = quantity(truth, f.equilibrium);
   }

@@ -184,6 +184,7 @@ TEST(Validate, StartAtTheReadingsFindsTheEquilibriumThePlatformWasIn) {
     for (std::size_t j = 0; j < exp.true_poses.size(); ++j) {
       ++poses;
       EXPECT_LT((v.robots[0].q[j] - exp.true_poses[j]).norm(), 1e-9) << nominal.name << " pose " << j + 1;
+      if (truth.num_cables() > 3) continue;  // elastic cables: no inextensible cold start to compare
       const ForwardResult cold = SolveForwardGeometricoStatic(truth, l0 + exp.measurements[j].dl_m);
       if (cold.status != ForwardStatus::kConverged || (cold.equilibrium.q - exp.true_poses[j]).norm() > 1e-6) {
         ++cold_elsewhere;

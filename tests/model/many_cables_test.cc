@@ -226,7 +226,7 @@ TEST(ManyCables, ForwardKinematicsRoundTrip) {
       const Eigen::VectorXd L = CableLengths(r, q);
       const Eigen::Vector3d guess = q + Eigen::Vector3d(0.01, -0.01, 0.01);
       for (const Eigen::Vector3d* g : {&guess, static_cast<const Eigen::Vector3d*>(nullptr)}) {
-        const ForwardResult f = SolveForwardGeometricoStatic(r, L, g);
+        const ForwardResult f = LeastSquaresPoseGuess(r, L, g);  // m = 3: the forward kinematics
         if (!g && f.status != ForwardStatus::kConverged) continue;  // a cold start may find another assembly
         ASSERT_EQ(f.status, ForwardStatus::kConverged) << r.name << " q " << q.transpose();
         EXPECT_LT((f.equilibrium.q - q).cwiseAbs().maxCoeff(), 1e-9) << r.name << " q " << q.transpose();
@@ -240,14 +240,15 @@ TEST(ManyCables, ForwardKinematicsRoundTrip) {
   EXPECT_GT(checked, 60);
 }
 
-// With 4 or more cables, lengths the robot cannot meet all at once give the least-squares pose:
-// the gradient J'r vanishes there while the residual does not.
+// With 4 or more cables, lengths the robot cannot meet all at once give the least-squares pose
+// (the geometric starting guess; a true robot settles by model/forward_statics.h): the gradient
+// J'r vanishes there while the residual does not.
 TEST(ManyCables, InconsistentLengthsGiveTheLeastSquaresPose) {
   const Robot r = RobotFile("planar4_fully_constrained.yaml");
   const Eigen::Vector3d q(1.4, 0.9, 0.02);
   Eigen::VectorXd L = CableLengths(r, q);
   L(0) += 0.002;
-  const ForwardResult f = SolveForwardGeometricoStatic(r, L, &q);
+  const ForwardResult f = LeastSquaresPoseGuess(r, L, &q);
   ASSERT_EQ(f.status, ForwardStatus::kConverged);
   const Eigen::VectorXd residual = CableLengths(r, f.equilibrium.q) - L;
   const Eigen::MatrixXd J = -WrenchMatrix<double>(r, Pose<double>(f.equilibrium.q)).transpose();

@@ -259,7 +259,7 @@ INSTANTIATE_TEST_SUITE_P(
                          "[[0.2, 0.1], [-0.2, 0.1], [-0.2, -0.1], [0.2, -0.1]]",
                          "[[0.2, 0.1], [0.2, 0.1], [0.2, 0.1], [0.2, 0.1]]",
                          "platform\\.anchors: all anchors are one point"},
-        ManyCableBadCase{"WrapSideways", "planar4_fully_constrained.yaml", "wrap: under}", "wrap: sideways}",
+        ManyCableBadCase{"WrapSideways", "planar4_fully_constrained.yaml", "wrap: under, stiffness", "wrap: sideways, stiffness",
                          "cables\\[2\\]\\.wrap: must be 'over' or 'under' \\(got 'sideways'\\)"},
         ManyCableBadCase{"HomeThetaOutsideBand", "planar3_suspended.yaml", "home_theta_deg: 18 ", "home_theta_deg: -20 ",
                          "home: \\(1\\.5, 1\\) m at theta -20 degrees \\(home_theta_deg\\) is not in the feasible "

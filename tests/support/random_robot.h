@@ -66,7 +66,9 @@ inline Robot RandomValidRobot(Rng& rng, const std::string& name) {
 // and the centre of mass below them. Fully constrained (m >= 4): about half the cables over
 // pulleys at the top, the rest under pulleys low on the frame (wrap: under), each on the
 // platform edge facing its pulley. The home pose is near the frame's centre at the middle of
-// its feasible theta band (found by scanning), so that the loader accepts it.
+// its feasible theta band (found by scanning), so that the loader accepts it. m >= 4: every
+// cable elastic, E*A = kRandomStiffnessOverMaxTension x tension.max.
+constexpr double kRandomStiffnessOverMaxTension = 3000.0;
 inline Robot RandomRobotWithCables(Rng& rng, const std::string& name, int m, bool fully_constrained) {
   if (m == 2 && !fully_constrained) return RandomValidRobot(rng, name);
   for (int attempt = 0; attempt < 1000; ++attempt) {
@@ -117,6 +119,13 @@ inline Robot RandomRobotWithCables(Rng& rng, const std::string& name, int m, boo
     const double weight_N = r.platform_mass_kg * r.gravity_mps2;
     r.tension_min_N = weight_N * rng.Uniform(0.02, 0.1);
     r.tension_max_N = weight_N * rng.Uniform(fully_constrained ? 6.0 : 3.5, fully_constrained ? 10.0 : 6.0);
+    // m >= 4: rigid cables over-determine the pose, and a true robot that differs from the
+    // nominal one is simulated with elastic ones (model/forward_statics.h). E*A = 3000 x
+    // tension.max on every cable (0.033 % stretch at the largest tension, a steel wire rope's
+    // ratio; no draw, so the robots are the ones drawn before stiffness existed).
+    for (Cable& c : r.cables) {
+      if (m >= 4) c.stiffness_N = kRandomStiffnessOverMaxTension * r.tension_max_N;
+    }
     r.p_F_home_m = Eigen::Vector2d(W / 2 + rng.Uniform(-0.2, 0.2), H / 2);
     // The middle of the feasible theta band at home, on a 0.5-degree scan.
     double lo = 1e9, hi = -1e9;
