@@ -281,8 +281,11 @@ int RunWorkspace(const Context& ctx, const WorkspaceOptions& options) {
   CheckCommandPaths({{"--robot", options.robot_path}},
                     {{"--out", options.out_path}, {"--plot", options.plot_path}});
   CheckPngPath("--plot", options.plot_path);
+  if (IsSpatialRobotFile(options.robot_path)) return RunSpatialWorkspace(ctx, options);
+  RefuseSpatialOnlyFlag(!options.rpy_deg.empty(), "--rpy-deg");
   const Robot robot = LoadRobotOption(options.robot_path);
-  const WorkspaceGrid grid = ComputeWorkspaceGrid(robot, options.step_m);
+  const double step_m = options.step_m < 0.0 ? 0.05 : options.step_m;
+  const WorkspaceGrid grid = ComputeWorkspaceGrid(robot, step_m);
   AtomicOutput output;
   std::string figure_error;
   const std::string temp_csv =
@@ -297,13 +300,15 @@ int RunWorkspace(const Context& ctx, const WorkspaceOptions& options) {
   }
   output.Commit();
   std::printf("workspace of %s: %d of %zu grid points feasible (step %s m), area ~ %.4g m^2\n", PrintableText(robot.name).c_str(),
-              grid.num_feasible, grid.points.size(), FormatDouble(options.step_m).c_str(), grid.feasible_area_m2());
+              grid.num_feasible, grid.points.size(), FormatDouble(step_m).c_str(), grid.feasible_area_m2());
   if (!figure_error.empty()) throw FigureFailure(figure_error + "; " + options.out_path + " was written");
   return kExitOk;
 }
 
 int RunSample(const Context& ctx, const SampleOptions& options) {
   CheckCommandPaths({{"--robot", options.robot_path}}, {{"--out", options.out_path}});
+  if (IsSpatialRobotFile(options.robot_path)) return RunSpatialSample(ctx, options);
+  RefuseSpatialOnlyFlag(options.yaw_range_deg >= 0.0, "--yaw-range-deg");
   const Robot robot = LoadRobotOption(options.robot_path);
   const std::vector<PlanPose> plan = SampleFeasiblePoses(robot, options.poses, options.seed);
   AtomicOutput output;
@@ -317,6 +322,7 @@ int RunSample(const Context& ctx, const SampleOptions& options) {
 int RunSimulate(const Context& ctx, const SimulateOptions& options) {
   CheckCommandPaths({{"--robot", options.robot_path}, {"--truth", options.truth_path}, {"--plan", options.plan_path}},
                     {{"--out", options.out_path}, {"--truth-out", options.truth_out_path}});
+  if (IsSpatialRobotFile(options.robot_path)) return RunSpatialSimulate(ctx, options);
   const Robot nominal = LoadRobotOption(options.robot_path);
   // A pose where the true robot settles outside its own workspace (beyond a tension limit,
   // the inclinometer range or the margin) would stop a lab's experiment: exit 2 naming the

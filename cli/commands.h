@@ -33,7 +33,8 @@ Robot LoadRobotOption(const std::string& robot_path);
 
 struct WorkspaceOptions {
   std::string robot_path, out_path, plot_path;
-  double step_m = 0.05;
+  double step_m = -1.0;  // < 0: not given (planar 0.05 m, spatial DefaultSpatialStep)
+  std::string rpy_deg;  // spatial robots: --rpy-deg R,P,Y (empty: home's orientation)
 };
 int RunWorkspace(const Context& ctx, const WorkspaceOptions& options);
 
@@ -41,6 +42,7 @@ struct SampleOptions {
   std::string robot_path, out_path;
   int poses = 0;
   unsigned long long seed = 1;
+  double yaw_range_deg = -1.0;  // spatial robots: --yaw-range-deg (< 0: not given, the default)
 };
 int RunSample(const Context& ctx, const SampleOptions& options);
 
@@ -54,6 +56,15 @@ struct SimulateOptions {
   bool skip_infeasible = false;    // skip the poses the true robot cannot hold (listed on stderr)
 };
 int RunSimulate(const Context& ctx, const SimulateOptions& options);
+
+// The same three commands for a robot file with `kind: spatial` (cli/spatial_commands.cc):
+// RunWorkspace, RunSample and RunSimulate hand such a file over to them.
+bool IsSpatialRobotFile(const std::string& robot_path);
+int RunSpatialWorkspace(const Context& ctx, const WorkspaceOptions& options);
+int RunSpatialSample(const Context& ctx, const SampleOptions& options);
+int RunSpatialSimulate(const Context& ctx, const SimulateOptions& options);
+// Refuses a spatial-only flag given for a planar robot.
+void RefuseSpatialOnlyFlag(bool given, const std::string& flag);
 
 struct IdentifyCommandOptions {
   std::string robot_path, measurements_path, out_path, calibrated_robot_path;
@@ -119,6 +130,9 @@ int RunReproduce(const Context& ctx, const ReproduceOptions& options);
 
 // Runs a plotting script of scripts/ with the python that has matplotlib. Throws
 // FigureFailure (exit 5) if the script fails, Interrupted if Ctrl-C came while it ran.
+// A figure's path must end in .png (InputError naming the flag otherwise).
+void CheckPngPath(const std::string& flag, const std::string& path);
+
 void RunPlotScript(const std::string& script, const std::vector<std::string>& args);
 
 // Runs RunPlotScript; if it fails, drops `figure_path` from `output`, removes an earlier file

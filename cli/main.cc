@@ -98,8 +98,17 @@ int main(int argc, char** argv) {
   cablecal::cli::WorkspaceOptions ws;
   CLI::App* ws_cmd = app.add_subcommand("workspace", "grid the feasible cable-tension workspace to CSV (and PNG)");
   AddRobotOption(ws_cmd, &ws.robot_path);
-  ws_cmd->add_option("--step", ws.step_m, "grid spacing in m")->capture_default_str()->check(kPositive);
-  ws_cmd->add_option("--out", ws.out_path, "workspace CSV (x,z,theta,t1..tm,feasible,reason; theta_min,theta_max with 3 or more cables)")->required();
+  ws_cmd->add_option("--step", ws.step_m,
+                     "grid spacing in m (default 0.05; spatial robots: the frame box's longest side / 40, rounded up "
+                     "to 1, 2 or 5 times a power of ten)")
+      ->check(kPositive);
+  ws_cmd->add_option("--out", ws.out_path,
+                     "workspace CSV (x,z,theta,t1..tm,feasible,reason; theta_min,theta_max with 3 or more cables; "
+                     "spatial robots: x,y,z,roll,pitch,yaw,t1..tm,feasible,reason)")
+      ->required();
+  ws_cmd->add_option("--rpy-deg", ws.rpy_deg,
+                     "spatial robots: the orientation R,P,Y (degrees) of the constant-orientation workspace "
+                     "(default: home's; with fewer than 6 cables only the controlled entries)");
   ws_cmd->add_option("--plot", ws.plot_path, "PNG of the feasible region, tensions and exit points");
 
   cablecal::cli::SampleOptions sample;
@@ -108,6 +117,9 @@ int main(int argc, char** argv) {
   sample_cmd->add_option("--poses", sample.poses, "number of poses")->required()->check(WholeNumberIn(1, 100000));
   sample_cmd->add_option("--seed", sample.seed, "random seed")->capture_default_str()->check(kSeed);
   sample_cmd->add_option("--out", sample.out_path, "pose plan CSV")->required();
+  sample_cmd->add_option("--yaw-range-deg", sample.yaw_range_deg,
+                         "spatial robots: draw yaw within home's yaw +- this many degrees (default 30)")
+      ->check(NumberAbove(0.0, false));
 
   cablecal::cli::SimulateOptions sim;
   CLI::App* sim_cmd = app.add_subcommand("simulate", "simulate an experiment: true robot, forward motion, sensor noise");
@@ -127,7 +139,9 @@ int main(int argc, char** argv) {
   sim_cmd->add_flag("--skip-infeasible", sim.skip_infeasible,
                     "skip the plan's poses the true robot cannot hold or holds outside its workspace (each named on "
                     "stderr) instead of stopping at the first; an error still if it can hold none");
-  sim_cmd->add_option("--out", sim.out_path, "measurement CSV (pose,dl1..dlm,z,theta)")->required();
+  sim_cmd->add_option("--out", sim.out_path,
+                      "measurement CSV (pose,dl1..dlm,z,theta; spatial robots: pose,dl1..dlm and each sensor's columns)")
+      ->required();
   sim_cmd->add_option("--truth-out", sim.truth_out_path, "true robot and true poses (YAML)");
 
   cablecal::cli::IdentifyCommandOptions ident;

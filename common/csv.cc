@@ -184,10 +184,14 @@ void ForEachCsvRow(std::istream& in, const std::string& path, const std::vector<
   if (rows == 0) throw InputError(path, "", "has a header but no data rows");
 }
 
-void ForEachCsvRowByName(std::istream& in, const std::string& path, char delimiter,
-                         const std::vector<std::string>& required, const std::vector<std::string>& optional,
-                         const std::function<void(const std::vector<std::string>&)>& on_ignored,
-                         const std::function<void(const CsvRow&)>& on_row) {
+namespace {
+
+// ForEachCsvRowByName's body; `on_other` hears the header's other columns with the header's
+// "file:line".
+void ForEachCsvRowByNameAt(std::istream& in, const std::string& path, char delimiter,
+                           const std::vector<std::string>& required, const std::vector<std::string>& optional,
+                           const std::function<void(const std::string&, const std::vector<std::string>&)>& on_other,
+                           const std::function<void(const CsvRow&)>& on_row) {
   std::vector<std::string> wanted = required;
   wanted.insert(wanted.end(), optional.begin(), optional.end());
   bool have_header = false;
@@ -225,8 +229,9 @@ void ForEachCsvRowByName(std::istream& in, const std::string& path, char delimit
                              ", in any order; got '" + trimmed + "')" + CaseHint(missing, cells) +
                              (other_separator ? " (another separator? give it with --delimiter)" : ""));
       }
-      if (!ignored.empty() && on_ignored) on_ignored(ignored);
+      if (!ignored.empty() && on_other) on_other(where, ignored);
       columns = cells.size();
+      row.header_line = line_no;
       have_header = true;
       return;
     }
@@ -248,6 +253,33 @@ void ForEachCsvRowByName(std::istream& in, const std::string& path, char delimit
   });
   if (!have_header) throw InputError(path, "", "is empty: no header line with '" + JoinCsv(required) + "'");
   if (rows == 0) throw InputError(path, "", "has a header but no data rows");
+}
+
+}  // namespace
+
+void ForEachCsvRowByName(std::istream& in, const std::string& path, char delimiter,
+                         const std::vector<std::string>& required, const std::vector<std::string>& optional,
+                         const std::function<void(const std::vector<std::string>&)>& on_ignored,
+                         const std::function<void(const CsvRow&)>& on_row) {
+  ForEachCsvRowByNameAt(
+      in, path, delimiter, required, optional,
+      [&](const std::string&, const std::vector<std::string>& ignored) {
+        if (on_ignored) on_ignored(ignored);
+      },
+      on_row);
+}
+
+void ForEachCsvRowByNameStrict(std::istream& in, const std::string& path, char delimiter,
+                               const std::vector<std::string>& required, const std::vector<std::string>& optional,
+                               const std::function<void(const CsvRow&)>& on_row) {
+  ForEachCsvRowByNameAt(
+      in, path, delimiter, required, optional,
+      [&](const std::string& where, const std::vector<std::string>& other) {
+        throw InputError(where, "column '" + other.front() + "'",
+                         "unknown column (the columns are '" + JoinCsv(required) + "'" +
+                             (optional.empty() ? std::string() : ", optionally '" + JoinCsv(optional) + "'") + ")");
+      },
+      on_row);
 }
 
 }  // namespace cablecal

@@ -14,6 +14,7 @@ namespace cablecal {
 struct CsvRow {
   const std::string* path = nullptr;
   int line = 0;  // 1-based line number in the file
+  int header_line = 0;  // the header's (ForEachCsvRowByName and ...Strict only)
   const std::vector<std::string>* header = nullptr;
   std::vector<std::string> cells;
   // Per column of `header`: false for an optional column the file does not have (its cell is
@@ -52,6 +53,12 @@ void ForEachCsvRowByName(std::istream& in, const std::string& name, char delimit
                          const std::vector<std::string>& required, const std::vector<std::string>& optional,
                          const std::function<void(const std::vector<std::string>&)>& on_ignored,
                          const std::function<void(const CsvRow&)>& on_row);
+
+// The same for a file cablecal wrote, where a column it does not know is a mistake (a
+// misspelt or another kind's column): refused naming the header's line and the column.
+void ForEachCsvRowByNameStrict(std::istream& in, const std::string& name, char delimiter,
+                               const std::vector<std::string>& required, const std::vector<std::string>& optional,
+                               const std::function<void(const CsvRow&)>& on_row);
 
 constexpr std::size_t kMaxCsvLineBytes = 1 << 16;
 

@@ -98,7 +98,7 @@ SpatialRobot Parse(const YAML::Node& root, const Reader& rd) {
                 : "must be 'planar' or 'spatial' (got '" + PrintableText(kind.substr(0, 40)) + "')");
   }
   rd.ExpectMap(root, "", {"name", "kind", "gravity", "frame", "platform", "cables", "tension", "limits", "home", "sensors"},
-               {"home_rpy_deg"});
+               {"home_rpy_deg", "true_poses"});
 
   robot.name = rd.String(root["name"], "name");
   if (robot.name.empty()) rd.Fail(root["name"], "name", "must not be empty");

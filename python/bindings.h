@@ -13,7 +13,12 @@
 
 #include <vector>
 
+#include <cstdint>
+
 #include "experiment/experiment.h"
+#include "experiment/spatial_measurements.h"
+#include "experiment/spatial_plan.h"
+#include "model/spatial_robot.h"
 #include "workspace/workspace.h"
 
 namespace py = pybind11;
@@ -31,7 +36,24 @@ struct PyMeasurements {
   int num_cables = 0;
 };
 
+// cablecal.SpatialPlan, cablecal.SpatialMeasurements: as Plan and Measurements, spatial.
+struct PySpatialPlan {
+  std::vector<SpatialPlanPose> poses;
+  int num_cables = 0;
+};
+struct PySpatialMeasurements {
+  std::vector<SpatialMeasurement> readings;
+  int num_cables = 0;
+};
+
 void BindModel(py::module_& m);       // Robot, workspace
+void BindSpatial(py::module_& m);     // SpatialRobot, SpatialPlan, SpatialMeasurements, SpatialExperiment
+// The spatial halves of workspace, sample and simulate (python/spatial.cc), for a SpatialRobot.
+py::object SpatialWorkspace(const SpatialRobot& robot, double step_m, py::handle rpy_deg);
+py::object SpatialSample(const SpatialRobot& robot, int n, std::uint64_t seed, py::handle yaw_range_deg);
+py::object SpatialSimulate(const SpatialRobot& robot, py::handle plan, py::handle truth, py::handle geometry_sigma,
+                           NoisySensors noisy, bool encoder_noise, std::uint64_t seed, bool systematic_errors,
+                           bool skip_infeasible);
 void BindExperiment(py::module_& m);  // Plan, Measurements, sample, Experiment, simulate
 void BindDesign(py::module_& m);      // DesignResult, design
 void BindIdentify(py::module_& m);    // IdentifyResult, identify, calibrated_robot, report, Validation, validate

@@ -36,6 +36,7 @@ PYBIND11_MODULE(cablecal, m) {
   });
 
   BindModel(m);
+  BindSpatial(m);
   BindExperiment(m);
   BindDesign(m);
   BindIdentify(m);

@@ -142,14 +142,24 @@ void BindExperiment(py::module_& m) {
   // ---- sample
   m.def(
       "sample",
-      [](py::handle robot_arg, py::handle n, py::handle seed) {
-        const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
+      [](py::handle robot_arg, py::handle n, py::handle seed, py::handle yaw_range_deg) -> py::object {
         const int count = static_cast<int>(AsInteger(n, "n", 1, kMaxPlanPoses));
         const std::uint64_t s = AsSeed(seed);
-        py::gil_scoped_release release;
-        return PyPlan{SampleFeasiblePoses(robot, count, s), robot.num_cables()};
+        if (py::isinstance<SpatialRobot>(robot_arg)) {
+          return SpatialSample(robot_arg.cast<const SpatialRobot&>(), count, s, yaw_range_deg);
+        }
+        if (!yaw_range_deg.is_none()) Bad("yaw_range_deg", "serves spatial robots only (a cablecal.SpatialRobot)");
+        const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
+        PyPlan plan{{}, robot.num_cables()};
+        {
+          py::gil_scoped_release release;
+          plan.poses = SampleFeasiblePoses(robot, count, s);
+        }
+        return py::cast(std::move(plan));
       },
-      py::arg("robot"), py::arg("n"), py::arg("seed") = 1, "n uniform random feasible poses (cablecal sample).");
+      py::arg("robot"), py::arg("n"), py::arg("seed") = 1, py::arg("yaw_range_deg") = py::none(),
+      "n uniform random feasible poses (cablecal sample): a Plan, or a SpatialPlan for a SpatialRobot (yaw within "
+      "home's +- yaw_range_deg, default 30).");
 
   // ---- simulate
   py::class_<PlanSimulation>(m, "Experiment", "A simulated experiment: measurements, the true robot and poses.")
@@ -171,7 +181,17 @@ void BindExperiment(py::module_& m) {
       "simulate",
       [](py::handle robot_arg, py::handle plan_arg, py::handle truth_arg, py::handle geometry_sigma,
          py::handle sensors, py::handle encoder_noise, py::handle seed, py::handle systematic_errors,
-         py::handle skip_infeasible) {
+         py::handle skip_infeasible) -> py::object {
+        if (py::isinstance<SpatialRobot>(robot_arg)) {
+          for (const auto& [flag, name] : {std::pair<py::handle, const char*>{encoder_noise, "encoder_noise"},
+                                           {systematic_errors, "systematic_errors"},
+                                           {skip_infeasible, "skip_infeasible"}}) {
+            if (!py::isinstance<py::bool_>(flag)) Bad(name, "expected True or False");
+          }
+          return SpatialSimulate(robot_arg.cast<const SpatialRobot&>(), plan_arg, truth_arg, geometry_sigma,
+                                 ParseNoisySensors(AsText(sensors, "sensors")), encoder_noise.cast<bool>(), AsSeed(seed),
+                                 systematic_errors.cast<bool>(), skip_infeasible.cast<bool>());
+        }
         const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
         const PyPlan& plan = AsObject<PyPlan>(plan_arg, "plan", "Plan");
         std::optional<Robot> truth;
@@ -209,7 +229,7 @@ void BindExperiment(py::module_& m) {
                                 "; Experiment.skipped says why)";
           if (PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 1) < 0) throw py::error_already_set();
         }
-        return std::move(*run);
+        return py::cast(std::move(*run));
       },
       py::arg("robot"), py::arg("plan"), py::arg("truth") = py::none(), py::arg("geometry_sigma") = py::none(),
       py::arg("sensors") = "both", py::arg("encoder_noise") = true, py::arg("seed") = 1,

@@ -8,9 +8,11 @@
 #include "common/error.h"
 #include "experiment/experiment.h"
 #include "model/robot.h"
+#include "model/spatial_robot.h"
 #include "model/statics.h"
 #include "python/bindings.h"
 #include "python/converters.h"
+#include "workspace/spatial_workspace.h"
 #include "workspace/workspace.h"
 
 namespace cablecal::python {
@@ -18,8 +20,15 @@ namespace cablecal::python {
 void BindModel(py::module_& m) {
   // ---- Robot
   py::class_<Robot>(m, "Robot", "A robot file's content (README, \"Robot file\").")
-      .def_static("load", [](py::handle path) { return LoadRobotFile(AsPath(path, "path")); }, py::arg("path"),
-                  "Loads and validates a robot YAML file.")
+      .def_static(
+          "load",
+          [](py::handle path) -> py::object {
+            const std::string p = AsPath(path, "path");
+            // A spatial file is a cablecal.SpatialRobot (bound after this class: looked up by name).
+            if (RobotKindOfFile(p) == RobotKind::kSpatial) return py::module_::import("cablecal").attr("SpatialRobot").attr("load")(p);
+            return py::cast(LoadRobotFile(p));
+          },
+          py::arg("path"), "Loads and validates a robot YAML file: a cablecal.Robot, or a cablecal.SpatialRobot for a file with kind: spatial.")
       .def_static(
           "builtin",
           [](py::handle name) {
@@ -53,6 +62,7 @@ void BindModel(py::module_& m) {
       .def("to_yaml", [](const Robot& r) { return RobotToYaml(r); })
       .def_property_readonly("name", [](const Robot& r) { return r.name; })
       .def_property_readonly("num_cables", &Robot::num_cables)
+      .def_property_readonly("kind", [](const Robot&) { return "planar"; })
       .def_property_readonly("geometry", [](const Robot& r) { return Vector(GeometryOf(r)); },
                              "a1x a1z ... amx amz l10 ... lm0 (m)")
       .def_property_readonly("geometry_names", [](const Robot& r) { return GeometryNames(r.num_cables()); })
@@ -63,10 +73,16 @@ void BindModel(py::module_& m) {
   // ---- workspace
   m.def(
       "workspace",
-      [](py::handle robot_arg, py::handle step) {
-        const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
-        const double step_m = AsNumber(step, "step");
+      [](py::handle robot_arg, py::handle step, py::handle rpy_deg) -> py::object {
+        const bool spatial = py::isinstance<SpatialRobot>(robot_arg);
+        // None: the CLI's default (planar 0.05 m; spatial DefaultSpatialStep).
+        const double step_m = !step.is_none() ? AsNumber(step, "step")
+                              : spatial       ? DefaultSpatialStep(robot_arg.cast<const SpatialRobot&>())
+                                              : 0.05;
         if (!(step_m > 0.0)) Bad("step", "must be positive (m)");
+        if (spatial) return SpatialWorkspace(robot_arg.cast<const SpatialRobot&>(), step_m, rpy_deg);
+        if (!rpy_deg.is_none()) Bad("rpy_deg", "serves spatial robots only (a cablecal.SpatialRobot)");
+        const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
         WorkspaceGrid grid;
         {
           py::gil_scoped_release release;
@@ -99,9 +115,10 @@ void BindModel(py::module_& m) {
         d["csv"] = WorkspaceCsv(robot, grid, "");
         return d;
       },
-      py::arg("robot"), py::arg("step") = 0.05,
+      py::arg("robot"), py::arg("step") = py::none(), py::arg("rpy_deg") = py::none(),
       "The feasible workspace on a grid: x, z, theta, tensions (NaN without equilibrium), feasible, reason, "
-      "area_m2, and csv (the CLI's file).");
+      "area_m2, and csv (the CLI's file). For a SpatialRobot the constant-orientation workspace at rpy_deg "
+      "(roll, pitch, yaw in degrees; default home's): xyz (n, 3), rpy (n, 3), tensions, feasible, reason, volume_m3, csv.");
 }
 
 }  // namespace cablecal::python

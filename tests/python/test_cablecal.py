@@ -11,6 +11,7 @@ import signal
 import subprocess
 import threading
 import time
+import warnings
 
 import cablecal  # before numpy: cablecal's reference BLAS is then the one numpy shares (README)
 import numpy as np
@@ -844,3 +845,83 @@ def test_progress_reaches_the_total_and_an_exception_in_it_stops_the_study():
         cablecal.montecarlo(robot, [6, 10], 20000, designs="random", seed=1, progress=stop)
     with pytest.raises(cablecal.InputError):
         cablecal.montecarlo(robot, [6], 10, progress="not callable")
+
+
+# ---- Spatial robots -----------------------------------------------------------------------------
+
+SPATIAL = ["cogiro", "ipanema1", "irma4u"]
+
+
+@pytest.mark.parametrize("name", SPATIAL)
+def test_spatial_robots_load_from_files_and_built_in(name):
+    r = cablecal.Robot.load(robot_file(name))
+    assert isinstance(r, cablecal.SpatialRobot)
+    assert r.kind == "spatial" and cablecal.Robot.builtin().kind == "planar"
+    assert r.num_cables == (4 if name == "irma4u" else 8)
+    assert repr(r) == f"<cablecal.SpatialRobot '{r.name}', {r.num_cables} cables>"
+    b = cablecal.SpatialRobot.builtin(name)
+    assert b.to_yaml() == r.to_yaml()
+    assert r.to_dict()["kind"] == "spatial"
+    assert r.home.shape == (6,)
+    assert name in cablecal.SpatialRobot.builtin_names()
+    with pytest.raises(cablecal.InputError, match="no built-in spatial robot"):
+        cablecal.SpatialRobot.builtin("nope")
+
+
+# The geometry error each true robot is drawn with: what its tension limits allow. Stiff cables
+# turn an exit error into tension, and ipanema1's plan has cables on tension.min, which any
+# error takes below it; irma4u's inextensible 4-cable home slackens a cable at 0.1 mm.
+SPATIAL_SIGMA = {"cogiro": "0.002", "ipanema1": "0", "irma4u": "0.000001"}
+
+
+@pytest.mark.parametrize("name", SPATIAL)
+def test_spatial_sample_workspace_simulate_equal_cli(tmp_path, name):
+    path = robot_file(name)
+    robot = cablecal.Robot.load(path)
+    plan = cablecal.sample(robot, 5, seed=3, yaw_range_deg=20)
+    assert plan.poses.shape == (5, 6)
+    assert plan.tensions.shape == (5, robot.num_cables)
+    out = tmp_path / "plan.csv"
+    cli("sample", "--robot", path, "--poses", "5", "--seed", "3", "--yaw-range-deg", "20", "--out", str(out))
+    assert plan.to_csv() == data_lines(out)
+    assert cablecal.SpatialPlan.load(robot, str(out)).to_csv() == plan.to_csv()
+
+    ws = cablecal.workspace(robot, rpy_deg=[0, 0, 0.2])  # irma4u holds its yaw within about 1 degree
+    ws_out = tmp_path / "ws.csv"
+    cli("workspace", "--robot", path, "--rpy-deg", "0,0,0.2", "--out", str(ws_out))
+    assert ws["csv"] == data_lines(ws_out)
+    assert ws["xyz"].shape[1] == 3 and ws["feasible"].any()
+    assert np.isfinite(ws["tensions"][ws["feasible"]]).all()
+    assert np.isclose(ws["volume_m3"], ws["feasible"].sum() * np.diff(np.unique(ws["xyz"][:, 0]))[0] ** 3)
+
+    sigma = SPATIAL_SIGMA[name]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the poses skipped, as the CLI's stderr lines
+        run = cablecal.simulate(robot, plan, geometry_sigma=float(sigma), seed=7, skip_infeasible=True)
+    m_out, t_out = tmp_path / "m.csv", tmp_path / "t.yaml"
+    cli("simulate", "--robot", path, "--plan", str(out), "--geometry-sigma", sigma, "--seed", "7", "--skip-infeasible",
+        "--out", str(m_out), "--truth-out", str(t_out))
+    assert run.measurements.to_csv() == data_lines(m_out)
+    assert run.truth_yaml == data_lines(t_out)
+    held = 5 - len(run.skipped)
+    assert held >= 1 and run.true_poses.shape == (held, 6)
+    assert run.measurements.dl.shape == (held, robot.num_cables)
+    back = cablecal.SpatialMeasurements.load(robot, str(m_out))
+    np.testing.assert_array_equal(back.dl, run.measurements.dl)
+    assert set(back.sensors) == set(run.measurements.sensors)
+
+
+def test_spatial_arguments_are_checked():
+    robot = cablecal.SpatialRobot.builtin("irma4u")
+    planar = cablecal.Robot.builtin()
+    with pytest.raises(cablecal.InputError, match="yaw_range_deg"):
+        cablecal.sample(planar, 3, yaw_range_deg=10)
+    with pytest.raises(cablecal.InputError, match="rpy_deg"):
+        cablecal.workspace(planar, rpy_deg=[0, 0, 0])
+    plan = cablecal.sample(robot, 2)
+    with pytest.raises(cablecal.InputError, match="SpatialPlan"):
+        cablecal.simulate(robot, cablecal.sample(planar, 2))
+    with pytest.raises(cablecal.InputError, match="truth"):
+        cablecal.simulate(robot, plan, truth=robot, geometry_sigma=0.001)
+    run = cablecal.simulate(robot, plan, sensors="none", encoder_noise=False)
+    np.testing.assert_array_equal(run.measurements.dl, plan.length_changes)

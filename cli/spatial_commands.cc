@@ -1,0 +1,167 @@
+// workspace, sample and simulate for a robot file with `kind: spatial` (README, "Spatial
+// robots"): the same flags and outputs as the planar commands, in the spatial formats.
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <optional>
+#include <sstream>
+
+#include "cli/commands.h"
+#include "common/atomic_output.h"
+#include "common/error.h"
+#include "common/format.h"
+#include "common/version.h"
+#include "design/design.h"  // kMaxGeometrySigma_m
+#include "experiment/spatial_plan.h"
+#include "experiment/spatial_simulation.h"
+#include "model/spatial_robot.h"
+#include "workspace/spatial_workspace.h"
+
+namespace cablecal::cli {
+
+namespace {
+
+constexpr double kDegPerRad = 180.0 / M_PI;
+
+std::string TripleArg(const std::string& flag, const Eigen::Vector3d& v) {
+  return "--" + flag + "=" + FormatDouble(v.x()) + "," + FormatDouble(v.y()) + "," + FormatDouble(v.z());
+}
+
+// --rpy-deg R,P,Y: three finite numbers of degrees, roll and pitch within +-90.
+Eigen::Vector3d ParseRpyDeg(const std::string& text) {
+  std::vector<std::string> parts;
+  std::stringstream in(text);
+  for (std::string part; std::getline(in, part, ',');) parts.push_back(part);
+  Eigen::Vector3d rpy_deg;
+  const bool ok = parts.size() == 3 && ParseFiniteDouble(parts[0], &rpy_deg(0)) &&
+                  ParseFiniteDouble(parts[1], &rpy_deg(1)) && ParseFiniteDouble(parts[2], &rpy_deg(2));
+  if (!ok || text.back() == ',') {
+    throw InputError("--rpy-deg", "", "must be three numbers R,P,Y: roll, pitch and yaw in degrees, e.g. 0,5,-10 (got '" +
+                                          PrintableText(text) + "')");
+  }
+  if (!(std::abs(rpy_deg(0)) < 90.0 && std::abs(rpy_deg(1)) < 90.0)) {
+    throw InputError("--rpy-deg", "", "roll and pitch must be within (-90, 90) degrees (got '" + PrintableText(text) + "')");
+  }
+  return rpy_deg / kDegPerRad;
+}
+
+std::string DegreesText(const Eigen::Vector3d& rpy_rad) {
+  return "roll " + Rounded(rpy_rad(0) * kDegPerRad) + ", pitch " + Rounded(rpy_rad(1) * kDegPerRad) + ", yaw " +
+         Rounded(rpy_rad(2) * kDegPerRad) + " deg";
+}
+
+}  // namespace
+
+bool IsSpatialRobotFile(const std::string& robot_path) {
+  return !robot_path.empty() && RobotKindOfFile(robot_path) == RobotKind::kSpatial;
+}
+
+void RefuseSpatialOnlyFlag(bool given, const std::string& flag) {
+  if (given) throw InputError(flag, "", "serves spatial robots only (a robot file with kind: spatial)");
+}
+
+int RunSpatialWorkspace(const Context& ctx, const WorkspaceOptions& options) {
+  const SpatialRobot robot = LoadSpatialRobotFile(options.robot_path);
+  const Eigen::Vector3d rpy_rad = options.rpy_deg.empty() ? robot.home_rpy_rad : ParseRpyDeg(options.rpy_deg);
+  const double step_m = options.step_m < 0.0 ? DefaultSpatialStep(robot) : options.step_m;
+  const SpatialWorkspaceGrid grid = ComputeSpatialWorkspace(robot, rpy_rad, step_m);
+  AtomicOutput output;
+  std::string figure_error;
+  const std::string temp_csv =
+      output.WriteText(options.out_path, SpatialWorkspaceCsv(robot, grid, ProvenanceComment(ctx.command_line)));
+  if (!options.plot_path.empty()) {
+    std::vector<std::string> args = {temp_csv, output.Add(options.plot_path), TripleArg("frame-min", robot.p_F_frame_min_m),
+                                     TripleArg("frame-max", robot.p_F_frame_max_m), TripleArg("home", robot.p_F_home_m)};
+    for (const SpatialCable& c : robot.cables) args.push_back(TripleArg("exit", c.p_F_exit_m));
+    const int m = robot.num_cables();
+    const std::string orientation =
+        m >= 6 ? DegreesText(rpy_rad)
+               : (m >= 4 ? "yaw " + Rounded(rpy_rad(2) * kDegPerRad) + " deg, roll and pitch"
+                         : "roll, pitch and yaw") +
+                     std::string(" from each point's equilibrium (") + std::to_string(m) + " cables)";
+    args.push_back("--title=" + robot.name + ", constant orientation: " + orientation + "; step " +
+                   FormatDouble(step_m) + " m");
+    figure_error = TryPlot(output, options.plot_path, "plot_spatial_workspace.py", args);
+  }
+  output.Commit();
+  std::printf("workspace of %s at %s: %d of %zu grid points feasible (step %s m), volume ~ %.4g m^3\n",
+              PrintableText(robot.name).c_str(), DegreesText(rpy_rad).c_str(), grid.num_feasible, grid.points.size(),
+              FormatDouble(step_m).c_str(), grid.feasible_volume_m3());
+  if (robot.num_cables() < 6) {
+    std::printf("  %d cables: %s each point's equilibrium (the CSV's orientation columns)\n", robot.num_cables(),
+                robot.num_cables() >= 4 ? "roll and pitch follow from" : "the orientation follows from");
+  }
+  if (!figure_error.empty()) throw FigureFailure(figure_error + "; " + options.out_path + " was written");
+  return kExitOk;
+}
+
+int RunSpatialSample(const Context& ctx, const SampleOptions& options) {
+  const SpatialRobot robot = LoadSpatialRobotFile(options.robot_path);
+  const double yaw_range_rad =
+      options.yaw_range_deg >= 0.0 ? options.yaw_range_deg / kDegPerRad : kDefaultSampleYawRange_rad;
+  const std::vector<SpatialPlanPose> plan = SampleSpatialPoses(robot, options.poses, options.seed, yaw_range_rad);
+  AtomicOutput output;
+  output.WriteText(options.out_path, SpatialPlanCsv(plan, ProvenanceComment(ctx.command_line)));
+  output.Commit();
+  std::printf("wrote %zu random feasible poses of %s (seed %llu; tilt within %s deg, yaw within +-%s deg of home's) to %s\n",
+              plan.size(), PrintableText(robot.name).c_str(), options.seed, Rounded(robot.tilt_max_rad * kDegPerRad).c_str(),
+              Rounded(yaw_range_rad * kDegPerRad).c_str(), options.out_path.c_str());
+  return kExitOk;
+}
+
+int RunSpatialSimulate(const Context& ctx, const SimulateOptions& options) {
+  const SpatialRobot nominal = LoadSpatialRobotFile(options.robot_path);
+  if (options.systematic_errors) {
+    throw InputError("--systematic-errors", "", "a spatial robot file has no systematic sensor errors to add (" +
+                                                    PrintableText(options.robot_path) + ")");
+  }
+  if (options.geometry_sigma_m > kMaxGeometrySigma_m) {  // as the planar command's
+    throw InputError("--geometry-sigma", "", "must be at most " + FormatDouble(kMaxGeometrySigma_m) +
+                                                 " m: a larger error is not a calibration problem (got " +
+                                                 FormatDouble(options.geometry_sigma_m) + ")");
+  }
+  if (!options.truth_path.empty() && options.geometry_sigma_m >= 0.0) {
+    throw InputError("--truth", "", "give either --truth or --geometry-sigma, not both");
+  }
+  SpatialSimulationOptions sim;
+  sim.noisy = ParseNoisySensors(options.sensors);
+  sim.encoder_noise = !options.no_encoder_noise;
+  sim.require_feasible = true;
+  sim.skip_infeasible = options.skip_infeasible;
+  std::optional<SpatialRobot> given_truth;
+  if (!options.truth_path.empty()) given_truth = LoadSpatialRobotFile(options.truth_path);
+  const std::vector<SpatialPlanPose> plan = ReadSpatialPlanCsv(options.plan_path, nominal.num_cables());
+  CheckSpatialPlanMatchesRobot(nominal, plan, options.plan_path);
+  const SpatialPlanSimulation run = SimulateSpatialPlan(nominal, given_truth, std::max(options.geometry_sigma_m, 0.0),
+                                                        plan, sim, options.seed, options.plan_path);
+  const SimulatedSpatialExperiment& experiment = run.experiment;
+  AtomicOutput output;
+  output.WriteText(options.out_path, SpatialMeasurementsCsv(experiment.measurements, ProvenanceComment(ctx.command_line)));
+  if (!options.truth_out_path.empty()) {
+    output.WriteText(options.truth_out_path,
+                     ProvenanceComment(ctx.command_line) + SpatialTruthYaml(run.truth, experiment));
+  }
+  output.Commit();
+  if (!ctx.quiet) {
+    for (const SpatialSkippedPose& skipped : experiment.skipped) {
+      std::fprintf(stderr, "cablecal: skipped pose %d of %s: %s\n", skipped.pose_id, options.plan_path.c_str(),
+                   skipped.reason.c_str());
+    }
+  }
+  std::string sensors;
+  for (const SpatialSensor s : kSpatialSensors) {
+    if (HasSpatialSensor(nominal, s)) sensors += std::string(sensors.empty() ? "" : ", ") + ToString(s);
+  }
+  const std::string skipped =
+      options.skip_infeasible ? ", " + std::to_string(experiment.skipped.size()) + " of " + std::to_string(plan.size()) +
+                                    " skipped (the true robot cannot hold them)"
+                              : "";
+  std::printf("simulated %zu poses of %s%s (encoders%s%s; noisy sensors: %s, encoder noise %s) to %s\n",
+              experiment.measurements.size(), PrintableText(nominal.name).c_str(), skipped.c_str(),
+              sensors.empty() ? "" : ", ", sensors.c_str(), ToString(sim.noisy), sim.encoder_noise ? "on" : "off",
+              options.out_path.c_str());
+  return kExitOk;
+}
+
+}  // namespace cablecal::cli

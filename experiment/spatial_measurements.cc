@@ -1,0 +1,90 @@
+#include "experiment/spatial_measurements.h"
+
+#include <fstream>
+
+#include "common/csv.h"
+#include "common/error.h"
+#include "common/format.h"
+#include "experiment/measurements.h"  // kMaxMeasuredPoses
+
+namespace cablecal {
+
+std::string SpatialMeasurementsCsv(const std::vector<SpatialMeasurement>& readings, const std::string& provenance) {
+  const int m = readings.empty() ? 0 : static_cast<int>(readings.front().dl_m.size());
+  std::vector<std::string> header = {"pose"};
+  for (int i = 1; i <= m; ++i) header.push_back("dl" + std::to_string(i));
+  std::array<bool, kNumSpatialSensors> present{};
+  for (const SpatialSensor s : kSpatialSensors) {
+    present[static_cast<int>(s)] = !readings.empty() && readings.front().has(s);
+    if (!present[static_cast<int>(s)]) continue;
+    for (const std::string& c : SpatialSensorColumns(s, m)) header.push_back(c);
+  }
+  std::string out = provenance + JoinCsv(header) + "\n";
+  for (const SpatialMeasurement& r : readings) {
+    out += std::to_string(r.pose_id);
+    for (int i = 0; i < m; ++i) out += "," + FormatDouble(r.dl_m(i));
+    for (const SpatialSensor s : kSpatialSensors) {
+      CABLECAL_CHECK(r.has(s) == present[static_cast<int>(s)], "one file, one set of sensors");
+      for (Eigen::Index k = 0; k < r.values(s).size(); ++k) out += "," + FormatDouble(r.values(s)(k));
+    }
+    out += "\n";
+  }
+  return out;
+}
+
+std::vector<SpatialMeasurement> ReadSpatialMeasurementsCsv(const std::string& path, int num_cables, char delimiter) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "", "cannot open the file");
+  return ReadSpatialMeasurementsCsv(in, path, num_cables, delimiter);
+}
+
+std::vector<SpatialMeasurement> ReadSpatialMeasurementsCsv(std::istream& in, const std::string& path, int num_cables,
+                                                           char delimiter) {
+  std::vector<std::string> required = {"pose"};
+  for (int i = 1; i <= num_cables; ++i) required.push_back("dl" + std::to_string(i));
+  std::vector<std::string> optional;
+  std::array<int, kNumSpatialSensors> first{};  // each sensor's first column in row.header
+  for (const SpatialSensor s : kSpatialSensors) {
+    first[static_cast<int>(s)] = static_cast<int>(required.size() + optional.size());
+    for (const std::string& c : SpatialSensorColumns(s, num_cables)) optional.push_back(c);
+  }
+  std::vector<SpatialMeasurement> out;
+  std::array<bool, kNumSpatialSensors> has{};
+  ForEachCsvRowByNameStrict(in, path, delimiter, required, optional, [&](const CsvRow& row) {
+    if (out.empty()) {
+      // A sensor is read whole or not at all: half a position is a mistake, not a sensor.
+      for (const SpatialSensor s : kSpatialSensors) {
+        const int begin = first[static_cast<int>(s)], size = SpatialSensorSize(s, num_cables);
+        int count = 0;
+        for (int k = begin; k < begin + size; ++k) count += row.present[k];
+        if (count > 0 && count < size) {
+          for (int k = begin; k < begin + size; ++k) {
+            if (row.present[k]) continue;
+            throw InputError(*row.path + ":" + std::to_string(row.header_line), "column '" + (*row.header)[k] + "'",
+                             "missing: the " + std::string(ToString(s)) + " reads " +
+                                 JoinCsv(SpatialSensorColumns(s, num_cables)) + ", all of them or none");
+          }
+        }
+        has[static_cast<int>(s)] = count == size;
+      }
+    }
+    if (static_cast<int>(out.size()) >= kMaxMeasuredPoses) {
+      throw InputError(row.Where(), "", "more than " + std::to_string(kMaxMeasuredPoses) + " readings");
+    }
+    SpatialMeasurement m;
+    m.where = row.Where();
+    m.pose_id = row.PositiveInt(0);
+    m.dl_m.resize(num_cables);
+    for (int i = 0; i < num_cables; ++i) m.dl_m(i) = row.Number(1 + i);
+    for (const SpatialSensor s : kSpatialSensors) {
+      if (!has[static_cast<int>(s)]) continue;
+      Eigen::VectorXd& v = m.values(s);
+      v.resize(SpatialSensorSize(s, num_cables));
+      for (Eigen::Index k = 0; k < v.size(); ++k) v(k) = row.Number(first[static_cast<int>(s)] + static_cast<int>(k));
+    }
+    out.push_back(std::move(m));
+  });
+  return out;
+}
+
+}  // namespace cablecal

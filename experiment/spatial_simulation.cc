@@ -1,0 +1,174 @@
+#include "experiment/spatial_simulation.h"
+
+#include "common/error.h"
+#include "common/format.h"
+#include "common/yaml_writer.h"
+#include "model/forward_statics.h"
+#include "model/spatial_sensor_model.h"
+#include "model/swivel.h"
+
+namespace cablecal {
+
+SpatialRobot PerturbSpatialGeometry(const SpatialRobot& nominal, double sigma_m, Rng& rng) {
+  const int m = nominal.num_cables();
+  Eigen::VectorXd draw(3 * m);
+  for (int k = 0; k < 3 * m; ++k) draw(k) = rng.Normal();  // all first: the stream stays aligned
+  SpatialRobot truth = nominal;
+  for (int i = 0; i < m; ++i) truth.cables[i].p_F_exit_m += sigma_m * draw.segment<3>(3 * i);
+  return truth;
+}
+
+namespace {
+
+// The draws one pose's readings take (SimulateSpatialExperiment's order).
+int DrawsPerPose(int num_cables) {
+  int draws = num_cables;
+  for (const SpatialSensor s : kSpatialSensors) draws += 2 * SpatialSensorSize(s, num_cables);
+  return draws;
+}
+
+// An elastic cable's tension comes from its stretch, EA (l / L - 1): a plan's tension at a bound
+// (the minimum-norm distribution puts some there) comes back a few ulps of EA off it, which is
+// no tension limit broken. Within this fraction of tension.max of a bound, on it (the planar
+// simulation's rule, experiment/simulation.cc).
+constexpr double kTensionRounding = 1e-9;
+Eigen::VectorXd SnapToBounds(const SpatialRobot& robot, Eigen::VectorXd tensions_N) {
+  const double tol_N = kTensionRounding * robot.tension_max_N;
+  for (double& t : tensions_N) {
+    if (std::abs(t - robot.tension_min_N) < tol_N) t = robot.tension_min_N;
+    if (std::abs(t - robot.tension_max_N) < tol_N) t = robot.tension_max_N;
+  }
+  return tensions_N;
+}
+
+bool Noisy(NoisySensors noisy, SpatialSensor s) {
+  switch (noisy) {
+    case NoisySensors::kBoth: return true;
+    case NoisySensors::kLaser: return s == SpatialSensor::kLaser;
+    case NoisySensors::kInclinometer: return s == SpatialSensor::kInclinometer;
+    case NoisySensors::kNone: return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+SpatialPose<double> TrueHome(const SpatialRobot& nominal, const SpatialRobot& truth) {
+  const SpatialHomeReference home = SpatialHome(nominal);
+  const SpatialForwardResult fwd = SolveForwardStatics(truth, home.paid_out_m, &home.equilibrium.q);
+  if (fwd.status != ForwardStatus::kConverged) {
+    throw SolverFailure("the true robot cannot hold the home pose's commanded lengths (" +
+                        CannotHoldReason(fwd.status, "home") + "): its sensors have no zero");
+  }
+  return fwd.equilibrium.q;
+}
+
+SimulatedSpatialExperiment SimulateSpatialExperiment(const SpatialRobot& nominal, const SpatialRobot& truth,
+                                                     const std::vector<SpatialPlanPose>& plan,
+                                                     const SpatialSimulationOptions& options, Rng& rng) {
+  const int m = nominal.num_cables();
+  const SpatialHomeReference home = SpatialHome(nominal);
+  SimulatedSpatialExperiment out;
+  out.true_home = TrueHome(nominal, truth);
+  const SpatialSensorZero zero = SensorZeroAt(truth, out.true_home);
+  for (std::size_t j = 0; j < plan.size(); ++j) {
+    const SpatialPlanPose& p = plan[j];
+    const Eigen::VectorXd commanded = home.paid_out_m + p.length_change_m;
+    // The commanded (nominal) pose is a good start: the true one is millimetres away.
+    const SpatialForwardResult fwd = SolveForwardStatics(truth, commanded, &p.q);
+    std::string infeasible;
+    if (fwd.status != ForwardStatus::kConverged) {
+      infeasible = "the true robot cannot hold the commanded lengths (" +
+                   CannotHoldReason(fwd.status, "the commanded pose") + ")";
+    } else if (options.require_feasible) {
+      int cable = -1;
+      const Feasibility f =
+          CheckSpatialFeasibility(truth, fwd.equilibrium.q, SnapToBounds(truth, fwd.equilibrium.tensions_N), &cable);
+      if (f != Feasibility::kFeasible) {
+        infeasible = "the true robot settles outside its workspace (" + std::string(ToString(f)) +
+                     (cable >= 0 ? ", cable " + std::to_string(cable + 1) : std::string()) + ")";
+      }
+    }
+    if (!infeasible.empty()) {
+      if (!options.skip_infeasible) throw SolverFailure("pose " + std::to_string(j + 1) + ": " + infeasible);
+      out.skipped.push_back({static_cast<int>(j + 1), infeasible});
+      for (int k = 0; k < DrawsPerPose(m); ++k) rng.Normal();  // the others read what they would have
+      continue;
+    }
+    SpatialMeasurement r;
+    r.pose_id = static_cast<int>(j + 1);
+    r.dl_m = p.length_change_m;
+    for (int i = 0; i < m; ++i) {
+      const double e = rng.Normal(0.0, nominal.sensors.encoder_sigma_m);
+      if (options.encoder_noise) r.dl_m(i) += e;
+    }
+    const auto exact = SpatialSensorReadings<double>(truth, fwd.equilibrium.q, fwd.equilibrium.tensions_N, zero);
+    for (const SpatialSensor s : kSpatialSensors) {
+      const std::optional<RangedNoise> noise = SpatialSensorNoise(nominal.sensors, s);
+      const RangedNoise n = noise.value_or(RangedNoise{});
+      Eigen::VectorXd v = exact[static_cast<int>(s)];
+      for (Eigen::Index k = 0; k < v.size(); ++k) {
+        const double accuracy = rng.Normal(0.0, n.accuracy / 3.0);
+        const double repeatability = rng.Normal(0.0, n.repeatability / 3.0);
+        if (Noisy(options.noisy, s)) v(k) += accuracy + repeatability;
+      }
+      if (noise) r.values(s) = v;
+    }
+    out.measurements.push_back(std::move(r));
+    out.true_poses.push_back(fwd.equilibrium.q);
+    out.true_tensions_N.push_back(fwd.equilibrium.tensions_N);
+  }
+  return out;
+}
+
+SpatialPlanSimulation SimulateSpatialPlan(const SpatialRobot& nominal, const std::optional<SpatialRobot>& truth,
+                                          double geometry_sigma_m, const std::vector<SpatialPlanPose>& plan,
+                                          const SpatialSimulationOptions& options, std::uint64_t seed,
+                                          const std::string& plan_source) {
+  Rng geometry_rng(StreamSeed(seed, {0}));
+  Rng noise_rng(StreamSeed(seed, {1}));
+  if (truth && truth->num_cables() != nominal.num_cables()) {
+    throw InputError(truth->source, "", "the true robot has " + std::to_string(truth->num_cables()) +
+                                            " cables, the nominal robot " + std::to_string(nominal.num_cables()) +
+                                            ": a file for another robot?");
+  }
+  SpatialPlanSimulation run{nominal, {}};
+  if (truth) {
+    run.truth = *truth;
+  } else if (geometry_sigma_m > 0.0) {
+    run.truth = PerturbSpatialGeometry(nominal, geometry_sigma_m, geometry_rng);
+  }
+  CheckSimulatable(run.truth);
+  try {
+    run.experiment = SimulateSpatialExperiment(nominal, run.truth, plan, options, noise_rng);
+  } catch (const SolverFailure& e) {
+    // Not a solver's fault: this plan does not suit this true robot. The plan's pose is named.
+    throw InputError(plan_source, "", std::string(e.what()) + ": the plan cannot be run on this true robot");
+  }
+  if (run.experiment.measurements.empty() && !plan.empty()) {
+    const SpatialSkippedPose& first = run.experiment.skipped.front();
+    throw InputError(plan_source, "", "the true robot can hold none of the plan's " + std::to_string(plan.size()) +
+                                          " poses, so every one was skipped (the first, pose " +
+                                          std::to_string(first.pose_id) + ": " + first.reason +
+                                          "): the plan cannot be run on this true robot");
+  }
+  return run;
+}
+
+std::string SpatialTruthYaml(const SpatialRobot& truth, const SimulatedSpatialExperiment& experiment) {
+  FlowRows rows(FlowRows::Syntax::kYaml);
+  for (std::size_t j = 0; j < experiment.true_poses.size(); ++j) {
+    rows.BeginRow();
+    rows.Key("pose");
+    rows.Int(experiment.measurements[j].pose_id);
+    for (int k = 0; k < SpatialKind::kPoseDim; ++k) {
+      rows.Key(SpatialKind::kPoseNames[k]);
+      rows.Number(experiment.true_poses[j](k));
+    }
+    rows.EndRow();
+  }
+  return SpatialRobotToYaml(truth) +
+         rows.Finish("true_poses", "where the platform settled at each measured pose: x, y, z (m), roll, pitch, yaw (rad)");
+}
+
+}  // namespace cablecal

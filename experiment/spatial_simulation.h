@@ -1,0 +1,95 @@
+// The simulated experiment of a spatial robot (README, "Spatial robots", simulate): a true
+// robot drawn around the nominal one, the platform settled where the true robot puts it for
+// each commanded pose of a plan (model/forward_statics.h), and its sensors' noisy readings
+// there; the truth file.
+//
+// The controller commands, for each plan pose, the unstretched lengths the nominal model gives
+// (home's paid-out lengths plus the plan's dl): that is what the winches pay out, on the true
+// robot too. The encoders and the relative sensors (swivel encoders, heading) are zeroed at home
+// on the true robot: where it settles with home's commanded lengths. The encoders then read
+// the commanded changes dl (plus noise): they sit on the motor side and see what was paid out,
+// not where the platform went.
+// Depends on experiment/spatial_plan.h, experiment/spatial_measurements.h and model/.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/random.h"
+#include "experiment/spatial_measurements.h"
+#include "experiment/simulation.h"  // NoisySensors
+#include "experiment/spatial_plan.h"
+#include "model/spatial_robot.h"
+
+namespace cablecal {
+
+// A true robot drawn around the nominal one: every exit coordinate (x, y, z of every cable)
+// gets N(0, sigma_m^2), independently; 3m standard normals are drawn first, in cable order,
+// then scaled. No coordinate is held: which rigid motion of the frame the sensors leave unseen
+// (the gauge) is the identification's business, not the true robot's.
+SpatialRobot PerturbSpatialGeometry(const SpatialRobot& nominal, double sigma_m, Rng& rng);
+
+struct SpatialSimulationOptions {
+  // Which sensors get noise besides the encoders (simulate --sensors): kBoth every one the
+  // robot has, kLaser or kInclinometer that one alone, kNone none.
+  NoisySensors noisy = NoisySensors::kBoth;
+  bool encoder_noise = true;
+  // Refuse a pose where the true robot settles outside its feasible workspace (a tension
+  // beyond the limits, the tilt limit, the margin, invalid cable geometry), as a lab's
+  // experiment would stop there.
+  bool require_feasible = true;
+  // Skip a pose the true robot cannot hold (or holds outside its workspace) instead of
+  // failing; its noise is drawn all the same.
+  bool skip_infeasible = false;
+};
+
+struct SpatialSkippedPose {
+  int pose_id = 0;
+  std::string reason;
+};
+
+struct SimulatedSpatialExperiment {
+  std::vector<SpatialMeasurement> measurements;
+  std::vector<SpatialPose<double>> true_poses;  // where the platform settled
+  std::vector<Eigen::VectorXd> true_tensions_N;
+  std::vector<SpatialSkippedPose> skipped;
+  SpatialPose<double> true_home = SpatialPose<double>::Zero();  // where the sensors were zeroed
+};
+
+// Where the true robot settles at home with the nominal home's paid-out lengths: the sensors'
+// zero. SolverFailure when it cannot hold them.
+SpatialPose<double> TrueHome(const SpatialRobot& nominal, const SpatialRobot& truth);
+
+// The readings of `plan` (one of nominal's) on `truth`. Noise: per pose, in this order whatever
+// sensors the robot has, m encoder draws N(0, encoder sigma), then for each sensor in
+// SpatialSensor order and each of its SpatialSensorSize values an accuracy draw and a
+// repeatability draw, each N(0, (range / 3)^2) (0 for a sensor the robot lacks): the stream
+// does not depend on the sensors present or noisy. Readings carry the sensors the nominal robot
+// file has. SolverFailure naming the pose when the true robot cannot hold it, unless
+// skip_infeasible (then only if it holds none).
+SimulatedSpatialExperiment SimulateSpatialExperiment(const SpatialRobot& nominal, const SpatialRobot& truth,
+                                                     const std::vector<SpatialPlanPose>& plan,
+                                                     const SpatialSimulationOptions& options, Rng& rng);
+
+// The simulate command's experiment: truth given, or nominal perturbed with geometry_sigma_m
+// (stream 0 of seed; 0: the nominal robot itself); noise from stream 1. InputError naming
+// plan_source when the plan does not suit the true robot, or a truth with another cable count;
+// InputError naming a cable's stiffness when the true robot cannot be simulated
+// (CheckSimulatable).
+struct SpatialPlanSimulation {
+  SpatialRobot truth;
+  SimulatedSpatialExperiment experiment;
+};
+SpatialPlanSimulation SimulateSpatialPlan(const SpatialRobot& nominal, const std::optional<SpatialRobot>& truth,
+                                          double geometry_sigma_m, const std::vector<SpatialPlanPose>& plan,
+                                          const SpatialSimulationOptions& options, std::uint64_t seed,
+                                          const std::string& plan_source);
+
+// Truth file: the true robot in the robot-file format plus `true_poses` (pose, x, y, z, roll,
+// pitch, yaw: m, rad) where the platform settled, one per reading.
+std::string SpatialTruthYaml(const SpatialRobot& truth, const SimulatedSpatialExperiment& experiment);
+
+}  // namespace cablecal
