@@ -39,9 +39,11 @@ SpatialPose<T> GeneralizedForce(const SpatialRobot& robot, const SpatialPose<T>&
 // leaves rounding, some 1e-16 of the largest.
 constexpr double kRankTolerance = 1e-9;
 
-// A curvature this small against the Hessian's largest entry is rounding of a zero: a neutral
-// direction (a bar whose centre of mass lies on its anchors' line spins freely about that line),
-// which holds the platform no more than a negative one. Rounding leaves some 1e-15 of it.
+// A curvature this small against the largest entry of the Hessian's gravity-and-tension part
+// (the springs' k g g' left out: a stiff cable's 1e11 N/m would drown the 10 N/m of gravity that
+// decides the motions the springs do not resist) is rounding of a zero: a neutral direction (a
+// bar whose centre of mass lies on its anchors' line spins freely about that line), which holds
+// the platform no more than a negative one. Rounding leaves some 1e-15 of it.
 constexpr double kNeutralCurvature = 1e-9;
 
 template <int D, typename RobotT>
@@ -72,6 +74,11 @@ StabilityResult Stability(const RobotT& robot, const Eigen::Matrix<double, D, 1>
   Eigen::Matrix<double, D, D> H;
   for (int r = 0; r < D; ++r) H.row(r) = -f(r).v.transpose();
   H = (0.5 * (H + H.transpose())).eval();
+  Eigen::Matrix<double, D, D> H_geometric = H;  // without the springs: the neutral test's scale
+  for (int i = 0; i < m; ++i) {
+    const double k = axial_stiffness_Npm(i);
+    if (k > 0.0 && !std::isinf(k)) H_geometric -= k * l(i).v * l(i).v.transpose();
+  }
 
   Eigen::Matrix<double, D, Eigen::Dynamic> N;  // orthonormal basis of the free motions
   if (constraints == 0) {
@@ -96,7 +103,7 @@ StabilityResult Stability(const RobotT& robot, const Eigen::Matrix<double, D, 1>
   const Eigen::MatrixXd H_reduced = N.transpose() * H * N;
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(H_reduced, Eigen::EigenvaluesOnly);
   result.min_eigenvalue = eig.eigenvalues()(0);
-  result.stable = result.min_eigenvalue > kNeutralCurvature * H.cwiseAbs().maxCoeff();
+  result.stable = result.min_eigenvalue > kNeutralCurvature * H_geometric.cwiseAbs().maxCoeff();
   return result;
 }
 

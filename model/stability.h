@@ -30,7 +30,7 @@ struct StabilityResult {
   int free_motions = 0;  // the dimension of the null space of the inextensible cables' dl/dq
   // The reduced Hessian is positive definite, or no motion is free: the inextensible cables hold
   // the pose (a motion shortening no taut cable raises the potential by t' dl >= 0 to first
-  // order). Positive: min_eigenvalue above 1e-9 of the Hessian's largest entry; a neutral
+  // order). Positive: min_eigenvalue above 1e-9 of the largest entry of the Hessian's gravity-and-tension part; a neutral
   // direction (zero but for rounding, e.g. a bar spinning freely about the line of its two
   // anchors when its centre of mass lies on it) is not stable.
   bool stable = false;

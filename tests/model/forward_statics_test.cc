@@ -33,6 +33,10 @@ SpatialRobot LoadRepoSpatialRobot(const std::string& name) {
   return LoadSpatialRobotFile(std::string(CABLECAL_SOURCE_DIR) + "/robots/" + name + ".yaml");
 }
 
+// Random planar robots of 4 or more cables are drawn rigid (tests/support/random_robot.h); the
+// elastic tests give them E*A = 3000 x tension.max (0.03 % stretch at the largest tension).
+constexpr double kRandomStiffnessOverMaxTension = 3000.0;
+
 Robot WithStiffness(Robot r, double ea_N) {
   for (Cable& c : r.cables) c.stiffness_N = ea_N;
   return r;
@@ -239,7 +243,8 @@ TEST(ForwardStatics, ElasticPlanarIsStationary) {
     ++solved;
   }
   for (int m = 5; m <= 8; ++m) {
-    const Robot r = testing::RandomRobotWithCables(rng, "elastic-" + std::to_string(m), m, true);
+    Robot r = testing::RandomRobotWithCables(rng, "elastic-" + std::to_string(m), m, true);
+    r = WithStiffness(r, kRandomStiffnessOverMaxTension * r.tension_max_N);
     const PoseEvaluation h = HomeEvaluation(r);
     Eigen::VectorXd L = CommandedUnstretchedLengths(r, CableLengths(r, h.equilibrium.q), h.equilibrium.tensions_N);
     for (int i = 0; i < L.size(); ++i) L(i) += rng.Uniform(-0.0005, 0.0005);
@@ -269,7 +274,8 @@ TEST(ForwardStatics, ElasticSpatialIsStationary) {
 // (c) Slack: a cable commanded much longer carries nothing (elastic) or is reported (inextensible).
 TEST(ForwardStatics, LongCableGoesSlack) {
   Rng rng(StreamSeed(17, {}));
-  const Robot r6 = testing::RandomRobotWithCables(rng, "slack-6", 6, true);
+  Robot r6 = testing::RandomRobotWithCables(rng, "slack-6", 6, true);
+  r6 = WithStiffness(r6, kRandomStiffnessOverMaxTension * r6.tension_max_N);
   const PoseEvaluation home = HomeEvaluation(r6);
   Eigen::VectorXd L = CommandedUnstretchedLengths(r6, CableLengths(r6, home.equilibrium.q), home.equilibrium.tensions_N);
   L(5) += 0.3;  // a lower cable, 30 cm of slack: the other five hold the platform
@@ -304,6 +310,7 @@ TEST(ForwardStatics, RandomPlanarRobotsNearHome) {
       const bool fully = m >= 4 || (m == 3 && draw % 2 == 1);
       Robot r = testing::RandomRobotWithCables(rng, "random-" + std::to_string(m) + "-" + std::to_string(draw), m, fully);
       if (m <= 3 && draw == 2) r = WithStiffness(r, 5000.0 * r.tension_max_N);  // elastic with few cables too
+      if (m >= 4) r = WithStiffness(r, kRandomStiffnessOverMaxTension * r.tension_max_N);
       const PoseEvaluation h = HomeEvaluation(r);
       const Eigen::VectorXd L =
           CommandedUnstretchedLengths(r, CableLengths(r, h.equilibrium.q), h.equilibrium.tensions_N);
