@@ -1,0 +1,908 @@
+// Spatial identification, first layer (identify/spatial_identify.h).
+#include "identify/spatial_identify.h"
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <memory>
+#include <sstream>
+
+#include "common/error.h"
+#include "identify/least_squares.h"  // LevenbergMarquardtSettings
+#include "model/geometry.h"
+#include "model/spatial_sensor_model.h"
+#include "model/swivel.h"
+
+namespace cablecal {
+
+namespace {
+
+using Eigen::MatrixXd;
+using Eigen::Vector3d;
+using Eigen::VectorXd;
+
+// Where each unknown of the geometry vector lives (names order, the header's file comment).
+struct Layout {
+  int m = 0;
+  bool swivel = false;
+  bool heading = false;
+  int exit(int i) const { return 3 * i; }
+  int length(int i) const { return 3 * m + i; }
+  int swivel_offset(int i) const { return 4 * m + i; }
+  int yaw0() const { return 4 * m + (swivel ? m : 0); }
+  int size() const { return 4 * m + (swivel ? m : 0) + (heading ? 1 : 0); }
+  int exit_coordinates() const { return 3 * m; }
+};
+
+// ---- Residuals: each the model of model/swivel.h or model/spatial_sensor_model.h minus the
+// reading, over the sensor's sigma. Pose block first, then the geometry blocks. ----
+
+template <typename T>
+SpatialPose<T> PoseOf(const T* q) {
+  return Eigen::Map<const SpatialPose<T>>(q);
+}
+
+// The cable from the exit block's D through its fixed swivel axis to the anchor at pose q.
+struct CableData {
+  Vector3d k_F_swivel_axis;
+  double pulley_radius_m;
+  Vector3d p_P_anchor_m;
+  template <typename T>
+  SwivelCableState<T> At(const T* q, const T* d) const {
+    const SpatialPose<T> pose = PoseOf(q);
+    const Eigen::Matrix<T, 3, 3> R = Rotation<T>(pose);
+    return SwivelCable<T>(Eigen::Map<const Vec3<T>>(d), k_F_swivel_axis.cast<T>(), T(pulley_radius_m),
+                          AnchorInF<T>(pose, R, p_P_anchor_m.cast<T>()));
+  }
+};
+
+// Encoder: dl = l(q, D) - l0 for an inextensible cable.
+struct EncoderCost {
+  CableData cable;
+  double dl_m, inv_sigma;
+  template <typename T>
+  bool operator()(const T* q, const T* d, const T* l0, T* r) const {
+    r[0] = (cable.At(q, d).length_m - l0[0] - T(dl_m)) * T(inv_sigma);
+    return true;
+  }
+};
+
+// Swivel encoder: the pulley's angle about k from the reference direction u_ref (the nominal
+// home's), less the encoder's zero offset sw0; the difference from the reading wrapped so that
+// a reading near +-pi does not jump.
+struct SwivelCost {
+  CableData cable;
+  Vector3d u_F_reference;
+  double reading_rad, inv_sigma;
+  template <typename T>
+  bool operator()(const T* q, const T* d, const T* sw0, T* r) const {
+    const T model = SwivelReading<T>(cable.At(q, d), cable.k_F_swivel_axis.cast<T>(), u_F_reference.cast<T>()) - sw0[0];
+    r[0] = WrappedAngle<T>(model - T(reading_rad)) * T(inv_sigma);
+    return true;
+  }
+};
+
+struct InclinometerCost {
+  Eigen::Vector2d reading_rad;
+  double inv_sigma;
+  template <typename T>
+  bool operator()(const T* q, T* r) const {
+    const Vec2<T> model = InclinometerReading<T>(PoseOf(q));
+    for (int a = 0; a < 2; ++a) r[a] = WrappedAngle<T>(model(a) - T(reading_rad(a))) * T(inv_sigma);
+    return true;
+  }
+};
+
+struct LaserCost {
+  double floor_z_m, reading_m, inv_sigma;
+  template <typename T>
+  bool operator()(const T* q, T* r) const {
+    r[0] = (LaserReading<T>(PoseOf(q), floor_z_m) - T(reading_m)) * T(inv_sigma);
+    return true;
+  }
+};
+
+struct PositionCost {
+  Vector3d p_P_target_m, reading_m;
+  double inv_sigma;
+  template <typename T>
+  bool operator()(const T* q, T* r) const {
+    const SpatialPose<T> pose = PoseOf(q);
+    const Vec3<T> model = PositionReading<T>(pose, Rotation<T>(pose), p_P_target_m.cast<T>());
+    for (int a = 0; a < 3; ++a) r[a] = (model(a) - T(reading_m(a))) * T(inv_sigma);
+    return true;
+  }
+};
+
+struct HeadingCost {
+  double reading_rad, inv_sigma;
+  template <typename T>
+  bool operator()(const T* q, const T* yaw0, T* r) const {
+    r[0] = WrappedAngle<T>(HeadingReading<T>(PoseOf(q), yaw0[0]) - T(reading_rad)) * T(inv_sigma);
+    return true;
+  }
+};
+
+// gauge prior: the tracker's survey of an exit point.
+struct ExitPriorCost {
+  Vector3d nominal_m;
+  double inv_sigma;
+  template <typename T>
+  bool operator()(const T* d, T* r) const {
+    for (int a = 0; a < 3; ++a) r[a] = (d[a] - T(nominal_m(a))) * T(inv_sigma);
+    return true;
+  }
+};
+
+// One residual block: its cost, the pose it reads (-1: none) and its geometry blocks (offset
+// into the geometry vector and size), in the cost's parameter order after the pose.
+struct Term {
+  std::unique_ptr<ceres::CostFunction> cost;
+  int pose = -1;
+  std::vector<int> block_offset, block_size;
+  int reading = -1;  // -1: the prior
+  int sensor = -1;   // -1: an encoder; else SpatialSensor
+  int value = 0;     // the first value of the reading's sensor it computes (the cable, ...)
+  int size() const { return cost->num_residuals(); }
+};
+
+template <typename Functor, int... Sizes>
+std::unique_ptr<ceres::CostFunction> Cost(Functor f) {
+  return std::make_unique<ceres::AutoDiffCostFunction<Functor, Sizes...>>(new Functor(f));
+}
+
+struct Model {
+  Layout layout;
+  std::vector<Term> terms;
+  std::vector<int> pose_ids;
+  std::vector<std::string> pose_where;       // the first reading's where, per pose
+  std::vector<std::vector<int>> pose_terms;  // per pose: its terms
+  std::vector<int> pose_values;              // per pose: its residual count
+  std::vector<int> prior_terms;
+  std::vector<std::string> unused_sensors;
+  int num_values = 0;
+};
+
+double SigmaOf(const SpatialRobot& robot, SpatialSensor s, const std::string& where) {
+  const std::optional<RangedNoise> noise = SpatialSensorNoise(robot.sensors, s);
+  if (!noise) {
+    throw InputError(where, ToString(s),
+                     "the readings have this sensor's columns but the robot file has no sensors." +
+                         std::string(ToString(s)) + ": its sigma is unknown");
+  }
+  if (!(noise->sigma() > 0.0)) throw InputError(robot.source, "sensors." + std::string(ToString(s)), "sigma is 0");
+  return noise->sigma();
+}
+
+Model BuildModel(const SpatialRobot& robot, const std::vector<SpatialMeasurement>& readings, bool prior) {
+  Model model;
+  const int m = robot.num_cables();
+  if (readings.empty()) throw InputError("readings", "", "no readings: nothing to identify");
+  Layout& L = model.layout;
+  L.m = m;
+  for (const SpatialMeasurement& r : readings) {
+    L.swivel = L.swivel || r.has(SpatialSensor::kSwivel);
+    L.heading = L.heading || r.has(SpatialSensor::kHeading);
+  }
+  if (!(robot.sensors.encoder_sigma_m > 0.0)) throw InputError(robot.source, "sensors.encoder", "sigma is 0");
+  const double inv_encoder = 1.0 / robot.sensors.encoder_sigma_m;
+  const SpatialSensorZero reference = SensorZeroAt(robot, robot.home_pose());
+  std::map<int, int> pose_of_id;
+  for (int k = 0; k < static_cast<int>(readings.size()); ++k) {
+    const SpatialMeasurement& r = readings[k];
+    const std::string where = r.where.empty() ? "reading " + std::to_string(k + 1) + " (pose " +
+                                                    std::to_string(r.pose_id) + ")"
+                                              : r.where;
+    if (r.dl_m.size() != m) {
+      throw InputError(where, "dl", std::to_string(r.dl_m.size()) + " encoder values for a robot of " +
+                                        std::to_string(m) + " cables");
+    }
+    auto [it, added] = pose_of_id.emplace(r.pose_id, static_cast<int>(model.pose_ids.size()));
+    if (added) {
+      model.pose_ids.push_back(r.pose_id);
+      model.pose_where.push_back(where);
+      model.pose_terms.emplace_back();
+      model.pose_values.push_back(0);
+    }
+    const int j = it->second;
+    const auto add = [&](std::unique_ptr<ceres::CostFunction> cost, std::vector<int> offset, std::vector<int> size,
+                         int sensor, int value) {
+      Term t;
+      t.cost = std::move(cost);
+      t.pose = j;
+      t.block_offset = std::move(offset);
+      t.block_size = std::move(size);
+      t.reading = k;
+      t.sensor = sensor;
+      t.value = value;
+      model.pose_terms[j].push_back(static_cast<int>(model.terms.size()));
+      model.pose_values[j] += t.size();
+      model.num_values += t.size();
+      model.terms.push_back(std::move(t));
+    };
+    for (int i = 0; i < m; ++i) {
+      const SpatialCable& c = robot.cables[i];
+      const CableData cable{c.k_F_swivel_axis, c.pulley_radius_m, c.p_P_anchor_m};
+      add(Cost<EncoderCost, 1, 6, 3, 1>(EncoderCost{cable, r.dl_m(i), inv_encoder}), {L.exit(i), L.length(i)}, {3, 1},
+          -1, i);
+    }
+    for (const SpatialSensor s : kSpatialSensors) {
+      if (!r.has(s)) continue;
+      const std::string sname = ToString(s);
+      if (r.values(s).size() != SpatialSensorSize(s, m)) {
+        throw InputError(where, sname, std::to_string(r.values(s).size()) + " values, expected " +
+                                           std::to_string(SpatialSensorSize(s, m)));
+      }
+      if (s == SpatialSensor::kLoadCell) {  // not modelled yet (the equilibrium's layer)
+        if (std::find(model.unused_sensors.begin(), model.unused_sensors.end(), sname) == model.unused_sensors.end()) {
+          model.unused_sensors.push_back(sname);
+        }
+        continue;
+      }
+      const double inv = 1.0 / SigmaOf(robot, s, where);
+      const VectorXd& v = r.values(s);
+      const int sensor = static_cast<int>(s);
+      switch (s) {
+        case SpatialSensor::kInclinometer:
+          add(Cost<InclinometerCost, 2, 6>(InclinometerCost{v.head<2>(), inv}), {}, {}, sensor, 0);
+          break;
+        case SpatialSensor::kLaser:
+          add(Cost<LaserCost, 1, 6>(LaserCost{robot.p_F_frame_min_m.z(), v(0), inv}), {}, {}, sensor, 0);
+          break;
+        case SpatialSensor::kPosition:
+          add(Cost<PositionCost, 3, 6>(PositionCost{robot.sensors.position->p_P_target_m, v.head<3>(), inv}), {}, {},
+              sensor, 0);
+          break;
+        case SpatialSensor::kSwivel:
+          for (int i = 0; i < m; ++i) {
+            const SpatialCable& c = robot.cables[i];
+            const CableData cable{c.k_F_swivel_axis, c.pulley_radius_m, c.p_P_anchor_m};
+            add(Cost<SwivelCost, 1, 6, 3, 1>(SwivelCost{cable, reference.u_F[i], v(i), inv}),
+                {L.exit(i), L.swivel_offset(i)}, {3, 1}, sensor, i);
+          }
+          break;
+        case SpatialSensor::kHeading:
+          add(Cost<HeadingCost, 1, 6, 1>(HeadingCost{v(0), inv}), {L.yaw0()}, {1}, sensor, 0);
+          break;
+        case SpatialSensor::kLoadCell: break;
+      }
+    }
+  }
+  if (prior) {
+    if (!robot.sensors.tracker_sigma_m || !(*robot.sensors.tracker_sigma_m > 0.0)) {
+      throw InputError("--gauge", "prior", "the robot file " + robot.source + " gives no sensors.tracker sigma");
+    }
+    for (int i = 0; i < m; ++i) {
+      Term t;
+      t.cost = Cost<ExitPriorCost, 3, 3>(ExitPriorCost{robot.cables[i].p_F_exit_m, 1.0 / *robot.sensors.tracker_sigma_m});
+      t.block_offset = {L.exit(i)};
+      t.block_size = {3};
+      t.value = i;
+      model.prior_terms.push_back(static_cast<int>(model.terms.size()));
+      model.num_values += 3;
+      model.terms.push_back(std::move(t));
+    }
+  }
+  return model;
+}
+
+// A term's residuals and (when asked) its Jacobians: d r / d pose (size x 6) and d r / d geometry
+// (size x p, only its blocks' columns nonzero).
+void EvaluateTerm(const Term& t, const VectorXd& g, const std::vector<SpatialPose<double>>& poses, double* residuals,
+                  MatrixXd* d_pose, MatrixXd* d_geometry) {
+  std::vector<const double*> params;
+  if (t.pose >= 0) params.push_back(poses[t.pose].data());
+  for (int b : t.block_offset) params.push_back(g.data() + b);
+  const int n = t.size();
+  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  std::vector<RowMajor> jac;
+  std::vector<double*> jac_ptr;
+  if (d_pose || d_geometry) {
+    if (t.pose >= 0) {
+      jac.emplace_back(n, 6);
+    }
+    for (int s : t.block_size) jac.emplace_back(n, s);
+    for (RowMajor& j : jac) jac_ptr.push_back(j.data());
+  }
+  const bool ok = t.cost->Evaluate(params.data(), residuals, jac_ptr.empty() ? nullptr : jac_ptr.data());
+  CABLECAL_CHECK(ok, "a spatial residual could not be evaluated");
+  if (jac_ptr.empty()) return;
+  int next = 0;
+  if (t.pose >= 0) {
+    if (d_pose) *d_pose = jac[0];
+    next = 1;
+  } else if (d_pose) {
+    d_pose->setZero(n, 6);
+  }
+  if (d_geometry) {
+    d_geometry->setZero(n, g.size());
+    for (std::size_t b = 0; b < t.block_offset.size(); ++b) {
+      d_geometry->middleCols(t.block_offset[b], t.block_size[b]) = jac[next + b];
+    }
+  }
+}
+
+// The starting pose of each pose: Levenberg-Marquardt on its own readings alone, from home, with
+// the geometry g (nominal: exits as in the file, l_i0 the nominal home's lengths).
+SpatialPose<double> StartingPose(const Model& model, int j, const VectorXd& g, const SpatialPose<double>& home) {
+  std::vector<SpatialPose<double>> q(model.pose_ids.size(), home);
+  const int rows = model.pose_values[j];
+  const auto evaluate = [&](const SpatialPose<double>& pose, VectorXd* r, MatrixXd* J) {
+    q[j] = pose;
+    r->resize(rows);
+    if (J) J->resize(rows, 6);
+    int row = 0;
+    for (int k : model.pose_terms[j]) {
+      const Term& t = model.terms[k];
+      MatrixXd jp;
+      EvaluateTerm(t, g, q, r->data() + row, J ? &jp : nullptr, nullptr);
+      if (J) J->middleRows(row, t.size()) = jp;
+      row += t.size();
+    }
+  };
+  SpatialPose<double> pose = home;
+  VectorXd r;
+  MatrixXd J;
+  evaluate(pose, &r, &J);
+  double cost = r.squaredNorm(), lambda = 1e-6;
+  for (int it = 0; it < 100 && cost > 0.0; ++it) {
+    const Eigen::Matrix<double, 6, 6> H = J.transpose() * J;
+    const Eigen::Matrix<double, 6, 1> grad = J.transpose() * r;
+    Eigen::Matrix<double, 6, 6> damped = H;
+    damped.diagonal() += lambda * (H.diagonal().array() + 1e-12).matrix();
+    const Eigen::Matrix<double, 6, 1> step = damped.ldlt().solve(-grad);
+    VectorXd r_new;
+    const SpatialPose<double> trial = pose + step;
+    evaluate(trial, &r_new, nullptr);
+    const double cost_new = r_new.squaredNorm();
+    if (std::isfinite(cost_new) && cost_new < cost) {
+      pose = trial;
+      cost = cost_new;
+      lambda = std::max(lambda / 10.0, 1e-12);
+      evaluate(pose, &r, &J);
+      if (step.norm() < 1e-13) break;
+    } else {
+      lambda *= 10.0;
+      if (lambda > 1e12) break;
+    }
+  }
+  return pose;
+}
+
+std::string PoseCoordinateNames(const Eigen::Matrix<double, 6, 1>& v) {
+  std::string out;
+  for (int a = 0; a < 6; ++a) {
+    if (std::abs(v(a)) > 0.1 * v.cwiseAbs().maxCoeff()) {
+      out += (out.empty() ? "" : ", ") + std::string(SpatialKind::kPoseNames[a]);
+    }
+  }
+  return out;
+}
+
+// The reduced geometry Jacobian: for each pose, its rows projected onto the orthogonal
+// complement of its own pose columns (Householder QR, nothing squared), so that the stacked
+// rows see exactly the geometry directions no pose change can compensate; the prior's rows as
+// they are. InputError for a pose its own readings do not determine (when `refuse`).
+MatrixXd ReducedJacobian(const Model& model, const VectorXd& g, const std::vector<SpatialPose<double>>& poses,
+                         bool refuse) {
+  const int p = g.size();
+  std::vector<MatrixXd> blocks;
+  int total = 0;
+  for (std::size_t j = 0; j < model.pose_ids.size(); ++j) {
+    const int rows = model.pose_values[j];
+    MatrixXd Jq(rows, 6), Jg(rows, p);
+    int row = 0;
+    VectorXd r(rows);
+    for (int k : model.pose_terms[j]) {
+      const Term& t = model.terms[k];
+      MatrixXd jp, jg;
+      EvaluateTerm(t, g, poses, r.data() + row, &jp, &jg);
+      Jq.middleRows(row, t.size()) = jp;
+      Jg.middleRows(row, t.size()) = jg;
+      row += t.size();
+    }
+    Eigen::JacobiSVD<MatrixXd> svd(Jq, Eigen::ComputeFullV);
+    const VectorXd& s = svd.singularValues();
+    const bool deficient = rows < 6 || !(s(5) > kSpatialNullThreshold * s(0));
+    if (deficient) {
+      if (!refuse) continue;
+      throw InputError(model.pose_where[j], "pose " + std::to_string(model.pose_ids[j]),
+                       "its own readings (" + std::to_string(rows) +
+                           " values) do not determine the pose's 6 coordinates (unseen: " +
+                           PoseCoordinateNames(svd.matrixV().col(5)) +
+                           "): no reading fixes it; add a sensor that sees it, or more cables' encoders");
+    }
+    Eigen::HouseholderQR<MatrixXd> qr(Jq);
+    MatrixXd projected = qr.householderQ().transpose() * Jg;
+    blocks.push_back(projected.bottomRows(rows - 6));
+    total += rows - 6;
+  }
+  for (int k : model.prior_terms) {
+    const Term& t = model.terms[k];
+    MatrixXd jg;
+    VectorXd r(t.size());
+    EvaluateTerm(t, g, poses, r.data(), nullptr, &jg);
+    blocks.push_back(jg);
+    total += t.size();
+  }
+  MatrixXd A(total, p);
+  int row = 0;
+  for (const MatrixXd& b : blocks) {
+    A.middleRows(row, b.rows()) = b;
+    row += b.rows();
+  }
+  return A;
+}
+
+// The SVD of A through its p x p triangular factor (A may have thousands of rows).
+Eigen::JacobiSVD<MatrixXd> SmallSvd(const MatrixXd& A) {
+  const int p = A.cols();
+  MatrixXd R = MatrixXd::Zero(p, p);
+  if (A.rows() >= p) {
+    Eigen::HouseholderQR<MatrixXd> qr(A);
+    R = qr.matrixQR().topRows(p).triangularView<Eigen::Upper>();
+  } else {
+    R.topRows(A.rows()) = A;
+  }
+  return Eigen::JacobiSVD<MatrixXd>(R, Eigen::ComputeFullV);
+}
+
+// ---- Directions in words ----
+
+const char* kGeneratorNames[6] = {"a translation along x", "a translation along y", "a translation along z",
+                                  "a rotation about x",    "a rotation about y",    "a rotation about z"};
+
+// The rigid motions of the frame on the exit coordinates: translations along x, y, z and
+// rotations about the axes through the exits' centroid (per radian).
+MatrixXd RigidGenerators(const VectorXd& g, const Layout& L) {
+  MatrixXd G = MatrixXd::Zero(L.exit_coordinates(), 6);
+  Vector3d centroid = Vector3d::Zero();
+  for (int i = 0; i < L.m; ++i) centroid += g.segment<3>(L.exit(i));
+  centroid /= L.m;
+  for (int i = 0; i < L.m; ++i) {
+    const Vector3d d = g.segment<3>(L.exit(i)) - centroid;
+    for (int a = 0; a < 3; ++a) {
+      G(L.exit(i) + a, a) = 1.0;
+      G.block<3, 1>(L.exit(i), 3 + a) = Vector3d::Unit(a).cross(d);
+    }
+  }
+  return G;
+}
+
+std::string LargestComponents(const VectorXd& v, const std::vector<std::string>& names) {
+  std::vector<int> order(v.size());
+  for (int k = 0; k < v.size(); ++k) order[k] = k;
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return std::abs(v(a)) > std::abs(v(b)); });
+  std::string out;
+  for (int k = 0; k < std::min<int>(4, v.size()); ++k) {
+    if (std::abs(v(order[k])) < 0.1 * std::abs(v(order[0]))) break;
+    out += (out.empty() ? "" : ", ") + names[order[k]];
+  }
+  return out;
+}
+
+// Describes the span of the columns of V (p x k, orthonormal-ish): when their exit parts are
+// rigid motions of the frame, a basis in reduced row-echelon form over the generators
+// (translations x, y, z, rotations x, y, z) so that "a translation along x" comes out as
+// such; otherwise each column by the unknowns it moves most.
+std::vector<SpatialDirection> Describe(const MatrixXd& V, const VectorXd& g, const Layout& L,
+                                       const std::vector<std::string>& names) {
+  const int k = V.cols();
+  std::vector<SpatialDirection> out;
+  if (k == 0) return out;
+  const MatrixXd G = RigidGenerators(g, L);
+  const MatrixXd E = V.topRows(L.exit_coordinates());
+  const MatrixXd C = G.colPivHouseholderQr().solve(E);  // 6 x k
+  bool rigid = true;
+  for (int c = 0; c < k; ++c) {
+    const double e = E.col(c).norm();
+    rigid = rigid && e > 1e-3 * V.col(c).norm() && (G * C.col(c) - E.col(c)).norm() <= 1e-6 * e;
+  }
+  if (rigid) {
+    // RREF of [C^T | I]: the rows' right halves say which combination of V each row is.
+    MatrixXd M(k, 6 + k);
+    M << C.transpose(), MatrixXd::Identity(k, k);
+    int row = 0;
+    for (int col = 0; col < 6 && row < k; ++col) {
+      int best = row;
+      for (int r = row; r < k; ++r) {
+        if (std::abs(M(r, col)) > std::abs(M(best, col))) best = r;
+      }
+      if (std::abs(M(best, col)) < 1e-6 * M.leftCols(6).cwiseAbs().maxCoeff()) continue;
+      M.row(row).swap(M.row(best));
+      M.row(row) /= M(row, col);
+      for (int r = 0; r < k; ++r) {
+        if (r != row) M.row(r) -= M(r, col) * M.row(row);
+      }
+      ++row;
+    }
+    for (int r = 0; r < k; ++r) {
+      SpatialDirection d;
+      d.geometry = (V * M.row(r).rightCols(k).transpose()).normalized();
+      std::string words;
+      int terms = 0;
+      for (int a = 0; a < 6; ++a) {
+        if (std::abs(M(r, a)) > 1e-6) {
+          char buf[96];
+          std::snprintf(buf, sizeof(buf), "%s%s (%.3g%s)", terms ? " with " : "", kGeneratorNames[a], M(r, a),
+                        a < 3 ? " m" : " rad");
+          words += terms ? std::string(buf) : std::string(kGeneratorNames[a]);
+          ++terms;
+        }
+      }
+      if (terms > 1) words = "a combination: " + words;
+      const VectorXd rest = d.geometry.bottomRows(d.geometry.size() - L.exit_coordinates());
+      if (rest.norm() > 1e-6) {
+        std::vector<std::string> rest_names(names.begin() + L.exit_coordinates(), names.end());
+        words += " of the frame, with " + LargestComponents(rest, rest_names);
+      } else {
+        words += " of the frame";
+      }
+      d.description = words;
+      out.push_back(d);
+    }
+    return out;
+  }
+  for (int c = 0; c < k; ++c) {
+    SpatialDirection d;
+    d.geometry = V.col(c).normalized();
+    const double e = d.geometry.topRows(L.exit_coordinates()).norm();
+    d.description = (e < 1e-3 ? "a direction that moves no exit point, of " : "a direction of ") +
+                    LargestComponents(d.geometry, names);
+    out.push_back(d);
+  }
+  return out;
+}
+
+std::string Join(const std::vector<std::string>& v, const char* sep) {
+  std::string s;
+  for (const std::string& x : v) s += (s.empty() ? "" : sep) + x;
+  return s;
+}
+
+std::string DescribeAll(const std::vector<SpatialDirection>& d) {
+  std::vector<std::string> w;
+  for (const SpatialDirection& x : d) w.push_back(x.description);
+  return Join(w, "; ");
+}
+
+struct Analysis {
+  Model model;
+  VectorXd g0;
+  std::vector<SpatialPose<double>> start;
+  SpatialGaugeAnalysis gauge;
+};
+
+Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasurement>& readings,
+                 const SpatialIdentifyOptions& options) {
+  Analysis a;
+  a.model = BuildModel(nominal, readings, options.gauge.kind == SpatialGaugeKind::kPrior);
+  const Layout& L = a.model.layout;
+  a.g0 = NominalSpatialGeometry(nominal, L.swivel, L.heading);
+  a.gauge.names = SpatialGeometryNames(L.m, L.swivel, L.heading);
+  const int p = L.size();
+  const int n = static_cast<int>(a.model.pose_ids.size());
+  if (a.model.num_values < p + 6 * n) {
+    throw InputError("readings", "", std::to_string(a.model.num_values) + " reading values for " +
+                                         std::to_string(p + 6 * n) + " unknowns (" + std::to_string(p) +
+                                         " of the geometry, 6 per pose for " + std::to_string(n) +
+                                         " poses): too few to determine the geometry; measure more poses");
+  }
+  for (int j = 0; j < n; ++j) a.start.push_back(StartingPose(a.model, j, a.g0, nominal.home_pose()));
+  const MatrixXd A = ReducedJacobian(a.model, a.g0, a.start, true);
+  const Eigen::JacobiSVD<MatrixXd> svd = SmallSvd(A);
+  const VectorXd& s = svd.singularValues();
+  const double largest = s(0);
+  std::vector<int> null_cols, weak_cols;
+  for (int c = 0; c < p; ++c) {
+    if (!(s(c) > kSpatialNullThreshold * largest)) {
+      null_cols.push_back(c);
+    } else if (s(c) < kSpatialWeakThreshold * largest) {
+      weak_cols.push_back(c);
+    }
+  }
+  const auto columns = [&](const std::vector<int>& cols) {
+    MatrixXd V(p, cols.size());
+    for (std::size_t c = 0; c < cols.size(); ++c) V.col(c) = svd.matrixV().col(cols[c]);
+    return V;
+  };
+  const MatrixXd N = columns(null_cols);
+  const int k = N.cols();
+  a.gauge.null_directions = Describe(N, a.g0, L, a.gauge.names);
+  a.gauge.weak_directions = Describe(columns(weak_cols), a.g0, L, a.gauge.names);
+  for (std::size_t c = 0; c < weak_cols.size(); ++c) {
+    a.gauge.weak_directions[c].relative_singular_value = s(weak_cols[c]) / largest;
+  }
+  if (k == 0) return a;
+  // A null direction with no exit coordinate cannot be held by any exit: refused whatever the gauge.
+  const MatrixXd E = N.topRows(L.exit_coordinates());
+  Eigen::JacobiSVD<MatrixXd> exit_svd(E, Eigen::ComputeFullV);
+  std::vector<int> unheldable;
+  for (int c = 0; c < k; ++c) {
+    if (!(exit_svd.singularValues()(c) > 1e-6)) unheldable.push_back(c);
+  }
+  if (!unheldable.empty()) {
+    MatrixXd U(p, unheldable.size());
+    for (std::size_t c = 0; c < unheldable.size(); ++c) U.col(c) = N * exit_svd.matrixV().col(unheldable[c]);
+    throw InputError("readings", "",
+                     "no reading fixes " + DescribeAll(Describe(U, a.g0, L, a.gauge.names)) +
+                         ", and holding exit coordinates cannot fix it: add a sensor that sees it (swivel "
+                         "offsets need swivel readings at several poses, yaw0 heading readings)");
+  }
+  switch (options.gauge.kind) {
+    case SpatialGaugeKind::kAuto: {
+      Eigen::ColPivHouseholderQR<MatrixXd> qr(E.transpose());
+      for (int c = 0; c < k; ++c) a.gauge.held.push_back(qr.colsPermutation().indices()(c));
+      std::sort(a.gauge.held.begin(), a.gauge.held.end());
+      break;
+    }
+    case SpatialGaugeKind::kHold: {
+      const std::vector<std::string>& names = a.gauge.names;
+      for (const std::string& h : options.gauge.held) {
+        const auto it = std::find(names.begin(), names.begin() + L.exit_coordinates(), h);
+        if (it == names.begin() + L.exit_coordinates()) {
+          throw InputError("--gauge", "hold:" + Join(options.gauge.held, ","),
+                           "'" + h + "' is not an exit coordinate of this " + std::to_string(L.m) +
+                               "-cable robot (a1x .. a" + std::to_string(L.m) + "z)");
+        }
+        const int index = static_cast<int>(it - names.begin());
+        if (std::find(a.gauge.held.begin(), a.gauge.held.end(), index) != a.gauge.held.end()) {
+          throw InputError("--gauge", "hold:" + Join(options.gauge.held, ","), "'" + h + "' is named twice");
+        }
+        a.gauge.held.push_back(index);
+      }
+      std::sort(a.gauge.held.begin(), a.gauge.held.end());
+      MatrixXd H(a.gauge.held.size(), k);
+      for (std::size_t r = 0; r < a.gauge.held.size(); ++r) H.row(r) = N.row(a.gauge.held[r]);
+      Eigen::JacobiSVD<MatrixXd> hold_svd(H, Eigen::ComputeFullV);
+      std::vector<int> left;
+      for (int c = 0; c < k; ++c) {
+        const double sv = c < hold_svd.singularValues().size() ? hold_svd.singularValues()(c) : 0.0;
+        if (!(sv > 1e-6)) left.push_back(c);
+      }
+      if (!left.empty()) {
+        MatrixXd U(p, left.size());
+        for (std::size_t c = 0; c < left.size(); ++c) U.col(c) = N * hold_svd.matrixV().col(left[c]);
+        // The exit coordinate the first remaining direction moves most: holding it too helps.
+        VectorXd moved = U.col(0).topRows(L.exit_coordinates()).cwiseAbs();
+        int best = 0;
+        moved.maxCoeff(&best);
+        throw InputError("--gauge", "hold:" + Join(options.gauge.held, ","),
+                         "does not fix the gauge: no reading fixes " +
+                             DescribeAll(Describe(U, a.g0, L, a.gauge.names)) + " (" + std::to_string(left.size()) +
+                             " of the " + std::to_string(k) + " null directions left); hold " + names[best] +
+                             " too, or add a sensor that sees it");
+      }
+      break;
+    }
+    case SpatialGaugeKind::kNone:
+    case SpatialGaugeKind::kPrior: break;
+  }
+  return a;
+}
+
+}  // namespace
+
+std::vector<std::string> SpatialGeometryNames(int num_cables, bool swivel, bool heading) {
+  std::vector<std::string> names = SpatialLayout(num_cables).names();
+  if (swivel) {
+    for (int i = 1; i <= num_cables; ++i) names.push_back("sw" + std::to_string(i) + "0");
+  }
+  if (heading) names.push_back("yaw0");
+  return names;
+}
+
+Eigen::VectorXd NominalSpatialGeometry(const SpatialRobot& nominal, bool swivel, bool heading) {
+  Layout L{nominal.num_cables(), swivel, heading};
+  VectorXd g = VectorXd::Zero(L.size());
+  const VectorXd home_lengths = CableLengths<double>(nominal, nominal.home_pose());
+  for (int i = 0; i < L.m; ++i) {
+    g.segment<3>(L.exit(i)) = nominal.cables[i].p_F_exit_m;
+    g(L.length(i)) = home_lengths(i);
+  }
+  if (heading) g(L.yaw0()) = nominal.home_rpy_rad.z();
+  return g;
+}
+
+SpatialGauge ParseSpatialGauge(const std::string& text) {
+  SpatialGauge gauge;
+  if (text == "auto") return gauge;
+  if (text == "none") {
+    gauge.kind = SpatialGaugeKind::kNone;
+    return gauge;
+  }
+  if (text == "prior") {
+    gauge.kind = SpatialGaugeKind::kPrior;
+    return gauge;
+  }
+  if (text.rfind("hold:", 0) == 0) {
+    gauge.kind = SpatialGaugeKind::kHold;
+    std::stringstream list(text.substr(5));
+    std::string name;
+    while (std::getline(list, name, ',')) {
+      if (name.empty()) throw InputError("--gauge", text, "an empty name in the hold list");
+      gauge.held.push_back(name);
+    }
+    if (gauge.held.empty()) throw InputError("--gauge", text, "hold: names no coordinate (e.g. hold:a1x,a1y,a1z)");
+    return gauge;
+  }
+  throw InputError("--gauge", text, "expected auto, none, prior or hold:a1x,a1y,...");
+}
+
+std::string ToString(const SpatialGauge& gauge) {
+  switch (gauge.kind) {
+    case SpatialGaugeKind::kAuto: return "auto";
+    case SpatialGaugeKind::kNone: return "none";
+    case SpatialGaugeKind::kPrior: return "prior";
+    case SpatialGaugeKind::kHold: return "hold:" + Join(gauge.held, ",");
+  }
+  return "?";
+}
+
+const char* ToString(SpatialIdentifyStatus s) {
+  switch (s) {
+    case SpatialIdentifyStatus::kConverged: return "converged";
+    case SpatialIdentifyStatus::kNotConverged: return "not_converged";
+    case SpatialIdentifyStatus::kRankDeficient: return "rank_deficient";
+  }
+  return "?";
+}
+
+SpatialGaugeAnalysis AnalyzeSpatialGauge(const SpatialRobot& nominal, const std::vector<SpatialMeasurement>& readings,
+                                         const SpatialIdentifyOptions& options) {
+  return Analyze(nominal, readings, options).gauge;
+}
+
+SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::vector<SpatialMeasurement>& readings,
+                                      const SpatialIdentifyOptions& options) {
+  if (options.max_iterations < 1) throw InputError("--max-iterations", "", "must be at least 1");
+  Analysis a = Analyze(nominal, readings, options);
+  const Model& model = a.model;
+  const Layout& L = model.layout;
+  const int p = L.size();
+  const int n = static_cast<int>(model.pose_ids.size());
+
+  SpatialIdentifyResult result;
+  result.names = a.gauge.names;
+  result.null_directions = a.gauge.null_directions;
+  result.weak_directions = a.gauge.weak_directions;
+  result.unused_sensors = model.unused_sensors;
+  for (int h : a.gauge.held) result.held.push_back(a.gauge.names[h]);
+  result.pose_ids = model.pose_ids;
+  result.starting_poses = a.start;
+
+  VectorXd g = a.g0;
+  std::vector<SpatialPose<double>> poses = a.start;
+  ceres::Problem::Options problem_options;
+  problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  auto* ordering = new ceres::ParameterBlockOrdering;
+  for (int j = 0; j < n; ++j) {
+    problem.AddParameterBlock(poses[j].data(), 6);
+    ordering->AddElementToGroup(poses[j].data(), 0);
+  }
+  for (int i = 0; i < L.m; ++i) {
+    problem.AddParameterBlock(g.data() + L.exit(i), 3);
+    problem.AddParameterBlock(g.data() + L.length(i), 1);
+    ordering->AddElementToGroup(g.data() + L.exit(i), 1);
+    ordering->AddElementToGroup(g.data() + L.length(i), 1);
+    if (L.swivel) {
+      problem.AddParameterBlock(g.data() + L.swivel_offset(i), 1);
+      ordering->AddElementToGroup(g.data() + L.swivel_offset(i), 1);
+    }
+  }
+  if (L.heading) {
+    problem.AddParameterBlock(g.data() + L.yaw0(), 1);
+    ordering->AddElementToGroup(g.data() + L.yaw0(), 1);
+  }
+  for (const Term& t : model.terms) {
+    std::vector<double*> params;
+    if (t.pose >= 0) params.push_back(poses[t.pose].data());
+    for (int b : t.block_offset) params.push_back(g.data() + b);
+    ceres::LossFunction* loss = nullptr;
+    if (t.reading >= 0 && options.loss.kind == LossKind::kHuber) loss = new ceres::HuberLoss(options.loss.scale_sigmas);
+    if (t.reading >= 0 && options.loss.kind == LossKind::kCauchy) loss = new ceres::CauchyLoss(options.loss.scale_sigmas);
+    problem.AddResidualBlock(t.cost.get(), loss, params);
+  }
+  for (int i = 0; i < L.m; ++i) {
+    std::vector<int> axes;
+    for (int axis = 0; axis < 3; ++axis) {
+      if (std::count(a.gauge.held.begin(), a.gauge.held.end(), L.exit(i) + axis)) axes.push_back(axis);
+    }
+    if (axes.size() == 3) {
+      problem.SetParameterBlockConstant(g.data() + L.exit(i));
+    } else if (!axes.empty()) {
+      problem.SetManifold(g.data() + L.exit(i), new ceres::SubsetManifold(3, axes));
+    }
+  }
+  ceres::Solver::Options solver;
+  constexpr internal::LevenbergMarquardtSettings kSettings;
+  solver.minimizer_type = ceres::TRUST_REGION;
+  solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  solver.function_tolerance = kSettings.function_tolerance;
+  solver.gradient_tolerance = kSettings.gradient_tolerance;
+  solver.parameter_tolerance = kSettings.parameter_tolerance;
+  solver.initial_trust_region_radius = kSettings.initial_trust_region_radius;
+  solver.linear_solver_type = ceres::DENSE_SCHUR;  // the poses eliminated first
+  solver.linear_solver_ordering.reset(ordering);
+  solver.max_num_iterations = options.max_iterations;
+  solver.num_threads = 1;
+  solver.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver, &problem, &summary);
+
+  result.geometry = g;
+  result.poses = poses;
+  result.iterations = static_cast<int>(summary.iterations.size());
+  // Plain whitened residuals (before the loss) per reading.
+  result.fits.resize(readings.size());
+  for (std::size_t k = 0; k < readings.size(); ++k) {
+    result.fits[k].pose_id = readings[k].pose_id;
+    result.fits[k].where = readings[k].where;
+    result.fits[k].encoders = VectorXd::Zero(L.m);
+    for (const SpatialSensor s : kSpatialSensors) {
+      if (readings[k].has(s) && s != SpatialSensor::kLoadCell) {
+        result.fits[k].sensors[static_cast<int>(s)] = VectorXd::Zero(SpatialSensorSize(s, L.m));
+      }
+    }
+  }
+  double cost = 0.0;
+  for (const Term& t : model.terms) {
+    VectorXd r(t.size());
+    EvaluateTerm(t, g, poses, r.data(), nullptr, nullptr);
+    cost += 0.5 * r.squaredNorm();
+    if (t.reading < 0) continue;
+    SpatialReadingFit& fit = result.fits[t.reading];
+    VectorXd& out = t.sensor < 0 ? fit.encoders : fit.sensors[t.sensor];
+    out.segment(t.value, t.size()) = r;
+  }
+  result.final_cost = cost;
+
+  if (summary.termination_type != ceres::CONVERGENCE) {
+    result.status = SpatialIdentifyStatus::kNotConverged;
+    result.message = "the solver stopped after " + std::to_string(result.iterations) +
+                     " iterations without converging: " + summary.message;
+    return result;
+  }
+  // Covariance at the estimate with the gauge held.
+  const MatrixXd A = ReducedJacobian(model, g, poses, false);
+  std::vector<int> free;
+  for (int c = 0; c < p; ++c) {
+    if (!std::count(a.gauge.held.begin(), a.gauge.held.end(), c)) free.push_back(c);
+  }
+  MatrixXd A_free(A.rows(), free.size());
+  for (std::size_t c = 0; c < free.size(); ++c) A_free.col(c) = A.col(free[c]);
+  const Eigen::JacobiSVD<MatrixXd> svd = SmallSvd(A_free);
+  const VectorXd& s = svd.singularValues();
+  const int f = static_cast<int>(free.size());
+  MatrixXd cov_free = MatrixXd::Zero(f, f);
+  int unseen = 0;
+  for (int c = 0; c < f; ++c) {
+    if (!(s(c) > kSpatialNullThreshold * s(0))) {
+      ++unseen;
+      continue;
+    }
+    cov_free += svd.matrixV().col(c) * svd.matrixV().col(c).transpose() / (s(c) * s(c));
+  }
+  result.covariance = MatrixXd::Zero(p, p);
+  for (int r = 0; r < f; ++r) {
+    for (int c = 0; c < f; ++c) result.covariance(free[r], free[c]) = cov_free(r, c);
+  }
+  result.sigma = result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+  const int expected_unseen = options.gauge.kind == SpatialGaugeKind::kNone ? static_cast<int>(a.gauge.null_directions.size()) : 0;
+  if (unseen > expected_unseen) {
+    result.status = SpatialIdentifyStatus::kRankDeficient;
+    result.message = std::to_string(unseen - expected_unseen) +
+                     " direction(s) of the geometry beyond the gauge are unseen at the estimate (the readings "
+                     "saw them at the start only): not a result";
+    return result;
+  }
+  result.status = SpatialIdentifyStatus::kConverged;
+  return result;
+}
+
+}  // namespace cablecal
