@@ -32,6 +32,7 @@
 #include "identify/identify.h"
 #include "identify/validate.h"
 #include "model/sensors.h"
+#include "model/forward_statics.h"
 #include "model/statics.h"
 #include "sensors/sensors.h"
 #include "workspace/workspace.h"
@@ -323,6 +324,7 @@ int RunSimulate(const Context& ctx, const SimulateOptions& options) {
                     {{"--out", options.out_path}, {"--truth-out", options.truth_out_path}});
   if (IsSpatialRobotFile(options.robot_path)) return RunSpatialSimulate(ctx, options);
   const Robot nominal = LoadRobotOption(options.robot_path);
+  CheckSimulatable(nominal);  // before the plan: the robot file is what must change
   // A pose where the true robot settles outside its own workspace (beyond a tension limit,
   // the inclinometer range or the margin) would stop a lab's experiment: exit 2 naming the
   // plan's pose (the Monte Carlo counts such a trial as failed).

@@ -27,6 +27,8 @@
 #include "identify/identify.h"
 #include "model/cable.h"
 #include "model/kind.h"
+#include "experiment/simulation.h"
+#include "model/forward_statics.h"
 #include "model/statics.h"
 
 namespace cablecal {
@@ -179,6 +181,7 @@ std::string VerifyRobustness(const Robot& robot, const DesignOptions& options, s
   std::string first;
   const GeometryVector nominal = GeometryOf(robot);
   const std::vector<std::string> names = GeometryNames(m);
+  const CableCommands commands(robot);
   for (int k = 0; k < nominal.size(); ++k) {
     for (const double sign : {-1.0, 1.0}) {
       GeometryVector g = nominal;
@@ -188,8 +191,8 @@ std::string VerifyRobustness(const Robot& robot, const DesignOptions& options, s
       for (std::size_t j = 0; j < plan->size(); ++j) {
         if (failing && (*failing)[j]) continue;
         PlanPose& pose = (*plan)[j];
-        const Eigen::VectorXd lengths = pose.length_change_m + g.tail(m);
-        const ForwardResult f = SolveForwardGeometricoStatic(truth, lengths, &pose.q);
+        const Eigen::VectorXd lengths = commands.TrueUnstretchedLengths(truth, g.tail(m), commands.PaidOutFromHome(pose));
+        const ForwardResult f = SettlePlanar(truth, lengths, &pose.q);
         const std::string where = "pose " + std::to_string(j + 1) + " on a true robot with " + scenario + ": ";
         std::string why;
         if (f.status != ForwardStatus::kConverged) {
@@ -338,6 +341,9 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
   if (!(options.robust_sigmas >= 0.0 && options.robust_sigmas <= 10.0)) {
     throw InputError("--robust-sigmas", "", "must be between 0 and 10 (got " + FormatDouble(options.robust_sigmas) + ")");
   }
+  // The robust design's scenario robots settle as simulated true robots do: rigid cables beyond
+  // the platform's degrees of freedom cannot (CheckSimulatable).
+  if (options.robust_sigmas > 0.0 && options.geometry_sigma_m > 0.0) CheckSimulatable(robot);
   if (options.prior_information && options.criterion == Criterion::kCondition) {
     throw InputError("--prior", "", "the condition-number criterion cannot count an earlier identification's "
                                     "information: use --criterion a, d or e");

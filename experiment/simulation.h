@@ -2,18 +2,20 @@
 // where the true robot puts it for each commanded pose of a plan, and the sensors' noisy
 // readings there; gross errors for robustness studies; the truth file.
 //
-// Simulation (README, "Commands", simulate): the controller commands the plan's length changes dl_ij,
-// computed with the nominal robot; the true robot's cables then have lengths
-// l_i0(true) + dl_ij and the platform settles where the true geometry puts it (forward
-// geometrico-static model). Sensors read that pose with the paper's noise.
-// With m >= 4 cables the commanded lengths over-determine the pose and, on a true geometry
-// that differs from the nominal one, are not all consistent: rigid cables cannot all have
-// them. The forward model returns the least-squares pose; the encoders then read the length
-// changes the cables actually have there, l_i(true, q) - l_i0(true), not the commanded ones
-// (a real controller's cables would stretch or slacken by the difference, which is what its
-// encoders, on the motor side, would not see; the model has rigid cables). For m <= 3 the two
-// are the same up to the forward model's tolerance and the commanded changes are read, as
-// always.
+// Simulation (README, "Commands", simulate): the controller commands the plan's cables from
+// the nominal robot, and the true robot settles where its own potential energy puts it
+// (model/forward_statics.h). The winches pay out cable: the command is an UNSTRETCHED length,
+// for an elastic cable (stiffness E*A) the one that is the plan's length l_ij under the plan's
+// tension t_ij on the nominal robot, L_ij = l_ij / (1 + t_ij / EA) (CommandedUnstretchedLengths),
+// for an inextensible one l_ij itself. The true robot's cable i has its own unstretched length
+// at home plus the commanded change from home, L_ij - L_i(home) (CableCommands below), and the
+// encoders, on the motor side, read that change: for inextensible cables exactly the plan's dl_ij.
+// Planar robots without stiffness and with 2 or 3 cables settle by the inextensible
+// geometrico-static model as they always did (SettlePlanar); a robot with more inextensible
+// cables than the platform's degrees of freedom (planar m >= 4 without stiffness) cannot be
+// simulated: its rigid cables could not all have the commanded lengths on a true robot that
+// differs from the nominal one (CheckSimulatable, exit 2 naming the key `stiffness`). Sensors
+// read the settled pose with the paper's noise.
 #pragma once
 
 
@@ -49,6 +51,23 @@ Robot PerturbGeometry(const Robot& nominal, double sigma_m, double exit_sigma_m,
 inline Robot PerturbGeometry(const Robot& nominal, double sigma_m, Rng& rng) {
   return PerturbGeometry(nominal, sigma_m, sigma_m, rng);
 }
+
+// The cables the controller commands for a plan on an elastic robot (the file comment): the
+// nominal robot's unstretched lengths at home (its initial lengths under the home tensions).
+struct CableCommands {
+  explicit CableCommands(const Robot& nominal);
+  // L_ij - L_i(home): what the winches pay out from home for a plan pose; the encoders' noise-free
+  // reading. For an inextensible cable the plan's dl_ij (the same bits when no cable is elastic).
+  Eigen::VectorXd PaidOutFromHome(const PlanPose& pose) const;
+  // The unstretched lengths of the true robot's cables at that pose: its initial lengths (the
+  // geometry's l_i0, lengths at home) under the home tensions, plus `paid_out_m`.
+  Eigen::VectorXd TrueUnstretchedLengths(const Robot& truth, const Eigen::VectorXd& true_initial_lengths_m,
+                                         const Eigen::VectorXd& paid_out_m) const;
+
+  const Robot& nominal;
+  bool elastic = false;  // some cable has a stiffness
+  Eigen::VectorXd home_tensions_N, home_unstretched_m;
+};
 
 // Which sensors get noise (the paper's Section 4.2 ablation switches laser/inclinometer).
 enum class NoisySensors { kBoth, kLaser, kInclinometer, kNone };

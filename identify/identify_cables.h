@@ -87,8 +87,8 @@ double StartingX(const Robot& nominal, const GeometryVector& g, const Measuremen
 
 // Starting pose for one reading (identify's x_j, z_j, theta_j; validate's forward model): the
 // measured z and theta (each sensor's pose coordinate) with StartingX's x. A coordinate no
-// sensor read starts where `robot` settles with these lengths (a cold forward model; home,
-// level, if it finds nothing).
+// sensor read starts at the pose these lengths give the rigid-cable model (LeastSquaresPoseGuess
+// from cold; home, level, if it finds nothing).
 template <int M>
 PlanarPose StartingPose(const Robot& robot, const GeometryVector& g, const Measurement& m) {
   PlanarPose q = PlanarPose::Zero();
@@ -96,7 +96,7 @@ PlanarPose StartingPose(const Robot& robot, const GeometryVector& g, const Measu
   for (const SensorUnit& u : kPlanarSensors) every_sensor = every_sensor && m.has(u.id);
   if (!every_sensor) {
     const Eigen::VectorXd lengths = g.tail<M>() + m.dl_m;
-    const ForwardResult fwd = SolveForwardGeometricoStatic(robot, lengths);
+    const ForwardResult fwd = LeastSquaresPoseGuess(robot, lengths);
     q = fwd.status == ForwardStatus::kConverged ? fwd.equilibrium.q
                                                 : PlanarPose(robot.p_F_home_m.x(), robot.p_F_home_m.y(), 0.0);
   }

@@ -10,7 +10,9 @@
 #include "common/format.h"
 #include "common/version.h"
 #include "common/yaml_writer.h"
+#include "experiment/simulation.h"
 #include "identify/identify.h"
+#include "model/forward_statics.h"
 #include "model/statics.h"
 
 namespace cablecal {
@@ -42,7 +44,18 @@ bool PredictPose(const Robot& robot, const std::string& role, const GeometryVect
   const int cables = robot.num_cables();
   const PlanarPose start = StartingPose(robot, geometry, m);
   const Eigen::VectorXd lengths = geometry.tail(cables) + m.dl_m;  // l_i0 + dl_i
-  const ForwardResult fwd = SolveForwardGeometricoStatic(robot, lengths, &start);
+  // The encoders read the cable paid out: with stiffness, the unstretched lengths settle the
+  // platform (model/forward_statics.h, as simulate's true robot); without, 2 or 3 rigid cables
+  // fix it, and more meet their lengths only in least squares (the rigid model's best pose).
+  ForwardResult fwd;
+  if (HasStiffness(robot)) {
+    const CableCommands commands(robot);
+    fwd = SolveForwardStatics(robot, commands.TrueUnstretchedLengths(robot, geometry.tail(cables), m.dl_m), &start);
+  } else if (cables <= PlanarKind::kPoseDim) {
+    fwd = SolveForwardGeometricoStatic(robot, lengths, &start);
+  } else {
+    fwd = LeastSquaresPoseGuess(robot, lengths, &start);
+  }
   const std::string hint = ": readings of another robot, or a pose outside its workspace?";
   if (fwd.status != ForwardStatus::kConverged) {
     *why = RobotLabel(role, robot) + " cannot hold these lengths, its initial lengths + dl (" +

@@ -69,6 +69,11 @@ constexpr double kMaxGravity_mps2 = 100.0;
 constexpr double kMaxFrameSide_m = 100.0;
 constexpr double kMaxPlatformMass_kg = 10000.0;
 
+// The least cable stiffness E*A a robot file (either kind) accepts, as a multiple of
+// tension.max: a cable stretching more than a tenth of its length at the largest tension is a
+// unit slip (kN typed for N), not a cable.
+constexpr double kMinStiffnessOverMaxTension = 10.0;
+
 struct Cable {
   Eigen::Vector2d p_F_exit_m;        // exit point A_i: the pulley's outermost point at centre height
   double pulley_radius_m = 0.0;
@@ -76,7 +81,26 @@ struct Cable {
   PulleyWrap wrap = PulleyWrap::kOver;
   Eigen::Vector2d p_P_anchor_m;      // anchor b_i on the platform, platform frame
   std::optional<double> initial_length_m;  // overrides the length at the home pose
+  // E*A (N): a cable of unstretched length L is L (1 + t / EA) long under tension t. Absent:
+  // inextensible. Only the forward model (model/forward_statics.h) uses it.
+  std::optional<double> stiffness_N;
 };
+
+// The unstretched length L of a cable l long under tension t, l = L (1 + t / EA), for either
+// kind's cable (its stiffness E*A, absent for an inextensible cable: L = l).
+template <typename T>
+T UnstretchedLength(const std::optional<double>& stiffness_N, const T& length_m, const T& tension_N) {
+  if (!stiffness_N) return length_m;
+  return length_m / (T(1.0) + tension_N / T(*stiffness_N));
+}
+
+// Its inverse for a cable of unstretched length L stretched to l: t = EA (l / L - 1) while
+// l > L, 0 when slack (a cable does not push).
+template <typename T>
+T ElasticTension(double stiffness_N, const T& length_m, const T& unstretched_length_m) {
+  const T strain = length_m / unstretched_length_m - T(1.0);
+  return strain > T(0.0) ? T(stiffness_N) * strain : T(0.0);
+}
 
 // The sensors' systematic errors (README, "Sensor error models"; the formulas are in
 // model/sensor_model.h): what a bench test fits and what is left once they are removed is the

@@ -98,7 +98,7 @@ Robot Parse(const YAML::Node& root, const Reader& rd) {
   for (std::size_t i = 0; i < cables.size(); ++i) {
     const std::string key = "cables[" + std::to_string(i) + "]";
     const YAML::Node c = cables[i];
-    rd.ExpectMap(c, key, {"exit", "pulley_radius", "side"}, {"initial_length", "wrap"});
+    rd.ExpectMap(c, key, {"exit", "pulley_radius", "side"}, {"initial_length", "wrap", "stiffness"});
     Cable cable;
     if (c["wrap"]) {
       const std::string wrap = rd.String(c["wrap"], key + ".wrap");
@@ -143,6 +143,10 @@ Robot Parse(const YAML::Node& root, const Reader& rd) {
     if (c["initial_length"]) {
       cable.initial_length_m = rd.Number(c, key, "initial_length");
       rd.Positive(c["initial_length"], key + ".initial_length", *cable.initial_length_m);
+    }
+    if (c["stiffness"]) {
+      cable.stiffness_N = rd.Number(c, key, "stiffness");
+      rd.Positive(c["stiffness"], key + ".stiffness", *cable.stiffness_N);
     }
     cable.p_P_anchor_m = rd.Vector2(anchors[i], "platform.anchors[" + std::to_string(i) + "]");
     robot.cables.push_back(cable);
@@ -198,6 +202,16 @@ Robot Parse(const YAML::Node& root, const Reader& rd) {
   if (!(robot.tension_min_N < robot.tension_max_N)) {
     rd.Fail(tension, "tension", "min must be < max (got min " + FormatDouble(robot.tension_min_N) +
                                     " N, max " + FormatDouble(robot.tension_max_N) + " N)");
+  }
+  // The same bound as the spatial file's (README, "Spatial robots").
+  for (std::size_t i = 0; i < robot.cables.size(); ++i) {
+    const std::optional<double>& ea = robot.cables[i].stiffness_N;
+    if (ea && !(*ea >= kMinStiffnessOverMaxTension * robot.tension_max_N)) {
+      const std::string key = "cables[" + std::to_string(i) + "].stiffness";
+      rd.Fail(cables[i]["stiffness"], key,
+              FormatDouble(*ea) + " N (E*A) would stretch the cable by more than " +
+                  FormatDouble(100.0 / kMinStiffnessOverMaxTension) + " % at tension.max: units? (E*A is in N)");
+    }
   }
 
   const YAML::Node limits = root["limits"];
@@ -336,6 +350,7 @@ void EmitRobotFields(YAML::Emitter& o, const Robot& robot) {
     o << YAML::Key << "side" << YAML::Value << (c.side == PulleySide::kLeft ? "left" : "right");
     if (c.wrap == PulleyWrap::kUnder) o << YAML::Key << "wrap" << YAML::Value << "under";
     if (c.initial_length_m) o << YAML::Key << "initial_length" << YAML::Value << YamlNumber{*c.initial_length_m};
+    if (c.stiffness_N) o << YAML::Key << "stiffness" << YAML::Value << YamlNumber{*c.stiffness_N};
     o << YAML::EndMap;
   }
   o << YAML::EndSeq;

@@ -14,6 +14,7 @@
 #include "common/yaml_writer.h"
 #include "model/sensor_model.h"
 #include "model/spatial_robot.h"
+#include "model/spatial_statics.h"
 #include "model/swivel.h"
 #include "model/yaml_reader.h"
 
@@ -26,12 +27,16 @@ using internal::Reader;
 constexpr double kSamePoint_m = 1e-6;
 // The least load-cell sigma: a milli-newton is finer than any load cell of a cable robot.
 constexpr double kMinLoadCellSigma_N = 1e-3;
-// The least stiffness, as a multiple of tension.max: a cable stretching more than a tenth of
-// its length at the largest tension is a unit slip (kN typed for N), not a cable.
-constexpr double kMinStiffnessOverMaxTension = 10.0;
 
 std::string Point(const Eigen::Vector3d& v) {
   return "(" + FormatDouble(v.x()) + ", " + FormatDouble(v.y()) + ", " + FormatDouble(v.z()) + ")";
+}
+
+// Numbers for a message, to `digits` significant digits: what a user reads, not round trips.
+std::string RoundedList(const Eigen::VectorXd& v, int digits) {
+  std::string s = "(";
+  for (int i = 0; i < v.size(); ++i) s += (i ? ", " : "") + Rounded(v(i), digits);
+  return s + ")";
 }
 
 // A sensor's two +- ranges (accuracy, repeatability; `_deg` keys for angles), each within
@@ -282,6 +287,20 @@ SpatialRobot Parse(const YAML::Node& root, const Reader& rd) {
                  : geometry.geometry == SwivelGeometry::kInsidePulley ? " (its anchor is inside the pulley)"
                                                                        : " (the wrap angle is outside [0, 270] degrees: "
                                                                          "is the swivel axis the way the cable arrives?)"));
+  }
+  // The statics last: the checks above name the simpler causes first.
+  const SpatialPoseEvaluation statics = EvaluateSpatialHome(robot);
+  if (!statics.feasible()) {
+    std::string why = ToString(statics.feasibility);
+    if (statics.cable >= 0) why += " (cables[" + std::to_string(statics.cable) + "])";
+    if (statics.has_equilibrium) {
+      why += "; tensions " + RoundedList(statics.equilibrium.tensions_N, 4) + " N, bounds [" + FormatDouble(robot.tension_min_N) +
+             ", " + FormatDouble(robot.tension_max_N) + "]";
+      if (robot.num_cables() < 6) {
+        why += ", equilibrium rpy " + RoundedList(statics.equilibrium.q.tail<3>() / kDegToRad, 4) + " degrees";
+      }
+    }
+    rd.Fail(root["home"], "home", "the home pose " + Point(robot.p_F_home_m) + " m is not in the feasible workspace: " + why);
   }
 
   const YAML::Node sensors = root["sensors"];

@@ -11,6 +11,7 @@
 
 #include "common/error.h"
 #include "model/cable.h"
+#include "model/stability.h"
 
 namespace cablecal {
 namespace {
@@ -94,19 +95,7 @@ Equilibrium HeldPose(const Robot& robot, const Eigen::Vector3d& q, const Eigen::
 double ReducedStiffness(const Robot& robot, const Eigen::Vector3d& q,
                         const Eigen::VectorXd& tensions_N) {
   CABLECAL_CHECK(robot.num_cables() == 2, "the statics are implemented for 2 cables");
-  using Jet3 = ceres::Jet<double, 3>;
-  Pose<Jet3> q_jet;
-  for (int k = 0; k < 3; ++k) q_jet(k) = Jet3(q(k), k);
-  const Eigen::Matrix<Jet3, Eigen::Dynamic, 1> t_jet = tensions_N.cast<Jet3>();
-  const Vec3<Jet3> r = EquilibriumResidual<Jet3>(robot, q_jet, t_jet);
-  // K = d^2 L / dq^2 = -d(W t + w_g)/dq at fixed t (the Lagrangian's Hessian).
-  Eigen::Matrix3d K;
-  for (int i = 0; i < 3; ++i) K.row(i) = -r(i).v.transpose();
-  // The motion the cables allow keeps every length: it is normal to every column of W.
-  const Eigen::Matrix<double, 3, Eigen::Dynamic> W = WrenchMatrix<double>(robot, q);
-  Eigen::Vector3d n = W.col(0).cross(W.col(1));
-  n.normalize();
-  return n.dot(K * n);
+  return StaticStability(robot, q, tensions_N, InextensibleCables(2)).min_eigenvalue;
 }
 
 EquilibriumResult SolveEquilibrium(const Robot& robot, double x_m, double z_m) {
@@ -245,6 +234,10 @@ const char* ToString(Feasibility f) {
     case Feasibility::kThetaLimit: return "theta_limit";
     case Feasibility::kTensionLow: return "tension_low";
     case Feasibility::kTensionHigh: return "tension_high";
+    case Feasibility::kTiltLimit: return "tilt_limit";
+    case Feasibility::kSwivelAxis: return "swivel_axis";
+    case Feasibility::kInsidePulley: return "inside_pulley";
+    case Feasibility::kWrap: return "wrap";
   }
   return "unknown";
 }
@@ -379,7 +372,7 @@ ThetaScan ScanTheta(const Robot& robot, double x_m, double z_m) {
     return scan;
   }
   // Nothing feasible: the reason most orientations give (the first in scan order on a tie).
-  int counts[16] = {0};
+  int counts[kNumFeasibility] = {0};
   for (const PoseEvaluation& e : evaluations) ++counts[static_cast<int>(e.feasibility)];
   int best = 0;
   for (std::size_t k = 1; k < evaluations.size(); ++k) {
@@ -548,7 +541,8 @@ ForwardResult ForwardNewton(const Robot& robot, const Eigen::VectorXd& lengths_m
 }
 
 
-// m >= 3: Gauss-Newton on l(q) = L from one start (dl/dq = -W', model/cable.h).
+// m >= 3: Gauss-Newton on l(q) = L from one start (dl/dq = -W', model/cable.h); the
+// least-squares pose when m >= 4 lengths are inconsistent.
 ForwardResult GaussNewtonLengths(const Robot& robot, const Eigen::VectorXd& lengths_m, const Eigen::Vector3d& start) {
   constexpr int kMaxIterations = 60;
   constexpr double kStepTol = 1e-13;  // m and rad: at the least-squares minimum to rounding
@@ -637,9 +631,17 @@ ForwardResult ForwardKinematics(const Robot& robot, const Eigen::VectorXd& lengt
 
 }  // namespace
 
+ForwardResult LeastSquaresPoseGuess(const Robot& robot, const Eigen::VectorXd& lengths_m,
+                                    const Eigen::Vector3d* guess) {
+  CABLECAL_CHECK(lengths_m.size() == robot.num_cables(), "one length per cable");
+  if (robot.theta_is_free()) return ForwardKinematics(robot, lengths_m, guess);
+  return SolveForwardGeometricoStatic(robot, lengths_m, guess);
+}
+
 ForwardResult SolveForwardGeometricoStatic(const Robot& robot, const Eigen::VectorXd& lengths_m,
                                            const Eigen::Vector3d* guess) {
   CABLECAL_CHECK(lengths_m.size() == robot.num_cables(), "one length per cable");
+  CABLECAL_CHECK(robot.num_cables() <= 3, "more than 3 inextensible cables over-determine the pose (forward_statics.h)");
   if (robot.theta_is_free()) return ForwardKinematics(robot, lengths_m, guess);
   ForwardResult last;
   if (guess) {

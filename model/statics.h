@@ -63,7 +63,15 @@ enum class Feasibility {
   kThetaLimit,     // |theta| beyond the inclinometer range
   kTensionLow,
   kTensionHigh,
+  // Spatial robots (model/spatial_statics.h); the planar code reports kCableGeometry and
+  // kThetaLimit instead.
+  kTiltLimit,      // the platform's tilt beyond limits.tilt_max_deg
+  kSwivelAxis,     // an anchor on its swivel axis (model/swivel.h)
+  kInsidePulley,   // an anchor inside its pulley, or closer to it than the margin
+  kWrap,           // a wrap angle outside [0, 270] degrees
 };
+// The number of reasons (kWrap is the last): the size of a table indexed by reason.
+constexpr int kNumFeasibility = static_cast<int>(Feasibility::kWrap) + 1;
 const char* ToString(Feasibility f);  // "feasible", "outside_frame", ...
 
 struct PoseEvaluation {
@@ -156,18 +164,27 @@ struct ForwardResult {
   double length_residual_m = 0.0;
 };
 
-// Forward geometrico-static model: cable lengths (exit point -> anchor) -> the pose where
-// the platform settles.
+// Forward geometrico-static model of inextensible cables: cable lengths (exit point -> anchor)
+// -> the pose where the platform settles. Requires m = 2 or 3 (more rigid cables over-determine
+// the pose: a true robot with them is elastic, model/forward_statics.h).
 // m = 2: Newton on the square system [l(q) - L; W(q) t + w_g(q)] = 0 in (x, z, theta, t),
 // started from `guess` (e.g. the commanded pose) and, if that fails or no guess is given,
 // from the intersections of the length circles at a few orientations.
-// m >= 3 (forward kinematics): Gauss-Newton on l(q) = L from `guess` (else the home pose, then
-// circle intersections), the least-squares pose when m >= 4 lengths are not all consistent
-// (length_residual_m says by how much); then the tension distribution there (kSlack when no
-// t > 0 holds it). A solution more than kOtherAssemblyDistance from the guess, with a cable off
-// its pulley or the platform outside the frame is kOtherAssembly.
+// m = 3 (forward kinematics): Gauss-Newton on l(q) = L from `guess` (else the home pose, then
+// circle intersections); then the tension distribution there (kSlack when no t > 0 holds it). A
+// solution more than kOtherAssemblyDistance from the guess, with a cable off its pulley or the
+// platform outside the frame is kOtherAssembly.
 ForwardResult SolveForwardGeometricoStatic(const Robot& robot, const Eigen::VectorXd& lengths_m,
                                            const Eigen::Vector3d* guess = nullptr);
+
+// A geometric starting guess, not where a true robot settles: m >= 3, the pose whose lengths are
+// nearest `lengths_m` in least squares, the cables taken as rigid (the m = 3 forward kinematics
+// above, which for m >= 4 inconsistent lengths meets only in least squares: length_residual_m
+// says by how much), with the tension distribution there; m = 2, SolveForwardGeometricoStatic.
+// The identification's starting poses and validate's pose for a robot of more than 3 cables
+// without stiffness (identify/identify_cables.h, identify/validate.cc) use it.
+ForwardResult LeastSquaresPoseGuess(const Robot& robot, const Eigen::VectorXd& lengths_m,
+                                    const Eigen::Vector3d* guess = nullptr);
 // "Far from the guess" for kOtherAssembly: a true robot settles millimetres from its
 // commanded pose, another assembly tens of centimetres or degrees away.
 constexpr double kOtherAssemblyDistance_m = 0.25;

@@ -284,8 +284,7 @@ Eigen::Matrix<T, 6, 1> EquilibriumResidual(const SpatialRobot& robot, const Spat
 // inextensible cable (stiffness absent).
 template <typename T>
 T UnstretchedLength(const SpatialCable& cable, const T& length_m, const T& tension_N) {
-  if (!cable.stiffness_N) return length_m;
-  return length_m / (T(1.0) + tension_N / T(*cable.stiffness_N));
+  return UnstretchedLength<T>(cable.stiffness_N, length_m, tension_N);
 }
 
 }  // namespace cablecal

@@ -1,5 +1,7 @@
 #include "montecarlo/montecarlo.h"
 
+#include "model/forward_statics.h"
+
 #include <omp.h>
 
 #include <chrono>
@@ -174,6 +176,8 @@ Criterion CriterionOf(PoseSetDesign d) {
 }  // namespace
 
 void ValidateOptions(const MonteCarloOptions& o, const Robot* nominal) {
+  // Every trial simulates a true robot (model/forward_statics.h).
+  if (nominal) CheckSimulatable(*nominal);
   if (o.trials < 1) throw InputError("--trials", "", "must be at least 1");
   if (o.geometry_prior && !(o.geometry_sigma_m >= kMinGeometryPriorSigma_m)) {
     throw InputError("--geometry-prior", "", "needs --geometry-sigma of at least " + FormatDouble(kMinGeometryPriorSigma_m) +

@@ -66,7 +66,7 @@ inline SpatialRobot RandomSpatialRobot(Rng& rng, const std::string& name, int nu
     const Eigen::Vector3d half(rng.Uniform(0.1, 0.4), rng.Uniform(0.1, 0.4), rng.Uniform(0.05, 0.3));
     for (int i = 0; i < num_cables; ++i) {
       SpatialCable c;
-      const bool upper = rng.Uniform() < 2.0 / 3.0;
+      const bool upper = rng.Uniform() < 2.0 / 3.0 || num_cables < 6;
       const double z = upper ? rng.Uniform(H - 0.6, H) : rng.Uniform(0.0, 0.5);
       c.p_F_exit_m = PointOnSideFaces(rng, r.p_F_frame_min_m, r.p_F_frame_max_m, z);
       if (rng.Uniform() < 0.25) {
@@ -91,11 +91,21 @@ inline SpatialRobot RandomSpatialRobot(Rng& rng, const std::string& name, int nu
     const double deg = M_PI / 180.0;
     r.home_rpy_rad = Eigen::Vector3d(rng.Uniform(-10.0, 10.0) * deg, rng.Uniform(-10.0, 10.0) * deg,
                                      rng.Uniform(-30.0, 30.0) * deg);
+    if (num_cables < 6) {
+      // A hanging robot's anchors face their exits (else the cables cross and no orientation
+      // near the drawn one balances the platform): anchor i's x-y direction in P is its exit's
+      // azimuth from home, at the home yaw, within +-20 degrees; its height as drawn.
+      for (SpatialCable& c : r.cables) {
+        const Eigen::Vector3d to_exit = c.p_F_exit_m - r.p_F_home_m;
+        const double a = std::atan2(to_exit.y(), to_exit.x()) - r.home_rpy_rad.z() + rng.Uniform(-20.0, 20.0) * deg;
+        c.p_P_anchor_m.head<2>() = Eigen::Vector2d(half.x() * std::cos(a), half.y() * std::sin(a));
+      }
+    }
     r.sensors.encoder_sigma_m = 5e-5;
     r.sensors.tracker_sigma_m = 5e-4;
     try {
       return LoadSpatialRobotFromString(SpatialRobotToYaml(r), name);
-    } catch (const InputError&) {
+    } catch (const InputError& e) { if (getenv("PROBE")) fprintf(stderr, "%d %s\n", num_cables, e.what());
       // refused (a coincident exit, invalid geometry at home, ...): draw again
     }
   }
