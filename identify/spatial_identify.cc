@@ -386,9 +386,9 @@ std::string PoseCoordinateNames(const Eigen::Matrix<double, 6, 1>& v) {
 // The reduced geometry Jacobian: for each pose, its rows projected onto the orthogonal
 // complement of its own pose columns (Householder QR, nothing squared), so that the stacked
 // rows see exactly the geometry directions no pose change can compensate; the prior's rows as
-// they are. InputError for a pose its own readings do not determine (when `refuse`).
+// they are (with_prior). InputError for a pose its own readings do not determine (when `refuse`).
 MatrixXd ReducedJacobian(const Model& model, const VectorXd& g, const std::vector<SpatialPose<double>>& poses,
-                         bool refuse) {
+                         bool refuse, bool with_prior) {
   const int p = g.size();
   std::vector<MatrixXd> blocks;
   int total = 0;
@@ -422,6 +422,7 @@ MatrixXd ReducedJacobian(const Model& model, const VectorXd& g, const std::vecto
     total += rows - 6;
   }
   for (int k : model.prior_terms) {
+    if (!with_prior) break;
     const Term& t = model.terms[k];
     MatrixXd jg;
     VectorXd r(t.size());
@@ -570,6 +571,28 @@ std::string DescribeAll(const std::vector<SpatialDirection>& d) {
   return Join(w, "; ");
 }
 
+// The column-pivoted QR of E^T (E: the null basis's exit rows, 3m x k) by modified
+// Gram-Schmidt: k times, the exit coordinate whose row has the largest norm left after
+// removing the rows already chosen. Row norms and projections do not depend on which
+// orthonormal basis of the null space the SVD returned, so neither does the choice; near-ties
+// (within 1e-6 relative, e.g. the symmetric exits of a built-in robot) go to the lowest index,
+// so that noise in the readings never changes the held set.
+std::vector<int> PivotedExitCoordinates(const MatrixXd& E) {
+  MatrixXd rows = E;
+  std::vector<int> held;
+  for (int c = 0; c < E.cols(); ++c) {
+    const VectorXd norms = rows.rowwise().norm();
+    const double largest = norms.maxCoeff();
+    int best = 0;
+    while (norms(best) < (1.0 - 1e-6) * largest) ++best;
+    held.push_back(best);
+    const VectorXd q = rows.row(best).transpose() / norms(best);
+    rows -= (rows * q) * q.transpose();
+  }
+  std::sort(held.begin(), held.end());
+  return held;
+}
+
 struct Analysis {
   Model model;
   VectorXd g0;
@@ -593,7 +616,7 @@ Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasureme
                                          " poses): too few to determine the geometry; measure more poses");
   }
   for (int j = 0; j < n; ++j) a.start.push_back(StartingPose(a.model, j, a.g0, nominal.home_pose()));
-  const MatrixXd A = ReducedJacobian(a.model, a.g0, a.start, true);
+  const MatrixXd A = ReducedJacobian(a.model, a.g0, a.start, true, false);  // what the readings alone see
   const Eigen::JacobiSVD<MatrixXd> svd = SmallSvd(A);
   const VectorXd& s = svd.singularValues();
   const double largest = s(0);
@@ -635,9 +658,7 @@ Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasureme
   }
   switch (options.gauge.kind) {
     case SpatialGaugeKind::kAuto: {
-      Eigen::ColPivHouseholderQR<MatrixXd> qr(E.transpose());
-      for (int c = 0; c < k; ++c) a.gauge.held.push_back(qr.colsPermutation().indices()(c));
-      std::sort(a.gauge.held.begin(), a.gauge.held.end());
+      a.gauge.held = PivotedExitCoordinates(E);
       break;
     }
     case SpatialGaugeKind::kHold: {
@@ -869,7 +890,7 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
     return result;
   }
   // Covariance at the estimate with the gauge held.
-  const MatrixXd A = ReducedJacobian(model, g, poses, false);
+  const MatrixXd A = ReducedJacobian(model, g, poses, false, true);
   std::vector<int> free;
   for (int c = 0; c < p; ++c) {
     if (!std::count(a.gauge.held.begin(), a.gauge.held.end(), c)) free.push_back(c);
