@@ -71,6 +71,55 @@ struct EncoderCost {
   }
 };
 
+// Encoder of an elastic cable: the paid-out (unstretched) length at the pose's tension t of the
+// cable, model/robot.h's elastic law (UnstretchedLength), less its value at home l0.
+struct ElasticEncoderCost {
+  CableData cable;
+  std::optional<double> stiffness_N;
+  double dl_m, inv_sigma;
+  template <typename T>
+  bool operator()(const T* q, const T* t, const T* d, const T* l0, T* r) const {
+    r[0] = (UnstretchedLength<T>(stiffness_N, cable.At(q, d).length_m, t[0]) - l0[0] - T(dl_m)) * T(inv_sigma);
+    return true;
+  }
+};
+
+// Load cell: the cable's tension (the pose block is a parameter only to tie the term to its pose).
+struct LoadCellCost {
+  double reading_N, inv_sigma;
+  template <typename T>
+  bool operator()(const T* /*q*/, const T* t, T* r) const {
+    r[0] = (t[0] - T(reading_N)) * T(inv_sigma);
+    return true;
+  }
+};
+
+// The pose's equilibrium W(q, D) t + w_g(q) (model/swivel.h's EquilibriumResidual, its columns
+// WrenchColumn of each cable through the exit block's D rather than the file's), force rows
+// over kEquilibriumWeightRelativeSigma m g, moment rows over m g kDefaultComSigma_m (the header).
+// Parameters: the pose, the m tensions (1 each), the m exit points (3 each).
+struct EquilibriumCost {
+  std::shared_ptr<const SpatialRobot> robot;
+  std::vector<CableData> cables;
+  double inv_force, inv_moment;
+  template <typename T>
+  bool operator()(T const* const* p, T* r) const {
+    const int m = static_cast<int>(cables.size());
+    const SpatialPose<T> pose = PoseOf(p[0]);
+    const Eigen::Matrix<T, 3, 3> R = Rotation<T>(pose);
+    Eigen::Matrix<T, 6, 1> w = GravityWrench<T>(*robot, pose);
+    for (int i = 0; i < m; ++i) {
+      const Vec3<T> r_F_anchor = R * cables[i].p_P_anchor_m.cast<T>();
+      w += p[1 + i][0] * WrenchColumn<T>(r_F_anchor, cables[i].At(p[0], p[1 + m + i]));
+    }
+    for (int a = 0; a < 3; ++a) {
+      r[a] = w(a) * T(inv_force);
+      r[3 + a] = w(3 + a) * T(inv_moment);
+    }
+    return true;
+  }
+};
+
 // Swivel encoder: the pulley's angle about k from the reference direction u_ref (the nominal
 // home's), less the encoder's zero offset sw0; the difference from the reading wrapped so that
 // a reading near +-pi does not jump.
@@ -143,20 +192,62 @@ struct ExitPriorCost {
 struct Term {
   std::unique_ptr<ceres::CostFunction> cost;
   int pose = -1;
+  std::vector<int> tension_cables;  // the pose's tension blocks it reads, after the pose block
   std::vector<int> block_offset, block_size;
   int reading = -1;  // -1: the prior
-  int sensor = -1;   // -1: an encoder; else SpatialSensor
+  int sensor = -1;   // -1: an encoder; kEquilibriumTerm; else SpatialSensor
   int value = 0;     // the first value of the reading's sensor it computes (the cable, ...)
   int size() const { return cost->num_residuals(); }
 };
+
+constexpr int kEquilibriumTerm = -2;
 
 template <typename Functor, int... Sizes>
 std::unique_ptr<ceres::CostFunction> Cost(Functor f) {
   return std::make_unique<ceres::AutoDiffCostFunction<Functor, Sizes...>>(new Functor(f));
 }
 
+// A pose's term as Ceres sees it when the pose has tensions: one parameter block per pose, its
+// 6 coordinates then its tensions (so that the Schur elimination takes them together: a pose's
+// blocks may share no residual), the term's own cost evaluated on views of it.
+class LocalBlockCost : public ceres::CostFunction {
+ public:
+  LocalBlockCost(const Term& term, int local) : term_(term), local_(local) {
+    set_num_residuals(term.size());
+    mutable_parameter_block_sizes()->push_back(local);
+    for (int s : term.block_size) mutable_parameter_block_sizes()->push_back(s);
+  }
+  bool Evaluate(double const* const* p, double* r, double** J) const override {
+    const std::vector<int>& tc = term_.tension_cables;
+    const int n = num_residuals();
+    std::vector<const double*> inner{p[0]};
+    for (int i : tc) inner.push_back(p[0] + 6 + i);
+    for (std::size_t b = 0; b < term_.block_size.size(); ++b) inner.push_back(p[1 + b]);
+    if (J == nullptr) return term_.cost->Evaluate(inner.data(), r, nullptr);
+    std::vector<double> pose_jac(J[0] ? n * 6 : 0), tension_jac(J[0] ? n * tc.size() : 0);
+    std::vector<double*> inner_jac{J[0] ? pose_jac.data() : nullptr};
+    for (std::size_t k = 0; k < tc.size(); ++k) inner_jac.push_back(J[0] ? tension_jac.data() + k * n : nullptr);
+    for (std::size_t b = 0; b < term_.block_size.size(); ++b) inner_jac.push_back(J[1 + b]);
+    if (!term_.cost->Evaluate(inner.data(), r, inner_jac.data())) return false;
+    if (J[0]) {
+      std::fill(J[0], J[0] + n * local_, 0.0);
+      for (int row = 0; row < n; ++row) {
+        for (int c = 0; c < 6; ++c) J[0][row * local_ + c] = pose_jac[row * 6 + c];
+        for (std::size_t k = 0; k < tc.size(); ++k) J[0][row * local_ + 6 + tc[k]] = tension_jac[k * n + row];
+      }
+    }
+    return true;
+  }
+
+ private:
+  const Term& term_;
+  int local_;
+};
+
 struct Model {
   Layout layout;
+  int nt = 0;  // tension unknowns per pose: m when the statics are modelled, else 0
+  int local() const { return 6 + nt; }
   std::vector<Term> terms;
   std::vector<int> pose_ids;
   std::vector<std::string> pose_where;       // the first reading's where, per pose
@@ -178,16 +269,48 @@ double SigmaOf(const SpatialRobot& robot, SpatialSensor s, const std::string& wh
   return noise->sigma();
 }
 
-Model BuildModel(const SpatialRobot& robot, const std::vector<SpatialMeasurement>& readings, bool prior) {
+Model BuildModel(const SpatialRobot& robot, const std::vector<SpatialMeasurement>& readings, bool prior,
+                 bool statics) {
   Model model;
   const int m = robot.num_cables();
   if (readings.empty()) throw InputError("readings", "", "no readings: nothing to identify");
   Layout& L = model.layout;
   L.m = m;
+  bool load_cells = false;
   for (const SpatialMeasurement& r : readings) {
     L.swivel = L.swivel || r.has(SpatialSensor::kSwivel);
     L.heading = L.heading || r.has(SpatialSensor::kHeading);
+    load_cells = load_cells || r.has(SpatialSensor::kLoadCell);
   }
+  // The statics join when they carry information (the header's file comment).
+  int inextensible = 0, first_inextensible = -1;
+  for (int i = 0; i < m; ++i) {
+    if (robot.cables[i].stiffness_N) continue;
+    if (first_inextensible < 0) first_inextensible = i;
+    ++inextensible;
+  }
+  model.nt = statics && (load_cells || inextensible < m || m < 6) ? m : 0;
+  if (model.nt > 0 && inextensible > 6) {
+    // W t = -w_g fixes 6 combinations of the tensions; a rigid cable's length says nothing of
+    // its own, so the rest of more than 6 rigid cables' tensions is free whatever is read.
+    const std::string why = std::to_string(inextensible) +
+                            " cables without stiffness: their tensions are indeterminate from the readings (the "
+                            "equilibrium fixes only 6 combinations of them, and an inextensible cable's length "
+                            "says nothing of its tension)";
+    if (load_cells) {
+      throw InputError(robot.source, "sensors.load_cell",
+                       "load-cell readings on a robot with " + why + ": give every cable its stiffness (cables[" +
+                           std::to_string(first_inextensible) + "].stiffness, ...) or leave out the f1..f" +
+                           std::to_string(m) + " columns");
+    }
+    throw InputError(robot.source, "cables[" + std::to_string(first_inextensible) + "].stiffness",
+                     "some cables stretch but " + why + ": give every cable its stiffness, or none");
+  }
+  const double weight_N = robot.platform_mass_kg * robot.gravity_mps2;
+  if (model.nt > 0 && !(weight_N > 0.0)) {
+    throw InputError(robot.source, "platform.mass", "the equilibrium needs the platform's weight, and it is 0");
+  }
+  auto shared_robot = std::make_shared<const SpatialRobot>(robot);
   if (!(robot.sensors.encoder_sigma_m > 0.0)) throw InputError(robot.source, "sensors.encoder", "sigma is 0");
   const double inv_encoder = 1.0 / robot.sensors.encoder_sigma_m;
   const SpatialSensorZero reference = SensorZeroAt(robot, robot.home_pose());
@@ -210,10 +333,11 @@ Model BuildModel(const SpatialRobot& robot, const std::vector<SpatialMeasurement
     }
     const int j = it->second;
     const auto add = [&](std::unique_ptr<ceres::CostFunction> cost, std::vector<int> offset, std::vector<int> size,
-                         int sensor, int value) {
+                         int sensor, int value, std::vector<int> tension_cables = {}) {
       Term t;
       t.cost = std::move(cost);
       t.pose = j;
+      t.tension_cables = std::move(tension_cables);
       t.block_offset = std::move(offset);
       t.block_size = std::move(size);
       t.reading = k;
@@ -224,11 +348,35 @@ Model BuildModel(const SpatialRobot& robot, const std::vector<SpatialMeasurement
       model.num_values += t.size();
       model.terms.push_back(std::move(t));
     };
+    if (added && model.nt > 0) {  // one equilibrium per pose, however often it was read
+      std::vector<CableData> cables;
+      std::vector<int> offset, size, tension_cables;
+      for (int i = 0; i < m; ++i) {
+        const SpatialCable& c = robot.cables[i];
+        cables.push_back(CableData{c.k_F_swivel_axis, c.pulley_radius_m, c.p_P_anchor_m});
+        offset.push_back(L.exit(i));
+        size.push_back(3);
+        tension_cables.push_back(i);
+      }
+      auto* cost = new ceres::DynamicAutoDiffCostFunction<EquilibriumCost, 4>(new EquilibriumCost{
+          shared_robot, cables, 1.0 / (kEquilibriumWeightRelativeSigma * weight_N),
+          1.0 / (kDefaultComSigma_m * weight_N)});
+      cost->AddParameterBlock(6);
+      for (int i = 0; i < m; ++i) cost->AddParameterBlock(1);
+      for (int i = 0; i < m; ++i) cost->AddParameterBlock(3);
+      cost->SetNumResiduals(6);
+      add(std::unique_ptr<ceres::CostFunction>(cost), offset, size, kEquilibriumTerm, 0, tension_cables);
+    }
     for (int i = 0; i < m; ++i) {
       const SpatialCable& c = robot.cables[i];
       const CableData cable{c.k_F_swivel_axis, c.pulley_radius_m, c.p_P_anchor_m};
-      add(Cost<EncoderCost, 1, 6, 3, 1>(EncoderCost{cable, r.dl_m(i), inv_encoder}), {L.exit(i), L.length(i)}, {3, 1},
-          -1, i);
+      if (model.nt > 0 && c.stiffness_N) {
+        add(Cost<ElasticEncoderCost, 1, 6, 1, 3, 1>(ElasticEncoderCost{cable, c.stiffness_N, r.dl_m(i), inv_encoder}),
+            {L.exit(i), L.length(i)}, {3, 1}, -1, i, {i});
+      } else {
+        add(Cost<EncoderCost, 1, 6, 3, 1>(EncoderCost{cable, r.dl_m(i), inv_encoder}), {L.exit(i), L.length(i)},
+            {3, 1}, -1, i);
+      }
     }
     for (const SpatialSensor s : kSpatialSensors) {
       if (!r.has(s)) continue;
@@ -237,7 +385,7 @@ Model BuildModel(const SpatialRobot& robot, const std::vector<SpatialMeasurement
         throw InputError(where, sname, std::to_string(r.values(s).size()) + " values, expected " +
                                            std::to_string(SpatialSensorSize(s, m)));
       }
-      if (s == SpatialSensor::kLoadCell) {  // not modelled yet (the equilibrium's layer)
+      if (s == SpatialSensor::kLoadCell && model.nt == 0) {  // the statics left out (options.statics)
         if (std::find(model.unused_sensors.begin(), model.unused_sensors.end(), sname) == model.unused_sensors.end()) {
           model.unused_sensors.push_back(sname);
         }
@@ -268,7 +416,9 @@ Model BuildModel(const SpatialRobot& robot, const std::vector<SpatialMeasurement
         case SpatialSensor::kHeading:
           add(Cost<HeadingCost, 1, 6, 1>(HeadingCost{v(0), inv}), {L.yaw0()}, {1}, sensor, 0);
           break;
-        case SpatialSensor::kLoadCell: break;
+        case SpatialSensor::kLoadCell:
+          for (int i = 0; i < m; ++i) add(Cost<LoadCellCost, 1, 6, 1>(LoadCellCost{v(i), inv}), {}, {}, sensor, i, {i});
+          break;
       }
     }
   }
@@ -290,21 +440,25 @@ Model BuildModel(const SpatialRobot& robot, const std::vector<SpatialMeasurement
   return model;
 }
 
-// A term's residuals and (when asked) its Jacobians: d r / d pose (size x 6) and d r / d geometry
-// (size x p, only its blocks' columns nonzero).
-void EvaluateTerm(const Term& t, const VectorXd& g, const std::vector<SpatialPose<double>>& poses, double* residuals,
-                  MatrixXd* d_pose, MatrixXd* d_geometry) {
+// Each pose's local unknowns: its 6 coordinates, then its tensions (Model::nt, N).
+using Locals = std::vector<VectorXd>;
+
+// A term's residuals and (when asked) its Jacobians: d r / d local (size x (6 + nt): the pose's
+// coordinates, then its tensions) and d r / d geometry (size x p, only its blocks' columns
+// nonzero).
+void EvaluateTerm(const Term& t, const VectorXd& g, const Locals& locals, double* residuals, MatrixXd* d_local,
+                  MatrixXd* d_geometry) {
   std::vector<const double*> params;
-  if (t.pose >= 0) params.push_back(poses[t.pose].data());
+  if (t.pose >= 0) params.push_back(locals[t.pose].data());
+  for (int i : t.tension_cables) params.push_back(locals[t.pose].data() + 6 + i);
   for (int b : t.block_offset) params.push_back(g.data() + b);
   const int n = t.size();
   using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   std::vector<RowMajor> jac;
   std::vector<double*> jac_ptr;
-  if (d_pose || d_geometry) {
-    if (t.pose >= 0) {
-      jac.emplace_back(n, 6);
-    }
+  if (d_local || d_geometry) {
+    if (t.pose >= 0) jac.emplace_back(n, 6);
+    for (std::size_t i = 0; i < t.tension_cables.size(); ++i) jac.emplace_back(n, 1);
     for (int s : t.block_size) jac.emplace_back(n, s);
     for (RowMajor& j : jac) jac_ptr.push_back(j.data());
   }
@@ -313,10 +467,14 @@ void EvaluateTerm(const Term& t, const VectorXd& g, const std::vector<SpatialPos
   if (jac_ptr.empty()) return;
   int next = 0;
   if (t.pose >= 0) {
-    if (d_pose) *d_pose = jac[0];
-    next = 1;
-  } else if (d_pose) {
-    d_pose->setZero(n, 6);
+    if (d_local) {
+      d_local->setZero(n, locals[t.pose].size());
+      d_local->leftCols(6) = jac[0];
+      for (std::size_t k = 0; k < t.tension_cables.size(); ++k) d_local->col(6 + t.tension_cables[k]) = jac[1 + k];
+    }
+    next = 1 + static_cast<int>(t.tension_cables.size());
+  } else if (d_local) {
+    d_local->setZero(n, 6);
   }
   if (d_geometry) {
     d_geometry->setZero(n, g.size());
@@ -326,15 +484,17 @@ void EvaluateTerm(const Term& t, const VectorXd& g, const std::vector<SpatialPos
   }
 }
 
-// The starting pose of each pose: Levenberg-Marquardt on its own readings alone, from home, with
-// the geometry g (nominal: exits as in the file, l_i0 the nominal home's lengths).
-SpatialPose<double> StartingPose(const Model& model, int j, const VectorXd& g, const SpatialPose<double>& home) {
-  std::vector<SpatialPose<double>> q(model.pose_ids.size(), home);
+// The starting local unknowns of pose j: Levenberg-Marquardt on its own readings (and its
+// equilibrium) alone, from `start` (home and the first tensions), with the geometry g (nominal:
+// exits as in the file, l_i0 the nominal home's lengths).
+VectorXd StartingLocal(const Model& model, int j, const VectorXd& g, const VectorXd& start) {
+  Locals q(model.pose_ids.size(), start);
   const int rows = model.pose_values[j];
-  const auto evaluate = [&](const SpatialPose<double>& pose, VectorXd* r, MatrixXd* J) {
-    q[j] = pose;
+  const int cols = start.size();
+  const auto evaluate = [&](const VectorXd& x, VectorXd* r, MatrixXd* J) {
+    q[j] = x;
     r->resize(rows);
-    if (J) J->resize(rows, 6);
+    if (J) J->resize(rows, cols);
     int row = 0;
     for (int k : model.pose_terms[j]) {
       const Term& t = model.terms[k];
@@ -344,40 +504,41 @@ SpatialPose<double> StartingPose(const Model& model, int j, const VectorXd& g, c
       row += t.size();
     }
   };
-  SpatialPose<double> pose = home;
+  VectorXd x = start;
   VectorXd r;
   MatrixXd J;
-  evaluate(pose, &r, &J);
+  evaluate(x, &r, &J);
   double cost = r.squaredNorm(), lambda = 1e-6;
-  for (int it = 0; it < 100 && cost > 0.0; ++it) {
-    const Eigen::Matrix<double, 6, 6> H = J.transpose() * J;
-    const Eigen::Matrix<double, 6, 1> grad = J.transpose() * r;
-    Eigen::Matrix<double, 6, 6> damped = H;
+  for (int it = 0; it < 200 && cost > 0.0; ++it) {
+    const MatrixXd H = J.transpose() * J;
+    const VectorXd grad = J.transpose() * r;
+    MatrixXd damped = H;
     damped.diagonal() += lambda * (H.diagonal().array() + 1e-12).matrix();
-    const Eigen::Matrix<double, 6, 1> step = damped.ldlt().solve(-grad);
+    const VectorXd step = damped.ldlt().solve(-grad);
     VectorXd r_new;
-    const SpatialPose<double> trial = pose + step;
+    const VectorXd trial = x + step;
     evaluate(trial, &r_new, nullptr);
     const double cost_new = r_new.squaredNorm();
     if (std::isfinite(cost_new) && cost_new < cost) {
-      pose = trial;
+      x = trial;
       cost = cost_new;
       lambda = std::max(lambda / 10.0, 1e-12);
-      evaluate(pose, &r, &J);
-      if (step.norm() < 1e-13) break;
+      evaluate(x, &r, &J);
+      if (step.norm() < 1e-13 * (1.0 + x.norm())) break;
     } else {
       lambda *= 10.0;
       if (lambda > 1e12) break;
     }
   }
-  return pose;
+  return x;
 }
 
-std::string PoseCoordinateNames(const Eigen::Matrix<double, 6, 1>& v) {
+std::string LocalCoordinateNames(const VectorXd& v) {
   std::string out;
-  for (int a = 0; a < 6; ++a) {
+  for (int a = 0; a < v.size(); ++a) {
     if (std::abs(v(a)) > 0.1 * v.cwiseAbs().maxCoeff()) {
-      out += (out.empty() ? "" : ", ") + std::string(SpatialKind::kPoseNames[a]);
+      out += (out.empty() ? "" : ", ") +
+             (a < 6 ? std::string(SpatialKind::kPoseNames[a]) : "the tension t" + std::to_string(a - 5));
     }
   }
   return out;
@@ -387,46 +548,48 @@ std::string PoseCoordinateNames(const Eigen::Matrix<double, 6, 1>& v) {
 // complement of its own pose columns (Householder QR, nothing squared), so that the stacked
 // rows see exactly the geometry directions no pose change can compensate; the prior's rows as
 // they are (with_prior). InputError for a pose its own readings do not determine (when `refuse`).
-MatrixXd ReducedJacobian(const Model& model, const VectorXd& g, const std::vector<SpatialPose<double>>& poses,
-                         bool refuse, bool with_prior) {
+MatrixXd ReducedJacobian(const Model& model, const VectorXd& g, const Locals& locals, bool refuse, bool with_prior) {
   const int p = g.size();
+  const int cols = model.local();
   std::vector<MatrixXd> blocks;
   int total = 0;
   for (std::size_t j = 0; j < model.pose_ids.size(); ++j) {
     const int rows = model.pose_values[j];
-    MatrixXd Jq(rows, 6), Jg(rows, p);
+    MatrixXd Jq(rows, cols), Jg(rows, p);
     int row = 0;
     VectorXd r(rows);
     for (int k : model.pose_terms[j]) {
       const Term& t = model.terms[k];
       MatrixXd jp, jg;
-      EvaluateTerm(t, g, poses, r.data() + row, &jp, &jg);
+      EvaluateTerm(t, g, locals, r.data() + row, &jp, &jg);
       Jq.middleRows(row, t.size()) = jp;
       Jg.middleRows(row, t.size()) = jg;
       row += t.size();
     }
     Eigen::JacobiSVD<MatrixXd> svd(Jq, Eigen::ComputeFullV);
     const VectorXd& s = svd.singularValues();
-    const bool deficient = rows < 6 || !(s(5) > kSpatialNullThreshold * s(0));
+    const bool deficient = rows < cols || !(s(cols - 1) > kSpatialNullThreshold * s(0));
     if (deficient) {
       if (!refuse) continue;
+      const std::string unknowns = model.nt > 0 ? "6 coordinates and " + std::to_string(model.nt) + " tensions"
+                                                : "6 coordinates";
       throw InputError(model.pose_where[j], "pose " + std::to_string(model.pose_ids[j]),
-                       "its own readings (" + std::to_string(rows) +
-                           " values) do not determine the pose's 6 coordinates (unseen: " +
-                           PoseCoordinateNames(svd.matrixV().col(5)) +
+                       "its own readings (" + std::to_string(rows) + " values" +
+                           (model.nt > 0 ? ", the equilibrium's 6 among them" : "") + ") do not determine the pose's " +
+                           unknowns + " (unseen: " + LocalCoordinateNames(svd.matrixV().col(cols - 1)) +
                            "): no reading fixes it; add a sensor that sees it, or more cables' encoders");
     }
     Eigen::HouseholderQR<MatrixXd> qr(Jq);
     MatrixXd projected = qr.householderQ().transpose() * Jg;
-    blocks.push_back(projected.bottomRows(rows - 6));
-    total += rows - 6;
+    blocks.push_back(projected.bottomRows(rows - cols));
+    total += rows - cols;
   }
   for (int k : model.prior_terms) {
     if (!with_prior) break;
     const Term& t = model.terms[k];
     MatrixXd jg;
     VectorXd r(t.size());
-    EvaluateTerm(t, g, poses, r.data(), nullptr, &jg);
+    EvaluateTerm(t, g, locals, r.data(), nullptr, &jg);
     blocks.push_back(jg);
     total += t.size();
   }
@@ -593,29 +756,78 @@ std::vector<int> PivotedExitCoordinates(const MatrixXd& E) {
   return held;
 }
 
+// The estimate's implausible parts (the header's kPlausibleExitOutsideFrame_m and the length
+// rule), in words.
+std::vector<std::string> PlausibilityWarnings(const SpatialRobot& nominal, const VectorXd& g, const VectorXd& g0,
+                                              const Layout& L) {
+  std::vector<std::string> out;
+  const Vector3d lo = nominal.p_F_frame_min_m, hi = nominal.p_F_frame_max_m;
+  const double diagonal_m = (hi - lo).norm();
+  char buf[160];
+  for (int i = 0; i < L.m; ++i) {
+    const Vector3d d = g.segment<3>(L.exit(i));
+    const double outside_m = (d.cwiseMax(lo).cwiseMin(hi) - d).norm();
+    if (outside_m > kPlausibleExitOutsideFrame_m) {
+      std::snprintf(buf, sizeof(buf), "exit point %d is %.3g m outside the frame box (more than %.3g m)", i + 1,
+                    outside_m, kPlausibleExitOutsideFrame_m);
+      out.push_back(std::string(buf) + ": wrong units, another robot's file, or a cable led elsewhere?");
+    }
+  }
+  for (int i = 0; i < L.m; ++i) {
+    const double off_m = g(L.length(i)) - g0(L.length(i));
+    if (std::abs(off_m) > diagonal_m) {
+      std::snprintf(buf, sizeof(buf), "l%d0 is %.4g m off its nominal %.4g m, more than the frame's diagonal %.4g m",
+                    i + 1, off_m, g0(L.length(i)), diagonal_m);
+      out.push_back(std::string(buf) + ": an encoder zeroed elsewhere, or readings of another cable order?");
+    }
+  }
+  return out;
+}
+
 struct Analysis {
   Model model;
   VectorXd g0;
-  std::vector<SpatialPose<double>> start;
+  Locals start;
   SpatialGaugeAnalysis gauge;
 };
 
 Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasurement>& readings,
                  const SpatialIdentifyOptions& options) {
   Analysis a;
-  a.model = BuildModel(nominal, readings, options.gauge.kind == SpatialGaugeKind::kPrior);
+  a.model = BuildModel(nominal, readings, options.gauge.kind == SpatialGaugeKind::kPrior, options.statics);
   const Layout& L = a.model.layout;
   a.g0 = NominalSpatialGeometry(nominal, L.swivel, L.heading);
   a.gauge.names = SpatialGeometryNames(L.m, L.swivel, L.heading);
   const int p = L.size();
   const int n = static_cast<int>(a.model.pose_ids.size());
-  if (a.model.num_values < p + 6 * n) {
+  const int local = a.model.local();
+  if (a.model.num_values < p + local * n) {
+    const std::string tensions =
+        a.model.nt > 0 ? " and " + std::to_string(a.model.nt) +
+                             " tensions per pose (the equilibrium's 6 rows per pose are among the values; a "
+                             "stretching cable's tension is an unknown that load cells would read)"
+                       : "";
     throw InputError("readings", "", std::to_string(a.model.num_values) + " reading values for " +
-                                         std::to_string(p + 6 * n) + " unknowns (" + std::to_string(p) +
-                                         " of the geometry, 6 per pose for " + std::to_string(n) +
-                                         " poses): too few to determine the geometry; measure more poses");
+                                         std::to_string(p + local * n) + " unknowns (" + std::to_string(p) +
+                                         " of the geometry, 6 coordinates per pose for " + std::to_string(n) +
+                                         " poses" + tensions +
+                                         "): too few to determine the geometry; measure more poses or add a sensor");
   }
-  for (int j = 0; j < n; ++j) a.start.push_back(StartingPose(a.model, j, a.g0, nominal.home_pose()));
+  // Each pose's start: home, and the tensions its first load-cell reading gives, else the
+  // least-squares tensions holding the nominal platform at home.
+  VectorXd start0(local);
+  start0.head<6>() = nominal.home_pose();
+  if (a.model.nt > 0) {
+    const Eigen::Matrix<double, 6, Eigen::Dynamic> W = WrenchMatrix<double>(nominal, nominal.home_pose());
+    const Eigen::Matrix<double, 6, 1> w_g = GravityWrench<double>(nominal, nominal.home_pose());
+    start0.tail(a.model.nt) = MatrixXd(W).completeOrthogonalDecomposition().solve(VectorXd(-w_g));
+  }
+  for (int j = 0; j < n; ++j) {
+    VectorXd s = start0;
+    const SpatialMeasurement& first = readings[a.model.terms[a.model.pose_terms[j][0]].reading];
+    if (a.model.nt > 0 && first.has(SpatialSensor::kLoadCell)) s.tail(a.model.nt) = first.values(SpatialSensor::kLoadCell);
+    a.start.push_back(StartingLocal(a.model, j, a.g0, s));
+  }
   const MatrixXd A = ReducedJacobian(a.model, a.g0, a.start, true, false);  // what the readings alone see
   const Eigen::JacobiSVD<MatrixXd> svd = SmallSvd(A);
   const VectorXd& s = svd.singularValues();
@@ -794,17 +1006,19 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
   result.unused_sensors = model.unused_sensors;
   for (int h : a.gauge.held) result.held.push_back(a.gauge.names[h]);
   result.pose_ids = model.pose_ids;
-  result.starting_poses = a.start;
+  for (const VectorXd& x : a.start) result.starting_poses.push_back(x.head<6>());
 
   VectorXd g = a.g0;
-  std::vector<SpatialPose<double>> poses = a.start;
+  Locals locals = a.start;
+  const int local = model.local();
+  std::vector<std::unique_ptr<ceres::CostFunction>> adapters;
   ceres::Problem::Options problem_options;
   problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
   auto* ordering = new ceres::ParameterBlockOrdering;
   for (int j = 0; j < n; ++j) {
-    problem.AddParameterBlock(poses[j].data(), 6);
-    ordering->AddElementToGroup(poses[j].data(), 0);
+    problem.AddParameterBlock(locals[j].data(), local);
+    ordering->AddElementToGroup(locals[j].data(), 0);
   }
   for (int i = 0; i < L.m; ++i) {
     problem.AddParameterBlock(g.data() + L.exit(i), 3);
@@ -822,12 +1036,19 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
   }
   for (const Term& t : model.terms) {
     std::vector<double*> params;
-    if (t.pose >= 0) params.push_back(poses[t.pose].data());
+    if (t.pose >= 0) params.push_back(locals[t.pose].data());
     for (int b : t.block_offset) params.push_back(g.data() + b);
+    // The robust loss on the sensors' readings; the equilibrium is the model's, not a reading.
+    const bool reading = t.reading >= 0 && t.sensor != kEquilibriumTerm;
     ceres::LossFunction* loss = nullptr;
-    if (t.reading >= 0 && options.loss.kind == LossKind::kHuber) loss = new ceres::HuberLoss(options.loss.scale_sigmas);
-    if (t.reading >= 0 && options.loss.kind == LossKind::kCauchy) loss = new ceres::CauchyLoss(options.loss.scale_sigmas);
-    problem.AddResidualBlock(t.cost.get(), loss, params);
+    if (reading && options.loss.kind == LossKind::kHuber) loss = new ceres::HuberLoss(options.loss.scale_sigmas);
+    if (reading && options.loss.kind == LossKind::kCauchy) loss = new ceres::CauchyLoss(options.loss.scale_sigmas);
+    ceres::CostFunction* cost = t.cost.get();
+    if (t.pose >= 0 && local > 6) {
+      adapters.push_back(std::make_unique<LocalBlockCost>(t, local));
+      cost = adapters.back().get();
+    }
+    problem.AddResidualBlock(cost, loss, params);
   }
   for (int i = 0; i < L.m; ++i) {
     std::vector<int> axes;
@@ -857,7 +1078,10 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
   ceres::Solve(solver, &problem, &summary);
 
   result.geometry = g;
-  result.poses = poses;
+  for (const VectorXd& x : locals) {
+    result.poses.push_back(x.head<6>());
+    if (model.nt > 0) result.tensions_N.push_back(x.tail(model.nt));
+  }
   result.iterations = static_cast<int>(summary.iterations.size());
   // Plain whitened residuals (before the loss) per reading.
   result.fits.resize(readings.size());
@@ -866,7 +1090,7 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
     result.fits[k].where = readings[k].where;
     result.fits[k].encoders = VectorXd::Zero(L.m);
     for (const SpatialSensor s : kSpatialSensors) {
-      if (readings[k].has(s) && s != SpatialSensor::kLoadCell) {
+      if (readings[k].has(s) && (s != SpatialSensor::kLoadCell || model.nt > 0)) {
         result.fits[k].sensors[static_cast<int>(s)] = VectorXd::Zero(SpatialSensorSize(s, L.m));
       }
     }
@@ -874,14 +1098,39 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
   double cost = 0.0;
   for (const Term& t : model.terms) {
     VectorXd r(t.size());
-    EvaluateTerm(t, g, poses, r.data(), nullptr, nullptr);
+    EvaluateTerm(t, g, locals, r.data(), nullptr, nullptr);
     cost += 0.5 * r.squaredNorm();
     if (t.reading < 0) continue;
     SpatialReadingFit& fit = result.fits[t.reading];
-    VectorXd& out = t.sensor < 0 ? fit.encoders : fit.sensors[t.sensor];
+    VectorXd& out = t.sensor == kEquilibriumTerm ? fit.equilibrium : t.sensor < 0 ? fit.encoders : fit.sensors[t.sensor];
+    if (t.sensor == kEquilibriumTerm) out.resize(6);
     out.segment(t.value, t.size()) = r;
+    for (int v = 0; v < t.size(); ++v) {
+      if (!(std::abs(r(v)) > std::abs(result.worst_residual))) continue;
+      result.worst_residual = r(v);
+      result.worst_pose_id = readings[t.reading].pose_id;
+      result.worst_where = readings[t.reading].where;
+      const int index = t.value + v + 1;
+      if (t.sensor == kEquilibriumTerm) {
+        result.worst_sensor = std::string("equilibrium ") + (v < 3 ? "force " : "moment ") + "xyz"[v % 3];
+      } else if (t.sensor < 0) {
+        result.worst_sensor = "encoder " + std::to_string(index);
+      } else {
+        const SpatialSensor sensor = static_cast<SpatialSensor>(t.sensor);
+        result.worst_sensor = std::string(ToString(sensor)) + " " + SpatialSensorColumns(sensor, L.m)[index - 1];
+      }
+    }
   }
   result.final_cost = cost;
+  result.warnings = PlausibilityWarnings(nominal, g, a.g0, L);
+  if (std::abs(result.worst_residual) > kOutlierSigmas) {
+    char buf[64];
+    std::snprintf(buf, sizeof(buf), "%.3g", result.worst_residual);
+    result.warnings.push_back("the worst reading, " + result.worst_sensor + " of pose " +
+                              std::to_string(result.worst_pose_id) +
+                              (result.worst_where.empty() ? "" : " (" + result.worst_where + ")") + ", is " + buf +
+                              " sigma off the fit: an outlier, or a model that does not fit the data");
+  }
 
   if (summary.termination_type != ceres::CONVERGENCE) {
     result.status = SpatialIdentifyStatus::kNotConverged;
@@ -890,7 +1139,7 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
     return result;
   }
   // Covariance at the estimate with the gauge held.
-  const MatrixXd A = ReducedJacobian(model, g, poses, false, true);
+  const MatrixXd A = ReducedJacobian(model, g, locals, false, true);
   std::vector<int> free;
   for (int c = 0; c < p; ++c) {
     if (!std::count(a.gauge.held.begin(), a.gauge.held.end(), c)) free.push_back(c);

@@ -13,9 +13,29 @@
 //
 // Residuals: model minus reading over the sensor's sigma (robot file: the encoder sigma, each
 // RangedNoise's sigma()), the models those of model/swivel.h and model/spatial_sensor_model.h.
-// Not modelled yet: cable stretch (an elastic robot's encoders read the paid-out length), load
-// cells (their readings are ignored and listed in `unused_sensors`), the equilibrium, free
-// platform anchors.
+//
+// Statics (options.statics, on by default). Each pose j also has the m cable tensions t_ij (N)
+// as unknowns, eliminated with its coordinates, when they carry information: load-cell
+// readings are present, a cable has a stiffness, or the robot is underactuated (m < 6). Then
+// - each load cell reads (t_ij - f_ij) / sigma_f;
+// - each pose's equilibrium W(q_j, D) t_j + w_g(q_j) = 0 (model/swivel.h: its wrench columns
+//   through the unknown exit points, mass and centre of mass from the robot file) is 6
+//   residuals: the force rows over kEquilibriumWeightRelativeSigma times the weight, the
+//   moment rows over the weight times kDefaultComSigma_m (identify/identify.h, the planar
+//   equilibrium's): what the robot file's mass and centre of mass are known to;
+// - the encoder of a cable with a stiffness reads the cable paid out, its unstretched length
+//   (model/robot.h's UnstretchedLength): dl_ij = l_i(q_j) / (1 + t_ij / EA_i) - l_i0, so that
+//   l_i0 is then the cable paid out at home (the unstretched length there), not its geometric
+//   length.
+// A robot with 7 or more inextensible cables gets no tensions without load cells (its
+// equilibrium adds nothing: every tension combination it does not fix is free) and is refused
+// with them (the same indeterminacy: InputError naming sensors.load_cell). Note that with
+// stretching cables and no load cells the tensions take the redundant cables' information:
+// each pose has m + 6 unknowns for m encoder values and 6 equilibrium rows, so encoders alone
+// no longer self-calibrate an elastic robot (refused, too few values); load cells, an
+// inclinometer or a laser restore it. options.statics = false leaves the statics out (cables
+// taken as inextensible, load cells unused): the first layer's model, for comparison.
+// Not modelled yet: free platform anchors.
 //
 // Gauge (SpatialGaugeAnalysis): the Jacobian of every whitened residual at the nominal
 // geometry and the starting poses, each pose's columns eliminated by an orthogonal projection
@@ -49,6 +69,16 @@ constexpr double kSpatialNullThreshold = 1e-9;
 // observable: its sigma is 1e4 times that of the best-seen direction or more.
 constexpr double kSpatialWeakThreshold = 1e-4;
 
+// The equilibrium rows' sigma: the force rows this fraction of the platform's weight (a
+// platform weighed, its cables and fittings estimated: 1 %); the moment rows the weight times
+// kDefaultComSigma_m (identify/identify.h: a centre of mass from CAD, known to 5 mm).
+constexpr double kEquilibriumWeightRelativeSigma = 0.01;
+
+// Plausibility (SpatialIdentifyResult::warnings): an identified exit point farther than this
+// outside the frame box (pulleys sit on the frame; half a metre is beyond any bracket), and an
+// initial length off its nominal by more than the frame box's diagonal (no cable can be).
+constexpr double kPlausibleExitOutsideFrame_m = 0.5;
+
 enum class SpatialGaugeKind {
   kAuto,   // hold the exit coordinates the pivoted QR picks (the default)
   kHold,   // hold the user's exit coordinates; refused when they leave a null direction
@@ -67,6 +97,7 @@ struct SpatialIdentifyOptions {
   SpatialGauge gauge;
   RobustLoss loss;  // on each whitened sensor value (an encoder, roll, px, ...) on its own
   int max_iterations = 200;
+  bool statics = true;  // the tensions, load cells, equilibrium and stretch (file comment)
 };
 
 // One direction of the geometry the readings do not see (or see weakly): unit vector over
@@ -82,7 +113,10 @@ struct SpatialReadingFit {
   int pose_id = 0;
   std::string where;
   Eigen::VectorXd encoders;  // per cable
-  std::array<Eigen::VectorXd, kNumSpatialSensors> sensors;  // empty where not read (and load cells)
+  std::array<Eigen::VectorXd, kNumSpatialSensors> sensors;  // empty where not read (load cells: or not modelled)
+  // The pose's 6 equilibrium residuals (force, moment), on the pose's first reading when the
+  // statics are modelled; empty otherwise.
+  Eigen::VectorXd equilibrium;
 };
 
 enum class SpatialIdentifyStatus {
@@ -100,6 +134,7 @@ struct SpatialIdentifyResult {
   std::vector<int> pose_ids;  // one per distinct pose id, in order of first appearance
   std::vector<SpatialPose<double>> poses;
   std::vector<SpatialPose<double>> starting_poses;
+  std::vector<Eigen::VectorXd> tensions_N;  // per pose when the statics are modelled, else empty
   double final_cost = 0.0;  // 1/2 sum of squared whitened residuals (before the loss)
   int iterations = 0;
   std::vector<SpatialReadingFit> fits;  // one per reading
@@ -111,7 +146,16 @@ struct SpatialIdentifyResult {
   // converged.
   Eigen::MatrixXd covariance;
   Eigen::VectorXd sigma;
-  std::vector<std::string> unused_sensors;  // read but not modelled yet ("load_cell")
+  std::vector<std::string> unused_sensors;  // read but not modelled ("load_cell" with statics off)
+  // The largest whitened residual (before the loss), its pose and sensor ("encoder 3",
+  // "inclinometer roll", "load_cell f2", "equilibrium moment x", ...).
+  double worst_residual = 0.0;
+  int worst_pose_id = 0;
+  std::string worst_sensor, worst_where;
+  // A result to read with care: an exit point more than kPlausibleExitOutsideFrame_m outside
+  // the frame box, an initial length off its nominal by more than the frame's diagonal, the
+  // worst reading beyond kOutlierSigmas.
+  std::vector<std::string> warnings;
   bool converged() const { return status == SpatialIdentifyStatus::kConverged; }
 };
 

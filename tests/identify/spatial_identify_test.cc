@@ -16,6 +16,7 @@
 #include "common/random.h"
 #include "identify/spatial_identify.h"
 #include "model/builtin_spatial_robots.h"
+#include "model/spatial_statics.h"
 #include "model/swivel.h"
 #include "tests/support/random_spatial_robot.h"
 #include "tests/support/swivel_construction.h"
@@ -30,11 +31,18 @@ using Eigen::VectorXd;
 constexpr double kRecoveryTol_m = 1e-7;
 constexpr double kRecoveryTol_rad = 1e-7;
 
-enum SensorBits : int { kInc = 1, kLaser = 2, kPos = 4, kSwivel = 8, kHeading = 16 };
+enum SensorBits : int { kInc = 1, kLaser = 2, kPos = 4, kSwivel = 8, kHeading = 16, kLoad = 32 };
 
-SpatialRobot Builtin(const std::string& name) {
+// The robot with inextensible cables: the construction's lengths are geometric, and these
+// tests are about geometry (the elastic robot: ElasticStretch* below).
+SpatialRobot Inextensible(SpatialRobot r) {
+  for (SpatialCable& c : r.cables) c.stiffness_N.reset();
+  return r;
+}
+SpatialRobot AsFiled(const std::string& name) {
   return LoadSpatialRobotFile(std::string(CABLECAL_SOURCE_DIR) + "/robots/" + name + ".yaml");
 }
+SpatialRobot Builtin(const std::string& name) { return Inextensible(AsFiled(name)); }
 
 // The robot with the sensors of `bits` (besides its encoders), sigmas of a real lab's order.
 SpatialRobot WithSensors(SpatialRobot r, int bits) {
@@ -43,6 +51,7 @@ SpatialRobot WithSensors(SpatialRobot r, int bits) {
   if (bits & kPos) r.sensors.position = SpatialSensors::Position{RangedNoise{0.0003, 0.0}, Vector3d(0.05, -0.03, 0.02)};
   if (bits & kSwivel) r.sensors.swivel_rad = RangedNoise{0.003, 0.0};
   if (bits & kHeading) r.sensors.heading_rad = RangedNoise{0.003, 0.0};
+  if (bits & kLoad) r.sensors.load_cell_N = RangedNoise{3.0, 0.0};
   return r;
 }
 
@@ -64,10 +73,50 @@ double AngleAbout(const Vector3d& k, const Vector3d& from, const Vector3d& to) {
 }
 double Wrapped(double a) { return std::atan2(std::sin(a), std::cos(a)); }
 
+SpatialRobot RandomInextensible(Rng& rng, const std::string& name, int m) {
+  return Inextensible(testing::RandomSpatialRobot(rng, name, m));
+}
+
+// The wrench matrix by virtual work on the construction, independently of model/swivel.h:
+// W = -(dl/dxi)^T, dl/dxi by central differences of the construction's lengths under a
+// translation of the platform along x, y, z and a rotation about the axes x, y, z through p.
+Eigen::MatrixXd WrenchByVirtualWork(const SpatialRobot& robot, const SpatialPose<double>& q) {
+  const int m = robot.num_cables();
+  const Eigen::Matrix3d R = testing::RotationByComposition(q);
+  constexpr double h = 1e-5;
+  Eigen::MatrixXd W(6, m);
+  for (int i = 0; i < m; ++i) {
+    const SpatialCable& c = robot.cables[i];
+    const auto length = [&](const Vector3d& B) {
+      return c.pulley_radius_m == 0.0 ? (B - c.p_F_exit_m).norm()
+                                      : testing::TangencyConstruction(c.p_F_exit_m, c.k_F_swivel_axis,
+                                                                      c.pulley_radius_m, B).length_m;
+    };
+    for (int a = 0; a < 6; ++a) {
+      double l[2];
+      for (int side = 0; side < 2; ++side) {
+        const double e = side ? h : -h;
+        const Vector3d B = a < 3 ? Vector3d(q.head<3>() + e * Vector3d::Unit(a) + R * c.p_P_anchor_m)
+                                 : Vector3d(q.head<3>() + Eigen::AngleAxisd(e, Vector3d::Unit(a - 3)) * R * c.p_P_anchor_m);
+        l[side] = length(B);
+      }
+      W(a, i) = -(l[1] - l[0]) / (2.0 * h);
+    }
+  }
+  return W;
+}
+Eigen::Matrix<double, 6, 1> GravityByComposition(const SpatialRobot& robot, const SpatialPose<double>& q) {
+  const Vector3d f(0.0, 0.0, -robot.platform_mass_kg * robot.gravity_mps2);
+  Eigen::Matrix<double, 6, 1> w;
+  w << f, (testing::RotationByComposition(q) * robot.p_P_com_m).cross(f);
+  return w;
+}
+
 struct Experiment {
   SpatialRobot truth;
   std::vector<SpatialPose<double>> poses;
   std::vector<SpatialMeasurement> readings;
+  std::vector<VectorXd> tensions_N;  // at each pose, for m < 6 or load cells
   VectorXd l0_m;
   std::vector<Vector3d> u_F_zero;  // each pulley's direction where its swivel encoder was zeroed
   double yaw0_rad = 0.0;
@@ -95,6 +144,26 @@ Experiment MakeExperiment(const SpatialRobot& nominal, const SpatialRobot& truth
     q(1) += rng.Uniform(-0.25, 0.25);
     q(2) += rng.Uniform(-0.15, 0.15);
     for (int a = 3; a < 6; ++a) q(a) += rng.Uniform(-0.1, 0.1);
+    VectorXd t;
+    if (m < 6) {
+      // An underactuated platform holds only its equilibria: the model's solver finds one (its
+      // roll and pitch from the guess's x, y, z, yaw), checked here by virtual work on the
+      // construction, whose least-squares tensions are the load cells' readings.
+      const SpatialEquilibriumResult eq = SolveSpatialEquilibrium(truth, q);
+      if (eq.status != EquilibriumStatus::kFound) continue;
+      q = eq.equilibrium.q;
+      const Eigen::MatrixXd W = WrenchByVirtualWork(truth, q);
+      const Eigen::Matrix<double, 6, 1> w_g = GravityByComposition(truth, q);
+      t = W.colPivHouseholderQr().solve(-w_g);
+      const double weight = truth.platform_mass_kg * truth.gravity_mps2;
+      EXPECT_LT((W * t + w_g).norm(), 1e-7 * weight) << "not an equilibrium by virtual work";
+      if (!((t.array() > 0.0).all())) continue;
+    } else if (bits & kLoad) {
+      // Any tensions balancing the weight: the least-squares ones (the robots here are not
+      // elastic, so nothing else ties them down).
+      const Eigen::MatrixXd W = WrenchByVirtualWork(truth, q);
+      t = W.completeOrthogonalDecomposition().solve(-GravityByComposition(truth, q));
+    }
     if (!CableGeometryAt(truth, q).valid()) continue;  // a filter only: the readings are the construction's
     SpatialMeasurement r;
     r.pose_id = static_cast<int>(e.poses.size()) + 1;
@@ -118,6 +187,8 @@ Experiment MakeExperiment(const SpatialRobot& nominal, const SpatialRobot& truth
       r.values(SpatialSensor::kSwivel) = sw;
     }
     if (bits & kHeading) r.values(SpatialSensor::kHeading) = VectorXd::Constant(1, Wrapped(q(5) - e.yaw0_rad));
+    if (bits & kLoad) r.values(SpatialSensor::kLoadCell) = t;
+    e.tensions_N.push_back(t);
     e.poses.push_back(q);
     e.readings.push_back(r);
   }
@@ -170,6 +241,13 @@ void ExpectRecovered(const SpatialRobot& nominal, const Experiment& e, int bits,
     EXPECT_LT((r.poses[j].tail<3>() - e.poses[j].tail<3>()).cwiseAbs().maxCoeff(), kRecoveryTol_rad) << "pose " << j;
   }
   for (const SpatialReadingFit& f : r.fits) EXPECT_LT(f.encoders.cwiseAbs().maxCoeff(), 1e-3);
+  if (m < 6 || (bits & kLoad)) {  // the tensions too, relative to the weight
+    ASSERT_EQ(r.tensions_N.size(), e.poses.size());
+    const double weight = nominal.platform_mass_kg * nominal.gravity_mps2;
+    for (std::size_t j = 0; j < e.poses.size(); ++j) {
+      EXPECT_LT((r.tensions_N[j] - e.tensions_N[j]).cwiseAbs().maxCoeff(), 1e-6 * weight) << "pose " << j;
+    }
+  }
 }
 
 // ---- Noise-free recovery and the null directions each sensor subset leaves ---------------
@@ -196,16 +274,13 @@ TEST(SpatialIdentify, BuiltInRobotsEncodersInclinometerLaser) {
     ExpectRecovered(nominal, e, kInc | kLaser, 3, name);
   }
   // irma4u (k = +-x): the rotation about x is seen by the inclinometer: translations x, y: 2
-  // null directions. Its rotation about z is seen only through its 3 cm pulleys (7 values per
-  // pose for 6 coordinates): Levenberg-Marquardt does not converge in 2000 iterations from a
-  // 1 cm error (tested here as a status, not a result); with its swivel encoders it does
-  // (FourCablesEncodersSwivelInclinometer).
+  // null directions, with the statics (its poses are equilibria: MakeExperiment) or without.
   const SpatialRobot irma = WithSensors(Builtin("irma4u"), kInc | kLaser);
   const Experiment e = MakeExperiment(irma, PerturbedExits(irma, rng, 0.01), 30, kInc | kLaser, rng);
-  EXPECT_EQ(AnalyzeSpatialGauge(irma, e.readings, {}).null_directions.size(), 2u);
-  const SpatialIdentifyResult r = IdentifySpatial(irma, e.readings, {});
-  EXPECT_FALSE(r.converged());
-  EXPECT_NE(r.message.find("without converging"), std::string::npos) << r.message;
+  SpatialIdentifyOptions no_statics;
+  no_statics.statics = false;
+  EXPECT_EQ(AnalyzeSpatialGauge(irma, e.readings, no_statics).null_directions.size(), 2u);
+  ExpectRecovered(irma, e, kInc | kLaser, 2, "irma4u with its equilibrium");
 }
 
 TEST(SpatialIdentify, RandomRobotsEncodersInclinometerLaser) {
@@ -213,7 +288,7 @@ TEST(SpatialIdentify, RandomRobotsEncodersInclinometerLaser) {
   for (int trial = 0; trial < 4; ++trial) {
     const int m = 6 + trial;  // 6 to 9 cables
     const SpatialRobot nominal =
-        WithSensors(testing::RandomSpatialRobot(rng, "random" + std::to_string(m), m), kInc | kLaser);
+        WithSensors(RandomInextensible(rng, "random" + std::to_string(m), m), kInc | kLaser);
     const Experiment e = MakeExperiment(nominal, PerturbedExits(nominal, rng, 0.01), 30, kInc | kLaser, rng);
     // Tilted axes, not all parallel: only the translations x, y remain.
     ExpectRecovered(nominal, e, kInc | kLaser, 2, nominal.name);
@@ -227,7 +302,7 @@ TEST(SpatialIdentify, EncodersAndPositionLeaveNothing) {
     const Experiment e = MakeExperiment(nominal, PerturbedExits(nominal, rng, 0.01), 20, kPos, rng);
     ExpectRecovered(nominal, e, kPos, 0, name);
   }
-  const SpatialRobot random = WithSensors(testing::RandomSpatialRobot(rng, "random6", 6), kPos);
+  const SpatialRobot random = WithSensors(RandomInextensible(rng, "random6", 6), kPos);
   const Experiment e = MakeExperiment(random, PerturbedExits(random, rng, 0.01), 20, kPos, rng);
   ExpectRecovered(random, e, kPos, 0, "random6");
 }
@@ -248,7 +323,7 @@ TEST(SpatialIdentify, EncodersAloneWithEightCables) {
         << Descriptions(gauge.null_directions);
   }
   for (const int m : {7, 8}) {
-    const SpatialRobot nominal = testing::RandomSpatialRobot(rng, "random" + std::to_string(m), m);
+    const SpatialRobot nominal = RandomInextensible(rng, "random" + std::to_string(m), m);
     const Experiment e = MakeExperiment(nominal, PerturbedExits(nominal, rng, 0.01), 50, 0, rng);
     ExpectRecovered(nominal, e, 0, 3, nominal.name);  // translations only: the tilted axes see rotations
   }
@@ -265,7 +340,7 @@ TEST(SpatialIdentify, FourCablesEncodersSwivelInclinometer) {
   e = MakeExperiment(irma_h, PerturbedExits(irma_h, rng, 0.01), 30, kSwivel | kInc | kHeading, rng);
   ExpectRecovered(irma_h, e, kSwivel | kInc | kHeading, 3, "irma4u with heading");
   for (int trial = 0; trial < 2; ++trial) {
-    const SpatialRobot nominal = WithSensors(testing::RandomSpatialRobot(rng, "random4", 4), kSwivel | kInc);
+    const SpatialRobot nominal = WithSensors(RandomInextensible(rng, "random4", 4), kSwivel | kInc);
     e = MakeExperiment(nominal, PerturbedExits(nominal, rng, 0.01), 30, kSwivel | kInc, rng);
     ExpectRecovered(nominal, e, kSwivel | kInc, 3, "random4");
   }
@@ -309,7 +384,7 @@ std::string InputErrorOf(F f) {
 TEST(SpatialIdentify, HoldThatLeavesANullDirectionIsRefusedNamingIt) {
   Rng rng(707);
   // Encoders + laser on a random 6-cable robot: translations x and y remain.
-  const SpatialRobot random = WithSensors(testing::RandomSpatialRobot(rng, "random6", 6), kLaser);
+  const SpatialRobot random = WithSensors(RandomInextensible(rng, "random6", 6), kLaser);
   const Experiment e = MakeExperiment(random, PerturbedExits(random, rng, 0.01), 30, kLaser, rng);
   SpatialIdentifyOptions options;
   options.gauge = ParseSpatialGauge("hold:a1x");
@@ -344,7 +419,7 @@ TEST(SpatialIdentify, SubsetsThatCannotDetermineTheGeometryAreRefused) {
   // whose readings... every pose has all encoders, so take a 6-cable robot with encoders +
   // inclinometer: 8 values per pose; the pose is determined; refuse instead a reading with a
   // sensor the robot lacks.
-  const SpatialRobot random = testing::RandomSpatialRobot(rng, "random6", 6);
+  const SpatialRobot random = RandomInextensible(rng, "random6", 6);
   Experiment g = MakeExperiment(WithSensors(random, kInc), PerturbedExits(random, rng, 0.01), 30, kInc, rng);
   const std::string lacks = InputErrorOf([&] { IdentifySpatial(random, g.readings, {}); });
   EXPECT_NE(lacks.find("no sensors.inclinometer"), std::string::npos) << lacks;
