@@ -7,6 +7,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <cstdlib>
 #include <cmath>
 #include <set>
 #include <string>
@@ -15,6 +16,8 @@
 #include "common/error.h"
 #include "common/random.h"
 #include "identify/spatial_identify.h"
+#include "experiment/spatial_plan.h"
+#include "experiment/spatial_simulation.h"
 #include "model/builtin_spatial_robots.h"
 #include "model/spatial_statics.h"
 #include "model/swivel.h"
@@ -508,6 +511,187 @@ TEST(SpatialIdentify, PredictedSigmasMatchTheMonteCarloSpread) {
     ++compared;
   }
   EXPECT_EQ(compared, p - 3);
+}
+
+// ---- Statics as information -----------------------------------------------------------------
+
+// m = 4 with every sensor a lab may add, load cells among them: each pose's tensions are
+// unknowns read by the load cells and tied to the pose by its equilibrium. The translations
+// remain (nothing here sees where the frame is).
+TEST(SpatialIdentify, FourCablesEncodersSwivelInclinometerHeadingLoadCells) {
+  Rng rng(1111);
+  const int bits = kSwivel | kInc | kHeading | kLoad;
+  const SpatialRobot irma = WithSensors(Builtin("irma4u"), bits);
+  ExpectRecovered(irma, MakeExperiment(irma, PerturbedExits(irma, rng, 0.01), 30, bits, rng), bits, 3, "irma4u");
+  for (int trial = 0; trial < 2; ++trial) {
+    const SpatialRobot nominal = WithSensors(RandomInextensible(rng, "random4", 4), bits);
+    ExpectRecovered(nominal, MakeExperiment(nominal, PerturbedExits(nominal, rng, 0.01), 30, bits, rng), bits, 3,
+                    "random4");
+  }
+}
+
+// An underactuated platform read by its encoders and an inclinometer: 6 values for its 6
+// coordinates, nothing left for the geometry without the statics (refused: too few values);
+// its equilibrium adds 6 rows for 4 tensions per pose, and the geometry is recovered.
+TEST(SpatialIdentify, UnderactuatedEncodersInclinometerNeedTheEquilibrium) {
+  Rng rng(1212);
+  const SpatialRobot irma = WithSensors(Builtin("irma4u"), kInc);
+  const Experiment e = MakeExperiment(irma, PerturbedExits(irma, rng, 0.01), 40, kInc, rng);
+  SpatialIdentifyOptions no_statics;
+  no_statics.statics = false;
+  const std::string few = InputErrorOf([&] { AnalyzeSpatialGauge(irma, e.readings, no_statics); });
+  EXPECT_NE(few.find("too few to determine the geometry"), std::string::npos) << few;
+  ExpectRecovered(irma, e, kInc, 3, "irma4u, encoders + inclinometer");  // the 3 translations
+  const SpatialRobot random = WithSensors(RandomInextensible(rng, "random4", 4), kInc);
+  ExpectRecovered(random, MakeExperiment(random, PerturbedExits(random, rng, 0.01), 40, kInc, rng), kInc, 3,
+                  "random4, encoders + inclinometer");
+}
+
+// irma4u's swivel axes are all parallel (+-x): encoders and swivel encoders do not see a
+// rotation of the frame about x (the swivel offsets absorb it): 4 null directions. Its
+// equilibrium does (gravity is not along x): 3.
+TEST(SpatialIdentify, TheEquilibriumSeesTheRotationTheSensorsDoNot) {
+  Rng rng(1313);
+  const SpatialRobot irma = WithSensors(Builtin("irma4u"), kSwivel);
+  const Experiment e = MakeExperiment(irma, PerturbedExits(irma, rng, 0.01), 30, kSwivel, rng);
+  SpatialIdentifyOptions no_statics;
+  no_statics.statics = false;
+  const SpatialGaugeAnalysis without = AnalyzeSpatialGauge(irma, e.readings, no_statics);
+  ASSERT_EQ(without.null_directions.size(), 4u) << Descriptions(without.null_directions);
+  EXPECT_NE(Descriptions(without.null_directions).find("rotation about x"), std::string::npos)
+      << Descriptions(without.null_directions);
+  const SpatialGaugeAnalysis with = AnalyzeSpatialGauge(irma, e.readings, {});
+  EXPECT_EQ(with.null_directions.size(), 3u) << Descriptions(with.null_directions);
+  EXPECT_EQ(Descriptions(with.null_directions).find("rotation"), std::string::npos) << Descriptions(with.null_directions);
+  ExpectRecovered(irma, e, kSwivel, 3, "irma4u, encoders + swivel, with the equilibrium");
+}
+
+TEST(SpatialIdentify, LoadCellsOnMoreThanSixInextensibleCablesAreRefused) {
+  Rng rng(1414);
+  const SpatialRobot cogiro = WithSensors(Builtin("cogiro"), kLoad | kInc);
+  const Experiment e = MakeExperiment(cogiro, PerturbedExits(cogiro, rng, 0.01), 10, kLoad | kInc, rng);
+  const std::string message = InputErrorOf([&] { IdentifySpatial(cogiro, e.readings, {}); });
+  EXPECT_NE(message.find("sensors.load_cell"), std::string::npos) << message;
+  EXPECT_NE(message.find("indeterminate"), std::string::npos) << message;
+  EXPECT_NE(message.find("cables[0].stiffness"), std::string::npos) << message;
+  // Without load cells an inextensible 8-cable robot gets no tensions (nothing to learn).
+  SpatialIdentifyOptions options;
+  std::vector<SpatialMeasurement> no_load = e.readings;
+  for (SpatialMeasurement& r : no_load) r.values(SpatialSensor::kLoadCell).resize(0);
+  const SpatialIdentifyResult r = IdentifySpatial(cogiro, no_load, options);
+  EXPECT_TRUE(r.tensions_N.empty());
+  for (const SpatialReadingFit& f : r.fits) EXPECT_EQ(f.equilibrium.size(), 0);
+}
+
+// ---- Plausibility and the worst reading ---------------------------------------------------
+
+TEST(SpatialIdentify, ImplausibleGeometryAndTheWorstReadingAreNamed) {
+  Rng rng(1515);
+  const SpatialRobot nominal = WithSensors(RandomInextensible(rng, "random6", 6), kPos);
+  const Experiment e = MakeExperiment(nominal, PerturbedExits(nominal, rng, 0.01), 20, kPos, rng);
+  SpatialIdentifyResult clean = IdentifySpatial(nominal, e.readings, {});
+  ASSERT_TRUE(clean.converged()) << clean.message;
+  EXPECT_TRUE(clean.warnings.empty()) << clean.warnings.front();
+  // A frame box that leaves exit 1 0.6 m outside (the frame only matters for the laser here).
+  SpatialRobot small = nominal;
+  small.p_F_frame_max_m.x() = nominal.cables[0].p_F_exit_m.x() - 0.6;
+  small.p_F_frame_min_m.x() = std::min(small.p_F_frame_min_m.x(), small.p_F_frame_max_m.x() - 1.0);
+  const SpatialIdentifyResult off = IdentifySpatial(small, e.readings, {});
+  ASSERT_TRUE(off.converged()) << off.message;
+  bool named = false;
+  for (const std::string& w : off.warnings) named = named || w.find("exit point 1 is 0.6") != std::string::npos;
+  EXPECT_TRUE(named) << (off.warnings.empty() ? "no warning" : off.warnings.front());
+  // Encoder 2 zeroed a frame's diagonal and a metre away: l20 off by more than the diagonal.
+  const double diagonal = (nominal.p_F_frame_max_m - nominal.p_F_frame_min_m).norm();
+  std::vector<SpatialMeasurement> shifted = e.readings;
+  for (SpatialMeasurement& r : shifted) r.dl_m(1) -= diagonal + 1.0;
+  const SpatialIdentifyResult longer = IdentifySpatial(nominal, shifted, {});
+  named = false;
+  for (const std::string& w : longer.warnings) named = named || w.find("l20 is") != std::string::npos;
+  EXPECT_TRUE(named) << (longer.warnings.empty() ? "no warning" : longer.warnings.front());
+  // One reading 20 sigma off: named by pose and sensor.
+  std::vector<SpatialMeasurement> outlier = e.readings;
+  outlier[6].values(SpatialSensor::kPosition)(1) += 20.0 * nominal.sensors.position->noise_m.sigma();
+  const SpatialIdentifyResult bad = IdentifySpatial(nominal, outlier, {});
+  EXPECT_EQ(bad.worst_pose_id, outlier[6].pose_id);
+  EXPECT_EQ(bad.worst_sensor, "position py");
+  EXPECT_GT(std::abs(bad.worst_residual), kOutlierSigmas);
+  named = false;
+  for (const std::string& w : bad.warnings) named = named || w.find("position py of pose 7") != std::string::npos;
+  EXPECT_TRUE(named) << (bad.warnings.empty() ? "no warning" : bad.warnings.front());
+}
+
+// ---- Cables that stretch --------------------------------------------------------------------
+
+// cogiro as filed (E A = 820510 N: about 1.3 mm of stretch on its 10 m cables), encoders +
+// inclinometer + laser, readings from the spatial simulation (the true robot settles with the
+// commanded paid-out lengths, model/forward_statics.h). The truth's l_i0 is the cable paid out
+// at home. Ignoring the stretch (statics off: the encoder read as the geometric length)
+// biases every l_i0 by millimetres; modelling it, the mean error over the experiments is
+// within 3 standard errors of 0. Experiments: CABLECAL_ELASTIC_EXPERIMENTS (default 100;
+// bench/README.md gives 200).
+TEST(SpatialIdentify, ElasticStretchBiasesTheLengthsUnlessModelled) {
+  int experiments = 100;
+  if (const char* env = std::getenv("CABLECAL_ELASTIC_EXPERIMENTS")) experiments = std::atoi(env);
+  ASSERT_GE(experiments, 5);
+  SpatialRobot nominal = AsFiled("cogiro");
+  nominal.sensors.inclinometer_rad = RangedNoise{0.003, 0.0};
+  nominal.sensors.laser_m = RangedNoise{0.0003, 0.0};
+  nominal.sensors.position.reset();
+  Rng rng(1616);
+  // The true geometry is the nominal one: with cables this stiff a centimetre off would slacken
+  // or overload cables (1 cm on 10 m is 820 N); the bias studied is the stretch's.
+  const SpatialRobot truth = nominal;
+  const std::vector<SpatialPlanPose> plan = SampleSpatialPoses(nominal, 20, 77);  // ~15 held
+  const VectorXd l0_true = SpatialHome(nominal).paid_out_m;
+  const int m = nominal.num_cables();
+  VectorXd sum[2] = {VectorXd::Zero(m), VectorXd::Zero(m)}, sum2[2] = {VectorXd::Zero(m), VectorXd::Zero(m)};
+  for (int x = 0; x < experiments; ++x) {
+    SpatialSimulationOptions lab;
+    lab.skip_infeasible = true;  // a pose with a cable near slack is not one a lab would read
+    const SimulatedSpatialExperiment sim = SimulateSpatialExperiment(nominal, truth, plan, lab, rng);
+    for (int modelled = 0; modelled < 2; ++modelled) {
+      SpatialIdentifyOptions options;
+      options.statics = modelled == 1;
+      const SpatialIdentifyResult r = IdentifySpatial(nominal, sim.measurements, options);
+      ASSERT_TRUE(r.converged()) << r.message;
+      const VectorXd error = r.geometry.segment(3 * m, m) - l0_true;
+      sum[modelled] += error;
+      sum2[modelled] += error.cwiseAbs2();
+    }
+  }
+  for (int modelled = 0; modelled < 2; ++modelled) {
+    const VectorXd mean = sum[modelled] / experiments;
+    const VectorXd sd = ((sum2[modelled] - experiments * mean.cwiseAbs2()) / (experiments - 1)).cwiseMax(0.0).cwiseSqrt();
+    const VectorXd se = sd / std::sqrt(double(experiments));
+    for (int i = 0; i < m; ++i) {
+      std::printf("%s l%d0: mean error %+.4f mm, standard error %.4f mm\n", modelled ? "modelled" : "ignored ", i + 1,
+                  1e3 * mean(i), 1e3 * se(i));
+      if (modelled) {
+        EXPECT_LT(std::abs(mean(i)), 3.0 * se(i)) << "l" << i + 1 << "0";
+      } else {
+        EXPECT_GT(std::abs(mean(i)), 3.0 * se(i)) << "l" << i + 1 << "0";
+        EXPECT_GT(std::abs(mean(i)), 0.3e-3) << "l" << i + 1 << "0: the stretch's bias, millimetres";
+      }
+    }
+  }
+}
+
+// Stretching cables and no load cells: each pose's 8 tensions take the redundant cables'
+// information (8 encoder values and 6 equilibrium rows for 14 unknowns): refused, saying why.
+TEST(SpatialIdentify, ElasticEncodersAloneAreRefusedSayingWhy) {
+  const SpatialRobot nominal = AsFiled("ipanema1");
+  const std::vector<SpatialPlanPose> plan = SampleSpatialPoses(nominal, 20, 5);
+  Rng rng(1717);
+  SpatialSimulationOptions lab;
+  lab.skip_infeasible = true;
+  const SimulatedSpatialExperiment sim = SimulateSpatialExperiment(nominal, nominal, plan, lab, rng);
+  std::vector<SpatialMeasurement> encoders = sim.measurements;
+  for (SpatialMeasurement& r : encoders) {
+    for (auto& v : r.sensor_values) v.resize(0);
+  }
+  const std::string message = InputErrorOf([&] { IdentifySpatial(nominal, encoders, {}); });
+  EXPECT_NE(message.find("tensions per pose"), std::string::npos) << message;
 }
 
 }  // namespace
