@@ -756,10 +756,12 @@ std::vector<int> PivotedExitCoordinates(const MatrixXd& E) {
   return held;
 }
 
-// The estimate's implausible parts (the header's kPlausibleExitOutsideFrame_m and the length
-// rule), in words.
-std::vector<std::string> PlausibilityWarnings(const SpatialRobot& nominal, const VectorXd& g, const VectorXd& g0,
-                                              const Layout& L) {
+}  // namespace
+
+std::vector<std::string> SpatialPlausibilityWarnings(const SpatialRobot& nominal, const Eigen::VectorXd& g) {
+  const Layout L{nominal.num_cables(), false, false};
+  CABLECAL_CHECK(g.size() >= L.size(), "a geometry vector shorter than the exits and lengths");
+  const VectorXd g0 = NominalSpatialGeometry(nominal, false, false);
   std::vector<std::string> out;
   const Vector3d lo = nominal.p_F_frame_min_m, hi = nominal.p_F_frame_max_m;
   const double diagonal_m = (hi - lo).norm();
@@ -783,6 +785,8 @@ std::vector<std::string> PlausibilityWarnings(const SpatialRobot& nominal, const
   }
   return out;
 }
+
+namespace {
 
 struct Analysis {
   Model model;
@@ -1122,7 +1126,7 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
     }
   }
   result.final_cost = cost;
-  result.warnings = PlausibilityWarnings(nominal, g, a.g0, L);
+  result.warnings = SpatialPlausibilityWarnings(nominal, g);
   if (std::abs(result.worst_residual) > kOutlierSigmas) {
     char buf[64];
     std::snprintf(buf, sizeof(buf), "%.3g", result.worst_residual);

@@ -181,6 +181,12 @@ SpatialGaugeAnalysis AnalyzeSpatialGauge(const SpatialRobot& nominal, const std:
 SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::vector<SpatialMeasurement>& readings,
                                       const SpatialIdentifyOptions& options);
 
+// The plausibility warnings of a geometry (names order; only its exits and lengths are read):
+// an exit point more than kPlausibleExitOutsideFrame_m outside nominal's frame box, an
+// initial length off its nominal value (NominalSpatialGeometry) by more than the box's
+// diagonal. Each names the unknown and the amount.
+std::vector<std::string> SpatialPlausibilityWarnings(const SpatialRobot& nominal, const Eigen::VectorXd& geometry);
+
 // The nominal geometry vector (names order): exits, lengths at the nominal home, zero swivel
 // offsets (when swivel), the home yaw (when heading).
 Eigen::VectorXd NominalSpatialGeometry(const SpatialRobot& nominal, bool swivel, bool heading);

@@ -610,6 +610,23 @@ TEST(SpatialIdentify, ImplausibleGeometryAndTheWorstReadingAreNamed) {
   const SpatialIdentifyResult longer = IdentifySpatial(nominal, shifted, {});
   EXPECT_FALSE(longer.converged());
   EXPECT_FALSE(longer.warnings.empty());
+  // The length rule on a geometry vector: l20 off by the diagonal plus a centimetre, and not
+  // by the diagonal less one.
+  VectorXd g = NominalSpatialGeometry(nominal, false, false);
+  g(3 * 6 + 1) += diagonal + 0.01;
+  std::vector<std::string> w = SpatialPlausibilityWarnings(nominal, g);
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("l20 is"), std::string::npos) << w[0];
+  g(3 * 6 + 1) -= 0.02;
+  EXPECT_TRUE(SpatialPlausibilityWarnings(nominal, g).empty());
+  // The exit rule likewise: 0.49 m outside is plausible, 0.51 m is not.
+  g = NominalSpatialGeometry(nominal, false, false);
+  g(2) = nominal.p_F_frame_max_m.z() + 0.49;
+  EXPECT_TRUE(SpatialPlausibilityWarnings(nominal, g).empty());
+  g(2) = nominal.p_F_frame_max_m.z() + 0.51;
+  w = SpatialPlausibilityWarnings(nominal, g);
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("exit point 1 is 0.51 m outside"), std::string::npos) << w[0];
   // One reading 20 sigma off: named by pose and sensor.
   std::vector<SpatialMeasurement> outlier = e.readings;
   outlier[6].values(SpatialSensor::kPosition)(1) += 20.0 * nominal.sensors.position->noise_m.sigma();
