@@ -647,7 +647,7 @@ TEST(SpatialIdentify, ImplausibleGeometryAndTheWorstReadingAreNamed) {
 // at home. Ignoring the stretch (statics off: the encoder read as the geometric length)
 // biases every l_i0 by millimetres; modelling it, the mean error over the experiments is
 // within 3 standard errors of 0. Experiments: CABLECAL_ELASTIC_EXPERIMENTS (default 100;
-// bench/README.md gives 200).
+// bench/README.md gives 200); CABLECAL_ELASTIC_LOAD_CELLS adds load cells.
 TEST(SpatialIdentify, ElasticStretchBiasesTheLengthsUnlessModelled) {
   int experiments = 100;
   if (const char* env = std::getenv("CABLECAL_ELASTIC_EXPERIMENTS")) experiments = std::atoi(env);
@@ -656,6 +656,8 @@ TEST(SpatialIdentify, ElasticStretchBiasesTheLengthsUnlessModelled) {
   nominal.sensors.inclinometer_rad = RangedNoise{0.003, 0.0};
   nominal.sensors.laser_m = RangedNoise{0.0003, 0.0};
   nominal.sensors.position.reset();
+  // With load cells (sigma 1 N) too: bench/README.md's second figure.
+  if (std::getenv("CABLECAL_ELASTIC_LOAD_CELLS")) nominal.sensors.load_cell_N = RangedNoise{3.0, 0.0};
   Rng rng(1616);
   // The true geometry is the nominal one: with cables this stiff a centimetre off would slacken
   // or overload cables (1 cm on 10 m is 820 N); the bias studied is the stretch's.
