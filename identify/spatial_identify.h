@@ -176,7 +176,9 @@ SpatialGaugeAnalysis AnalyzeSpatialGauge(const SpatialRobot& nominal, const std:
 // reading has a sensor the robot file lacks (no sigma); the readings have fewer values than
 // the unknowns; a pose is not determined by its own readings; a null direction moves no exit
 // coordinate (holding exits cannot fix it); `hold:` names something other than an exit
-// coordinate or leaves a null direction (named in words); `prior` without a tracker sigma.
+// coordinate or leaves a null direction (named in words); `prior` without a tracker sigma;
+// load cells on more than 6 inextensible cables (sensors.load_cell), stiffness on some cables
+// with more than 6 without (cables[i].stiffness), the statics on a weightless platform.
 // A solver that did not converge is a status, never a result.
 SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::vector<SpatialMeasurement>& readings,
                                       const SpatialIdentifyOptions& options);
