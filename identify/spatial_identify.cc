@@ -1,0 +1,1182 @@
+// Spatial identification, first layer (identify/spatial_identify.h).
+#include "identify/spatial_identify.h"
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <memory>
+#include <sstream>
+
+#include "common/error.h"
+#include "identify/least_squares.h"  // LevenbergMarquardtSettings
+#include "model/geometry.h"
+#include "model/spatial_sensor_model.h"
+#include "model/swivel.h"
+
+namespace cablecal {
+
+namespace {
+
+using Eigen::MatrixXd;
+using Eigen::Vector3d;
+using Eigen::VectorXd;
+
+// Where each unknown of the geometry vector lives (names order, the header's file comment).
+struct Layout {
+  int m = 0;
+  bool swivel = false;
+  bool heading = false;
+  int exit(int i) const { return 3 * i; }
+  int length(int i) const { return 3 * m + i; }
+  int swivel_offset(int i) const { return 4 * m + i; }
+  int yaw0() const { return 4 * m + (swivel ? m : 0); }
+  int size() const { return 4 * m + (swivel ? m : 0) + (heading ? 1 : 0); }
+  int exit_coordinates() const { return 3 * m; }
+};
+
+// ---- Residuals: each the model of model/swivel.h or model/spatial_sensor_model.h minus the
+// reading, over the sensor's sigma. Pose block first, then the geometry blocks. ----
+
+template <typename T>
+SpatialPose<T> PoseOf(const T* q) {
+  return Eigen::Map<const SpatialPose<T>>(q);
+}
+
+// The cable from the exit block's D through its fixed swivel axis to the anchor at pose q.
+struct CableData {
+  Vector3d k_F_swivel_axis;
+  double pulley_radius_m;
+  Vector3d p_P_anchor_m;
+  template <typename T>
+  SwivelCableState<T> At(const T* q, const T* d) const {
+    const SpatialPose<T> pose = PoseOf(q);
+    const Eigen::Matrix<T, 3, 3> R = Rotation<T>(pose);
+    return SwivelCable<T>(Eigen::Map<const Vec3<T>>(d), k_F_swivel_axis.cast<T>(), T(pulley_radius_m),
+                          AnchorInF<T>(pose, R, p_P_anchor_m.cast<T>()));
+  }
+};
+
+// Encoder: dl = l(q, D) - l0 for an inextensible cable.
+struct EncoderCost {
+  CableData cable;
+  double dl_m, inv_sigma;
+  template <typename T>
+  bool operator()(const T* q, const T* d, const T* l0, T* r) const {
+    r[0] = (cable.At(q, d).length_m - l0[0] - T(dl_m)) * T(inv_sigma);
+    return true;
+  }
+};
+
+// Encoder of an elastic cable: the paid-out (unstretched) length at the pose's tension t of the
+// cable, model/robot.h's elastic law (UnstretchedLength), less its value at home l0.
+struct ElasticEncoderCost {
+  CableData cable;
+  std::optional<double> stiffness_N;
+  double dl_m, inv_sigma;
+  template <typename T>
+  bool operator()(const T* q, const T* t, const T* d, const T* l0, T* r) const {
+    r[0] = (UnstretchedLength<T>(stiffness_N, cable.At(q, d).length_m, t[0]) - l0[0] - T(dl_m)) * T(inv_sigma);
+    return true;
+  }
+};
+
+// Load cell: the cable's tension (the pose block is a parameter only to tie the term to its pose).
+struct LoadCellCost {
+  double reading_N, inv_sigma;
+  template <typename T>
+  bool operator()(const T* /*q*/, const T* t, T* r) const {
+    r[0] = (t[0] - T(reading_N)) * T(inv_sigma);
+    return true;
+  }
+};
+
+// The pose's equilibrium W(q, D) t + w_g(q) (model/swivel.h's EquilibriumResidual, its columns
+// WrenchColumn of each cable through the exit block's D rather than the file's), force rows
+// over kEquilibriumWeightRelativeSigma m g, moment rows over m g kDefaultComSigma_m (the header).
+// Parameters: the pose, the m tensions (1 each), the m exit points (3 each).
+struct EquilibriumCost {
+  std::shared_ptr<const SpatialRobot> robot;
+  std::vector<CableData> cables;
+  double inv_force, inv_moment;
+  template <typename T>
+  bool operator()(T const* const* p, T* r) const {
+    const int m = static_cast<int>(cables.size());
+    const SpatialPose<T> pose = PoseOf(p[0]);
+    const Eigen::Matrix<T, 3, 3> R = Rotation<T>(pose);
+    Eigen::Matrix<T, 6, 1> w = GravityWrench<T>(*robot, pose);
+    for (int i = 0; i < m; ++i) {
+      const Vec3<T> r_F_anchor = R * cables[i].p_P_anchor_m.cast<T>();
+      w += p[1 + i][0] * WrenchColumn<T>(r_F_anchor, cables[i].At(p[0], p[1 + m + i]));
+    }
+    for (int a = 0; a < 3; ++a) {
+      r[a] = w(a) * T(inv_force);
+      r[3 + a] = w(3 + a) * T(inv_moment);
+    }
+    return true;
+  }
+};
+
+// Swivel encoder: the pulley's angle about k from the reference direction u_ref (the nominal
+// home's), less the encoder's zero offset sw0; the difference from the reading wrapped so that
+// a reading near +-pi does not jump.
+struct SwivelCost {
+  CableData cable;
+  Vector3d u_F_reference;
+  double reading_rad, inv_sigma;
+  template <typename T>
+  bool operator()(const T* q, const T* d, const T* sw0, T* r) const {
+    const T model = SwivelReading<T>(cable.At(q, d), cable.k_F_swivel_axis.cast<T>(), u_F_reference.cast<T>()) - sw0[0];
+    r[0] = WrappedAngle<T>(model - T(reading_rad)) * T(inv_sigma);
+    return true;
+  }
+};
+
+struct InclinometerCost {
+  Eigen::Vector2d reading_rad;
+  double inv_sigma;
+  template <typename T>
+  bool operator()(const T* q, T* r) const {
+    const Vec2<T> model = InclinometerReading<T>(PoseOf(q));
+    for (int a = 0; a < 2; ++a) r[a] = WrappedAngle<T>(model(a) - T(reading_rad(a))) * T(inv_sigma);
+    return true;
+  }
+};
+
+struct LaserCost {
+  double floor_z_m, reading_m, inv_sigma;
+  template <typename T>
+  bool operator()(const T* q, T* r) const {
+    r[0] = (LaserReading<T>(PoseOf(q), floor_z_m) - T(reading_m)) * T(inv_sigma);
+    return true;
+  }
+};
+
+struct PositionCost {
+  Vector3d p_P_target_m, reading_m;
+  double inv_sigma;
+  template <typename T>
+  bool operator()(const T* q, T* r) const {
+    const SpatialPose<T> pose = PoseOf(q);
+    const Vec3<T> model = PositionReading<T>(pose, Rotation<T>(pose), p_P_target_m.cast<T>());
+    for (int a = 0; a < 3; ++a) r[a] = (model(a) - T(reading_m(a))) * T(inv_sigma);
+    return true;
+  }
+};
+
+struct HeadingCost {
+  double reading_rad, inv_sigma;
+  template <typename T>
+  bool operator()(const T* q, const T* yaw0, T* r) const {
+    r[0] = WrappedAngle<T>(HeadingReading<T>(PoseOf(q), yaw0[0]) - T(reading_rad)) * T(inv_sigma);
+    return true;
+  }
+};
+
+// gauge prior: the tracker's survey of an exit point.
+struct ExitPriorCost {
+  Vector3d nominal_m;
+  double inv_sigma;
+  template <typename T>
+  bool operator()(const T* d, T* r) const {
+    for (int a = 0; a < 3; ++a) r[a] = (d[a] - T(nominal_m(a))) * T(inv_sigma);
+    return true;
+  }
+};
+
+// One residual block: its cost, the pose it reads (-1: none) and its geometry blocks (offset
+// into the geometry vector and size), in the cost's parameter order after the pose.
+struct Term {
+  std::unique_ptr<ceres::CostFunction> cost;
+  int pose = -1;
+  std::vector<int> tension_cables;  // the pose's tension blocks it reads, after the pose block
+  std::vector<int> block_offset, block_size;
+  int reading = -1;  // -1: the prior
+  int sensor = -1;   // -1: an encoder; kEquilibriumTerm; else SpatialSensor
+  int value = 0;     // the first value of the reading's sensor it computes (the cable, ...)
+  int size() const { return cost->num_residuals(); }
+};
+
+constexpr int kEquilibriumTerm = -2;
+
+template <typename Functor, int... Sizes>
+std::unique_ptr<ceres::CostFunction> Cost(Functor f) {
+  return std::make_unique<ceres::AutoDiffCostFunction<Functor, Sizes...>>(new Functor(f));
+}
+
+// A pose's term as Ceres sees it when the pose has tensions: one parameter block per pose, its
+// 6 coordinates then its tensions (so that the Schur elimination takes them together: a pose's
+// blocks may share no residual), the term's own cost evaluated on views of it.
+class LocalBlockCost : public ceres::CostFunction {
+ public:
+  LocalBlockCost(const Term& term, int local) : term_(term), local_(local) {
+    set_num_residuals(term.size());
+    mutable_parameter_block_sizes()->push_back(local);
+    for (int s : term.block_size) mutable_parameter_block_sizes()->push_back(s);
+  }
+  bool Evaluate(double const* const* p, double* r, double** J) const override {
+    const std::vector<int>& tc = term_.tension_cables;
+    const int n = num_residuals();
+    std::vector<const double*> inner{p[0]};
+    for (int i : tc) inner.push_back(p[0] + 6 + i);
+    for (std::size_t b = 0; b < term_.block_size.size(); ++b) inner.push_back(p[1 + b]);
+    if (J == nullptr) return term_.cost->Evaluate(inner.data(), r, nullptr);
+    std::vector<double> pose_jac(J[0] ? n * 6 : 0), tension_jac(J[0] ? n * tc.size() : 0);
+    std::vector<double*> inner_jac{J[0] ? pose_jac.data() : nullptr};
+    for (std::size_t k = 0; k < tc.size(); ++k) inner_jac.push_back(J[0] ? tension_jac.data() + k * n : nullptr);
+    for (std::size_t b = 0; b < term_.block_size.size(); ++b) inner_jac.push_back(J[1 + b]);
+    if (!term_.cost->Evaluate(inner.data(), r, inner_jac.data())) return false;
+    if (J[0]) {
+      std::fill(J[0], J[0] + n * local_, 0.0);
+      for (int row = 0; row < n; ++row) {
+        for (int c = 0; c < 6; ++c) J[0][row * local_ + c] = pose_jac[row * 6 + c];
+        for (std::size_t k = 0; k < tc.size(); ++k) J[0][row * local_ + 6 + tc[k]] = tension_jac[k * n + row];
+      }
+    }
+    return true;
+  }
+
+ private:
+  const Term& term_;
+  int local_;
+};
+
+struct Model {
+  Layout layout;
+  int nt = 0;  // tension unknowns per pose: m when the statics are modelled, else 0
+  int local() const { return 6 + nt; }
+  std::vector<Term> terms;
+  std::vector<int> pose_ids;
+  std::vector<std::string> pose_where;       // the first reading's where, per pose
+  std::vector<std::vector<int>> pose_terms;  // per pose: its terms
+  std::vector<int> pose_values;              // per pose: its residual count
+  std::vector<int> prior_terms;
+  std::vector<std::string> unused_sensors;
+  int num_values = 0;
+};
+
+double SigmaOf(const SpatialRobot& robot, SpatialSensor s, const std::string& where) {
+  const std::optional<RangedNoise> noise = SpatialSensorNoise(robot.sensors, s);
+  if (!noise) {
+    throw InputError(where, ToString(s),
+                     "the readings have this sensor's columns but the robot file has no sensors." +
+                         std::string(ToString(s)) + ": its sigma is unknown");
+  }
+  if (!(noise->sigma() > 0.0)) throw InputError(robot.source, "sensors." + std::string(ToString(s)), "sigma is 0");
+  return noise->sigma();
+}
+
+Model BuildModel(const SpatialRobot& robot, const std::vector<SpatialMeasurement>& readings, bool prior,
+                 bool statics) {
+  Model model;
+  const int m = robot.num_cables();
+  if (readings.empty()) throw InputError("readings", "", "no readings: nothing to identify");
+  Layout& L = model.layout;
+  L.m = m;
+  bool load_cells = false;
+  for (const SpatialMeasurement& r : readings) {
+    L.swivel = L.swivel || r.has(SpatialSensor::kSwivel);
+    L.heading = L.heading || r.has(SpatialSensor::kHeading);
+    load_cells = load_cells || r.has(SpatialSensor::kLoadCell);
+  }
+  // The statics join when they carry information (the header's file comment).
+  int inextensible = 0, first_inextensible = -1;
+  for (int i = 0; i < m; ++i) {
+    if (robot.cables[i].stiffness_N) continue;
+    if (first_inextensible < 0) first_inextensible = i;
+    ++inextensible;
+  }
+  model.nt = statics && (load_cells || inextensible < m || m < 6) ? m : 0;
+  if (model.nt > 0 && inextensible > 6) {
+    // W t = -w_g fixes 6 combinations of the tensions; a rigid cable's length says nothing of
+    // its own, so the rest of more than 6 rigid cables' tensions is free whatever is read.
+    const std::string why = std::to_string(inextensible) +
+                            " cables without stiffness: their tensions are indeterminate from the readings (the "
+                            "equilibrium fixes only 6 combinations of them, and an inextensible cable's length "
+                            "says nothing of its tension)";
+    if (load_cells) {
+      throw InputError(robot.source, "sensors.load_cell",
+                       "load-cell readings on a robot with " + why + ": give every cable its stiffness (cables[" +
+                           std::to_string(first_inextensible) + "].stiffness, ...) or leave out the f1..f" +
+                           std::to_string(m) + " columns");
+    }
+    throw InputError(robot.source, "cables[" + std::to_string(first_inextensible) + "].stiffness",
+                     "some cables stretch but " + why + ": give every cable its stiffness, or none");
+  }
+  const double weight_N = robot.platform_mass_kg * robot.gravity_mps2;
+  if (model.nt > 0 && !(weight_N > 0.0)) {
+    throw InputError(robot.source, "platform.mass", "the equilibrium needs the platform's weight, and it is 0");
+  }
+  auto shared_robot = std::make_shared<const SpatialRobot>(robot);
+  if (!(robot.sensors.encoder_sigma_m > 0.0)) throw InputError(robot.source, "sensors.encoder", "sigma is 0");
+  const double inv_encoder = 1.0 / robot.sensors.encoder_sigma_m;
+  const SpatialSensorZero reference = SensorZeroAt(robot, robot.home_pose());
+  std::map<int, int> pose_of_id;
+  for (int k = 0; k < static_cast<int>(readings.size()); ++k) {
+    const SpatialMeasurement& r = readings[k];
+    const std::string where = r.where.empty() ? "reading " + std::to_string(k + 1) + " (pose " +
+                                                    std::to_string(r.pose_id) + ")"
+                                              : r.where;
+    if (r.dl_m.size() != m) {
+      throw InputError(where, "dl", std::to_string(r.dl_m.size()) + " encoder values for a robot of " +
+                                        std::to_string(m) + " cables");
+    }
+    auto [it, added] = pose_of_id.emplace(r.pose_id, static_cast<int>(model.pose_ids.size()));
+    if (added) {
+      model.pose_ids.push_back(r.pose_id);
+      model.pose_where.push_back(where);
+      model.pose_terms.emplace_back();
+      model.pose_values.push_back(0);
+    }
+    const int j = it->second;
+    const auto add = [&](std::unique_ptr<ceres::CostFunction> cost, std::vector<int> offset, std::vector<int> size,
+                         int sensor, int value, std::vector<int> tension_cables = {}) {
+      Term t;
+      t.cost = std::move(cost);
+      t.pose = j;
+      t.tension_cables = std::move(tension_cables);
+      t.block_offset = std::move(offset);
+      t.block_size = std::move(size);
+      t.reading = k;
+      t.sensor = sensor;
+      t.value = value;
+      model.pose_terms[j].push_back(static_cast<int>(model.terms.size()));
+      model.pose_values[j] += t.size();
+      model.num_values += t.size();
+      model.terms.push_back(std::move(t));
+    };
+    if (added && model.nt > 0) {  // one equilibrium per pose, however often it was read
+      std::vector<CableData> cables;
+      std::vector<int> offset, size, tension_cables;
+      for (int i = 0; i < m; ++i) {
+        const SpatialCable& c = robot.cables[i];
+        cables.push_back(CableData{c.k_F_swivel_axis, c.pulley_radius_m, c.p_P_anchor_m});
+        offset.push_back(L.exit(i));
+        size.push_back(3);
+        tension_cables.push_back(i);
+      }
+      auto* cost = new ceres::DynamicAutoDiffCostFunction<EquilibriumCost, 4>(new EquilibriumCost{
+          shared_robot, cables, 1.0 / (kEquilibriumWeightRelativeSigma * weight_N),
+          1.0 / (kDefaultComSigma_m * weight_N)});
+      cost->AddParameterBlock(6);
+      for (int i = 0; i < m; ++i) cost->AddParameterBlock(1);
+      for (int i = 0; i < m; ++i) cost->AddParameterBlock(3);
+      cost->SetNumResiduals(6);
+      add(std::unique_ptr<ceres::CostFunction>(cost), offset, size, kEquilibriumTerm, 0, tension_cables);
+    }
+    for (int i = 0; i < m; ++i) {
+      const SpatialCable& c = robot.cables[i];
+      const CableData cable{c.k_F_swivel_axis, c.pulley_radius_m, c.p_P_anchor_m};
+      if (model.nt > 0 && c.stiffness_N) {
+        add(Cost<ElasticEncoderCost, 1, 6, 1, 3, 1>(ElasticEncoderCost{cable, c.stiffness_N, r.dl_m(i), inv_encoder}),
+            {L.exit(i), L.length(i)}, {3, 1}, -1, i, {i});
+      } else {
+        add(Cost<EncoderCost, 1, 6, 3, 1>(EncoderCost{cable, r.dl_m(i), inv_encoder}), {L.exit(i), L.length(i)},
+            {3, 1}, -1, i);
+      }
+    }
+    for (const SpatialSensor s : kSpatialSensors) {
+      if (!r.has(s)) continue;
+      const std::string sname = ToString(s);
+      if (r.values(s).size() != SpatialSensorSize(s, m)) {
+        throw InputError(where, sname, std::to_string(r.values(s).size()) + " values, expected " +
+                                           std::to_string(SpatialSensorSize(s, m)));
+      }
+      if (s == SpatialSensor::kLoadCell && model.nt == 0) {  // the statics left out (options.statics)
+        if (std::find(model.unused_sensors.begin(), model.unused_sensors.end(), sname) == model.unused_sensors.end()) {
+          model.unused_sensors.push_back(sname);
+        }
+        continue;
+      }
+      const double inv = 1.0 / SigmaOf(robot, s, where);
+      const VectorXd& v = r.values(s);
+      const int sensor = static_cast<int>(s);
+      switch (s) {
+        case SpatialSensor::kInclinometer:
+          add(Cost<InclinometerCost, 2, 6>(InclinometerCost{v.head<2>(), inv}), {}, {}, sensor, 0);
+          break;
+        case SpatialSensor::kLaser:
+          add(Cost<LaserCost, 1, 6>(LaserCost{robot.p_F_frame_min_m.z(), v(0), inv}), {}, {}, sensor, 0);
+          break;
+        case SpatialSensor::kPosition:
+          add(Cost<PositionCost, 3, 6>(PositionCost{robot.sensors.position->p_P_target_m, v.head<3>(), inv}), {}, {},
+              sensor, 0);
+          break;
+        case SpatialSensor::kSwivel:
+          for (int i = 0; i < m; ++i) {
+            const SpatialCable& c = robot.cables[i];
+            const CableData cable{c.k_F_swivel_axis, c.pulley_radius_m, c.p_P_anchor_m};
+            add(Cost<SwivelCost, 1, 6, 3, 1>(SwivelCost{cable, reference.u_F[i], v(i), inv}),
+                {L.exit(i), L.swivel_offset(i)}, {3, 1}, sensor, i);
+          }
+          break;
+        case SpatialSensor::kHeading:
+          add(Cost<HeadingCost, 1, 6, 1>(HeadingCost{v(0), inv}), {L.yaw0()}, {1}, sensor, 0);
+          break;
+        case SpatialSensor::kLoadCell:
+          for (int i = 0; i < m; ++i) add(Cost<LoadCellCost, 1, 6, 1>(LoadCellCost{v(i), inv}), {}, {}, sensor, i, {i});
+          break;
+      }
+    }
+  }
+  if (prior) {
+    if (!robot.sensors.tracker_sigma_m || !(*robot.sensors.tracker_sigma_m > 0.0)) {
+      throw InputError("--gauge", "prior", "the robot file " + robot.source + " gives no sensors.tracker sigma");
+    }
+    for (int i = 0; i < m; ++i) {
+      Term t;
+      t.cost = Cost<ExitPriorCost, 3, 3>(ExitPriorCost{robot.cables[i].p_F_exit_m, 1.0 / *robot.sensors.tracker_sigma_m});
+      t.block_offset = {L.exit(i)};
+      t.block_size = {3};
+      t.value = i;
+      model.prior_terms.push_back(static_cast<int>(model.terms.size()));
+      model.num_values += 3;
+      model.terms.push_back(std::move(t));
+    }
+  }
+  return model;
+}
+
+// Each pose's local unknowns: its 6 coordinates, then its tensions (Model::nt, N).
+using Locals = std::vector<VectorXd>;
+
+// A term's residuals and (when asked) its Jacobians: d r / d local (size x (6 + nt): the pose's
+// coordinates, then its tensions) and d r / d geometry (size x p, only its blocks' columns
+// nonzero).
+void EvaluateTerm(const Term& t, const VectorXd& g, const Locals& locals, double* residuals, MatrixXd* d_local,
+                  MatrixXd* d_geometry) {
+  std::vector<const double*> params;
+  if (t.pose >= 0) params.push_back(locals[t.pose].data());
+  for (int i : t.tension_cables) params.push_back(locals[t.pose].data() + 6 + i);
+  for (int b : t.block_offset) params.push_back(g.data() + b);
+  const int n = t.size();
+  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  std::vector<RowMajor> jac;
+  std::vector<double*> jac_ptr;
+  if (d_local || d_geometry) {
+    if (t.pose >= 0) jac.emplace_back(n, 6);
+    for (std::size_t i = 0; i < t.tension_cables.size(); ++i) jac.emplace_back(n, 1);
+    for (int s : t.block_size) jac.emplace_back(n, s);
+    for (RowMajor& j : jac) jac_ptr.push_back(j.data());
+  }
+  const bool ok = t.cost->Evaluate(params.data(), residuals, jac_ptr.empty() ? nullptr : jac_ptr.data());
+  CABLECAL_CHECK(ok, "a spatial residual could not be evaluated");
+  if (jac_ptr.empty()) return;
+  int next = 0;
+  if (t.pose >= 0) {
+    if (d_local) {
+      d_local->setZero(n, locals[t.pose].size());
+      d_local->leftCols(6) = jac[0];
+      for (std::size_t k = 0; k < t.tension_cables.size(); ++k) d_local->col(6 + t.tension_cables[k]) = jac[1 + k];
+    }
+    next = 1 + static_cast<int>(t.tension_cables.size());
+  } else if (d_local) {
+    d_local->setZero(n, 6);
+  }
+  if (d_geometry) {
+    d_geometry->setZero(n, g.size());
+    for (std::size_t b = 0; b < t.block_offset.size(); ++b) {
+      d_geometry->middleCols(t.block_offset[b], t.block_size[b]) = jac[next + b];
+    }
+  }
+}
+
+// The starting local unknowns of pose j: Levenberg-Marquardt on its own readings (and its
+// equilibrium) alone, from `start` (home and the first tensions), with the geometry g (nominal:
+// exits as in the file, l_i0 the nominal home's lengths).
+VectorXd StartingLocal(const Model& model, int j, const VectorXd& g, const VectorXd& start) {
+  Locals q(model.pose_ids.size(), start);
+  const int rows = model.pose_values[j];
+  const int cols = start.size();
+  const auto evaluate = [&](const VectorXd& x, VectorXd* r, MatrixXd* J) {
+    q[j] = x;
+    r->resize(rows);
+    if (J) J->resize(rows, cols);
+    int row = 0;
+    for (int k : model.pose_terms[j]) {
+      const Term& t = model.terms[k];
+      MatrixXd jp;
+      EvaluateTerm(t, g, q, r->data() + row, J ? &jp : nullptr, nullptr);
+      if (J) J->middleRows(row, t.size()) = jp;
+      row += t.size();
+    }
+  };
+  VectorXd x = start;
+  VectorXd r;
+  MatrixXd J;
+  evaluate(x, &r, &J);
+  double cost = r.squaredNorm(), lambda = 1e-6;
+  for (int it = 0; it < 200 && cost > 0.0; ++it) {
+    const MatrixXd H = J.transpose() * J;
+    const VectorXd grad = J.transpose() * r;
+    MatrixXd damped = H;
+    damped.diagonal() += lambda * (H.diagonal().array() + 1e-12).matrix();
+    const VectorXd step = damped.ldlt().solve(-grad);
+    VectorXd r_new;
+    const VectorXd trial = x + step;
+    evaluate(trial, &r_new, nullptr);
+    const double cost_new = r_new.squaredNorm();
+    if (std::isfinite(cost_new) && cost_new < cost) {
+      x = trial;
+      cost = cost_new;
+      lambda = std::max(lambda / 10.0, 1e-12);
+      evaluate(x, &r, &J);
+      if (step.norm() < 1e-13 * (1.0 + x.norm())) break;
+    } else {
+      lambda *= 10.0;
+      if (lambda > 1e12) break;
+    }
+  }
+  return x;
+}
+
+std::string LocalCoordinateNames(const VectorXd& v) {
+  std::string out;
+  for (int a = 0; a < v.size(); ++a) {
+    if (std::abs(v(a)) > 0.1 * v.cwiseAbs().maxCoeff()) {
+      out += (out.empty() ? "" : ", ") +
+             (a < 6 ? std::string(SpatialKind::kPoseNames[a]) : "the tension t" + std::to_string(a - 5));
+    }
+  }
+  return out;
+}
+
+// The reduced geometry Jacobian: for each pose, its rows projected onto the orthogonal
+// complement of its own pose columns (Householder QR, nothing squared), so that the stacked
+// rows see exactly the geometry directions no pose change can compensate; the prior's rows as
+// they are (with_prior). InputError for a pose its own readings do not determine (when `refuse`).
+MatrixXd ReducedJacobian(const Model& model, const VectorXd& g, const Locals& locals, bool refuse, bool with_prior) {
+  const int p = g.size();
+  const int cols = model.local();
+  std::vector<MatrixXd> blocks;
+  int total = 0;
+  for (std::size_t j = 0; j < model.pose_ids.size(); ++j) {
+    const int rows = model.pose_values[j];
+    MatrixXd Jq(rows, cols), Jg(rows, p);
+    int row = 0;
+    VectorXd r(rows);
+    for (int k : model.pose_terms[j]) {
+      const Term& t = model.terms[k];
+      MatrixXd jp, jg;
+      EvaluateTerm(t, g, locals, r.data() + row, &jp, &jg);
+      Jq.middleRows(row, t.size()) = jp;
+      Jg.middleRows(row, t.size()) = jg;
+      row += t.size();
+    }
+    Eigen::JacobiSVD<MatrixXd> svd(Jq, Eigen::ComputeFullV);
+    const VectorXd& s = svd.singularValues();
+    const bool deficient = rows < cols || !(s(cols - 1) > kSpatialNullThreshold * s(0));
+    if (deficient) {
+      if (!refuse) continue;
+      const std::string unknowns = model.nt > 0 ? "6 coordinates and " + std::to_string(model.nt) + " tensions"
+                                                : "6 coordinates";
+      throw InputError(model.pose_where[j], "pose " + std::to_string(model.pose_ids[j]),
+                       "its own readings (" + std::to_string(rows) + " values" +
+                           (model.nt > 0 ? ", the equilibrium's 6 among them" : "") + ") do not determine the pose's " +
+                           unknowns + " (unseen: " + LocalCoordinateNames(svd.matrixV().col(cols - 1)) +
+                           "): no reading fixes it; add a sensor that sees it, or more cables' encoders");
+    }
+    Eigen::HouseholderQR<MatrixXd> qr(Jq);
+    MatrixXd projected = qr.householderQ().transpose() * Jg;
+    blocks.push_back(projected.bottomRows(rows - cols));
+    total += rows - cols;
+  }
+  for (int k : model.prior_terms) {
+    if (!with_prior) break;
+    const Term& t = model.terms[k];
+    MatrixXd jg;
+    VectorXd r(t.size());
+    EvaluateTerm(t, g, locals, r.data(), nullptr, &jg);
+    blocks.push_back(jg);
+    total += t.size();
+  }
+  MatrixXd A(total, p);
+  int row = 0;
+  for (const MatrixXd& b : blocks) {
+    A.middleRows(row, b.rows()) = b;
+    row += b.rows();
+  }
+  return A;
+}
+
+// The SVD of A through its p x p triangular factor (A may have thousands of rows).
+Eigen::JacobiSVD<MatrixXd> SmallSvd(const MatrixXd& A) {
+  const int p = A.cols();
+  MatrixXd R = MatrixXd::Zero(p, p);
+  if (A.rows() >= p) {
+    Eigen::HouseholderQR<MatrixXd> qr(A);
+    R = qr.matrixQR().topRows(p).triangularView<Eigen::Upper>();
+  } else {
+    R.topRows(A.rows()) = A;
+  }
+  return Eigen::JacobiSVD<MatrixXd>(R, Eigen::ComputeFullV);
+}
+
+// ---- Directions in words ----
+
+const char* kGeneratorNames[6] = {"a translation along x", "a translation along y", "a translation along z",
+                                  "a rotation about x",    "a rotation about y",    "a rotation about z"};
+
+// The rigid motions of the frame on the exit coordinates: translations along x, y, z and
+// rotations about the axes through the exits' centroid (per radian).
+MatrixXd RigidGenerators(const VectorXd& g, const Layout& L) {
+  MatrixXd G = MatrixXd::Zero(L.exit_coordinates(), 6);
+  Vector3d centroid = Vector3d::Zero();
+  for (int i = 0; i < L.m; ++i) centroid += g.segment<3>(L.exit(i));
+  centroid /= L.m;
+  for (int i = 0; i < L.m; ++i) {
+    const Vector3d d = g.segment<3>(L.exit(i)) - centroid;
+    for (int a = 0; a < 3; ++a) {
+      G(L.exit(i) + a, a) = 1.0;
+      G.block<3, 1>(L.exit(i), 3 + a) = Vector3d::Unit(a).cross(d);
+    }
+  }
+  return G;
+}
+
+std::string LargestComponents(const VectorXd& v, const std::vector<std::string>& names) {
+  std::vector<int> order(v.size());
+  for (int k = 0; k < v.size(); ++k) order[k] = k;
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return std::abs(v(a)) > std::abs(v(b)); });
+  std::string out;
+  for (int k = 0; k < std::min<int>(4, v.size()); ++k) {
+    if (std::abs(v(order[k])) < 0.1 * std::abs(v(order[0]))) break;
+    out += (out.empty() ? "" : ", ") + names[order[k]];
+  }
+  return out;
+}
+
+// Describes the span of the columns of V (p x k, orthonormal-ish): when their exit parts are
+// rigid motions of the frame, a basis in reduced row-echelon form over the generators
+// (translations x, y, z, rotations x, y, z) so that "a translation along x" comes out as
+// such; otherwise each column by the unknowns it moves most.
+std::vector<SpatialDirection> Describe(const MatrixXd& V, const VectorXd& g, const Layout& L,
+                                       const std::vector<std::string>& names) {
+  const int k = V.cols();
+  std::vector<SpatialDirection> out;
+  if (k == 0) return out;
+  const MatrixXd G = RigidGenerators(g, L);
+  const MatrixXd E = V.topRows(L.exit_coordinates());
+  const MatrixXd C = G.colPivHouseholderQr().solve(E);  // 6 x k
+  bool rigid = true;
+  for (int c = 0; c < k; ++c) {
+    const double e = E.col(c).norm();
+    rigid = rigid && e > 1e-3 * V.col(c).norm() && (G * C.col(c) - E.col(c)).norm() <= 1e-6 * e;
+  }
+  if (rigid) {
+    // RREF of [C^T | I]: the rows' right halves say which combination of V each row is.
+    MatrixXd M(k, 6 + k);
+    M << C.transpose(), MatrixXd::Identity(k, k);
+    int row = 0;
+    for (int col = 0; col < 6 && row < k; ++col) {
+      int best = row;
+      for (int r = row; r < k; ++r) {
+        if (std::abs(M(r, col)) > std::abs(M(best, col))) best = r;
+      }
+      if (std::abs(M(best, col)) < 1e-6 * M.leftCols(6).cwiseAbs().maxCoeff()) continue;
+      M.row(row).swap(M.row(best));
+      M.row(row) /= M(row, col);
+      for (int r = 0; r < k; ++r) {
+        if (r != row) M.row(r) -= M(r, col) * M.row(row);
+      }
+      ++row;
+    }
+    for (int r = 0; r < k; ++r) {
+      SpatialDirection d;
+      d.geometry = (V * M.row(r).rightCols(k).transpose()).normalized();
+      std::string words;
+      int terms = 0;
+      for (int a = 0; a < 6; ++a) {
+        if (std::abs(M(r, a)) > 1e-6) {
+          char buf[96];
+          std::snprintf(buf, sizeof(buf), "%s%s (%.3g%s)", terms ? " with " : "", kGeneratorNames[a], M(r, a),
+                        a < 3 ? " m" : " rad");
+          words += terms ? std::string(buf) : std::string(kGeneratorNames[a]);
+          ++terms;
+        }
+      }
+      if (terms > 1) words = "a combination: " + words;
+      const VectorXd rest = d.geometry.bottomRows(d.geometry.size() - L.exit_coordinates());
+      if (rest.norm() > 1e-6) {
+        std::vector<std::string> rest_names(names.begin() + L.exit_coordinates(), names.end());
+        words += " of the frame, with " + LargestComponents(rest, rest_names);
+      } else {
+        words += " of the frame";
+      }
+      d.description = words;
+      out.push_back(d);
+    }
+    return out;
+  }
+  for (int c = 0; c < k; ++c) {
+    SpatialDirection d;
+    d.geometry = V.col(c).normalized();
+    const double e = d.geometry.topRows(L.exit_coordinates()).norm();
+    d.description = (e < 1e-3 ? "a direction that moves no exit point, of " : "a direction of ") +
+                    LargestComponents(d.geometry, names);
+    out.push_back(d);
+  }
+  return out;
+}
+
+std::string Join(const std::vector<std::string>& v, const char* sep) {
+  std::string s;
+  for (const std::string& x : v) s += (s.empty() ? "" : sep) + x;
+  return s;
+}
+
+std::string DescribeAll(const std::vector<SpatialDirection>& d) {
+  std::vector<std::string> w;
+  for (const SpatialDirection& x : d) w.push_back(x.description);
+  return Join(w, "; ");
+}
+
+// The column-pivoted QR of E^T (E: the null basis's exit rows, 3m x k) by modified
+// Gram-Schmidt: k times, the exit coordinate whose row has the largest norm left after
+// removing the rows already chosen. Row norms and projections do not depend on which
+// orthonormal basis of the null space the SVD returned, so neither does the choice; near-ties
+// (within 1e-6 relative, e.g. the symmetric exits of a built-in robot) go to the lowest index,
+// so that noise in the readings never changes the held set.
+std::vector<int> PivotedExitCoordinates(const MatrixXd& E) {
+  MatrixXd rows = E;
+  std::vector<int> held;
+  for (int c = 0; c < E.cols(); ++c) {
+    const VectorXd norms = rows.rowwise().norm();
+    const double largest = norms.maxCoeff();
+    int best = 0;
+    while (norms(best) < (1.0 - 1e-6) * largest) ++best;
+    held.push_back(best);
+    const VectorXd q = rows.row(best).transpose() / norms(best);
+    rows -= (rows * q) * q.transpose();
+  }
+  std::sort(held.begin(), held.end());
+  return held;
+}
+
+}  // namespace
+
+std::vector<std::string> SpatialPlausibilityWarnings(const SpatialRobot& nominal, const Eigen::VectorXd& g) {
+  const Layout L{nominal.num_cables(), false, false};
+  CABLECAL_CHECK(g.size() >= L.size(), "a geometry vector shorter than the exits and lengths");
+  const VectorXd g0 = NominalSpatialGeometry(nominal, false, false);
+  std::vector<std::string> out;
+  const Vector3d lo = nominal.p_F_frame_min_m, hi = nominal.p_F_frame_max_m;
+  const double diagonal_m = (hi - lo).norm();
+  char buf[160];
+  for (int i = 0; i < L.m; ++i) {
+    const Vector3d d = g.segment<3>(L.exit(i));
+    const double outside_m = (d.cwiseMax(lo).cwiseMin(hi) - d).norm();
+    if (outside_m > kPlausibleExitOutsideFrame_m) {
+      std::snprintf(buf, sizeof(buf), "exit point %d is %.3g m outside the frame box (more than %.3g m)", i + 1,
+                    outside_m, kPlausibleExitOutsideFrame_m);
+      out.push_back(std::string(buf) + ": wrong units, another robot's file, or a cable led elsewhere?");
+    }
+  }
+  for (int i = 0; i < L.m; ++i) {
+    const double off_m = g(L.length(i)) - g0(L.length(i));
+    if (std::abs(off_m) > diagonal_m) {
+      std::snprintf(buf, sizeof(buf), "l%d0 is %.4g m off its nominal %.4g m, more than the frame's diagonal %.4g m",
+                    i + 1, off_m, g0(L.length(i)), diagonal_m);
+      out.push_back(std::string(buf) + ": an encoder zeroed elsewhere, or readings of another cable order?");
+    }
+  }
+  return out;
+}
+
+namespace {
+
+struct Analysis {
+  Model model;
+  VectorXd g0;
+  Locals start;
+  SpatialGaugeAnalysis gauge;
+};
+
+Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasurement>& readings,
+                 const SpatialIdentifyOptions& options) {
+  Analysis a;
+  a.model = BuildModel(nominal, readings, options.gauge.kind == SpatialGaugeKind::kPrior, options.statics);
+  const Layout& L = a.model.layout;
+  a.g0 = NominalSpatialGeometry(nominal, L.swivel, L.heading);
+  a.gauge.names = SpatialGeometryNames(L.m, L.swivel, L.heading);
+  const int p = L.size();
+  const int n = static_cast<int>(a.model.pose_ids.size());
+  const int local = a.model.local();
+  if (a.model.num_values < p + local * n) {
+    const std::string tensions =
+        a.model.nt > 0 ? " and " + std::to_string(a.model.nt) +
+                             " tensions per pose (the equilibrium's 6 rows per pose are among the values; a "
+                             "stretching cable's tension is an unknown that load cells would read)"
+                       : "";
+    throw InputError("readings", "", std::to_string(a.model.num_values) + " reading values for " +
+                                         std::to_string(p + local * n) + " unknowns (" + std::to_string(p) +
+                                         " of the geometry, 6 coordinates per pose for " + std::to_string(n) +
+                                         " poses" + tensions +
+                                         "): too few to determine the geometry; measure more poses or add a sensor");
+  }
+  // Each pose's start: home, and the tensions its first load-cell reading gives, else the
+  // least-squares tensions holding the nominal platform at home.
+  VectorXd start0(local);
+  start0.head<6>() = nominal.home_pose();
+  if (a.model.nt > 0) {
+    const Eigen::Matrix<double, 6, Eigen::Dynamic> W = WrenchMatrix<double>(nominal, nominal.home_pose());
+    const Eigen::Matrix<double, 6, 1> w_g = GravityWrench<double>(nominal, nominal.home_pose());
+    start0.tail(a.model.nt) = MatrixXd(W).completeOrthogonalDecomposition().solve(VectorXd(-w_g));
+  }
+  for (int j = 0; j < n; ++j) {
+    VectorXd s = start0;
+    const SpatialMeasurement& first = readings[a.model.terms[a.model.pose_terms[j][0]].reading];
+    if (a.model.nt > 0 && first.has(SpatialSensor::kLoadCell)) s.tail(a.model.nt) = first.values(SpatialSensor::kLoadCell);
+    a.start.push_back(StartingLocal(a.model, j, a.g0, s));
+  }
+  const MatrixXd A = ReducedJacobian(a.model, a.g0, a.start, true, false);  // what the readings alone see
+  const Eigen::JacobiSVD<MatrixXd> svd = SmallSvd(A);
+  const VectorXd& s = svd.singularValues();
+  const double largest = s(0);
+  std::vector<int> null_cols, weak_cols;
+  for (int c = 0; c < p; ++c) {
+    if (!(s(c) > kSpatialNullThreshold * largest)) {
+      null_cols.push_back(c);
+    } else if (s(c) < kSpatialWeakThreshold * largest) {
+      weak_cols.push_back(c);
+    }
+  }
+  const auto columns = [&](const std::vector<int>& cols) {
+    MatrixXd V(p, cols.size());
+    for (std::size_t c = 0; c < cols.size(); ++c) V.col(c) = svd.matrixV().col(cols[c]);
+    return V;
+  };
+  const MatrixXd N = columns(null_cols);
+  const int k = N.cols();
+  a.gauge.null_directions = Describe(N, a.g0, L, a.gauge.names);
+  a.gauge.weak_directions = Describe(columns(weak_cols), a.g0, L, a.gauge.names);
+  for (std::size_t c = 0; c < weak_cols.size(); ++c) {
+    a.gauge.weak_directions[c].relative_singular_value = s(weak_cols[c]) / largest;
+  }
+  if (k == 0) return a;
+  // A null direction with no exit coordinate cannot be held by any exit: refused whatever the gauge.
+  const MatrixXd E = N.topRows(L.exit_coordinates());
+  Eigen::JacobiSVD<MatrixXd> exit_svd(E, Eigen::ComputeFullV);
+  std::vector<int> unheldable;
+  for (int c = 0; c < k; ++c) {
+    if (!(exit_svd.singularValues()(c) > 1e-6)) unheldable.push_back(c);
+  }
+  if (!unheldable.empty()) {
+    MatrixXd U(p, unheldable.size());
+    for (std::size_t c = 0; c < unheldable.size(); ++c) U.col(c) = N * exit_svd.matrixV().col(unheldable[c]);
+    throw InputError("readings", "",
+                     "no reading fixes " + DescribeAll(Describe(U, a.g0, L, a.gauge.names)) +
+                         ", and holding exit coordinates cannot fix it: add a sensor that sees it (swivel "
+                         "offsets need swivel readings at several poses, yaw0 heading readings)");
+  }
+  switch (options.gauge.kind) {
+    case SpatialGaugeKind::kAuto: {
+      a.gauge.held = PivotedExitCoordinates(E);
+      break;
+    }
+    case SpatialGaugeKind::kHold: {
+      const std::vector<std::string>& names = a.gauge.names;
+      for (const std::string& h : options.gauge.held) {
+        const auto it = std::find(names.begin(), names.begin() + L.exit_coordinates(), h);
+        if (it == names.begin() + L.exit_coordinates()) {
+          throw InputError("--gauge", "hold:" + Join(options.gauge.held, ","),
+                           "'" + h + "' is not an exit coordinate of this " + std::to_string(L.m) +
+                               "-cable robot (a1x .. a" + std::to_string(L.m) + "z)");
+        }
+        const int index = static_cast<int>(it - names.begin());
+        if (std::find(a.gauge.held.begin(), a.gauge.held.end(), index) != a.gauge.held.end()) {
+          throw InputError("--gauge", "hold:" + Join(options.gauge.held, ","), "'" + h + "' is named twice");
+        }
+        a.gauge.held.push_back(index);
+      }
+      std::sort(a.gauge.held.begin(), a.gauge.held.end());
+      MatrixXd H(a.gauge.held.size(), k);
+      for (std::size_t r = 0; r < a.gauge.held.size(); ++r) H.row(r) = N.row(a.gauge.held[r]);
+      Eigen::JacobiSVD<MatrixXd> hold_svd(H, Eigen::ComputeFullV);
+      std::vector<int> left;
+      for (int c = 0; c < k; ++c) {
+        const double sv = c < hold_svd.singularValues().size() ? hold_svd.singularValues()(c) : 0.0;
+        if (!(sv > 1e-6)) left.push_back(c);
+      }
+      if (!left.empty()) {
+        MatrixXd U(p, left.size());
+        for (std::size_t c = 0; c < left.size(); ++c) U.col(c) = N * hold_svd.matrixV().col(left[c]);
+        // The exit coordinate the first remaining direction moves most: holding it too helps.
+        VectorXd moved = U.col(0).topRows(L.exit_coordinates()).cwiseAbs();
+        int best = 0;
+        moved.maxCoeff(&best);
+        throw InputError("--gauge", "hold:" + Join(options.gauge.held, ","),
+                         "does not fix the gauge: no reading fixes " +
+                             DescribeAll(Describe(U, a.g0, L, a.gauge.names)) + " (" + std::to_string(left.size()) +
+                             " of the " + std::to_string(k) + " null directions left); hold " + names[best] +
+                             " too, or add a sensor that sees it");
+      }
+      break;
+    }
+    case SpatialGaugeKind::kNone:
+    case SpatialGaugeKind::kPrior: break;
+  }
+  return a;
+}
+
+}  // namespace
+
+std::vector<std::string> SpatialGeometryNames(int num_cables, bool swivel, bool heading) {
+  std::vector<std::string> names = SpatialLayout(num_cables).names();
+  if (swivel) {
+    for (int i = 1; i <= num_cables; ++i) names.push_back("sw" + std::to_string(i) + "0");
+  }
+  if (heading) names.push_back("yaw0");
+  return names;
+}
+
+Eigen::VectorXd NominalSpatialGeometry(const SpatialRobot& nominal, bool swivel, bool heading) {
+  Layout L{nominal.num_cables(), swivel, heading};
+  VectorXd g = VectorXd::Zero(L.size());
+  const VectorXd home_lengths = CableLengths<double>(nominal, nominal.home_pose());
+  for (int i = 0; i < L.m; ++i) {
+    g.segment<3>(L.exit(i)) = nominal.cables[i].p_F_exit_m;
+    g(L.length(i)) = home_lengths(i);
+  }
+  if (heading) g(L.yaw0()) = nominal.home_rpy_rad.z();
+  return g;
+}
+
+SpatialGauge ParseSpatialGauge(const std::string& text) {
+  SpatialGauge gauge;
+  if (text == "auto") return gauge;
+  if (text == "none") {
+    gauge.kind = SpatialGaugeKind::kNone;
+    return gauge;
+  }
+  if (text == "prior") {
+    gauge.kind = SpatialGaugeKind::kPrior;
+    return gauge;
+  }
+  if (text.rfind("hold:", 0) == 0) {
+    gauge.kind = SpatialGaugeKind::kHold;
+    std::stringstream list(text.substr(5));
+    std::string name;
+    while (std::getline(list, name, ',')) {
+      if (name.empty()) throw InputError("--gauge", text, "an empty name in the hold list");
+      gauge.held.push_back(name);
+    }
+    if (gauge.held.empty()) throw InputError("--gauge", text, "hold: names no coordinate (e.g. hold:a1x,a1y,a1z)");
+    return gauge;
+  }
+  throw InputError("--gauge", text, "expected auto, none, prior or hold:a1x,a1y,...");
+}
+
+std::string ToString(const SpatialGauge& gauge) {
+  switch (gauge.kind) {
+    case SpatialGaugeKind::kAuto: return "auto";
+    case SpatialGaugeKind::kNone: return "none";
+    case SpatialGaugeKind::kPrior: return "prior";
+    case SpatialGaugeKind::kHold: return "hold:" + Join(gauge.held, ",");
+  }
+  return "?";
+}
+
+const char* ToString(SpatialIdentifyStatus s) {
+  switch (s) {
+    case SpatialIdentifyStatus::kConverged: return "converged";
+    case SpatialIdentifyStatus::kNotConverged: return "not_converged";
+    case SpatialIdentifyStatus::kRankDeficient: return "rank_deficient";
+  }
+  return "?";
+}
+
+SpatialGaugeAnalysis AnalyzeSpatialGauge(const SpatialRobot& nominal, const std::vector<SpatialMeasurement>& readings,
+                                         const SpatialIdentifyOptions& options) {
+  return Analyze(nominal, readings, options).gauge;
+}
+
+SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::vector<SpatialMeasurement>& readings,
+                                      const SpatialIdentifyOptions& options) {
+  if (options.max_iterations < 1) throw InputError("--max-iterations", "", "must be at least 1");
+  Analysis a = Analyze(nominal, readings, options);
+  const Model& model = a.model;
+  const Layout& L = model.layout;
+  const int p = L.size();
+  const int n = static_cast<int>(model.pose_ids.size());
+
+  SpatialIdentifyResult result;
+  result.names = a.gauge.names;
+  result.null_directions = a.gauge.null_directions;
+  result.weak_directions = a.gauge.weak_directions;
+  result.unused_sensors = model.unused_sensors;
+  for (int h : a.gauge.held) result.held.push_back(a.gauge.names[h]);
+  result.pose_ids = model.pose_ids;
+  for (const VectorXd& x : a.start) result.starting_poses.push_back(x.head<6>());
+
+  VectorXd g = a.g0;
+  Locals locals = a.start;
+  const int local = model.local();
+  std::vector<std::unique_ptr<ceres::CostFunction>> adapters;
+  ceres::Problem::Options problem_options;
+  problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  auto* ordering = new ceres::ParameterBlockOrdering;
+  for (int j = 0; j < n; ++j) {
+    problem.AddParameterBlock(locals[j].data(), local);
+    ordering->AddElementToGroup(locals[j].data(), 0);
+  }
+  for (int i = 0; i < L.m; ++i) {
+    problem.AddParameterBlock(g.data() + L.exit(i), 3);
+    problem.AddParameterBlock(g.data() + L.length(i), 1);
+    ordering->AddElementToGroup(g.data() + L.exit(i), 1);
+    ordering->AddElementToGroup(g.data() + L.length(i), 1);
+    if (L.swivel) {
+      problem.AddParameterBlock(g.data() + L.swivel_offset(i), 1);
+      ordering->AddElementToGroup(g.data() + L.swivel_offset(i), 1);
+    }
+  }
+  if (L.heading) {
+    problem.AddParameterBlock(g.data() + L.yaw0(), 1);
+    ordering->AddElementToGroup(g.data() + L.yaw0(), 1);
+  }
+  for (const Term& t : model.terms) {
+    std::vector<double*> params;
+    if (t.pose >= 0) params.push_back(locals[t.pose].data());
+    for (int b : t.block_offset) params.push_back(g.data() + b);
+    // The robust loss on the sensors' readings; the equilibrium is the model's, not a reading.
+    const bool reading = t.reading >= 0 && t.sensor != kEquilibriumTerm;
+    ceres::LossFunction* loss = nullptr;
+    if (reading && options.loss.kind == LossKind::kHuber) loss = new ceres::HuberLoss(options.loss.scale_sigmas);
+    if (reading && options.loss.kind == LossKind::kCauchy) loss = new ceres::CauchyLoss(options.loss.scale_sigmas);
+    ceres::CostFunction* cost = t.cost.get();
+    if (t.pose >= 0 && local > 6) {
+      adapters.push_back(std::make_unique<LocalBlockCost>(t, local));
+      cost = adapters.back().get();
+    }
+    problem.AddResidualBlock(cost, loss, params);
+  }
+  for (int i = 0; i < L.m; ++i) {
+    std::vector<int> axes;
+    for (int axis = 0; axis < 3; ++axis) {
+      if (std::count(a.gauge.held.begin(), a.gauge.held.end(), L.exit(i) + axis)) axes.push_back(axis);
+    }
+    if (axes.size() == 3) {
+      problem.SetParameterBlockConstant(g.data() + L.exit(i));
+    } else if (!axes.empty()) {
+      problem.SetManifold(g.data() + L.exit(i), new ceres::SubsetManifold(3, axes));
+    }
+  }
+  ceres::Solver::Options solver;
+  constexpr internal::LevenbergMarquardtSettings kSettings;
+  solver.minimizer_type = ceres::TRUST_REGION;
+  solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  solver.function_tolerance = kSettings.function_tolerance;
+  solver.gradient_tolerance = kSettings.gradient_tolerance;
+  solver.parameter_tolerance = kSettings.parameter_tolerance;
+  solver.initial_trust_region_radius = kSettings.initial_trust_region_radius;
+  solver.linear_solver_type = ceres::DENSE_SCHUR;  // the poses eliminated first
+  solver.linear_solver_ordering.reset(ordering);
+  solver.max_num_iterations = options.max_iterations;
+  solver.num_threads = 1;
+  solver.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver, &problem, &summary);
+
+  result.geometry = g;
+  for (const VectorXd& x : locals) {
+    result.poses.push_back(x.head<6>());
+    if (model.nt > 0) result.tensions_N.push_back(x.tail(model.nt));
+  }
+  result.iterations = static_cast<int>(summary.iterations.size());
+  // Plain whitened residuals (before the loss) per reading.
+  result.fits.resize(readings.size());
+  for (std::size_t k = 0; k < readings.size(); ++k) {
+    result.fits[k].pose_id = readings[k].pose_id;
+    result.fits[k].where = readings[k].where;
+    result.fits[k].encoders = VectorXd::Zero(L.m);
+    for (const SpatialSensor s : kSpatialSensors) {
+      if (readings[k].has(s) && (s != SpatialSensor::kLoadCell || model.nt > 0)) {
+        result.fits[k].sensors[static_cast<int>(s)] = VectorXd::Zero(SpatialSensorSize(s, L.m));
+      }
+    }
+  }
+  double cost = 0.0;
+  for (const Term& t : model.terms) {
+    VectorXd r(t.size());
+    EvaluateTerm(t, g, locals, r.data(), nullptr, nullptr);
+    cost += 0.5 * r.squaredNorm();
+    if (t.reading < 0) continue;
+    SpatialReadingFit& fit = result.fits[t.reading];
+    VectorXd& out = t.sensor == kEquilibriumTerm ? fit.equilibrium : t.sensor < 0 ? fit.encoders : fit.sensors[t.sensor];
+    if (t.sensor == kEquilibriumTerm) out.resize(6);
+    out.segment(t.value, t.size()) = r;
+    for (int v = 0; v < t.size(); ++v) {
+      if (!(std::abs(r(v)) > std::abs(result.worst_residual))) continue;
+      result.worst_residual = r(v);
+      result.worst_pose_id = readings[t.reading].pose_id;
+      result.worst_where = readings[t.reading].where;
+      const int index = t.value + v + 1;
+      if (t.sensor == kEquilibriumTerm) {
+        result.worst_sensor = std::string("equilibrium ") + (v < 3 ? "force " : "moment ") + "xyz"[v % 3];
+      } else if (t.sensor < 0) {
+        result.worst_sensor = "encoder " + std::to_string(index);
+      } else {
+        const SpatialSensor sensor = static_cast<SpatialSensor>(t.sensor);
+        result.worst_sensor = std::string(ToString(sensor)) + " " + SpatialSensorColumns(sensor, L.m)[index - 1];
+      }
+    }
+  }
+  result.final_cost = cost;
+  result.warnings = SpatialPlausibilityWarnings(nominal, g);
+  if (std::abs(result.worst_residual) > kOutlierSigmas) {
+    char buf[64];
+    std::snprintf(buf, sizeof(buf), "%.3g", result.worst_residual);
+    result.warnings.push_back("the worst reading, " + result.worst_sensor + " of pose " +
+                              std::to_string(result.worst_pose_id) +
+                              (result.worst_where.empty() ? "" : " (" + result.worst_where + ")") + ", is " + buf +
+                              " sigma off the fit: an outlier, or a model that does not fit the data");
+  }
+
+  if (summary.termination_type != ceres::CONVERGENCE) {
+    result.status = SpatialIdentifyStatus::kNotConverged;
+    result.message = "the solver stopped after " + std::to_string(result.iterations) +
+                     " iterations without converging: " + summary.message;
+    return result;
+  }
+  // Covariance at the estimate with the gauge held.
+  const MatrixXd A = ReducedJacobian(model, g, locals, false, true);
+  std::vector<int> free;
+  for (int c = 0; c < p; ++c) {
+    if (!std::count(a.gauge.held.begin(), a.gauge.held.end(), c)) free.push_back(c);
+  }
+  MatrixXd A_free(A.rows(), free.size());
+  for (std::size_t c = 0; c < free.size(); ++c) A_free.col(c) = A.col(free[c]);
+  const Eigen::JacobiSVD<MatrixXd> svd = SmallSvd(A_free);
+  const VectorXd& s = svd.singularValues();
+  const int f = static_cast<int>(free.size());
+  MatrixXd cov_free = MatrixXd::Zero(f, f);
+  int unseen = 0;
+  for (int c = 0; c < f; ++c) {
+    if (!(s(c) > kSpatialNullThreshold * s(0))) {
+      ++unseen;
+      continue;
+    }
+    cov_free += svd.matrixV().col(c) * svd.matrixV().col(c).transpose() / (s(c) * s(c));
+  }
+  result.covariance = MatrixXd::Zero(p, p);
+  for (int r = 0; r < f; ++r) {
+    for (int c = 0; c < f; ++c) result.covariance(free[r], free[c]) = cov_free(r, c);
+  }
+  result.sigma = result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+  const int expected_unseen = options.gauge.kind == SpatialGaugeKind::kNone ? static_cast<int>(a.gauge.null_directions.size()) : 0;
+  if (unseen > expected_unseen) {
+    result.status = SpatialIdentifyStatus::kRankDeficient;
+    result.message = std::to_string(unseen - expected_unseen) +
+                     " direction(s) of the geometry beyond the gauge are unseen at the estimate (the readings "
+                     "saw them at the start only): not a result";
+    return result;
+  }
+  result.status = SpatialIdentifyStatus::kConverged;
+  return result;
+}
+
+}  // namespace cablecal

@@ -1,0 +1,197 @@
+// Spatial identification, first layer (README, "Spatial robots", "Spatial identification"):
+// the geometry of a spatial robot (every exit point D_i, every initial length l_i0, and the
+// zero offsets of the relative sensors) and every measured pose from the readings of any subset
+// of its sensors, with the gauge chosen from the data.
+//
+// Unknowns, in the order of SpatialIdentifyResult::names: a1x a1y a1z ... amx amy amz (exit
+// points, m), l10 ... lm0 (each cable's length at home, m: an inextensible cable's encoder
+// reads dl_ij = l_i(q_j) - l_i0), then sw10 ... swm0 when swivel readings are present (the
+// angle about k_i, from the nominal home's pulley direction, at which encoder i reads zero,
+// rad), then yaw0 when heading readings are present (the yaw at which the IMU reads zero,
+// rad); and each measured pose's (x, y, z, roll, pitch, yaw). Repeated pose ids are repeated
+// readings of one pose.
+//
+// Residuals: model minus reading over the sensor's sigma (robot file: the encoder sigma, each
+// RangedNoise's sigma()), the models those of model/swivel.h and model/spatial_sensor_model.h.
+//
+// Statics (options.statics, on by default). Each pose j also has the m cable tensions t_ij (N)
+// as unknowns, eliminated with its coordinates, when they carry information: load-cell
+// readings are present, a cable has a stiffness, or the robot is underactuated (m < 6). Then
+// - each load cell reads (t_ij - f_ij) / sigma_f;
+// - each pose's equilibrium W(q_j, D) t_j + w_g(q_j) = 0 (model/swivel.h: its wrench columns
+//   through the unknown exit points, mass and centre of mass from the robot file) is 6
+//   residuals: the force rows over kEquilibriumWeightRelativeSigma times the weight, the
+//   moment rows over the weight times kDefaultComSigma_m (identify/identify.h, the planar
+//   equilibrium's): what the robot file's mass and centre of mass are known to;
+// - the encoder of a cable with a stiffness reads the cable paid out, its unstretched length
+//   (model/robot.h's UnstretchedLength): dl_ij = l_i(q_j) / (1 + t_ij / EA_i) - l_i0, so that
+//   l_i0 is then the cable paid out at home (the unstretched length there), not its geometric
+//   length.
+// A robot with 7 or more inextensible cables gets no tensions without load cells (its
+// equilibrium adds nothing: every tension combination it does not fix is free) and is refused
+// with them (the same indeterminacy: InputError naming sensors.load_cell). Note that with
+// stretching cables and no load cells the tensions take the redundant cables' information:
+// each pose has m + 6 unknowns for m encoder values and 6 equilibrium rows, so encoders alone
+// no longer self-calibrate an elastic robot (refused, too few values); load cells, an
+// inclinometer or a laser restore it. options.statics = false leaves the statics out (cables
+// taken as inextensible, load cells unused): the first layer's model, for comparison.
+// Not modelled yet: free platform anchors.
+//
+// Gauge (SpatialGaugeAnalysis): the Jacobian of every whitened residual at the nominal
+// geometry and the starting poses, each pose's columns eliminated by an orthogonal projection
+// (so that nothing is squared), then an SVD of the reduced geometry Jacobian: singular values
+// below kSpatialNullThreshold of the largest are null directions (no reading sees them),
+// those below kSpatialWeakThreshold weakly observable. The default gauge holds, at their
+// nominal values, the exit coordinates chosen by a column-pivoted QR of the transposed null
+// basis restricted to the exit-coordinate rows (the first k pivots for k null directions: the
+// coordinates the null directions move most independently).
+// Depends on model/ (header-only parts and the robot), Ceres and experiment/spatial_measurements.h.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <string>
+#include <vector>
+
+#include "experiment/spatial_measurements.h"
+#include "identify/identify.h"  // RobustLoss
+#include "model/kind.h"
+#include "model/spatial_robot.h"
+
+namespace cablecal {
+
+// A singular value of the reduced Jacobian below this fraction of the largest is a null
+// direction: rounding in the whitened Jacobian (entries of order 1 / sigma, exact to ~1e-15
+// relative) stays six orders below it, while a direction seen through a pulley radius of a
+// millimetre on a 10 m frame is still above it.
+constexpr double kSpatialNullThreshold = 1e-9;
+// Below this fraction (and above the null threshold) a direction is reported as weakly
+// observable: its sigma is 1e4 times that of the best-seen direction or more.
+constexpr double kSpatialWeakThreshold = 1e-4;
+
+// The equilibrium rows' sigma: the force rows this fraction of the platform's weight (a
+// platform weighed, its cables and fittings estimated: 1 %); the moment rows the weight times
+// kDefaultComSigma_m (identify/identify.h: a centre of mass from CAD, known to 5 mm).
+constexpr double kEquilibriumWeightRelativeSigma = 0.01;
+
+// Plausibility (SpatialIdentifyResult::warnings): an identified exit point farther than this
+// outside the frame box (pulleys sit on the frame; half a metre is beyond any bracket), and an
+// initial length off its nominal by more than the frame box's diagonal (no cable can be).
+constexpr double kPlausibleExitOutsideFrame_m = 0.5;
+
+enum class SpatialGaugeKind {
+  kAuto,   // hold the exit coordinates the pivoted QR picks (the default)
+  kHold,   // hold the user's exit coordinates; refused when they leave a null direction
+  kNone,   // hold nothing: covariance by the pseudo-inverse, the null directions reported
+  kPrior,  // the robot file's tracker sigma on every exit coordinate, about its nominal value
+};
+struct SpatialGauge {
+  SpatialGaugeKind kind = SpatialGaugeKind::kAuto;
+  std::vector<std::string> held;  // kHold: exit-coordinate names, a1x ...
+};
+// "auto", "none", "prior", "hold:a1x,a2y,...". InputError naming --gauge.
+SpatialGauge ParseSpatialGauge(const std::string& text);
+std::string ToString(const SpatialGauge& gauge);
+
+struct SpatialIdentifyOptions {
+  SpatialGauge gauge;
+  RobustLoss loss;  // on each whitened sensor value (an encoder, roll, px, ...) on its own
+  int max_iterations = 200;
+  bool statics = true;  // the tensions, load cells, equilibrium and stretch (file comment)
+};
+
+// One direction of the geometry the readings do not see (or see weakly): unit vector over
+// the geometry unknowns (names order), the relative singular value, and in words.
+struct SpatialDirection {
+  Eigen::VectorXd geometry;
+  double relative_singular_value = 0.0;
+  std::string description;  // "a translation along x", "a rotation about z", ...
+};
+
+// How one reading fits at the estimate: each value's whitened residual (model - reading) / sigma.
+struct SpatialReadingFit {
+  int pose_id = 0;
+  std::string where;
+  Eigen::VectorXd encoders;  // per cable
+  std::array<Eigen::VectorXd, kNumSpatialSensors> sensors;  // empty where not read (load cells: or not modelled)
+  // The pose's 6 equilibrium residuals (force, moment), on the pose's first reading when the
+  // statics are modelled; empty otherwise.
+  Eigen::VectorXd equilibrium;
+};
+
+enum class SpatialIdentifyStatus {
+  kConverged,
+  kNotConverged,   // the solver stopped without meeting its tolerances: not a result
+  kRankDeficient,  // at the estimate a direction beyond the gauge is unseen: not a result
+};
+const char* ToString(SpatialIdentifyStatus s);
+
+struct SpatialIdentifyResult {
+  SpatialIdentifyStatus status = SpatialIdentifyStatus::kNotConverged;
+  std::string message;  // why, when not converged
+  std::vector<std::string> names;
+  Eigen::VectorXd geometry;  // by names; the last iterate when not converged (not a result)
+  std::vector<int> pose_ids;  // one per distinct pose id, in order of first appearance
+  std::vector<SpatialPose<double>> poses;
+  std::vector<SpatialPose<double>> starting_poses;
+  std::vector<Eigen::VectorXd> tensions_N;  // per pose when the statics are modelled, else empty
+  double final_cost = 0.0;  // 1/2 sum of squared whitened residuals (before the loss)
+  int iterations = 0;
+  std::vector<SpatialReadingFit> fits;  // one per reading
+  std::vector<std::string> held;        // the held exit coordinates
+  std::vector<SpatialDirection> null_directions;  // before holding anything
+  std::vector<SpatialDirection> weak_directions;
+  // Covariance of the geometry (names order) with the gauge held: held rows and columns zero;
+  // gauge none: the pseudo-inverse (the null directions have no variance). Empty when not
+  // converged.
+  Eigen::MatrixXd covariance;
+  Eigen::VectorXd sigma;
+  std::vector<std::string> unused_sensors;  // read but not modelled ("load_cell" with statics off)
+  // The largest whitened residual (before the loss), its pose and sensor ("encoder 3",
+  // "inclinometer roll", "load_cell f2", "equilibrium moment x", ...).
+  double worst_residual = 0.0;
+  int worst_pose_id = 0;
+  std::string worst_sensor, worst_where;
+  // A result to read with care: an exit point more than kPlausibleExitOutsideFrame_m outside
+  // the frame box, an initial length off its nominal by more than the frame's diagonal, the
+  // worst reading beyond kOutlierSigmas.
+  std::vector<std::string> warnings;
+  bool converged() const { return status == SpatialIdentifyStatus::kConverged; }
+};
+
+// The gauge analysis alone (IdentifySpatial runs it first): the null and weak directions of
+// the readings at the nominal geometry and the starting poses, and what the gauge holds.
+// InputError as IdentifySpatial.
+struct SpatialGaugeAnalysis {
+  std::vector<std::string> names;
+  std::vector<SpatialDirection> null_directions;
+  std::vector<SpatialDirection> weak_directions;
+  std::vector<int> held;  // indices into names
+};
+SpatialGaugeAnalysis AnalyzeSpatialGauge(const SpatialRobot& nominal, const std::vector<SpatialMeasurement>& readings,
+                                         const SpatialIdentifyOptions& options);
+
+// Identifies the geometry and the poses (file comment). InputError (exit 2 in the CLI), naming
+// what is missing, when: no readings; a reading's cable count differs from the robot's; a
+// reading has a sensor the robot file lacks (no sigma); the readings have fewer values than
+// the unknowns; a pose is not determined by its own readings; a null direction moves no exit
+// coordinate (holding exits cannot fix it); `hold:` names something other than an exit
+// coordinate or leaves a null direction (named in words); `prior` without a tracker sigma;
+// load cells on more than 6 inextensible cables (sensors.load_cell), stiffness on some cables
+// with more than 6 without (cables[i].stiffness), the statics on a weightless platform.
+// A solver that did not converge is a status, never a result.
+SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::vector<SpatialMeasurement>& readings,
+                                      const SpatialIdentifyOptions& options);
+
+// The plausibility warnings of a geometry (names order; only its exits and lengths are read):
+// an exit point more than kPlausibleExitOutsideFrame_m outside nominal's frame box, an
+// initial length off its nominal value (NominalSpatialGeometry) by more than the box's
+// diagonal. Each names the unknown and the amount.
+std::vector<std::string> SpatialPlausibilityWarnings(const SpatialRobot& nominal, const Eigen::VectorXd& geometry);
+
+// The nominal geometry vector (names order): exits, lengths at the nominal home, zero swivel
+// offsets (when swivel), the home yaw (when heading).
+Eigen::VectorXd NominalSpatialGeometry(const SpatialRobot& nominal, bool swivel, bool heading);
+std::vector<std::string> SpatialGeometryNames(int num_cables, bool swivel, bool heading);
+
+}  // namespace cablecal

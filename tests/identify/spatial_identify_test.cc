@@ -1,0 +1,718 @@
+// Spatial identification (identify/spatial_identify.h): noise-free readings made by an
+// independent model (tests/support/swivel_construction.h: the numerical tangency construction
+// and Eigen's angle-axis rotations, not model/swivel.h) recovered for each sensor subset that
+// determines the geometry, the null directions each subset leaves (counted and named), the
+// refusals, and the predicted sigmas against a Monte Carlo spread.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cstdlib>
+#include <cmath>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "common/error.h"
+#include "common/random.h"
+#include "identify/spatial_identify.h"
+#include "experiment/spatial_plan.h"
+#include "experiment/spatial_simulation.h"
+#include "model/builtin_spatial_robots.h"
+#include "model/spatial_statics.h"
+#include "model/swivel.h"
+#include "tests/support/random_spatial_robot.h"
+#include "tests/support/swivel_construction.h"
+
+namespace cablecal {
+namespace {
+
+using Eigen::Vector3d;
+using Eigen::VectorXd;
+
+// Noise-free readings, the tangency construction to ~1e-15 m: what the brief of the issue asks.
+constexpr double kRecoveryTol_m = 1e-7;
+constexpr double kRecoveryTol_rad = 1e-7;
+
+enum SensorBits : int { kInc = 1, kLaser = 2, kPos = 4, kSwivel = 8, kHeading = 16, kLoad = 32 };
+
+// The robot with inextensible cables: the construction's lengths are geometric, and these
+// tests are about geometry (the elastic robot: ElasticStretch* below).
+SpatialRobot Inextensible(SpatialRobot r) {
+  for (SpatialCable& c : r.cables) c.stiffness_N.reset();
+  return r;
+}
+SpatialRobot AsFiled(const std::string& name) {
+  return LoadSpatialRobotFile(std::string(CABLECAL_SOURCE_DIR) + "/robots/" + name + ".yaml");
+}
+SpatialRobot Builtin(const std::string& name) { return Inextensible(AsFiled(name)); }
+
+// The robot with the sensors of `bits` (besides its encoders), sigmas of a real lab's order.
+SpatialRobot WithSensors(SpatialRobot r, int bits) {
+  if (bits & kInc) r.sensors.inclinometer_rad = RangedNoise{0.003, 0.0};
+  if (bits & kLaser) r.sensors.laser_m = RangedNoise{0.0003, 0.0};
+  if (bits & kPos) r.sensors.position = SpatialSensors::Position{RangedNoise{0.0003, 0.0}, Vector3d(0.05, -0.03, 0.02)};
+  if (bits & kSwivel) r.sensors.swivel_rad = RangedNoise{0.003, 0.0};
+  if (bits & kHeading) r.sensors.heading_rad = RangedNoise{0.003, 0.0};
+  if (bits & kLoad) r.sensors.load_cell_N = RangedNoise{3.0, 0.0};
+  return r;
+}
+
+SpatialRobot PerturbedExits(const SpatialRobot& nominal, Rng& rng, double sigma_m) {
+  SpatialRobot truth = nominal;
+  for (SpatialCable& c : truth.cables) {
+    for (int a = 0; a < 3; ++a) c.p_F_exit_m(a) += rng.Normal(0.0, sigma_m);
+  }
+  return truth;
+}
+
+// The pulley plane's direction off the axis, independently: the anchor's offset from the axis.
+Vector3d PulleyDirection(const SpatialCable& c, const SpatialPose<double>& q) {
+  const Vector3d rho = testing::PointByComposition(q, c.p_P_anchor_m) - c.p_F_exit_m;
+  return (rho - rho.dot(c.k_F_swivel_axis) * c.k_F_swivel_axis).normalized();
+}
+double AngleAbout(const Vector3d& k, const Vector3d& from, const Vector3d& to) {
+  return std::atan2(k.dot(from.cross(to)), from.dot(to));
+}
+double Wrapped(double a) { return std::atan2(std::sin(a), std::cos(a)); }
+
+SpatialRobot RandomInextensible(Rng& rng, const std::string& name, int m) {
+  return Inextensible(testing::RandomSpatialRobot(rng, name, m));
+}
+
+// The wrench matrix by virtual work on the construction, independently of model/swivel.h:
+// W = -(dl/dxi)^T, dl/dxi by central differences of the construction's lengths under a
+// translation of the platform along x, y, z and a rotation about the axes x, y, z through p.
+Eigen::MatrixXd WrenchByVirtualWork(const SpatialRobot& robot, const SpatialPose<double>& q) {
+  const int m = robot.num_cables();
+  const Eigen::Matrix3d R = testing::RotationByComposition(q);
+  constexpr double h = 1e-5;
+  Eigen::MatrixXd W(6, m);
+  for (int i = 0; i < m; ++i) {
+    const SpatialCable& c = robot.cables[i];
+    const auto length = [&](const Vector3d& B) {
+      return c.pulley_radius_m == 0.0 ? (B - c.p_F_exit_m).norm()
+                                      : testing::TangencyConstruction(c.p_F_exit_m, c.k_F_swivel_axis,
+                                                                      c.pulley_radius_m, B).length_m;
+    };
+    for (int a = 0; a < 6; ++a) {
+      double l[2];
+      for (int side = 0; side < 2; ++side) {
+        const double e = side ? h : -h;
+        const Vector3d B = a < 3 ? Vector3d(q.head<3>() + e * Vector3d::Unit(a) + R * c.p_P_anchor_m)
+                                 : Vector3d(q.head<3>() + Eigen::AngleAxisd(e, Vector3d::Unit(a - 3)) * R * c.p_P_anchor_m);
+        l[side] = length(B);
+      }
+      W(a, i) = -(l[1] - l[0]) / (2.0 * h);
+    }
+  }
+  return W;
+}
+Eigen::Matrix<double, 6, 1> GravityByComposition(const SpatialRobot& robot, const SpatialPose<double>& q) {
+  const Vector3d f(0.0, 0.0, -robot.platform_mass_kg * robot.gravity_mps2);
+  Eigen::Matrix<double, 6, 1> w;
+  w << f, (testing::RotationByComposition(q) * robot.p_P_com_m).cross(f);
+  return w;
+}
+
+struct Experiment {
+  SpatialRobot truth;
+  std::vector<SpatialPose<double>> poses;
+  std::vector<SpatialMeasurement> readings;
+  std::vector<VectorXd> tensions_N;  // at each pose, for m < 6 or load cells
+  VectorXd l0_m;
+  std::vector<Vector3d> u_F_zero;  // each pulley's direction where its swivel encoder was zeroed
+  double yaw0_rad = 0.0;
+};
+
+// n poses near home (within +-0.25 m, +-0.15 m in z, +-0.1 rad), valid for the true robot,
+// each read by the encoders (zeroed at the nominal home pose on the true robot) and the
+// sensors of `bits`. The swivel encoders are zeroed there too; their offsets are relative to
+// the nominal geometry's pulley directions at home (the identification's reference); the IMU
+// is zeroed at a yaw 0.05 rad off home's.
+Experiment MakeExperiment(const SpatialRobot& nominal, const SpatialRobot& truth, int n, int bits, Rng& rng) {
+  Experiment e;
+  e.truth = truth;
+  const int m = nominal.num_cables();
+  const SpatialPose<double> home = nominal.home_pose();
+  e.l0_m.resize(m);
+  for (int i = 0; i < m; ++i) {
+    e.l0_m(i) = testing::SpatialLengthByConstruction(truth.cables[i], home);
+    e.u_F_zero.push_back(PulleyDirection(truth.cables[i], home));
+  }
+  e.yaw0_rad = home(5) + 0.05;
+  while (static_cast<int>(e.poses.size()) < n) {
+    SpatialPose<double> q = home;
+    q(0) += rng.Uniform(-0.25, 0.25);
+    q(1) += rng.Uniform(-0.25, 0.25);
+    q(2) += rng.Uniform(-0.15, 0.15);
+    for (int a = 3; a < 6; ++a) q(a) += rng.Uniform(-0.1, 0.1);
+    VectorXd t;
+    if (m < 6) {
+      // An underactuated platform holds only its equilibria: the model's solver finds one (its
+      // roll and pitch from the guess's x, y, z, yaw), checked here by virtual work on the
+      // construction, whose least-squares tensions are the load cells' readings.
+      const SpatialEquilibriumResult eq = SolveSpatialEquilibrium(truth, q);
+      if (eq.status != EquilibriumStatus::kFound) continue;
+      q = eq.equilibrium.q;
+      const Eigen::MatrixXd W = WrenchByVirtualWork(truth, q);
+      const Eigen::Matrix<double, 6, 1> w_g = GravityByComposition(truth, q);
+      t = W.colPivHouseholderQr().solve(-w_g);
+      const double weight = truth.platform_mass_kg * truth.gravity_mps2;
+      EXPECT_LT((W * t + w_g).norm(), 1e-7 * weight) << "not an equilibrium by virtual work";
+      if (!((t.array() > 0.0).all())) continue;
+    } else if (bits & kLoad) {
+      // Any tensions balancing the weight: the least-squares ones (the robots here are not
+      // elastic, so nothing else ties them down).
+      const Eigen::MatrixXd W = WrenchByVirtualWork(truth, q);
+      t = W.completeOrthogonalDecomposition().solve(-GravityByComposition(truth, q));
+    }
+    if (!CableGeometryAt(truth, q).valid()) continue;  // a filter only: the readings are the construction's
+    SpatialMeasurement r;
+    r.pose_id = static_cast<int>(e.poses.size()) + 1;
+    r.dl_m.resize(m);
+    bool found = true;
+    for (int i = 0; i < m; ++i) {
+      r.dl_m(i) = testing::SpatialLengthByConstruction(truth.cables[i], q) - e.l0_m(i);
+      found = found && std::isfinite(r.dl_m(i));
+    }
+    if (!found) continue;
+    const Eigen::Matrix3d R = testing::RotationByComposition(q);
+    if (bits & kInc) r.values(SpatialSensor::kInclinometer) = Eigen::Vector2d(q(3), q(4));
+    if (bits & kLaser) r.values(SpatialSensor::kLaser) = VectorXd::Constant(1, q(2) - nominal.p_F_frame_min_m.z());
+    if (bits & kPos) r.values(SpatialSensor::kPosition) = q.head<3>() + R * nominal.sensors.position->p_P_target_m;
+    if (bits & kSwivel) {
+      VectorXd sw(m);
+      for (int i = 0; i < m; ++i) {
+        sw(i) = AngleAbout(truth.cables[i].k_F_swivel_axis, PulleyDirection(truth.cables[i], home),
+                           PulleyDirection(truth.cables[i], q));
+      }
+      r.values(SpatialSensor::kSwivel) = sw;
+    }
+    if (bits & kHeading) r.values(SpatialSensor::kHeading) = VectorXd::Constant(1, Wrapped(q(5) - e.yaw0_rad));
+    if (bits & kLoad) r.values(SpatialSensor::kLoadCell) = t;
+    e.tensions_N.push_back(t);
+    e.poses.push_back(q);
+    e.readings.push_back(r);
+  }
+  return e;
+}
+
+std::string Descriptions(const std::vector<SpatialDirection>& d) {
+  std::string s;
+  for (const SpatialDirection& x : d) s += "\n  " + x.description;
+  return s;
+}
+
+// The default gauge's null count and held coordinates, then the identification with those
+// coordinates held at the truth's values: everything recovered.
+void ExpectRecovered(const SpatialRobot& nominal, const Experiment& e, int bits, int expected_null,
+                     const std::string& what) {
+  SCOPED_TRACE(what);
+  const SpatialGaugeAnalysis gauge = AnalyzeSpatialGauge(nominal, e.readings, {});
+  EXPECT_EQ(static_cast<int>(gauge.null_directions.size()), expected_null) << Descriptions(gauge.null_directions);
+  ASSERT_EQ(gauge.held.size(), gauge.null_directions.size());
+  SpatialRobot at_truth = nominal;
+  SpatialIdentifyOptions options;
+  options.gauge.kind = SpatialGaugeKind::kHold;
+  for (int h : gauge.held) {
+    ASSERT_LT(h, 3 * nominal.num_cables()) << "the default gauge holds only exit coordinates";
+    at_truth.cables[h / 3].p_F_exit_m(h % 3) = e.truth.cables[h / 3].p_F_exit_m(h % 3);
+    options.gauge.held.push_back(gauge.names[h]);
+  }
+  const SpatialIdentifyResult r = IdentifySpatial(at_truth, e.readings, options);
+  ASSERT_TRUE(r.converged()) << r.message;
+  EXPECT_EQ(r.held, options.gauge.held);
+  const int m = nominal.num_cables();
+  for (int i = 0; i < m; ++i) {
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_NEAR(r.geometry(3 * i + a), e.truth.cables[i].p_F_exit_m(a), kRecoveryTol_m) << r.names[3 * i + a];
+    }
+    EXPECT_NEAR(r.geometry(3 * m + i), e.l0_m(i), kRecoveryTol_m) << r.names[3 * m + i];
+    if (bits & kSwivel) {
+      // The offset: the angle from the identification's reference (the pulley's direction at
+      // home on the robot it was given) to where the encoder was zeroed.
+      const double sw0 = AngleAbout(e.truth.cables[i].k_F_swivel_axis,
+                                    PulleyDirection(at_truth.cables[i], nominal.home_pose()), e.u_F_zero[i]);
+      EXPECT_NEAR(Wrapped(r.geometry(4 * m + i) - sw0), 0.0, kRecoveryTol_rad) << r.names[4 * m + i];
+    }
+  }
+  if (bits & kHeading) EXPECT_NEAR(Wrapped(r.geometry(r.geometry.size() - 1) - e.yaw0_rad), 0.0, kRecoveryTol_rad);
+  ASSERT_EQ(r.poses.size(), e.poses.size());
+  for (std::size_t j = 0; j < e.poses.size(); ++j) {
+    EXPECT_LT((r.poses[j].head<3>() - e.poses[j].head<3>()).cwiseAbs().maxCoeff(), kRecoveryTol_m) << "pose " << j;
+    EXPECT_LT((r.poses[j].tail<3>() - e.poses[j].tail<3>()).cwiseAbs().maxCoeff(), kRecoveryTol_rad) << "pose " << j;
+  }
+  for (const SpatialReadingFit& f : r.fits) EXPECT_LT(f.encoders.cwiseAbs().maxCoeff(), 1e-3);
+  if (m < 6 || (bits & kLoad)) {  // the tensions too, relative to the weight
+    ASSERT_EQ(r.tensions_N.size(), e.poses.size());
+    const double weight = nominal.platform_mass_kg * nominal.gravity_mps2;
+    for (std::size_t j = 0; j < e.poses.size(); ++j) {
+      EXPECT_LT((r.tensions_N[j] - e.tensions_N[j]).cwiseAbs().maxCoeff(), 1e-6 * weight) << "pose " << j;
+    }
+  }
+}
+
+// ---- Noise-free recovery and the null directions each sensor subset leaves ---------------
+//
+// Theory. Encoders read lengths from D_i (with its fixed swivel axis k_i) to the anchors, less
+// l_i0: moving every exit point and every pose by one rigid motion leaves them unchanged when
+// the motion keeps every k_i, i.e. the 3 translations, plus the rotation about an axis parallel
+// to all the k_i when they are all parallel (cogiro, ipanema1: +-z; irma4u: +-x). Any other
+// rotation turns the pulleys against their axes: seen only through the pulley radius, weakly,
+// but not null. The inclinometer reads roll and pitch (gravity): it sees rotations about x and
+// y, not about z. The laser reads z: it sees the translation along z. The position sensor sees
+// every translation and rotation. Swivel encoders read the pulley angle about k_i from an
+// unknown zero: a rotation about an axis parallel to all k_i shifts every reading by the same
+// angle, absorbed by the offsets, so they add nothing against it; a translation leaves them
+// unchanged. The heading reads yaw from an unknown zero yaw0: a rotation about z shifts every
+// pose's yaw and yaw0 alike, so it adds nothing against that rotation either.
+
+TEST(SpatialIdentify, BuiltInRobotsEncodersInclinometerLaser) {
+  Rng rng(101);
+  // cogiro, ipanema1 (k = +-z): translations x, y and the rotation about z remain: 3.
+  for (const char* name : {"cogiro", "ipanema1"}) {
+    const SpatialRobot nominal = WithSensors(Builtin(name), kInc | kLaser);
+    const Experiment e = MakeExperiment(nominal, PerturbedExits(nominal, rng, 0.01), 30, kInc | kLaser, rng);
+    ExpectRecovered(nominal, e, kInc | kLaser, 3, name);
+  }
+  // irma4u (k = +-x): the rotation about x is seen by the inclinometer: translations x, y: 2
+  // null directions, with the statics (its poses are equilibria: MakeExperiment) or without.
+  const SpatialRobot irma = WithSensors(Builtin("irma4u"), kInc | kLaser);
+  const Experiment e = MakeExperiment(irma, PerturbedExits(irma, rng, 0.01), 30, kInc | kLaser, rng);
+  SpatialIdentifyOptions no_statics;
+  no_statics.statics = false;
+  EXPECT_EQ(AnalyzeSpatialGauge(irma, e.readings, no_statics).null_directions.size(), 2u);
+  ExpectRecovered(irma, e, kInc | kLaser, 2, "irma4u with its equilibrium");
+}
+
+TEST(SpatialIdentify, RandomRobotsEncodersInclinometerLaser) {
+  Rng rng(202);
+  for (int trial = 0; trial < 4; ++trial) {
+    const int m = 6 + trial;  // 6 to 9 cables
+    const SpatialRobot nominal =
+        WithSensors(RandomInextensible(rng, "random" + std::to_string(m), m), kInc | kLaser);
+    const Experiment e = MakeExperiment(nominal, PerturbedExits(nominal, rng, 0.01), 30, kInc | kLaser, rng);
+    // Tilted axes, not all parallel: only the translations x, y remain.
+    ExpectRecovered(nominal, e, kInc | kLaser, 2, nominal.name);
+  }
+}
+
+TEST(SpatialIdentify, EncodersAndPositionLeaveNothing) {
+  Rng rng(303);
+  for (const char* name : {"cogiro", "ipanema1"}) {
+    const SpatialRobot nominal = WithSensors(Builtin(name), kPos);
+    const Experiment e = MakeExperiment(nominal, PerturbedExits(nominal, rng, 0.01), 20, kPos, rng);
+    ExpectRecovered(nominal, e, kPos, 0, name);
+  }
+  const SpatialRobot random = WithSensors(RandomInextensible(rng, "random6", 6), kPos);
+  const Experiment e = MakeExperiment(random, PerturbedExits(random, rng, 0.01), 20, kPos, rng);
+  ExpectRecovered(random, e, kPos, 0, "random6");
+}
+
+// Self-calibration: more than 6 cables, encoders alone.
+TEST(SpatialIdentify, EncodersAloneWithEightCables) {
+  Rng rng(404);
+  for (const char* name : {"cogiro", "ipanema1"}) {
+    const SpatialRobot nominal = Builtin(name);
+    const Experiment e = MakeExperiment(nominal, PerturbedExits(nominal, rng, 0.01), 40, 0, rng);
+    // Translations x, y, z and the rotation about z (k = +-z).
+    ExpectRecovered(nominal, e, 0, 4, name);
+    const SpatialGaugeAnalysis gauge = AnalyzeSpatialGauge(nominal, e.readings, {});
+    std::set<std::string> words;
+    for (const SpatialDirection& d : gauge.null_directions) words.insert(d.description);
+    EXPECT_EQ(words, (std::set<std::string>{"a translation along x of the frame", "a translation along y of the frame",
+                                            "a translation along z of the frame", "a rotation about z of the frame"}))
+        << Descriptions(gauge.null_directions);
+  }
+  for (const int m : {7, 8}) {
+    const SpatialRobot nominal = RandomInextensible(rng, "random" + std::to_string(m), m);
+    const Experiment e = MakeExperiment(nominal, PerturbedExits(nominal, rng, 0.01), 50, 0, rng);
+    ExpectRecovered(nominal, e, 0, 3, nominal.name);  // translations only: the tilted axes see rotations
+  }
+}
+
+TEST(SpatialIdentify, FourCablesEncodersSwivelInclinometer) {
+  Rng rng(505);
+  // irma4u (k = +-x): the translations; the rotation about x is the inclinometer's roll.
+  const SpatialRobot irma = WithSensors(Builtin("irma4u"), kSwivel | kInc);
+  Experiment e = MakeExperiment(irma, PerturbedExits(irma, rng, 0.01), 30, kSwivel | kInc, rng);
+  ExpectRecovered(irma, e, kSwivel | kInc, 3, "irma4u");
+  // With the heading too (its offset yaw0 an unknown): still the 3 translations.
+  const SpatialRobot irma_h = WithSensors(Builtin("irma4u"), kSwivel | kInc | kHeading);
+  e = MakeExperiment(irma_h, PerturbedExits(irma_h, rng, 0.01), 30, kSwivel | kInc | kHeading, rng);
+  ExpectRecovered(irma_h, e, kSwivel | kInc | kHeading, 3, "irma4u with heading");
+  for (int trial = 0; trial < 2; ++trial) {
+    const SpatialRobot nominal = WithSensors(RandomInextensible(rng, "random4", 4), kSwivel | kInc);
+    e = MakeExperiment(nominal, PerturbedExits(nominal, rng, 0.01), 30, kSwivel | kInc, rng);
+    ExpectRecovered(nominal, e, kSwivel | kInc, 3, "random4");
+  }
+}
+
+// The null directions with nothing held, for the subsets of the theory above on cogiro.
+TEST(SpatialIdentify, NullDirectionCountsOnCogiro) {
+  Rng rng(606);
+  const SpatialRobot nominal = WithSensors(Builtin("cogiro"), kInc | kLaser | kPos | kSwivel | kHeading);
+  const SpatialRobot truth = PerturbedExits(nominal, rng, 0.01);
+  const struct {
+    int bits;
+    int nulls;
+  } cases[] = {{0, 4}, {kInc, 4}, {kLaser, 3}, {kInc | kLaser, 3}, {kPos, 0}, {kSwivel, 4},
+               {kSwivel | kInc, 4}, {kHeading, 4}, {kHeading | kInc | kLaser, 3}};
+  for (const auto& c : cases) {
+    const Experiment e = MakeExperiment(nominal, truth, 30, c.bits, rng);
+    SpatialIdentifyOptions none;
+    none.gauge.kind = SpatialGaugeKind::kNone;
+    const SpatialIdentifyResult r = IdentifySpatial(nominal, e.readings, none);
+    EXPECT_EQ(static_cast<int>(r.null_directions.size()), c.nulls)
+        << "sensors " << c.bits << Descriptions(r.null_directions);
+    EXPECT_TRUE(r.held.empty());
+    EXPECT_TRUE(r.converged()) << r.message;
+  }
+}
+
+// ---- Refusals -----------------------------------------------------------------------------
+
+template <typename F>
+std::string InputErrorOf(F f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no InputError";
+  return "";
+}
+
+TEST(SpatialIdentify, HoldThatLeavesANullDirectionIsRefusedNamingIt) {
+  Rng rng(707);
+  // Encoders + laser on a random 6-cable robot: translations x and y remain.
+  const SpatialRobot random = WithSensors(RandomInextensible(rng, "random6", 6), kLaser);
+  const Experiment e = MakeExperiment(random, PerturbedExits(random, rng, 0.01), 30, kLaser, rng);
+  SpatialIdentifyOptions options;
+  options.gauge = ParseSpatialGauge("hold:a1x");
+  const std::string message = InputErrorOf([&] { IdentifySpatial(random, e.readings, options); });
+  EXPECT_NE(message.find("--gauge: hold:a1x: does not fix the gauge"), std::string::npos) << message;
+  EXPECT_NE(message.find("a translation along y"), std::string::npos) << message;
+  options.gauge = ParseSpatialGauge("hold:a1x,a2y");
+  EXPECT_TRUE(IdentifySpatial(random, e.readings, options).converged());
+  // On ipanema1 (k = +-z) the rotation about z remains too.
+  const SpatialRobot ipanema = WithSensors(Builtin("ipanema1"), kLaser);
+  const Experiment f = MakeExperiment(ipanema, PerturbedExits(ipanema, rng, 0.01), 30, kLaser, rng);
+  options.gauge = ParseSpatialGauge("hold:a1x,a1y");
+  const std::string rotation = InputErrorOf([&] { IdentifySpatial(ipanema, f.readings, options); });
+  EXPECT_NE(rotation.find("rotation about z"), std::string::npos) << rotation;
+  // Holding every exit coordinate is a lab's own choice: accepted.
+  std::string all = "hold:";
+  for (int i = 1; i <= 8; ++i) all += std::string(i > 1 ? "," : "") + "a" + std::to_string(i) + "x,a" + std::to_string(i) + "y,a" + std::to_string(i) + "z";
+  options.gauge = ParseSpatialGauge(all);
+  const SpatialIdentifyResult r = IdentifySpatial(ipanema, f.readings, options);
+  EXPECT_TRUE(r.converged()) << r.message;
+  EXPECT_EQ(r.held.size(), 24u);
+}
+
+TEST(SpatialIdentify, SubsetsThatCannotDetermineTheGeometryAreRefused) {
+  Rng rng(808);
+  // Four cables, encoders alone: 4 values per pose for its 6 coordinates.
+  const SpatialRobot irma = Builtin("irma4u");
+  const Experiment e = MakeExperiment(irma, PerturbedExits(irma, rng, 0.01), 30, 0, rng);
+  const std::string few = InputErrorOf([&] { IdentifySpatial(irma, e.readings, {}); });
+  EXPECT_NE(few.find("unknowns"), std::string::npos) << few;
+  // Enough values overall but one pose read by too few: 6 cables, encoders alone, and a pose
+  // whose readings... every pose has all encoders, so take a 6-cable robot with encoders +
+  // inclinometer: 8 values per pose; the pose is determined; refuse instead a reading with a
+  // sensor the robot lacks.
+  const SpatialRobot random = RandomInextensible(rng, "random6", 6);
+  Experiment g = MakeExperiment(WithSensors(random, kInc), PerturbedExits(random, rng, 0.01), 30, kInc, rng);
+  const std::string lacks = InputErrorOf([&] { IdentifySpatial(random, g.readings, {}); });
+  EXPECT_NE(lacks.find("no sensors.inclinometer"), std::string::npos) << lacks;
+  // gauge prior without a tracker sigma; hold of something that is not an exit coordinate.
+  SpatialRobot untracked = WithSensors(random, kInc);
+  untracked.sensors.tracker_sigma_m.reset();
+  SpatialIdentifyOptions prior;
+  prior.gauge.kind = SpatialGaugeKind::kPrior;
+  EXPECT_NE(InputErrorOf([&] { IdentifySpatial(untracked, g.readings, prior); }).find("tracker"), std::string::npos);
+  SpatialIdentifyOptions hold;
+  hold.gauge = ParseSpatialGauge("hold:l10");
+  EXPECT_NE(InputErrorOf([&] { IdentifySpatial(WithSensors(random, kInc), g.readings, hold); })
+                .find("'l10' is not an exit coordinate"),
+            std::string::npos);
+  EXPECT_NE(InputErrorOf([] { ParseSpatialGauge("hold"); }).find("--gauge"), std::string::npos);
+  EXPECT_NE(InputErrorOf([] { ParseSpatialGauge("hold:"); }).find("names no coordinate"), std::string::npos);
+}
+
+// With the prior every null direction is fixed by the tracker's survey; nothing is held.
+TEST(SpatialIdentify, PriorGaugeHoldsNothing) {
+  Rng rng(909);
+  const SpatialRobot nominal = WithSensors(Builtin("cogiro"), kInc | kLaser);
+  const Experiment e = MakeExperiment(nominal, PerturbedExits(nominal, rng, 0.001), 30, kInc | kLaser, rng);
+  SpatialIdentifyOptions prior;
+  prior.gauge.kind = SpatialGaugeKind::kPrior;
+  const SpatialIdentifyResult r = IdentifySpatial(nominal, e.readings, prior);
+  ASSERT_TRUE(r.converged()) << r.message;
+  EXPECT_TRUE(r.held.empty());
+  EXPECT_EQ(r.null_directions.size(), 3u);
+  // Every exit coordinate has a finite sigma no larger than the prior's.
+  for (int k = 0; k < 24; ++k) {
+    EXPECT_GT(r.sigma(k), 0.0);
+    EXPECT_LE(r.sigma(k), *nominal.sensors.tracker_sigma_m * (1.0 + 1e-9));
+  }
+}
+
+// ---- Covariance against the spread of simulated experiments -------------------------------
+
+// ipanema1, encoders + inclinometer + laser, 12 poses, default gauge (3 exit coordinates held at
+// their nominal values); 200 experiments with the robot file's sigmas: the spread of every
+// free geometry unknown within 20 % of its predicted sigma (the sample standard deviation of
+// 200 draws is within 20 % of the true one with probability > 1 - 1e-8 each).
+TEST(SpatialIdentify, PredictedSigmasMatchTheMonteCarloSpread) {
+  Rng rng(1234);
+  const SpatialRobot nominal = Builtin("ipanema1");
+  const Experiment clean = MakeExperiment(nominal, PerturbedExits(nominal, rng, 0.01), 12, kInc | kLaser, rng);
+  const double s_enc = nominal.sensors.encoder_sigma_m;
+  const double s_inc = nominal.sensors.inclinometer_rad->sigma();
+  const double s_las = nominal.sensors.laser_m->sigma();
+  constexpr int kTrials = 200;
+  std::vector<VectorXd> estimates;
+  VectorXd predicted;
+  std::vector<std::string> held;
+  for (int t = 0; t < kTrials; ++t) {
+    std::vector<SpatialMeasurement> noisy = clean.readings;
+    for (SpatialMeasurement& r : noisy) {
+      for (int i = 0; i < r.dl_m.size(); ++i) r.dl_m(i) += rng.Normal(0.0, s_enc);
+      for (int a = 0; a < 2; ++a) r.values(SpatialSensor::kInclinometer)(a) += rng.Normal(0.0, s_inc);
+      r.values(SpatialSensor::kLaser)(0) += rng.Normal(0.0, s_las);
+    }
+    const SpatialIdentifyResult r = IdentifySpatial(nominal, noisy, {});
+    ASSERT_TRUE(r.converged()) << r.message;
+    if (t == 0) {
+      predicted = r.sigma;
+      held = r.held;
+    }
+    EXPECT_EQ(r.held, held);
+    estimates.push_back(r.geometry);
+  }
+  const int p = predicted.size();
+  VectorXd mean = VectorXd::Zero(p);
+  for (const VectorXd& g : estimates) mean += g / kTrials;
+  VectorXd spread = VectorXd::Zero(p);
+  for (const VectorXd& g : estimates) spread += (g - mean).cwiseAbs2() / (kTrials - 1);
+  spread = spread.cwiseSqrt();
+  const std::vector<std::string> names = SpatialGeometryNames(8, false, false);
+  int compared = 0;
+  for (int k = 0; k < p; ++k) {
+    if (std::find(held.begin(), held.end(), names[k]) != held.end()) {
+      EXPECT_EQ(predicted(k), 0.0);
+      EXPECT_LT(spread(k), 1e-12);
+      continue;
+    }
+    EXPECT_NEAR(spread(k) / predicted(k), 1.0, 0.2) << names[k] << " predicted " << predicted(k) << " spread "
+                                                     << spread(k);
+    ++compared;
+  }
+  EXPECT_EQ(compared, p - 3);
+}
+
+// ---- Statics as information -----------------------------------------------------------------
+
+// m = 4 with every sensor a lab may add, load cells among them: each pose's tensions are
+// unknowns read by the load cells and tied to the pose by its equilibrium. The translations
+// remain (nothing here sees where the frame is).
+TEST(SpatialIdentify, FourCablesEncodersSwivelInclinometerHeadingLoadCells) {
+  Rng rng(1111);
+  const int bits = kSwivel | kInc | kHeading | kLoad;
+  const SpatialRobot irma = WithSensors(Builtin("irma4u"), bits);
+  ExpectRecovered(irma, MakeExperiment(irma, PerturbedExits(irma, rng, 0.01), 30, bits, rng), bits, 3, "irma4u");
+  for (int trial = 0; trial < 2; ++trial) {
+    const SpatialRobot nominal = WithSensors(RandomInextensible(rng, "random4", 4), bits);
+    ExpectRecovered(nominal, MakeExperiment(nominal, PerturbedExits(nominal, rng, 0.01), 30, bits, rng), bits, 3,
+                    "random4");
+  }
+}
+
+// An underactuated platform read by its encoders and an inclinometer: 6 values for its 6
+// coordinates, nothing left for the geometry without the statics (refused: too few values);
+// its equilibrium adds 6 rows for 4 tensions per pose, and the geometry is recovered.
+TEST(SpatialIdentify, UnderactuatedEncodersInclinometerNeedTheEquilibrium) {
+  Rng rng(1212);
+  const SpatialRobot irma = WithSensors(Builtin("irma4u"), kInc);
+  const Experiment e = MakeExperiment(irma, PerturbedExits(irma, rng, 0.01), 40, kInc, rng);
+  SpatialIdentifyOptions no_statics;
+  no_statics.statics = false;
+  const std::string few = InputErrorOf([&] { AnalyzeSpatialGauge(irma, e.readings, no_statics); });
+  EXPECT_NE(few.find("too few to determine the geometry"), std::string::npos) << few;
+  ExpectRecovered(irma, e, kInc, 3, "irma4u, encoders + inclinometer");  // the 3 translations
+  const SpatialRobot random = WithSensors(RandomInextensible(rng, "random4", 4), kInc);
+  ExpectRecovered(random, MakeExperiment(random, PerturbedExits(random, rng, 0.01), 40, kInc, rng), kInc, 3,
+                  "random4, encoders + inclinometer");
+}
+
+// irma4u's swivel axes are all parallel (+-x): encoders and swivel encoders do not see a
+// rotation of the frame about x (the swivel offsets absorb it): 4 null directions. Its
+// equilibrium does (gravity is not along x): 3.
+TEST(SpatialIdentify, TheEquilibriumSeesTheRotationTheSensorsDoNot) {
+  Rng rng(1313);
+  const SpatialRobot irma = WithSensors(Builtin("irma4u"), kSwivel);
+  const Experiment e = MakeExperiment(irma, PerturbedExits(irma, rng, 0.01), 30, kSwivel, rng);
+  SpatialIdentifyOptions no_statics;
+  no_statics.statics = false;
+  const SpatialGaugeAnalysis without = AnalyzeSpatialGauge(irma, e.readings, no_statics);
+  ASSERT_EQ(without.null_directions.size(), 4u) << Descriptions(without.null_directions);
+  EXPECT_NE(Descriptions(without.null_directions).find("rotation about x"), std::string::npos)
+      << Descriptions(without.null_directions);
+  const SpatialGaugeAnalysis with = AnalyzeSpatialGauge(irma, e.readings, {});
+  EXPECT_EQ(with.null_directions.size(), 3u) << Descriptions(with.null_directions);
+  EXPECT_EQ(Descriptions(with.null_directions).find("rotation"), std::string::npos) << Descriptions(with.null_directions);
+  ExpectRecovered(irma, e, kSwivel, 3, "irma4u, encoders + swivel, with the equilibrium");
+}
+
+TEST(SpatialIdentify, LoadCellsOnMoreThanSixInextensibleCablesAreRefused) {
+  Rng rng(1414);
+  const SpatialRobot cogiro = WithSensors(Builtin("cogiro"), kLoad | kInc);
+  const Experiment e = MakeExperiment(cogiro, PerturbedExits(cogiro, rng, 0.01), 10, kLoad | kInc, rng);
+  const std::string message = InputErrorOf([&] { IdentifySpatial(cogiro, e.readings, {}); });
+  EXPECT_NE(message.find("sensors.load_cell"), std::string::npos) << message;
+  EXPECT_NE(message.find("indeterminate"), std::string::npos) << message;
+  EXPECT_NE(message.find("cables[0].stiffness"), std::string::npos) << message;
+  // Without load cells an inextensible 8-cable robot gets no tensions (nothing to learn).
+  SpatialIdentifyOptions options;
+  std::vector<SpatialMeasurement> no_load = e.readings;
+  for (SpatialMeasurement& r : no_load) r.values(SpatialSensor::kLoadCell).resize(0);
+  const SpatialIdentifyResult r = IdentifySpatial(cogiro, no_load, options);
+  EXPECT_TRUE(r.tensions_N.empty());
+  for (const SpatialReadingFit& f : r.fits) EXPECT_EQ(f.equilibrium.size(), 0);
+}
+
+// ---- Plausibility and the worst reading ---------------------------------------------------
+
+TEST(SpatialIdentify, ImplausibleGeometryAndTheWorstReadingAreNamed) {
+  Rng rng(1515);
+  const SpatialRobot nominal = WithSensors(RandomInextensible(rng, "random6", 6), kPos);
+  const Experiment e = MakeExperiment(nominal, PerturbedExits(nominal, rng, 0.01), 20, kPos, rng);
+  SpatialIdentifyResult clean = IdentifySpatial(nominal, e.readings, {});
+  ASSERT_TRUE(clean.converged()) << clean.message;
+  EXPECT_TRUE(clean.warnings.empty()) << clean.warnings.front();
+  // A frame box that leaves exit 1 0.6 m outside (the frame only matters for the laser here).
+  SpatialRobot small = nominal;
+  small.p_F_frame_max_m.x() = nominal.cables[0].p_F_exit_m.x() - 0.6;
+  small.p_F_frame_min_m.x() = std::min(small.p_F_frame_min_m.x(), small.p_F_frame_max_m.x() - 1.0);
+  const SpatialIdentifyResult off = IdentifySpatial(small, e.readings, {});
+  ASSERT_TRUE(off.converged()) << off.message;
+  bool named = false;
+  for (const std::string& w : off.warnings) named = named || w.find("exit point 1 is 0.6") != std::string::npos;
+  EXPECT_TRUE(named) << (off.warnings.empty() ? "no warning" : off.warnings.front());
+  // Encoder 2 zeroed a frame's diagonal and a metre away: the poses' starts are then far off
+  // and the solver does not converge; said as a status, never as a result. (The length rule of
+  // the warnings is not reached by such data: it is untested here.)
+  const double diagonal = (nominal.p_F_frame_max_m - nominal.p_F_frame_min_m).norm();
+  std::vector<SpatialMeasurement> shifted = e.readings;
+  for (SpatialMeasurement& r : shifted) r.dl_m(1) -= diagonal + 1.0;
+  const SpatialIdentifyResult longer = IdentifySpatial(nominal, shifted, {});
+  EXPECT_FALSE(longer.converged());
+  EXPECT_FALSE(longer.warnings.empty());
+  // The length rule on a geometry vector: l20 off by the diagonal plus a centimetre, and not
+  // by the diagonal less one.
+  VectorXd g = NominalSpatialGeometry(nominal, false, false);
+  g(3 * 6 + 1) += diagonal + 0.01;
+  std::vector<std::string> w = SpatialPlausibilityWarnings(nominal, g);
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("l20 is"), std::string::npos) << w[0];
+  g(3 * 6 + 1) -= 0.02;
+  EXPECT_TRUE(SpatialPlausibilityWarnings(nominal, g).empty());
+  // The exit rule likewise: 0.49 m outside is plausible, 0.51 m is not.
+  g = NominalSpatialGeometry(nominal, false, false);
+  g(2) = nominal.p_F_frame_max_m.z() + 0.49;
+  EXPECT_TRUE(SpatialPlausibilityWarnings(nominal, g).empty());
+  g(2) = nominal.p_F_frame_max_m.z() + 0.51;
+  w = SpatialPlausibilityWarnings(nominal, g);
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("exit point 1 is 0.51 m outside"), std::string::npos) << w[0];
+  // One reading 20 sigma off: named by pose and sensor.
+  std::vector<SpatialMeasurement> outlier = e.readings;
+  outlier[6].values(SpatialSensor::kPosition)(1) += 20.0 * nominal.sensors.position->noise_m.sigma();
+  const SpatialIdentifyResult bad = IdentifySpatial(nominal, outlier, {});
+  EXPECT_EQ(bad.worst_pose_id, outlier[6].pose_id);
+  EXPECT_EQ(bad.worst_sensor, "position py");
+  EXPECT_GT(std::abs(bad.worst_residual), kOutlierSigmas);
+  named = false;
+  for (const std::string& w : bad.warnings) named = named || w.find("position py of pose 7") != std::string::npos;
+  EXPECT_TRUE(named) << (bad.warnings.empty() ? "no warning" : bad.warnings.front());
+}
+
+// ---- Cables that stretch --------------------------------------------------------------------
+
+// cogiro as filed (E A = 820510 N: about 1.3 mm of stretch on its 10 m cables), encoders +
+// inclinometer + laser, readings from the spatial simulation (the true robot settles with the
+// commanded paid-out lengths, model/forward_statics.h). The truth's l_i0 is the cable paid out
+// at home. Ignoring the stretch (statics off: the encoder read as the geometric length)
+// biases every l_i0 by millimetres; modelling it, the mean error over the experiments is
+// within 3 standard errors of 0. Experiments: CABLECAL_ELASTIC_EXPERIMENTS (default 100;
+// bench/README.md gives 200); CABLECAL_ELASTIC_LOAD_CELLS adds load cells.
+TEST(SpatialIdentify, ElasticStretchBiasesTheLengthsUnlessModelled) {
+  int experiments = 100;
+  if (const char* env = std::getenv("CABLECAL_ELASTIC_EXPERIMENTS")) experiments = std::atoi(env);
+  ASSERT_GE(experiments, 5);
+  SpatialRobot nominal = AsFiled("cogiro");
+  nominal.sensors.inclinometer_rad = RangedNoise{0.003, 0.0};
+  nominal.sensors.laser_m = RangedNoise{0.0003, 0.0};
+  nominal.sensors.position.reset();
+  // With load cells (sigma 1 N) too: bench/README.md's second figure.
+  if (std::getenv("CABLECAL_ELASTIC_LOAD_CELLS")) nominal.sensors.load_cell_N = RangedNoise{3.0, 0.0};
+  Rng rng(1616);
+  // The true geometry is the nominal one: with cables this stiff a centimetre off would slacken
+  // or overload cables (1 cm on 10 m is 820 N); the bias studied is the stretch's.
+  const SpatialRobot truth = nominal;
+  const std::vector<SpatialPlanPose> plan = SampleSpatialPoses(nominal, 20, 77);  // ~15 held
+  const VectorXd l0_true = SpatialHome(nominal).paid_out_m;
+  const int m = nominal.num_cables();
+  VectorXd sum[2] = {VectorXd::Zero(m), VectorXd::Zero(m)}, sum2[2] = {VectorXd::Zero(m), VectorXd::Zero(m)};
+  for (int x = 0; x < experiments; ++x) {
+    SpatialSimulationOptions lab;
+    lab.skip_infeasible = true;  // a pose with a cable near slack is not one a lab would read
+    const SimulatedSpatialExperiment sim = SimulateSpatialExperiment(nominal, truth, plan, lab, rng);
+    for (int modelled = 0; modelled < 2; ++modelled) {
+      SpatialIdentifyOptions options;
+      options.statics = modelled == 1;
+      const SpatialIdentifyResult r = IdentifySpatial(nominal, sim.measurements, options);
+      ASSERT_TRUE(r.converged()) << r.message;
+      const VectorXd error = r.geometry.segment(3 * m, m) - l0_true;
+      sum[modelled] += error;
+      sum2[modelled] += error.cwiseAbs2();
+    }
+  }
+  for (int modelled = 0; modelled < 2; ++modelled) {
+    const VectorXd mean = sum[modelled] / experiments;
+    const VectorXd sd = ((sum2[modelled] - experiments * mean.cwiseAbs2()) / (experiments - 1)).cwiseMax(0.0).cwiseSqrt();
+    const VectorXd se = sd / std::sqrt(double(experiments));
+    for (int i = 0; i < m; ++i) {
+      std::printf("%s l%d0: mean error %+.4f mm, standard error %.4f mm\n", modelled ? "modelled" : "ignored ", i + 1,
+                  1e3 * mean(i), 1e3 * se(i));
+      if (modelled) {
+        EXPECT_LT(std::abs(mean(i)), 3.0 * se(i)) << "l" << i + 1 << "0";
+      } else {
+        EXPECT_GT(std::abs(mean(i)), 3.0 * se(i)) << "l" << i + 1 << "0";
+        EXPECT_GT(std::abs(mean(i)), 0.3e-3) << "l" << i + 1 << "0: the stretch's bias, millimetres";
+      }
+    }
+  }
+}
+
+// Stretching cables and no load cells: each pose's 8 tensions take the redundant cables'
+// information (8 encoder values and 6 equilibrium rows for 14 unknowns): refused, saying why.
+TEST(SpatialIdentify, ElasticEncodersAloneAreRefusedSayingWhy) {
+  const SpatialRobot nominal = AsFiled("ipanema1");
+  const std::vector<SpatialPlanPose> plan = SampleSpatialPoses(nominal, 20, 5);
+  Rng rng(1717);
+  SpatialSimulationOptions lab;
+  lab.skip_infeasible = true;
+  const SimulatedSpatialExperiment sim = SimulateSpatialExperiment(nominal, nominal, plan, lab, rng);
+  std::vector<SpatialMeasurement> encoders = sim.measurements;
+  for (SpatialMeasurement& r : encoders) {
+    for (auto& v : r.sensor_values) v.resize(0);
+  }
+  const std::string message = InputErrorOf([&] { IdentifySpatial(nominal, encoders, {}); });
+  EXPECT_NE(message.find("tensions per pose"), std::string::npos) << message;
+}
+
+}  // namespace
+}  // namespace cablecal
