@@ -126,7 +126,8 @@ int main(int argc, char** argv) {
   AddRobotOption(sim_cmd, &sim.robot_path);
   sim_cmd->add_option("--truth", sim.truth_path, "true robot file (default: the nominal robot)")->check(CLI::ExistingFile);
   sim_cmd->add_option("--geometry-sigma", sim.geometry_sigma_m,
-                      "perturb nominal exit points and initial lengths by N(0, S^2), S in m")
+                      "perturb nominal exit points and initial lengths (spatial robots: every exit coordinate) by "
+                      "N(0, S^2), S in m")
       ->check(kNonNegative);
   sim_cmd->add_option("--plan", sim.plan_path, "pose plan CSV")->required()->check(CLI::ExistingFile);
   sim_cmd->add_option("--seed", sim.seed, "random seed")->capture_default_str()->check(kSeed);

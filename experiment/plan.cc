@@ -83,6 +83,16 @@ std::string PosePlanCsv(const std::vector<PlanPose>& plan, const std::string& pr
 }
 
 
+void RequirePlanEquilibrium(const std::string& where, const std::string& robot_name, double residual_N,
+                            double weight_N, const std::string& pose_columns, int num_cables) {
+  if (residual_N <= 1e-6 * weight_N) return;
+  std::string columns = pose_columns;
+  for (int i = 1; i <= num_cables; ++i) columns += ",t" + std::to_string(i);
+  throw InputError(where, "columns '" + columns + "'",
+                   "not a static equilibrium of " + robot_name + " (force and moment residual " +
+                       FormatDouble(residual_N) + " N): the platform would not stay at this pose");
+}
+
 void CheckPlanMatchesRobot(const Robot& robot, const std::vector<PlanPose>& plan, const std::string& source) {
   constexpr double kLengthTol_m = 1e-6;  // files hold shortest round-trip doubles: far below
   const double weight_N = robot.platform_mass_kg * robot.gravity_mps2;
@@ -121,14 +131,8 @@ void CheckPlanMatchesRobot(const Robot& robot, const std::vector<PlanPose>& plan
                                                             FormatDouble(l0(i)) + " m of " + robot.name);
       }
     }
-    const double residual_N = EquilibriumResidual<double>(robot, p.q, p.tensions_N).norm();
-    if (!(residual_N <= 1e-6 * weight_N)) {
-      std::string columns = "x,z,theta";
-      for (int i = 1; i <= robot.num_cables(); ++i) columns += ",t" + std::to_string(i);
-      throw InputError(where, "columns '" + columns + "'",
-                       "not a static equilibrium of " + robot.name + " (force and moment residual " +
-                           FormatDouble(residual_N) + " N): the platform would not stay at this pose");
-    }
+    RequirePlanEquilibrium(where, robot.name, EquilibriumResidual<double>(robot, p.q, p.tensions_N).norm(), weight_N,
+                           "x,z,theta", robot.num_cables());
   }
 }
 

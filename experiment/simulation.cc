@@ -73,18 +73,10 @@ Eigen::VectorXd CableCommands::PaidOutFromHome(const PlanPose& pose) const {
 
 namespace {
 
-// An elastic robot's tensions come from its stretch, EA (l / L - 1): a plan's tension at a bound
-// (the minimum-norm distribution puts some there) comes back a few ulps of EA off it, which is
-// not a lab's tension limit broken. Within this fraction of tension.max of a bound, on it.
-constexpr double kTensionRounding = 1e-9;
-Eigen::VectorXd SnapToBounds(const Robot& robot, Eigen::VectorXd tensions_N) {
+// An elastic robot's tensions on a bound to rounding are on it (SnapTensionsToBounds).
+Eigen::VectorXd SnapToBounds(const Robot& robot, const Eigen::VectorXd& tensions_N) {
   if (!HasStiffness(robot)) return tensions_N;
-  const double tol_N = kTensionRounding * robot.tension_max_N;
-  for (double& t : tensions_N) {
-    if (std::abs(t - robot.tension_min_N) < tol_N) t = robot.tension_min_N;
-    if (std::abs(t - robot.tension_max_N) < tol_N) t = robot.tension_max_N;
-  }
-  return tensions_N;
+  return SnapTensionsToBounds(tensions_N, robot.tension_min_N, robot.tension_max_N);
 }
 
 }  // namespace

@@ -199,14 +199,8 @@ void CheckSpatialPlanMatchesRobot(const SpatialRobot& robot, const std::vector<S
                              "'s paid-out length from home (" + FormatDouble(dl) + " m) of " + robot.name);
       }
     }
-    const double residual_N = EquilibriumResidual<double>(robot, p.q, p.tensions_N).norm();
-    if (!(residual_N <= 1e-6 * weight_N)) {
-      std::string columns = "x,y,z,roll,pitch,yaw";
-      for (int i = 1; i <= robot.num_cables(); ++i) columns += ",t" + std::to_string(i);
-      throw InputError(where, "columns '" + columns + "'",
-                       "not a static equilibrium of " + robot.name + " (force and moment residual " +
-                           FormatDouble(residual_N) + "): the platform would not stay at this pose");
-    }
+    RequirePlanEquilibrium(where, robot.name, EquilibriumResidual<double>(robot, p.q, p.tensions_N).norm(), weight_N,
+                           "x,y,z,roll,pitch,yaw", robot.num_cables());
   }
 }
 

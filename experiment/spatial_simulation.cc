@@ -27,19 +27,6 @@ int DrawsPerPose(int num_cables) {
   return draws;
 }
 
-// An elastic cable's tension comes from its stretch, EA (l / L - 1): a plan's tension at a bound
-// (the minimum-norm distribution puts some there) comes back a few ulps of EA off it, which is
-// no tension limit broken. Within this fraction of tension.max of a bound, on it (the planar
-// simulation's rule, experiment/simulation.cc).
-constexpr double kTensionRounding = 1e-9;
-Eigen::VectorXd SnapToBounds(const SpatialRobot& robot, Eigen::VectorXd tensions_N) {
-  const double tol_N = kTensionRounding * robot.tension_max_N;
-  for (double& t : tensions_N) {
-    if (std::abs(t - robot.tension_min_N) < tol_N) t = robot.tension_min_N;
-    if (std::abs(t - robot.tension_max_N) < tol_N) t = robot.tension_max_N;
-  }
-  return tensions_N;
-}
 
 bool Noisy(NoisySensors noisy, SpatialSensor s) {
   switch (noisy) {
@@ -82,11 +69,21 @@ SimulatedSpatialExperiment SimulateSpatialExperiment(const SpatialRobot& nominal
                    CannotHoldReason(fwd.status, "the commanded pose") + ")";
     } else if (options.require_feasible) {
       int cable = -1;
-      const Feasibility f =
-          CheckSpatialFeasibility(truth, fwd.equilibrium.q, SnapToBounds(truth, fwd.equilibrium.tensions_N), &cable);
+      const Eigen::VectorXd t = SnapTensionsToBounds(fwd.equilibrium.tensions_N, truth.tension_min_N, truth.tension_max_N);
+      const Feasibility f = CheckSpatialFeasibility(truth, fwd.equilibrium.q, t, &cable);
+      std::string tension;
+      if (f == Feasibility::kTensionLow || f == Feasibility::kTensionHigh) {
+        // The cable furthest beyond its bound, as t1..tm number them.
+        Eigen::Index i = 0;
+        if (f == Feasibility::kTensionLow) t.minCoeff(&i);
+        else t.maxCoeff(&i);
+        cable = static_cast<int>(i);
+        tension = " at " + FormatDouble(std::round(t(i) * 1e3) / 1e3) + " N, bounds [" + FormatDouble(truth.tension_min_N) +
+                  ", " + FormatDouble(truth.tension_max_N) + "]";
+      }
       if (f != Feasibility::kFeasible) {
         infeasible = "the true robot settles outside its workspace (" + std::string(ToString(f)) +
-                     (cable >= 0 ? ", cable " + std::to_string(cable + 1) : std::string()) + ")";
+                     (cable >= 0 ? ", cable " + std::to_string(cable + 1) : std::string()) + tension + ")";
       }
     }
     if (!infeasible.empty()) {
@@ -131,6 +128,12 @@ SpatialPlanSimulation SimulateSpatialPlan(const SpatialRobot& nominal, const std
     throw InputError(truth->source, "", "the true robot has " + std::to_string(truth->num_cables()) +
                                             " cables, the nominal robot " + std::to_string(nominal.num_cables()) +
                                             ": a file for another robot?");
+  }
+  // A truth file (simulate --truth-out) keeps the nominal robot's name.
+  if (truth && truth->name != nominal.name) {
+    throw InputError(truth->source, "name", "the true robot is '" + truth->name + "', the nominal robot '" + nominal.name +
+                                                "': a file for another robot? (a truth file written by simulate "
+                                                "--truth-out keeps the nominal robot's name)");
   }
   SpatialPlanSimulation run{nominal, {}};
   if (truth) {

@@ -436,6 +436,15 @@ Eigen::VectorXd CommandedUnstretchedLengths(const SpatialRobot& robot, const Eig
 
 void CheckSimulatable(const SpatialRobot& robot) { CheckSimulatableKind<SpatialAdapter>(robot, "spatial"); }
 
+Eigen::VectorXd SnapTensionsToBounds(Eigen::VectorXd tensions_N, double tension_min_N, double tension_max_N) {
+  const double tol_N = kTensionRounding * tension_max_N;
+  for (double& t : tensions_N) {
+    if (std::abs(t - tension_min_N) < tol_N) t = tension_min_N;
+    if (std::abs(t - tension_max_N) < tol_N) t = tension_max_N;
+  }
+  return tensions_N;
+}
+
 bool HasStiffness(const Robot& robot) {
   for (const Cable& c : robot.cables) {
     if (c.stiffness_N) return true;

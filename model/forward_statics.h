@@ -83,6 +83,12 @@ void CheckSimulatable(const SpatialRobot& robot);
 ForwardResult SettlePlanar(const Robot& robot, const Eigen::VectorXd& unstretched_lengths_m,
                            const PlanarPose* guess = nullptr);
 
+// An elastic cable's tension comes from its stretch, EA (l / L - 1): a plan's tension at a bound
+// (the minimum-norm distribution puts some there) comes back a few ulps of EA off it, which is
+// no tension limit broken. The tensions within kTensionRounding x max of a bound are set on it.
+constexpr double kTensionRounding = 1e-9;
+Eigen::VectorXd SnapTensionsToBounds(Eigen::VectorXd tensions_N, double tension_min_N, double tension_max_N);
+
 // Whether any cable of the robot has a stiffness.
 bool HasStiffness(const Robot& robot);
 

@@ -205,13 +205,7 @@ Robot Parse(const YAML::Node& root, const Reader& rd) {
   }
   // The same bound as the spatial file's (README, "Spatial robots").
   for (std::size_t i = 0; i < robot.cables.size(); ++i) {
-    const std::optional<double>& ea = robot.cables[i].stiffness_N;
-    if (ea && !(*ea >= kMinStiffnessOverMaxTension * robot.tension_max_N)) {
-      const std::string key = "cables[" + std::to_string(i) + "].stiffness";
-      rd.Fail(cables[i]["stiffness"], key,
-              FormatDouble(*ea) + " N (E*A) would stretch the cable by more than " +
-                  FormatDouble(100.0 / kMinStiffnessOverMaxTension) + " % at tension.max: units? (E*A is in N)");
-    }
+    internal::CheckCableStiffness(rd, cables, i, robot.cables[i].stiffness_N, robot.tension_max_N);
   }
 
   const YAML::Node limits = root["limits"];

@@ -21,6 +21,11 @@
 namespace cablecal {
 namespace {
 
+// A cable in prose: its number as the CSV columns count (t1..tm), and its key in the file.
+std::string CableName(int index) {
+  return "cable " + std::to_string(index + 1) + " (cables[" + std::to_string(index) + "])";
+}
+
 using internal::Reader;
 
 // Two points closer than this are one (anchors, exit points), as in the planar loader.
@@ -181,7 +186,7 @@ SpatialRobot Parse(const YAML::Node& root, const Reader& rd) {
     for (std::size_t j = i + 1; j < robot.cables.size(); ++j) {
       if ((robot.cables[i].p_F_exit_m - robot.cables[j].p_F_exit_m).norm() < kSamePoint_m) {
         rd.Fail(cables[j]["exit"], "cables[" + std::to_string(j) + "].exit",
-                "coincides with the exit point of cable " + std::to_string(i));
+                "coincides with the exit point of " + CableName(static_cast<int>(i)));
       }
     }
   }
@@ -224,13 +229,7 @@ SpatialRobot Parse(const YAML::Node& root, const Reader& rd) {
                                     FormatDouble(robot.tension_max_N) + " N)");
   }
   for (std::size_t i = 0; i < robot.cables.size(); ++i) {
-    const std::optional<double>& ea = robot.cables[i].stiffness_N;
-    if (ea && !(*ea >= kMinStiffnessOverMaxTension * robot.tension_max_N)) {
-      const std::string key = "cables[" + std::to_string(i) + "].stiffness";
-      rd.Fail(cables[i]["stiffness"], key,
-              FormatDouble(*ea) + " N (E*A) would stretch the cable by more than " +
-                  FormatDouble(100.0 / kMinStiffnessOverMaxTension) + " % at tension.max: units? (E*A is in N)");
-    }
+    internal::CheckCableStiffness(rd, cables, i, robot.cables[i].stiffness_N, robot.tension_max_N);
   }
 
   const YAML::Node limits = root["limits"];
@@ -255,6 +254,9 @@ SpatialRobot Parse(const YAML::Node& root, const Reader& rd) {
                                       Point(robot.p_F_frame_min_m) + " to " + Point(robot.p_F_frame_max_m) + " m");
   }
   if (root["home_rpy_deg"]) {
+    if (!root["home_rpy_deg"].IsSequence() || root["home_rpy_deg"].size() != 3) {
+      rd.Fail(root["home_rpy_deg"], "home_rpy_deg", "must be a list of three angles [roll, pitch, yaw] in degrees");
+    }
     const Eigen::Vector3d rpy_deg = rd.Vector3(root["home_rpy_deg"], "home_rpy_deg");
     if (!(rpy_deg.cwiseAbs().maxCoeff() <= 180.0)) {
       rd.Fail(root["home_rpy_deg"], "home_rpy_deg", "each angle must be within +-180 degrees (got " + Point(rpy_deg) + ")");
@@ -282,7 +284,7 @@ SpatialRobot Parse(const YAML::Node& root, const Reader& rd) {
   const CableGeometryCheck geometry = CableGeometryAt(robot, home);
   if (!geometry.valid()) {
     rd.Fail(root["home"], "home",
-            "cable " + std::to_string(geometry.cable) + " has invalid geometry at home: " + ToString(geometry.geometry) +
+            CableName(geometry.cable) + " has invalid geometry at home: " + ToString(geometry.geometry) +
                 (geometry.geometry == SwivelGeometry::kSwivelAxis     ? " (its anchor is on the swivel axis)"
                  : geometry.geometry == SwivelGeometry::kInsidePulley ? " (its anchor is inside the pulley)"
                                                                        : " (the wrap angle is outside [0, 270] degrees: "
@@ -292,7 +294,15 @@ SpatialRobot Parse(const YAML::Node& root, const Reader& rd) {
   const SpatialPoseEvaluation statics = EvaluateSpatialHome(robot);
   if (!statics.feasible()) {
     std::string why = ToString(statics.feasibility);
-    if (statics.cable >= 0) why += " (cables[" + std::to_string(statics.cable) + "])";
+    int cable = statics.cable;
+    if (statics.has_equilibrium &&
+        (statics.feasibility == Feasibility::kTensionLow || statics.feasibility == Feasibility::kTensionHigh)) {
+      Eigen::Index extreme = 0;  // the cable furthest beyond its bound
+      if (statics.feasibility == Feasibility::kTensionLow) statics.equilibrium.tensions_N.minCoeff(&extreme);
+      else statics.equilibrium.tensions_N.maxCoeff(&extreme);
+      cable = static_cast<int>(extreme);
+    }
+    if (cable >= 0) why += " (" + CableName(cable) + ")";
     if (statics.has_equilibrium) {
       why += "; tensions " + RoundedList(statics.equilibrium.tensions_N, 4) + " N, bounds [" + FormatDouble(robot.tension_min_N) +
              ", " + FormatDouble(robot.tension_max_N) + "]";
@@ -300,7 +310,24 @@ SpatialRobot Parse(const YAML::Node& root, const Reader& rd) {
         why += ", equilibrium rpy " + RoundedList(statics.equilibrium.q.tail<3>() / kDegToRad, 4) + " degrees";
       }
     }
-    rd.Fail(root["home"], "home", "the home pose " + Point(robot.p_F_home_m) + " m is not in the feasible workspace: " + why);
+    std::string hint;
+    if (robot.num_cables() < 6 && !statics.has_equilibrium) {
+      // Where an underactuated platform can hang is narrow; the exits' centroid is a start.
+      Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+      for (const SpatialCable& c : robot.cables) centroid += c.p_F_exit_m;
+      centroid /= robot.num_cables();
+      // + 0.0: a centroid of -1e-17 reads 0, not -0.
+      hint = ". With fewer than 6 cables the platform hangs in equilibrium only where gravity lies in the cables' "
+             "span: home_rpy_deg's roll and pitch are only the solver's first guess" +
+             std::string(robot.num_cables() >= 4 ? ", its yaw is held, and such a robot holds a narrow band of yaw" : "") +
+             "; try a home below the exits (their centroid is at x = " + FormatDouble(std::round(centroid.x() * 1e3) / 1e3 + 0.0) +
+             ", y = " + FormatDouble(std::round(centroid.y() * 1e3) / 1e3 + 0.0) + " m)" +
+             (robot.num_cables() >= 4 ? " at the yaw of the exits' and anchors' layout (often 0)" : "");
+    }
+    rd.Fail(root["home"], "home",
+            "the home pose " + Point(robot.p_F_home_m) + " m at roll, pitch, yaw " +
+                RoundedList(robot.home_rpy_rad / kDegToRad, 4) + " degrees (home_rpy_deg) is not in the feasible workspace: " +
+                why + hint);
   }
 
   const YAML::Node sensors = root["sensors"];

@@ -146,4 +146,13 @@ std::string KindOf(const YAML::Node& root, const Reader& rd) {
   return rd.String(root["kind"], "kind");
 }
 
+void CheckCableStiffness(const Reader& rd, const YAML::Node& cables, std::size_t index,
+                         const std::optional<double>& stiffness_N, double tension_max_N) {
+  if (!stiffness_N || *stiffness_N >= kMinStiffnessOverMaxTension * tension_max_N) return;
+  const std::string key = "cables[" + std::to_string(index) + "].stiffness";
+  rd.Fail(cables[index]["stiffness"], key,
+          FormatDouble(*stiffness_N) + " N (E*A) would stretch the cable by more than " +
+              FormatDouble(100.0 / kMinStiffnessOverMaxTension) + " % at tension.max: units? (E*A is in N)");
+}
+
 }  // namespace cablecal::internal

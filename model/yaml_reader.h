@@ -9,6 +9,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/Core>
+#include <optional>
 #include <set>
 #include <string>
 
@@ -93,5 +94,10 @@ void CheckSpatialRobotDocument(const YAML::Node& root, const Reader& rd);
 // home_rpy_deg, a cable's swivel_axis): the planar loader then says to add `kind: spatial`
 // rather than call the first such key unknown.
 bool LooksSpatial(const YAML::Node& root);
+
+// Both robot files' bound on a cable's optional `stiffness` (E*A, N): at least
+// kMinStiffnessOverMaxTension x tension.max (model/robot.h); `cables` is the file's cable list.
+void CheckCableStiffness(const Reader& rd, const YAML::Node& cables, std::size_t index,
+                         const std::optional<double>& stiffness_N, double tension_max_N);
 
 }  // namespace cablecal::internal

@@ -48,7 +48,9 @@ SpatialWorkspaceGrid ComputeSpatialWorkspace(const SpatialRobot& robot, const Ei
   ParallelFor(n, 8, [&](long k) {
     SpatialWorkspacePoint& point = grid.points[k];
     const Eigen::Vector3d index(k % nx, (k / nx) % ny, k / (nx * ny));
-    point.p_F_m = robot.p_F_frame_min_m + step_m * index;
+    // Rounded to the picometre so that the CSV reads 0.3, not 0.30000000000000004 (a grep for a
+    // slice's height must find it).
+    point.p_F_m = ((robot.p_F_frame_min_m + step_m * index) * 1e12).array().round() / 1e12;
     SpatialPose<double> q;
     q << point.p_F_m, rpy_rad;
     point.evaluation = EvaluateSpatialPose(robot, q);

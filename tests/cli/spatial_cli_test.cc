@@ -226,3 +226,54 @@ TEST_F(SpatialCli, HostileInputsExitTwoNamingWhereAndWriteNothing) {
 }
 
 }  // namespace
+
+// What a new user's trial asked of the messages: a truth file of another robot with the same
+// cable count is named as such; a pose skipped for a tension names the cable (as t1..tm count
+// them) and the tension; the workspace grid's coordinates are the decimal values (a grep for a
+// slice finds them); an underactuated home that cannot hang says where to try.
+TEST_F(SpatialCli, MessagesNameTheTruthTheCableAndTheGrid) {
+  const std::string ipanema = Builtin("ipanema1"), cogiro = Builtin("cogiro");
+  ASSERT_EQ(RunCablecal("sample --robot " + ipanema + " --poses 12 --seed 3 --out " + Path("plan.csv")).exit_code, 0);
+  RunResult r = RunCablecal("simulate --robot " + ipanema + " --plan " + Path("plan.csv") + " --truth " + cogiro +
+                            " --out " + Path("m.csv"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("the true robot is 'cogiro', the nominal robot 'ipanema1'"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(Path("m.csv")));
+  // ipanema1's stiff cables leave the bounds on millimetres of geometry error (README).
+  r = RunCablecal("simulate --robot " + ipanema + " --plan " + Path("plan.csv") +
+                  " --geometry-sigma 0.0001 --skip-infeasible --seed 4 --out " + Path("m.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::regex skipped("tension_(low|high), cable [1-8] at -?[0-9.e+-]+ N, bounds \\[10, 720\\]");
+  EXPECT_TRUE(std::regex_search(r.output, skipped)) << r.output;
+  r = RunCablecal("workspace --robot " + ipanema + " --step 0.1 --out " + Path("ws.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string ws = Read("ws.csv");
+  // x, y, z of every row: a grid of 0.1 m from -2, -1.5, 0 reads as decimals (at most "-1.55").
+  int rows = 0;
+  for (const std::string& line : Lines(ws)) {
+    if (line.empty() || line[0] == '#' || line[0] == 'x') continue;
+    std::istringstream fields(line);
+    std::string field;
+    for (int k = 0; k < 3 && std::getline(fields, field, ','); ++k) {
+      EXPECT_LE(field.size(), 5u) << "grid value with rounding noise: " << line;
+    }
+    ++rows;
+  }
+  EXPECT_GT(rows, 1000);
+  EXPECT_TRUE(ws.find("\n0.3,") != std::string::npos) << ws.substr(0, 400);
+  // irma4u at a home yaw of 20 degrees (it holds about +-1 degree): no equilibrium, and a hint.
+  std::ifstream in(Builtin("irma4u"));
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string moved = text.str();
+  const std::string rpy = "home_rpy_deg: [0, 0, 0]";
+  ASSERT_NE(moved.find(rpy), std::string::npos);
+  moved.replace(moved.find(rpy), rpy.size(), "home_rpy_deg: [0, 0, 20]");
+  std::ofstream(Path("moved.yaml")) << moved;
+  r = RunCablecal("workspace --robot " + Path("moved.yaml") + " --out " + Path("ws2.csv"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("no_equilibrium"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("its yaw is held"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("(their centroid is at x = 0, y = 0 m)"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(Path("ws2.csv")));
+}

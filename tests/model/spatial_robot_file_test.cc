@@ -243,7 +243,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"AnchorCount", "    - [-0.06, -0.06, 0.0]\ncables:", "cables:", "    - [-0.06, 0.06, 0.0]",
                 "platform\\.anchors: needs one anchor per cable \\(8\\), got 7"},
         BadCase{"CoincidentExits", "exit: [-2.0, -1.5, 0.0]", "exit: [-2.0, 1.5, 0.0]", "exit: [-2.0, 1.5, 0.0]",
-                "cables\\[7\\]\\.exit: coincides with the exit point of cable 4", 2},
+                "cables\\[7\\]\\.exit: coincides with the exit point of cable 5 \\(cables\\[4\\]\\)", 2},
         BadCase{"HomeOutsideTheFrame", "home: [0.0, 0.0, 1.0]", "home: [0.0, 0.0, 2.5]", "home: [",
                 "home: \\(0, 0, 2\\.5\\) m is outside the frame box"},
         BadCase{"HomeWithinTheMargin", "home: [0.0, 0.0, 1.0]", "home: [0.0, 0.0, 0.02]", "home: [",
@@ -252,7 +252,7 @@ INSTANTIATE_TEST_SUITE_P(
                 "home_rpy_deg: the platform's tilt at home, 34\\.77[0-9]* degrees, is beyond limits\\.tilt_max_deg \\(30"},
         BadCase{"HomeGeometryInvalid", kCable1,
                 "{exit: [-2.0, 1.5, 2.0], swivel_axis: [1.94, -1.44, -1.0], pulley_radius: 0.1}", "home: [",
-                "home: cable 0 has invalid geometry at home: swivel_axis \\(its anchor is on the swivel axis\\)"},
+                "home: cable 1 \\(cables\\[0\\]\\) has invalid geometry at home: swivel_axis \\(its anchor is on the swivel axis\\)"},
         BadCase{"TiltLimit", "tilt_max_deg: 30", "tilt_max_deg: 90", "tilt_max_deg",
                 "limits\\.tilt_max_deg: must be in \\(0, 89\\) degrees"},
         BadCase{"FrameInsideOut", "max: [2.0, 1.5, 2.0]", "max: [2.0, -1.5, 2.0]", "frame:",
@@ -312,7 +312,7 @@ TEST(SpatialRobotFile, CableCountsAndCollinearAnchorsAreRefused) {
   for (int i = 0; i < 4; ++i) plane.cables[i].p_P_anchor_m = Eigen::Vector3d(-0.075 + 0.05 * i, i == 2 ? 0.001 : 0.0, 0.266);
   const std::string plane_message = message_of(plane).first;
   EXPECT_EQ(plane_message.find("one line"), std::string::npos) << plane_message;
-  EXPECT_NE(plane_message.find(": home: the home pose (0, 0, 1) m is not in the feasible workspace: tilt_limit"),
+  EXPECT_NE(plane_message.find(": home: the home pose (0, 0, 1) m at roll, pitch, yaw (0, 0, 0) degrees (home_rpy_deg) is not in the feasible workspace: tilt_limit"),
             std::string::npos)
       << plane_message;
 }

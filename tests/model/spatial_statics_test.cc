@@ -577,14 +577,16 @@ TEST(SpatialFeasibility, LoaderRefusesAnInfeasibleHome) {
   };
   EXPECT_EQ(message(SymmetricThreeCables(-0.5)), "");
   const std::string unstable = message(SymmetricThreeCables(0.6));
-  EXPECT_NE(unstable.find(": home: the home pose (0, 0, 1.5) m is not in the feasible workspace: unstable"),
+  EXPECT_NE(unstable.find(" degrees (home_rpy_deg) is not in the feasible workspace: unstable"),
             std::string::npos)
       << unstable;
   SpatialRobot high = SixCables();
   high.tension_max_N = EvaluateSpatialHome(high).equilibrium.tensions_N.maxCoeff() - 1.0;
   const std::string tension = message(high);
   EXPECT_NE(tension.find(": home: the home pose ("), std::string::npos) << tension;
-  EXPECT_NE(tension.find(" m is not in the feasible workspace: tension_high; tensions ("), std::string::npos) << tension;
+  EXPECT_NE(tension.find(" degrees (home_rpy_deg) is not in the feasible workspace: tension_high (cable "), std::string::npos)
+      << tension;
+  EXPECT_NE(tension.find("; tensions ("), std::string::npos) << tension;
   EXPECT_THROW(SpatialHomeEvaluation(high), InputError);
   EXPECT_THROW(SpatialHomeLengths(high), InputError);
   const SpatialRobot six = SixCables();
