@@ -83,6 +83,15 @@ std::string PosePlanCsv(const std::vector<PlanPose>& plan, const std::string& pr
 }
 
 
+void RequirePlanLength(const std::string& where, const std::string& robot_name, int cable, double model_length_m,
+                       double plan_length_m, double tolerance_m) {
+  if (std::abs(model_length_m - plan_length_m) <= tolerance_m) return;
+  const std::string c = std::to_string(cable + 1);
+  throw InputError(where, "column 'l" + c + "'", FormatDouble(plan_length_m) + " m is not the length of cable " + c +
+                                                   " of " + robot_name + " at this pose (" + FormatDouble(model_length_m) +
+                                                   " m): a plan for another robot?");
+}
+
 void RequirePlanEquilibrium(const std::string& where, const std::string& robot_name, double residual_N,
                             double weight_N, const std::string& pose_columns, int num_cables) {
   if (residual_N <= 1e-6 * weight_N) return;
@@ -120,11 +129,7 @@ void CheckPlanMatchesRobot(const Robot& robot, const std::vector<PlanPose>& plan
     const Eigen::VectorXd l = CableLengths(robot, p.q);
     for (int i = 0; i < robot.num_cables(); ++i) {
       const std::string c = std::to_string(i + 1);
-      if (!(std::abs(l(i) - p.lengths_m(i)) <= kLengthTol_m)) {
-        throw InputError(where, "column 'l" + c + "'", FormatDouble(p.lengths_m(i)) + " m is not the length of cable " +
-                                                           c + " of " + robot.name + " at this pose (" +
-                                                           FormatDouble(l(i)) + " m): a plan for another robot?");
-      }
+      RequirePlanLength(where, robot.name, i, l(i), p.lengths_m(i), kLengthTol_m);
       if (!(std::abs(l(i) - l0(i) - p.length_change_m(i)) <= kLengthTol_m)) {
         throw InputError(where, "column 'dl" + c + "'", FormatDouble(p.length_change_m(i)) +
                                                             " m is not l" + c + " minus the initial length " +

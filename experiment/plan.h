@@ -62,6 +62,11 @@ constexpr int kMaxPlanPoses = 100000;
 // the pose and the column otherwise (a plan made for another robot, or edited by hand).
 void CheckPlanMatchesRobot(const Robot& robot, const std::vector<PlanPose>& plan, const std::string& source);
 
+// The plan checks' length test, shared by both kinds: InputError naming `where` and column
+// l<cable+1> when the plan's length differs from the model's by more than tolerance_m.
+void RequirePlanLength(const std::string& where, const std::string& robot_name, int cable, double model_length_m,
+                       double plan_length_m, double tolerance_m);
+
 // The plan checks' equilibrium test, shared by both kinds: InputError naming `where` and the
 // columns `pose_columns`,t1..tm when |W t + w_g| = residual_N exceeds 1e-6 of the weight.
 void RequirePlanEquilibrium(const std::string& where, const std::string& robot_name, double residual_N,

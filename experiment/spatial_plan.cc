@@ -187,11 +187,7 @@ void CheckSpatialPlanMatchesRobot(const SpatialRobot& robot, const std::vector<S
     const Eigen::VectorXd paid_out = CommandedUnstretchedLengths(robot, l, p.tensions_N);
     for (int i = 0; i < robot.num_cables(); ++i) {
       const std::string c = std::to_string(i + 1);
-      if (!(std::abs(l(i) - p.lengths_m(i)) <= kLengthTol_m)) {
-        throw InputError(where, "column 'l" + c + "'", FormatDouble(p.lengths_m(i)) + " m is not the length of cable " +
-                                                           c + " of " + robot.name + " at this pose (" +
-                                                           FormatDouble(l(i)) + " m): a plan for another robot?");
-      }
+      RequirePlanLength(where, robot.name, i, l(i), p.lengths_m(i), kLengthTol_m);
       const double dl = paid_out(i) - home.paid_out_m(i);
       if (!(std::abs(dl - p.length_change_m(i)) <= kLengthTol_m)) {
         throw InputError(where, "column 'dl" + c + "'",
