@@ -58,12 +58,8 @@ CABLECAL_BUILD_DIR="$root/build-sanitize" build_sanitize
 # robots: SpatialSample.EveryPose... took 4.2 s in Release and 307 s instrumented, and the CLI
 # ones 21 s each in Release), the spatial noiseless simulation and the 100-experiment stretch
 # study (the spatial statics, forward model, stages and identification keep their other tests
-# here). OPEN DEFECT, not a sanitizer finding: two spatial identification tests give other
-# numbers in the clang build (FourCables...LoadCells recovers a random 4-cable robot to 1.01e-7 m
-# against its 1e-7 tolerance; ImplausibleGeometry...'s 20-sigma outlier comes out at 4.1 sigma
-# against 4.5 and its far exit is not named): left out here until understood (they pass with
-# GCC in the Release stage). Instrumented, the first ones were about
+# here). Instrumented, the first ones were about
 # 570 s of CPU of the stage's ~1100 s (measured in CI, 2 cores). The fuzzers (label fuzz) run
 # among the tests.
 (cd "$root/build-sanitize" && ctest --output-on-failure --parallel "$jobs" --timeout 1800 \
-  -E '^(Sizes/ConditionQuality\.AtMostHalfTheRandomMedian/(15|30)|Shards/RandomRobots\..*|RobustDesign\.(AsymmetricRobotAtEightAndTwelvePosesIsAtMostHalfTheRandomMedian|RobustPlansSurviveTheTrueGeometryNominalOnesDoNot)|Criteria/InformationQuality\.BeatsRandomMedianByAFactorOfTwo/(d|e)( .*)?|MonteCarlo\.BitIdenticalForOneAndTwoThreads|Design\.SameSeedSameResultWhateverTheThreadCount|Cables/RandomRobotsWithCables\..*|RobustDesign\.ManyCablesSameResultWhateverTheThreadCount|SpatialSample\..*|SpatialCli\.(SampleWorkspaceSimulateOnEveryBuiltInAndARandomRobot|WorkspacePlotIsWrittenForEachBuiltIn|OneAndTwoThreadsWriteTheSameBytes|MessagesNameTheTruthTheCableAndTheGrid)|SpatialSimulation\.NoiselessReadingsAreTheModelsValues|SpatialIdentify\.(ElasticStretchBiasesTheLengthsUnlessModelled|FourCablesEncodersSwivelInclinometerHeadingLoadCells|ImplausibleGeometryAndTheWorstReadingAreNamed))$')
+  -E '^(Sizes/ConditionQuality\.AtMostHalfTheRandomMedian/(15|30)|Shards/RandomRobots\..*|RobustDesign\.(AsymmetricRobotAtEightAndTwelvePosesIsAtMostHalfTheRandomMedian|RobustPlansSurviveTheTrueGeometryNominalOnesDoNot)|Criteria/InformationQuality\.BeatsRandomMedianByAFactorOfTwo/(d|e)( .*)?|MonteCarlo\.BitIdenticalForOneAndTwoThreads|Design\.SameSeedSameResultWhateverTheThreadCount|Cables/RandomRobotsWithCables\..*|RobustDesign\.ManyCablesSameResultWhateverTheThreadCount|SpatialSample\..*|SpatialCli\.(SampleWorkspaceSimulateOnEveryBuiltInAndARandomRobot|WorkspacePlotIsWrittenForEachBuiltIn|OneAndTwoThreadsWriteTheSameBytes|MessagesNameTheTruthTheCableAndTheGrid)|SpatialSimulation\.NoiselessReadingsAreTheModelsValues|SpatialIdentify\.ElasticStretchBiasesTheLengthsUnlessModelled)$')

@@ -13,6 +13,7 @@
 #include "model/cable.h"
 #include "model/statics.h"
 #include "tests/support/random_robot.h"
+#include "tests/support/random_spatial_robot.h"
 
 namespace cablecal {
 namespace {
@@ -145,16 +146,18 @@ TEST(ManyCables, SixRowWrenchDistributionForAnyCableCount) {
     const int m = trial < 400 ? 7 : 6 + trial % 7;  // m = 7 often: the exact comparison
     Eigen::MatrixXd W(6, m);
     for (int i = 0; i < m; ++i) {
-      Eigen::Vector3d u(rng.Normal(), rng.Normal(), rng.Normal());
+      // Sequenced draws (an argument list's order is unspecified), last coordinate first.
+      Eigen::Vector3d u;
+      for (int a = 2; a >= 0; --a) u(a) = rng.Normal();
       u = u.normalized();
       u.z() = std::abs(u.z()) + 0.2;  // mostly upward: a suspended platform's cables
       u.normalize();
-      const Eigen::Vector3d b(rng.Uniform(-0.3, 0.3), rng.Uniform(-0.3, 0.3), rng.Uniform(-0.1, 0.1));
+      const Eigen::Vector3d b = testing::DrawVector3(rng, {-0.3, -0.3, -0.1}, {0.3, 0.3, 0.1});
       W.col(i) << u, b.cross(u);
     }
     const double weight_N = rng.Uniform(10.0, 500.0);
     Eigen::VectorXd w_g(6);
-    const Eigen::Vector3d com(rng.Uniform(-0.05, 0.05), rng.Uniform(-0.05, 0.05), rng.Uniform(-0.05, 0.05));
+    const Eigen::Vector3d com = testing::DrawVector3(rng, Eigen::Vector3d::Constant(-0.05), Eigen::Vector3d::Constant(0.05));
     const Eigen::Vector3d f_g(0.0, 0.0, -weight_N);
     w_g << f_g, com.cross(f_g);
     const double lo = 0.02 * weight_N, hi = 4.0 * weight_N;

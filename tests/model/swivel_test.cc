@@ -182,8 +182,9 @@ TEST(SwivelPlanarEquivalence, BothWrapsAndSidesAgainstCableH) {
     for (const double side : {1.0, -1.0}) {
       for (int k = 0; k < 200; ++k) {
         const double r = rng.Uniform(0.01, 0.2);
-        const Eigen::Vector2d A(rng.Uniform(-1.0, 1.0), rng.Uniform(-1.0, 1.0));
-        const Eigen::Vector2d B(A.x() + side * rng.Uniform(0.0, 2.0), A.y() + rng.Uniform(-2.0, 2.0));
+        const Eigen::Vector2d A = testing::DrawVector2(rng, {-1.0, -1.0}, {1.0, 1.0});
+        const Eigen::Vector2d AB = testing::DrawVector2(rng, {0.0, -2.0}, {2.0, 2.0});
+        const Eigen::Vector2d B(A.x() + side * AB.x(), A.y() + AB.y());
         const CableState<double> p = CableGeometry<double>(A, r, PulleySigns{side, wrap}, B);
         if (!CableGeometryValid(p, r)) continue;
         const SwivelCableState<double> s =
@@ -204,7 +205,7 @@ TEST(SwivelPlanarEquivalence, BothWrapsAndSidesAgainstCableH) {
 
 Vec3d RandomUnit(Rng& rng) {
   for (;;) {
-    const Vec3d v(rng.Uniform(-1.0, 1.0), rng.Uniform(-1.0, 1.0), rng.Uniform(-1.0, 1.0));
+    const Vec3d v = testing::DrawVector3(rng, {-1.0, -1.0, -1.0}, {1.0, 1.0, 1.0});
     if (v.norm() > 0.1 && v.norm() <= 1.0) return v.normalized();
   }
 }
@@ -213,19 +214,20 @@ TEST(SwivelCable, MatchesNumericalTangencyForRandomAxesAndAnchors) {
   Rng rng(17);
   int compared = 0, wraps = 0;
   for (int k = 0; k < 4000; ++k) {
-    const Vec3d D(rng.Uniform(-3.0, 3.0), rng.Uniform(-3.0, 3.0), rng.Uniform(0.0, 3.0));
+    const Vec3d D = testing::DrawVector3(rng, {-3.0, -3.0, 0.0}, {3.0, 3.0, 3.0});
     const Vec3d axis = RandomUnit(rng);
     const double r = rng.Uniform(0.01, 0.2);
     // Anchors anywhere within 3 m, near the pulley (a third), or behind it close to the axis
     // (a third: where the wrap passes 3 pi / 2).
     Vec3d B;
     if (k % 3 == 0) {
-      B = D + Vec3d(rng.Uniform(-3.0, 3.0), rng.Uniform(-3.0, 3.0), rng.Uniform(-3.0, 3.0));
+      B = D + testing::DrawVector3(rng, {-3.0, -3.0, -3.0}, {3.0, 3.0, 3.0});
     } else if (k % 3 == 1) {
-      B = D + 4.0 * r * Vec3d(rng.Uniform(-1.0, 1.0), rng.Uniform(-1.0, 1.0), rng.Uniform(-1.0, 1.0));
+      B = D + 4.0 * r * testing::DrawVector3(rng, {-1.0, -1.0, -1.0}, {1.0, 1.0, 1.0});
     } else {
       const Vec3d w = axis.cross(RandomUnit(rng)).normalized();
-      B = D + rng.Uniform(0.0, 1.5 * r) * w + rng.Uniform(-3.0 * r, 0.0) * axis;
+      const double across = rng.Uniform(0.0, 1.5 * r), along = rng.Uniform(-3.0 * r, 0.0);
+      B = D + across * w + along * axis;
     }
     const SwivelCableState<double> s = SwivelCable<double>(D, axis, r, B);
     ASSERT_TRUE(AllFinite(s));
@@ -291,10 +293,10 @@ TEST(SwivelCable, LengthGradientIsTheFreeSegmentsUnitVector) {
   Rng rng(41);
   int checked = 0;
   for (int k = 0; k < 2000; ++k) {
-    const Vec3d D(rng.Uniform(-3.0, 3.0), rng.Uniform(-3.0, 3.0), rng.Uniform(0.0, 3.0));
+    const Vec3d D = testing::DrawVector3(rng, {-3.0, -3.0, 0.0}, {3.0, 3.0, 3.0});
     const Vec3d axis = RandomUnit(rng);
     const double r = k % 10 == 0 ? 0.0 : rng.Uniform(0.01, 0.2);  // eyelets too
-    const Vec3d B = D + Vec3d(rng.Uniform(-3.0, 3.0), rng.Uniform(-3.0, 3.0), rng.Uniform(-3.0, 3.0));
+    const Vec3d B = D + testing::DrawVector3(rng, {-3.0, -3.0, -3.0}, {3.0, 3.0, 3.0});
     const SwivelCableState<double> s = SwivelCable<double>(D, axis, r, B);
     if (!s.valid()) continue;
     Vec3<Jet<3>> Bj, Dj;
@@ -322,10 +324,10 @@ TEST(SwivelCable, RadiusAndAxisDerivativesMatchCentralDifferences) {
   Rng rng(43);
   int checked = 0;
   for (int k = 0; k < 300; ++k) {
-    const Vec3d D(rng.Uniform(-3.0, 3.0), rng.Uniform(-3.0, 3.0), rng.Uniform(0.0, 3.0));
+    const Vec3d D = testing::DrawVector3(rng, {-3.0, -3.0, 0.0}, {3.0, 3.0, 3.0});
     const Vec3d axis = RandomUnit(rng);
     const double r = rng.Uniform(0.01, 0.2);
-    const Vec3d B = D + Vec3d(rng.Uniform(-3.0, 3.0), rng.Uniform(-3.0, 3.0), rng.Uniform(-3.0, 3.0));
+    const Vec3d B = D + testing::DrawVector3(rng, {-3.0, -3.0, -3.0}, {3.0, 3.0, 3.0});
     if (!SwivelCable<double>(D, axis, r, B).valid()) continue;
     // Parameters (r, kx, ky, kz): the axis as given, not renormalised (a direction's length
     // does not enter k . rho and rho_perp in the same way, and Jets see what the code computes).
@@ -498,10 +500,10 @@ TEST(SwivelCable, InvalidConfigurationsAreNamedNeverNaN) {
 TEST(SwivelCable, SwivelAngleReadsATurnAboutTheAxis) {
   Rng rng(61);
   for (int k = 0; k < 200; ++k) {
-    const Vec3d D(rng.Uniform(-2.0, 2.0), rng.Uniform(-2.0, 2.0), rng.Uniform(0.0, 3.0));
+    const Vec3d D = testing::DrawVector3(rng, {-2.0, -2.0, 0.0}, {2.0, 2.0, 3.0});
     const Vec3d axis = RandomUnit(rng);
     const double r = rng.Uniform(0.01, 0.1);
-    const Vec3d B = D + Vec3d(rng.Uniform(-2.0, 2.0), rng.Uniform(-2.0, 2.0), rng.Uniform(-2.0, 2.0));
+    const Vec3d B = D + testing::DrawVector3(rng, {-2.0, -2.0, -2.0}, {2.0, 2.0, 2.0});
     const SwivelCableState<double> home = SwivelCable<double>(D, axis, r, B);
     if (!home.valid()) continue;
     const double turn = rng.Uniform(-3.0, 3.0);

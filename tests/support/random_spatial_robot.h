@@ -36,6 +36,23 @@
 
 namespace cablecal::testing {
 
+// Draws sequenced by hand, as tests/support/random_robot.h's: a function's arguments are
+// evaluated in an unspecified order (GCC right to left, clang left to right), so
+// Vector3d(rng.Uniform(..), rng.Uniform(..), rng.Uniform(..)) drew other robots under clang
+// (and the clang build's tests then ran on robots nobody had run them on). Each draws its last
+// coordinate first, as GCC did, so the robots the tests were written against stay the same.
+inline Eigen::Vector3d DrawVector3(Rng& rng, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+  const double z = rng.Uniform(lo.z(), hi.z());
+  const double y = rng.Uniform(lo.y(), hi.y());
+  const double x = rng.Uniform(lo.x(), hi.x());
+  return Eigen::Vector3d(x, y, z);
+}
+inline Eigen::Vector2d DrawVector2(Rng& rng, const Eigen::Vector2d& lo, const Eigen::Vector2d& hi) {
+  const double y = rng.Uniform(lo.y(), hi.y());
+  const double x = rng.Uniform(lo.x(), hi.x());
+  return Eigen::Vector2d(x, y);
+}
+
 // A unit vector `base` tilted by up to max_tilt_rad toward a random direction.
 inline Eigen::Vector3d TiltedAxis(Rng& rng, const Eigen::Vector3d& base, double max_tilt_rad) {
   const Eigen::Vector3d any = std::abs(base.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
@@ -68,12 +85,12 @@ inline SpatialRobot RandomSpatialRobot(Rng& rng, const std::string& name, int nu
     r.name = name;
     r.gravity_mps2 = 9.81;
     const double H = rng.Uniform(2.0, 4.0);
-    r.p_F_frame_min_m = Eigen::Vector3d(-rng.Uniform(1.5, 3.5), -rng.Uniform(1.0, 3.0), 0.0);
-    r.p_F_frame_max_m = Eigen::Vector3d(rng.Uniform(1.5, 3.5), rng.Uniform(1.0, 3.0), H);
+    r.p_F_frame_min_m << -DrawVector2(rng, {1.5, 1.0}, {3.5, 3.0}), 0.0;
+    r.p_F_frame_max_m << DrawVector2(rng, {1.5, 1.0}, {3.5, 3.0}), H;
     const Eigen::Vector3d centre = 0.5 * (r.p_F_frame_min_m + r.p_F_frame_max_m);
     r.platform_mass_kg = rng.Uniform(1.0, 100.0);
-    r.p_P_com_m = Eigen::Vector3d(rng.Uniform(-0.1, 0.1), rng.Uniform(-0.1, 0.1), rng.Uniform(-0.1, 0.1));
-    const Eigen::Vector3d half(rng.Uniform(0.1, 0.4), rng.Uniform(0.1, 0.4), rng.Uniform(0.05, 0.3));
+    r.p_P_com_m = DrawVector3(rng, Eigen::Vector3d::Constant(-0.1), Eigen::Vector3d::Constant(0.1));
+    const Eigen::Vector3d half = DrawVector3(rng, {0.1, 0.1, 0.05}, {0.4, 0.4, 0.3});
     for (int i = 0; i < num_cables; ++i) {
       SpatialCable c;
       const bool upper = rng.Uniform() < 2.0 / 3.0 || num_cables < 6;
@@ -88,19 +105,17 @@ inline SpatialRobot RandomSpatialRobot(Rng& rng, const std::string& name, int nu
       }
       c.pulley_radius_m = rng.Uniform() < 0.125 ? 0.0 : rng.Uniform(0.01, 0.08);
       if (rng.Uniform() < 0.5) c.stiffness_N = rng.Uniform(1e5, 1e7);
-      c.p_P_anchor_m = Eigen::Vector3d(rng.Uniform(-half.x(), half.x()), rng.Uniform(-half.y(), half.y()),
-                                       rng.Uniform(-half.z(), half.z()));
+      c.p_P_anchor_m = DrawVector3(rng, -half, half);
       r.cables.push_back(c);
     }
     r.tension_min_N = rng.Uniform(1.0, 20.0);
     r.tension_max_N = r.tension_min_N + rng.Uniform(200.0, 2000.0);
     r.tilt_max_rad = 30.0 * M_PI / 180.0;
     r.margin_m = 0.05;
-    r.p_F_home_m = Eigen::Vector3d(centre.x() + rng.Uniform(-0.3, 0.3), centre.y() + rng.Uniform(-0.3, 0.3),
-                                   H * rng.Uniform(0.35, 0.6));
+    const Eigen::Vector3d home_draw = DrawVector3(rng, {-0.3, -0.3, 0.35}, {0.3, 0.3, 0.6});
+    r.p_F_home_m = Eigen::Vector3d(centre.x() + home_draw.x(), centre.y() + home_draw.y(), H * home_draw.z());
     const double deg = M_PI / 180.0;
-    r.home_rpy_rad = Eigen::Vector3d(rng.Uniform(-10.0, 10.0) * deg, rng.Uniform(-10.0, 10.0) * deg,
-                                     rng.Uniform(-30.0, 30.0) * deg);
+    r.home_rpy_rad = deg * DrawVector3(rng, {-10.0, -10.0, -30.0}, {10.0, 10.0, 30.0});
     if (num_cables < 6) {
       // A hanging robot's anchors face their exits (else the cables cross and no orientation
       // near the drawn one balances the platform): anchor i's x-y direction in P is its exit's
