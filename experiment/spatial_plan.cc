@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <fstream>
+#include <limits>
 #include <set>
 
 #ifdef _OPENMP
@@ -16,6 +17,7 @@
 #include "experiment/plan.h"  // kMaxPlanPoses
 #include "model/forward_statics.h"
 #include "model/swivel.h"
+#include "workspace/spatial_workspace.h"
 
 namespace cablecal {
 
@@ -92,6 +94,51 @@ std::vector<SpatialPlanPose> SampleSpatialPoses(const SpatialRobot& robot, int n
     ParallelFor(batch, 4, [&](long k) { evaluations[k] = EvaluateSpatialPose(robot, candidates[k]); });
     for (int k = 0; k < batch && static_cast<int>(plan.size()) < n && draws < max_draws; ++k, ++draws) {
       if (evaluations[k].feasible()) plan.push_back(MakeSpatialPlanPose(robot, evaluations[k].equilibrium, home));
+    }
+  }
+  return plan;
+}
+
+std::vector<SpatialPlanPose> GridSpatialPoses(const SpatialRobot& robot, int side) {
+  if (side < 2 || side > 4) {
+    throw InputError("--designs", "", "a grid's side must be 2, 3 or 4 (got " + std::to_string(side) + ")");
+  }
+  const SpatialHomeReference home = SpatialHome(robot);
+  const SpatialWorkspaceGrid grid = ComputeSpatialWorkspace(robot, robot.home_rpy_rad, DefaultSpatialStep(robot));
+  std::vector<int> feasible;
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (int k = 0; k < static_cast<int>(grid.points.size()); ++k) {
+    if (!grid.points[k].evaluation.feasible()) continue;
+    feasible.push_back(k);
+    lo = lo.cwiseMin(grid.points[k].p_F_m);
+    hi = hi.cwiseMax(grid.points[k].p_F_m);
+  }
+  const int n = side * side * side;
+  if (static_cast<int>(feasible.size()) < n) {
+    throw SolverFailure("the workspace of " + robot.name + " at home's orientation has " +
+                        std::to_string(feasible.size()) + " feasible points on its " + FormatDouble(grid.step_m) +
+                        " m grid, fewer than the " + std::to_string(n) + " poses of a " + std::to_string(side) + "x" +
+                        std::to_string(side) + "x" + std::to_string(side) + " grid");
+  }
+  std::vector<bool> taken(grid.points.size(), false);
+  std::vector<SpatialPlanPose> plan;
+  for (int iz = 0; iz < side; ++iz) {
+    for (int iy = 0; iy < side; ++iy) {
+      for (int ix = 0; ix < side; ++ix) {
+        const Eigen::Vector3d fraction((ix + 0.5) / side, (iy + 0.5) / side, (iz + 0.5) / side);
+        const Eigen::Vector3d centre = lo + fraction.cwiseProduct(hi - lo);
+        int best = -1;
+        double best_distance = std::numeric_limits<double>::infinity();
+        for (const int k : feasible) {
+          const double d = (grid.points[k].p_F_m - centre).squaredNorm();
+          if (!taken[k] && d < best_distance) {
+            best = k;
+            best_distance = d;
+          }
+        }
+        taken[best] = true;
+        plan.push_back(MakeSpatialPlanPose(robot, grid.points[best].evaluation.equilibrium, home));
+      }
     }
   }
   return plan;

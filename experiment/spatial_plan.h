@@ -54,6 +54,18 @@ constexpr double kDefaultSampleYawRange_rad = 30.0 * M_PI / 180.0;
 std::vector<SpatialPlanPose> SampleSpatialPoses(const SpatialRobot& robot, int n, std::uint64_t seed,
                                                 double yaw_range_rad = kDefaultSampleYawRange_rad);
 
+// The peer's pose set, side^3 poses (side 2 or 3: the 2x2x2 and 3x3x3 grids that a published
+// self-calibration, Zoffoli, Ida and Carricato, Robotica 2025, picks its 8 and 27 poses from),
+// as cablecal builds it: the constant-orientation workspace at home's orientation on its
+// default grid (workspace/spatial_workspace.h), the bounding box of its feasible points, the
+// centres of the box's side x side x side equal cells (x innermost, then y, then z), and for
+// each centre in that order the nearest feasible workspace point not taken yet (ties to the
+// lower grid index): an evenly spaced set of positions, each made statically feasible. With
+// fewer than 6 cables the positions and home's yaw are the controlled coordinates; roll and
+// pitch follow from the equilibrium. No random draw: the same set every time. InputError for
+// a side outside 2..4; SolverFailure when the workspace has fewer than side^3 feasible points.
+std::vector<SpatialPlanPose> GridSpatialPoses(const SpatialRobot& robot, int side);
+
 // Plan CSV: pose,x,y,z,roll,pitch,yaw,t1..tm,l1..lm,dl1..dlm (m, rad, N), poses numbered from 1.
 std::string SpatialPlanCsv(const std::vector<SpatialPlanPose>& plan, const std::string& provenance);
 // Reads it; '#' lines are comments. InputError naming file, line and column on a wrong header

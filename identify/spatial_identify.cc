@@ -1019,10 +1019,17 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
   ceres::Problem::Options problem_options;
   problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
+  // Every pose's block in one buffer, in pose order: Ceres keeps a group's blocks in a set
+  // ordered by address, so blocks allocated one by one would be eliminated in an order that
+  // changes from run to run, and the result's last bits with it (a Monte Carlo's trials must
+  // give the same bytes every time).
+  std::vector<double> local_buffer(static_cast<std::size_t>(n) * local);
+  const auto block = [&](int j) { return local_buffer.data() + static_cast<std::size_t>(j) * local; };
   auto* ordering = new ceres::ParameterBlockOrdering;
   for (int j = 0; j < n; ++j) {
-    problem.AddParameterBlock(locals[j].data(), local);
-    ordering->AddElementToGroup(locals[j].data(), 0);
+    Eigen::Map<VectorXd>(block(j), local) = locals[j];
+    problem.AddParameterBlock(block(j), local);
+    ordering->AddElementToGroup(block(j), 0);
   }
   for (int i = 0; i < L.m; ++i) {
     problem.AddParameterBlock(g.data() + L.exit(i), 3);
@@ -1040,7 +1047,7 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
   }
   for (const Term& t : model.terms) {
     std::vector<double*> params;
-    if (t.pose >= 0) params.push_back(locals[t.pose].data());
+    if (t.pose >= 0) params.push_back(block(t.pose));
     for (int b : t.block_offset) params.push_back(g.data() + b);
     // The robust loss on the sensors' readings; the equilibrium is the model's, not a reading.
     const bool reading = t.reading >= 0 && t.sensor != kEquilibriumTerm;
@@ -1080,6 +1087,7 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
   solver.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
   ceres::Solve(solver, &problem, &summary);
+  for (int j = 0; j < n; ++j) locals[j] = Eigen::Map<const VectorXd>(block(j), local);
 
   result.geometry = g;
   for (const VectorXd& x : locals) {

@@ -30,8 +30,14 @@ const char* ToString(PoseSetDesign d) {
     case PoseSetDesign::kA: return "a";
     case PoseSetDesign::kE: return "e";
     case PoseSetDesign::kCondition: return "condition";
+    case PoseSetDesign::kGrid2: return "grid:2x2x2";
+    case PoseSetDesign::kGrid3: return "grid:3x3x3";
   }
   return "unknown";
+}
+
+int GridSide(PoseSetDesign d) {
+  return d == PoseSetDesign::kGrid2 ? 2 : d == PoseSetDesign::kGrid3 ? 3 : 0;
 }
 
 std::vector<PoseSetDesign> ParseDesigns(const std::string& text) {
@@ -46,7 +52,10 @@ std::vector<PoseSetDesign> ParseDesigns(const std::string& text) {
     else if (item == "a") d = PoseSetDesign::kA;
     else if (item == "e") d = PoseSetDesign::kE;
     else if (item == "condition") d = PoseSetDesign::kCondition;
-    else throw InputError("--designs", "", "unknown design '" + item + "' (random, optimized, condition, d, a, e)");
+    else if (item == "grid:2x2x2") d = PoseSetDesign::kGrid2;
+    else if (item == "grid:3x3x3") d = PoseSetDesign::kGrid3;
+    else throw InputError("--designs", "", "unknown design '" + item + "' (random, optimized, condition, d, a, e; "
+                                           "spatial robots also grid:2x2x2, grid:3x3x3)");
     for (PoseSetDesign seen : out) {
       if (seen == d) throw InputError("--designs", "", "'" + item + "' given twice");
       // "optimized" is the default criterion's set: A-optimal. Both would be the same cells twice.
@@ -175,8 +184,36 @@ Criterion CriterionOf(PoseSetDesign d) {
 
 }  // namespace
 
-void ValidateOptions(const MonteCarloOptions& o, const Robot* nominal) {
+void ValidateStudyOptions(const MonteCarloOptions& o, int geometry_count) {
   if (o.trials < 1) throw InputError("--trials", "", "must be at least 1");
+  // Every successful trial keeps its geometric errors and one per pose (8 bytes each): refuse a
+  // study that would not fit in memory before starting it, naming the size.
+  double bytes = 0.0;
+  for (const int n : o.pose_counts) {
+    bytes += 8.0 * (geometry_count + n) * o.trials * static_cast<double>(o.designs.size());
+  }
+  if (bytes > kMaxStudyBytes) {
+    char buffer[160];
+    std::snprintf(buffer, sizeof(buffer), "the study would keep %.3g GB of errors (at most %.3g GB): fewer trials or "
+                  "pose counts, or split it into several runs", bytes / 1e9, kMaxStudyBytes / 1e9);
+    throw InputError("--trials", "", buffer);
+  }
+  if (o.pose_counts.empty()) throw InputError("--poses", "", "no pose counts");
+  for (const int n : o.pose_counts) {
+    if (n > kMaxPosesPerSet) {
+      throw InputError("--poses", "", "at most " + std::to_string(kMaxPosesPerSet) + " poses per set (got " +
+                                          std::to_string(n) + ")");
+    }
+  }
+  if (o.designs.empty()) throw InputError("--designs", "", "no designs");
+  if (!(o.geometry_sigma_m >= 0.0 && o.geometry_sigma_m <= kMaxGeometrySigma_m)) {
+    throw InputError("--geometry-sigma", "", "must be between 0 and " + FormatDouble(kMaxGeometrySigma_m) +
+                                                 " m: a larger error is not a calibration problem (got " +
+                                                 FormatDouble(o.geometry_sigma_m) + ")");
+  }
+}
+
+void ValidateOptions(const MonteCarloOptions& o, const Robot* nominal) {
   if (o.geometry_prior && !(o.geometry_sigma_m >= kMinGeometryPriorSigma_m)) {
     throw InputError("--geometry-prior", "", "needs --geometry-sigma of at least " + FormatDouble(kMinGeometryPriorSigma_m) +
                                                  " m: the prior is the spread the true geometry is drawn with (got " +
@@ -202,20 +239,7 @@ void ValidateOptions(const MonteCarloOptions& o, const Robot* nominal) {
   if (nominal && o.gauge == Gauge::kPrior && !nominal->sensors.tracker_sigma_m) {
     throw InputError(nominal->source, "sensors.tracker.sigma", "is needed for --gauge prior");
   }
-  // Every successful trial keeps 3m + n errors (8 bytes each): refuse a study that would not
-  // fit in memory before starting it, naming the size.
-  const int geometry_count = PlanarLayout(nominal ? nominal->num_cables() : 2).size();
-  double bytes = 0.0;
-  for (const int n : o.pose_counts) {
-    bytes += 8.0 * (geometry_count + n) * o.trials * static_cast<double>(o.designs.size());
-  }
-  if (bytes > kMaxStudyBytes) {
-    char buffer[160];
-    std::snprintf(buffer, sizeof(buffer), "the study would keep %.3g GB of errors (at most %.3g GB): fewer trials or "
-                  "pose counts, or split it into several runs", bytes / 1e9, kMaxStudyBytes / 1e9);
-    throw InputError("--trials", "", buffer);
-  }
-  if (o.pose_counts.empty()) throw InputError("--poses", "", "no pose counts");
+  ValidateStudyOptions(o, PlanarLayout(nominal ? nominal->num_cables() : 2).size());
   // The design's rule (design.h MinDesignPoses): 5 poses for 2 cables, 4 for 3 to 8.
   const int fewest = MinDesignPoses(nominal ? nominal->num_cables() : 2);
   for (const int n : o.pose_counts) {
@@ -224,16 +248,12 @@ void ValidateOptions(const MonteCarloOptions& o, const Robot* nominal) {
                                           (nominal ? " of " + std::to_string(nominal->num_cables()) + " cables" : "") +
                                           " (got " + std::to_string(n) + ")");
     }
-    if (n > kMaxPosesPerSet) {
-      throw InputError("--poses", "", "at most " + std::to_string(kMaxPosesPerSet) + " poses per set (got " +
-                                          std::to_string(n) + ")");
-    }
   }
-  if (o.designs.empty()) throw InputError("--designs", "", "no designs");
-  if (!(o.geometry_sigma_m >= 0.0 && o.geometry_sigma_m <= kMaxGeometrySigma_m)) {
-    throw InputError("--geometry-sigma", "", "must be between 0 and " + FormatDouble(kMaxGeometrySigma_m) +
-                                                 " m: a larger error is not a calibration problem (got " +
-                                                 FormatDouble(o.geometry_sigma_m) + ")");
+  for (const PoseSetDesign d : o.designs) {
+    if (GridSide(d) > 0) {
+      throw InputError("--designs", "", std::string(ToString(d)) + " is a spatial robot's pose set (the peer's grid of "
+                                        "positions); for a planar robot use random or a criterion");
+    }
   }
 }
 
@@ -278,6 +298,16 @@ ShareResult RunShare(const Robot& robot, const MonteCarloOptions& o, const Desig
   // The nominal initial lengths (the home equilibrium) once, not in every trial's sampling and
   // identification: the same numbers, set in the robot.
   const Robot nominal = WithGeometry(robot, GeometryOf(robot));
+  return RunShareTrials(o, share, [&](int n, PoseSetDesign d, int trial) {
+    const auto it = designed.find({n, static_cast<int>(d)});
+    if (d != PoseSetDesign::kRandom && it == designed.end()) {
+      throw std::logic_error("no designed set for n=" + std::to_string(n) + " " + ToString(d));
+    }
+    return RunTrial(nominal, o, n, d, trial, it == designed.end() ? nullptr : &it->second);
+  });
+}
+
+ShareResult RunShareTrials(const MonteCarloOptions& o, const StudyShare& share, const TrialFunction& run_trial) {
   const long total = StudyItems(o);
   std::vector<long> items;
   items.reserve(ItemsOwned(share, total));
@@ -301,13 +331,8 @@ ShareResult RunShare(const Robot& robot, const MonteCarloOptions& o, const Desig
     const long cell = items[k] / o.trials;
     const int n = o.pose_counts[cell / designs];
     const PoseSetDesign d = o.designs[cell % designs];
-    const auto it = designed.find({n, static_cast<int>(d)});
     try {
-      if (d != PoseSetDesign::kRandom && it == designed.end()) {
-        throw std::logic_error("no designed set for n=" + std::to_string(n) + " " + ToString(d));
-      }
-      out.outcomes[k] = RunTrial(nominal, o, n, d, static_cast<int>(items[k] % o.trials),
-                                 it == designed.end() ? nullptr : &it->second);
+      out.outcomes[k] = run_trial(n, d, static_cast<int>(items[k] % o.trials));
     } catch (...) {
       // Not a failed trial (those are caught in RunTrial) but something that makes the
       // whole share suspect, such as running out of memory: stop and report it.
@@ -356,8 +381,7 @@ MonteCarloResult RunMonteCarlo(const Robot& nominal, const MonteCarloOptions& o)
     result.interrupted = true;
     return result;
   }
-  result = AssembleShares(o, std::move(shares));
-  result.num_cables = nominal.num_cables();
+  result = AssembleShares(o, std::move(shares), PlanarStudyNames(nominal.num_cables()));
   result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;
 }

@@ -31,10 +31,15 @@ namespace cablecal {
 // Pose-set designs: a fresh random feasible set per trial, or a set designed once per n
 // with one of the experiment-design criteria: "optimized" is the design's default criterion
 // (A-optimality, README "Experiment design"), "condition" the paper's condition number. The
-// numbers are part of every trial's seed stream: never renumber them.
-enum class PoseSetDesign { kRandom = 0, kOptimized = 1, kD = 2, kA = 3, kE = 4, kCondition = 5 };
+// numbers are part of every trial's seed stream: never renumber them. The grids (spatial robots
+// only, "grid:2x2x2", "grid:3x3x3") are the peer's pose sets, evenly spaced positions at home's
+// orientation (experiment/spatial_plan.h GridSpatialPoses): side^3 poses, so a study runs them
+// at that n alone.
+enum class PoseSetDesign { kRandom = 0, kOptimized = 1, kD = 2, kA = 3, kE = 4, kCondition = 5, kGrid2 = 6, kGrid3 = 7 };
 const char* ToString(PoseSetDesign d);
-std::vector<PoseSetDesign> ParseDesigns(const std::string& text);  // "random,optimized,d"
+std::vector<PoseSetDesign> ParseDesigns(const std::string& text);  // "random,optimized,d,grid:2x2x2"
+// The grid's side (2, 3), or 0 for a design that is not a grid.
+int GridSide(PoseSetDesign d);
 // "6:50" or "6:50:2" (first:last[:step]); InputError naming --poses otherwise.
 std::vector<int> ParsePoseCounts(const std::string& text);
 // Per pose set of a study (ParsePoseCounts, ValidateOptions): bounds a study's trials and
@@ -89,7 +94,12 @@ struct MonteCarloCell {
 const std::vector<std::string>& FailureCauses();
 
 struct MonteCarloResult {
-  int num_cables = 2;                 // of the robot studied: names the geometric errors
+  // The geometric errors' names, in the order of TrialOutcome::errors_m (the robot's kind's
+  // layout: a1x a1z ... l10 ... planar, a1x a1y a1z ... l10 ... spatial); then each pose's x.
+  std::vector<std::string> geometry_names;
+  // The ones the gauge holds (equal in the identified and the true geometry: the frame's
+  // definition, not estimates): a1x planar, the data's choice spatial.
+  std::vector<std::string> held_names;
   std::vector<MonteCarloCell> cells;  // n-major, then designs in the order given
   bool interrupted = false;
   double wall_time_s = 0.0;
@@ -109,6 +119,9 @@ MonteCarloResult RunMonteCarlo(const Robot& nominal, const MonteCarloOptions& op
 // The memory bound counts 3m geometric errors per trial (m = 2 without `nominal`).
 void ValidateOptions(const MonteCarloOptions& options, const Robot* nominal = nullptr);
 constexpr double kMaxStudyBytes = 4e9;  // the errors a study keeps in memory, at most
+// The checks of any study, whatever the robot's kind: trials, memory (geometry_count errors
+// plus one per pose, per successful trial), pose counts, designs, geometry sigma.
+void ValidateStudyOptions(const MonteCarloOptions& options, int geometry_count);
 
 // ---- Splitting a study into shares -------------------------------------------------------
 // Items are the study's trials numbered cell by cell (cells n-major, then designs in the
@@ -148,13 +161,23 @@ struct ShareResult {
   std::string failure;  // why this share could not finish (not a failed trial); then no outcomes
   std::exception_ptr error;  // the exception behind `failure`, rethrown by a run of one process
 };
-// Runs the share's trials with OpenMP; `designed` holds at least the sets of its cells.
+// Runs the share's trials with OpenMP, whatever the robot's kind: run_trial(n, design, trial)
+// is one trial's outcome, depending on its own seed stream only (a failed trial is an outcome).
 // An unexpected exception in a trial stops the share and is returned in `failure`.
+using TrialFunction = std::function<TrialOutcome(int n, PoseSetDesign design, int trial)>;
+ShareResult RunShareTrials(const MonteCarloOptions& options, const StudyShare& share, const TrialFunction& run_trial);
+// The planar robot's trials; `designed` holds at least the sets of its cells.
 ShareResult RunShare(const Robot& nominal, const MonteCarloOptions& options, const DesignedSets& designed,
                      const StudyShare& share);
 // The result of the whole study from shares[k] = the result of share k of shares.size().
 // Every share must have finished (no failure, not interrupted).
-MonteCarloResult AssembleShares(const MonteCarloOptions& options, std::vector<ShareResult>&& shares);
+// `names`: what the errors are (MonteCarloResult::geometry_names, held_names).
+struct StudyNames {
+  std::vector<std::string> geometry, held;
+};
+StudyNames PlanarStudyNames(int num_cables);  // GeometryNames; a1x held
+MonteCarloResult AssembleShares(const MonteCarloOptions& options, std::vector<ShareResult>&& shares,
+                                const StudyNames& names);
 // The cells in which `share` owns trials, as "n=6 random (8 of 20 trials), ...", at most
 // `max_cells` of them named: what is lost when that share fails.
 std::string DescribeShareCells(const MonteCarloOptions& options, const StudyShare& share, int max_cells = 12);
@@ -174,13 +197,14 @@ Robot TrueGeometryForTrial(const Robot& nominal, double sigma_m, Gauge gauge, Rn
 
 // Parameter names of the summary: the geometric ones (3 per cable), x4 (the 4th pose's x, as
 // the paper's figures) and x_all (every pose's x pooled).
-std::vector<std::string> SummaryParameters(int num_cables);
+std::vector<std::string> SummaryParameters(const std::vector<std::string>& geometry_names);
 
 struct ErrorStats {
   int count = 0;
   double mean = 0, std = 0, rms = 0, max_abs = 0, share_within_5mm = 0;
 };
-ErrorStats Summarise(const MonteCarloCell& cell, int num_cables, const std::string& parameter);
+ErrorStats Summarise(const MonteCarloCell& cell, const std::vector<std::string>& geometry_names,
+                     const std::string& parameter);
 
 // The study's files (montecarlo/report.cc, their one writer).
 std::string ErrorsCsv(const MonteCarloResult& r);    // n,design,trial,parameter,error

@@ -245,8 +245,7 @@ MonteCarloResult RunMonteCarloMpi(const Robot& nominal, const MonteCarloOptions&
   if (!lost.empty()) Verdict(world, Status{kExitRankFailed, "the run is incomplete, nothing was written:" + lost, ""});
   if (interrupted) Verdict(world, Status{kExitInterrupted, "", ""});
   Verdict(world, Status{});
-  MonteCarloResult result = AssembleShares(o, std::move(shares));
-  result.num_cables = nominal.num_cables();
+  MonteCarloResult result = AssembleShares(o, std::move(shares), PlanarStudyNames(nominal.num_cables()));
   result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;
 }

@@ -10,15 +10,15 @@
 
 namespace cablecal {
 
-std::vector<std::string> SummaryParameters(int num_cables) {
-  std::vector<std::string> names = GeometryNames(num_cables);
+std::vector<std::string> SummaryParameters(const std::vector<std::string>& geometry_names) {
+  std::vector<std::string> names = geometry_names;
   names.push_back("x4");
   names.push_back("x_all");
   return names;
 }
 
-ErrorStats Summarise(const MonteCarloCell& cell, int num_cables, const std::string& parameter) {
-  const std::vector<std::string> geometry = GeometryNames(num_cables);
+ErrorStats Summarise(const MonteCarloCell& cell, const std::vector<std::string>& geometry,
+                     const std::string& parameter) {
   const int g = static_cast<int>(geometry.size());
   std::vector<double> e;
   for (const TrialOutcome& t : cell.trials) {
@@ -55,7 +55,7 @@ ErrorStats Summarise(const MonteCarloCell& cell, int num_cables, const std::stri
 
 std::string ErrorsCsv(const MonteCarloResult& r) {
   std::string out = "n,design,trial,parameter,error\n";
-  const std::vector<std::string> geometry = GeometryNames(r.num_cables);
+  const std::vector<std::string>& geometry = r.geometry_names;
   const std::size_t g = geometry.size();
   for (const MonteCarloCell& c : r.cells) {
     for (std::size_t t = 0; t < c.trials.size(); ++t) {
@@ -97,8 +97,8 @@ std::string SummaryCsv(const MonteCarloResult& r) {
   for (const std::string& cause : FailureCauses()) out += ",failed_" + cause;
   out += "\n";
   for (const MonteCarloCell& c : r.cells) {
-    for (const std::string& p : SummaryParameters(r.num_cables)) {
-      const ErrorStats s = Summarise(c, r.num_cables, p);
+    for (const std::string& p : SummaryParameters(r.geometry_names)) {
+      const ErrorStats s = Summarise(c, r.geometry_names, p);
       // No successful trial: no statistic (empty cells), never a zero; one trial: no std (x_all
       // pools a trial's poses, whose spread within one trial is not the spread over trials).
       const int successes = static_cast<int>(c.trials.size()) - c.failures();
@@ -124,9 +124,9 @@ std::string SummaryMarkdown(const MonteCarloResult& r, const std::string& title)
        "hold a commanded pose within its limits), identification. Failed trials have no error to count, so the\n"
        "statistics are over the successful ones: compare designs on both columns.\n\n";
   o << "| n | design |";
-  for (const std::string& p : SummaryParameters(r.num_cables)) o << " " << p << " |";
+  for (const std::string& p : SummaryParameters(r.geometry_names)) o << " " << p << " |";
   o << " within ±5 mm | failed |\n|---|---|";
-  for (std::size_t k = 0; k < SummaryParameters(r.num_cables).size() + 2; ++k) o << "---|";
+  for (std::size_t k = 0; k < SummaryParameters(r.geometry_names).size() + 2; ++k) o << "---|";
   o << "\n";
   char buf[32];
   for (const MonteCarloCell& c : r.cells) {
@@ -135,8 +135,8 @@ std::string SummaryMarkdown(const MonteCarloResult& r, const std::string& title)
     // Fewer than two successful trials: n/a everywhere (README), x_all too, whose poses pooled
     // from one trial would read as a spread over trials (a new user's trial: 0.76 mm from one).
     const bool spread = static_cast<int>(c.trials.size()) - c.failures() > 1;
-    for (const std::string& p : SummaryParameters(r.num_cables)) {
-      const ErrorStats s = Summarise(c, r.num_cables, p);
+    for (const std::string& p : SummaryParameters(r.geometry_names)) {
+      const ErrorStats s = Summarise(c, r.geometry_names, p);
       if (spread && s.count > 1) {
         std::snprintf(buf, sizeof(buf), " %.3f |", 1e3 * s.std);
         o << buf;
@@ -148,7 +148,7 @@ std::string SummaryMarkdown(const MonteCarloResult& r, const std::string& title)
         count += s.count;
       }
     }
-    const ErrorStats xs = Summarise(c, r.num_cables, "x_all");
+    const ErrorStats xs = Summarise(c, r.geometry_names, "x_all");
     within += static_cast<int>(std::lround(xs.share_within_5mm * xs.count));
     count += xs.count;
     if (spread) {
@@ -193,11 +193,13 @@ std::vector<std::string> CellsThatAddLittle(const MonteCarloResult& r, bool wors
   std::vector<std::string> out;
   if (!(r.geometry_sigma_m > 0.0)) return out;
   const double bound = worse ? r.geometry_sigma_m : kDataAddLittle * r.geometry_sigma_m;
-  const std::vector<std::string> names = GeometryNames(r.num_cables);
+  const std::vector<std::string>& names = r.geometry_names;
   for (const MonteCarloCell& c : r.cells) {
     std::vector<std::pair<double, std::string>> over;
-    for (std::size_t k = 1; k < names.size(); ++k) {  // a1x is held: the frame's origin, not an estimate
-      const ErrorStats s = Summarise(c, r.num_cables, names[k]);
+    for (std::size_t k = 0; k < names.size(); ++k) {
+      // The held coordinates define the frame: not estimates.
+      if (std::find(r.held_names.begin(), r.held_names.end(), names[k]) != r.held_names.end()) continue;
+      const ErrorStats s = Summarise(c, r.geometry_names, names[k]);
       if (s.count > 1 && s.std > bound) over.emplace_back(s.std, names[k]);
     }
     if (over.empty()) continue;

@@ -41,7 +41,14 @@ std::vector<DesignedSetKey> DesignedSetKeys(const MonteCarloOptions& o) {
   return keys;
 }
 
-MonteCarloResult AssembleShares(const MonteCarloOptions& o, std::vector<ShareResult>&& shares) {
+StudyNames PlanarStudyNames(int num_cables) {
+  StudyNames names;
+  names.geometry = GeometryNames(num_cables);
+  names.held = {names.geometry[0]};  // a1x: every planar gauge holds it
+  return names;
+}
+
+MonteCarloResult AssembleShares(const MonteCarloOptions& o, std::vector<ShareResult>&& shares, const StudyNames& names) {
   const int count = static_cast<int>(shares.size());
   CABLECAL_CHECK(count >= 1, "no shares");
   const long total = StudyItems(o);
@@ -51,6 +58,8 @@ MonteCarloResult AssembleShares(const MonteCarloOptions& o, std::vector<ShareRes
                    "share " + std::to_string(k) + " has " + std::to_string(shares[k].outcomes.size()) + " outcomes");
   }
   MonteCarloResult result;
+  result.geometry_names = names.geometry;
+  result.held_names = names.held;
   result.geometry_sigma_m = o.geometry_sigma_m;
   result.geometry_prior = o.geometry_prior;
   for (int n : o.pose_counts) {

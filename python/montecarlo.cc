@@ -22,8 +22,8 @@ void BindMonteCarlo(py::module_& m) {
       .def_property_readonly("summary", [](const MonteCarloResult& r) {
         py::list rows;
         for (const MonteCarloCell& cell : r.cells) {
-          for (const std::string& parameter : SummaryParameters(r.num_cables)) {
-            const ErrorStats s = Summarise(cell, r.num_cables, parameter);
+          for (const std::string& parameter : SummaryParameters(r.geometry_names)) {
+            const ErrorStats s = Summarise(cell, r.geometry_names, parameter);
             py::dict d;
             d["n"] = cell.n;
             d["design"] = ToString(cell.design);

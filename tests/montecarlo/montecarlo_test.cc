@@ -58,14 +58,14 @@ TEST(MonteCarlo, ErrorsShrinkWithMorePosesAndMatchTheNoiseFreeLimit) {
   o.designs = {PoseSetDesign::kRandom};
   o.trials = 60;
   const MonteCarloResult r = RunMonteCarlo(robot, o);
-  EXPECT_GT(Summarise(r.cells[0], 2, "a2x").std, 2.0 * Summarise(r.cells[1], 2, "a2x").std);
+  EXPECT_GT(Summarise(r.cells[0], GeometryNames(2), "a2x").std, 2.0 * Summarise(r.cells[1], GeometryNames(2), "a2x").std);
   // No sensor noise at all: identification errors vanish (encoders keep their 0.05 mm).
   o.sensors = NoisySensors::kNone;
   o.pose_counts = {30};
   const MonteCarloResult quiet = RunMonteCarlo(robot, o);
-  EXPECT_LT(Summarise(quiet.cells[0], 2, "a2x").std, 0.2 * Summarise(r.cells[1], 2, "a2x").std);
+  EXPECT_LT(Summarise(quiet.cells[0], GeometryNames(2), "a2x").std, 0.2 * Summarise(r.cells[1], GeometryNames(2), "a2x").std);
   // Gauge a1x: the true a1x is the nominal one, so its error is exactly zero.
-  EXPECT_EQ(Summarise(r.cells[1], 2, "a1x").max_abs, 0.0);
+  EXPECT_EQ(Summarise(r.cells[1], GeometryNames(2), "a1x").max_abs, 0.0);
 }
 
 // --outliers: gross readings make least squares refuse most trials (poor fit); Cauchy's loss
@@ -88,7 +88,7 @@ TEST(MonteCarlo, OutliersFailLeastSquaresAndCauchyRecovers) {
   EXPECT_GE(rough.cells[0].failures("identification"), 4);
   EXPECT_LE(robust.cells[0].failures("identification"), 1);
   for (const char* p : {"a2x", "l10"}) {
-    EXPECT_LT(Summarise(robust.cells[0], 2, p).std, 1.5 * Summarise(clean.cells[0], 2, p).std) << p;
+    EXPECT_LT(Summarise(robust.cells[0], GeometryNames(2), p).std, 1.5 * Summarise(clean.cells[0], GeometryNames(2), p).std) << p;
   }
   o.outliers = OutlierModel{};
   o.loss = RobustLoss{};
@@ -112,7 +112,7 @@ TEST(MonteCarlo, SaysWhenTheCalibrationKnowsLessThanThePriorAndThePriorMendsIt) 
   o.geometry_prior = true;
   const MonteCarloResult prior = RunMonteCarlo(robot, o);
   for (const std::string& p : GeometryNames(3)) {
-    const ErrorStats s = Summarise(prior.cells[0], 3, p);
+    const ErrorStats s = Summarise(prior.cells[0], GeometryNames(3), p);
     ASSERT_GT(s.count, 30) << p;
     // The spread of 60 draws of a sigma-0.01 quantity stays below 1.4 x it but for 1 in 10^4.
     EXPECT_LT(s.std, 1.4 * o.geometry_sigma_m) << p;
@@ -139,7 +139,7 @@ TEST(MonteCarlo, FailuresAreCountedNotDropped) {
   }
   EXPECT_EQ(c.failures(), failed);
   EXPECT_GT(failed, 0);
-  EXPECT_EQ(Summarise(c, 2, "a2x").count, o.trials - failed);
+  EXPECT_EQ(Summarise(c, GeometryNames(2), "a2x").count, o.trials - failed);
   // Every failure has exactly one cause, and the summary counts them per cause.
   int by_cause = 0;
   for (const std::string& cause : FailureCauses()) by_cause += c.failures(cause);
@@ -172,7 +172,7 @@ TEST(MonteCarlo, AFailedDesignFailsOnlyItsCell) {
   designed[{8, static_cast<int>(PoseSetDesign::kOptimized)}] = SampleFeasiblePoses(robot, 8, 5);
   std::vector<ShareResult> shares = {RunShare(robot, o, designed, StudyShare{0, 1})};
   ASSERT_TRUE(shares[0].failure.empty()) << shares[0].failure;
-  const MonteCarloResult r = AssembleShares(o, std::move(shares));
+  const MonteCarloResult r = AssembleShares(o, std::move(shares), PlanarStudyNames(robot.num_cables()));
   ASSERT_EQ(r.cells.size(), 4u);
   for (const MonteCarloCell& c : r.cells) {
     const bool broken = c.n == 6 && c.design == PoseSetDesign::kOptimized;
@@ -191,7 +191,8 @@ TEST(MonteCarlo, AFailedDesignFailsOnlyItsCell) {
 // poses from that one trial once read as a sigma (a new user's trial: "0.761" from one trial).
 TEST(MonteCarlo, OneSuccessfulTrialShowsNoSpreadAnywhere) {
   MonteCarloResult r;
-  r.num_cables = 2;
+  r.geometry_names = GeometryNames(2);
+  r.held_names = {"a1x"};
   MonteCarloCell one;
   one.n = 6;
   TrialOutcome ok;

@@ -68,7 +68,7 @@ TEST(StudyShares, AssembledSharesEqualTheWholeRunToTheBit) {
       ASSERT_TRUE(s.failure.empty()) << s.failure;
       shares[k].outcomes = DecodeOutcomes(EncodeOutcomes(s.outcomes));
     }
-    const MonteCarloResult assembled = AssembleShares(o, std::move(shares));
+    const MonteCarloResult assembled = AssembleShares(o, std::move(shares), PlanarStudyNames(robot.num_cables()));
     EXPECT_EQ(ErrorsCsv(assembled), ErrorsCsv(whole)) << count << " shares";
     EXPECT_EQ(SummaryCsv(assembled), SummaryCsv(whole)) << count << " shares";
     EXPECT_EQ(SummaryMarkdown(assembled, "t"), SummaryMarkdown(whole, "t")) << count << " shares";

@@ -1,0 +1,193 @@
+#include "montecarlo/spatial_montecarlo.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdint>
+#include <map>
+#include <string>
+
+#include "common/error.h"
+#include "common/random.h"
+#include "experiment/spatial_simulation.h"
+
+namespace cablecal {
+
+namespace {
+
+bool IsCriterion(PoseSetDesign d) { return d != PoseSetDesign::kRandom && GridSide(d) == 0; }
+
+// Noise-free readings of the nominal robot at `n` sampled poses (the study's own stream): what
+// the gauge analysis and the identifiability check look at.
+std::vector<SpatialMeasurement> NominalReadings(const SpatialRobot& nominal, const SpatialMonteCarloOptions& o, int n) {
+  const std::vector<SpatialPlanPose> plan =
+      SampleSpatialPoses(nominal, n, StreamSeed(o.study.seed, {0x9a0e, static_cast<std::uint64_t>(n)}), o.yaw_range_rad);
+  SpatialSimulationOptions clean;
+  clean.noisy = NoisySensors::kNone;
+  clean.encoder_noise = false;
+  Rng unused(0);
+  return SimulateSpatialExperiment(nominal, nominal, plan, clean, unused).measurements;
+}
+
+SpatialIdentifyOptions TrialIdentifyOptions(const SpatialMonteCarloOptions& o, const std::vector<std::string>& held) {
+  SpatialIdentifyOptions id;
+  id.loss = o.study.loss;
+  id.statics = o.statics;
+  id.gauge.kind = SpatialGaugeKind::kHold;
+  id.gauge.held = held;
+  return id;
+}
+
+// The exit coordinates the study holds (file comment): the default gauge's choice on noise-free
+// readings at the fewest poses, which also says whether those poses can identify the geometry.
+std::vector<std::string> StudyGauge(const SpatialRobot& nominal, const SpatialMonteCarloOptions& o) {
+  const int fewest = *std::min_element(o.study.pose_counts.begin(), o.study.pose_counts.end());
+  std::vector<SpatialMeasurement> readings;
+  try {
+    readings = NominalReadings(nominal, o, fewest);
+  } catch (const SolverFailure& e) {
+    throw InputError("--poses", "", "no " + std::to_string(fewest) + " feasible poses to study: " + e.what());
+  }
+  SpatialIdentifyOptions id;
+  id.statics = o.statics;
+  SpatialGaugeAnalysis gauge;
+  try {
+    gauge = AnalyzeSpatialGauge(nominal, readings, id);
+  } catch (const InputError& e) {
+    throw InputError("--poses", "", std::to_string(fewest) + " poses of " + nominal.name +
+                                        " with its sensors cannot identify the geometry: " + e.what());
+  }
+  std::vector<std::string> held;
+  for (const int k : gauge.held) held.push_back(gauge.names[k]);
+  return held;
+}
+
+TrialOutcome RunSpatialTrial(const SpatialRobot& nominal, const SpatialMonteCarloOptions& o, const Eigen::VectorXd& l0_m,
+                             const std::vector<int>& held, const SpatialIdentifyOptions& id, int n, PoseSetDesign design,
+                             int trial, const std::vector<SpatialPlanPose>* designed) {
+  const std::uint64_t n64 = static_cast<std::uint64_t>(n), d64 = static_cast<std::uint64_t>(design),
+                      t64 = static_cast<std::uint64_t>(trial);
+  Rng rng(StreamSeed(o.study.seed, {n64, d64, t64, 0}));
+  TrialOutcome out;
+  if (designed && designed->empty()) {
+    out.failure = "design: no pose set for n=" + std::to_string(n) + ", " + ToString(design);
+    return out;
+  }
+  const int m = nominal.num_cables();
+  SpatialRobot truth = PerturbSpatialGeometry(nominal, o.study.geometry_sigma_m, rng);
+  for (const int k : held) truth.cables[k / 3].p_F_exit_m(k % 3) = nominal.cables[k / 3].p_F_exit_m(k % 3);
+  std::vector<SpatialPlanPose> sampled;
+  if (!designed) {
+    try {
+      sampled = SampleSpatialPoses(nominal, n, StreamSeed(o.study.seed, {n64, d64, t64, 1}), o.yaw_range_rad);
+    } catch (const SolverFailure& e) {
+      out.failure = std::string("sampling: ") + e.what();
+      return out;
+    }
+  }
+  SimulatedSpatialExperiment sim;
+  try {
+    SpatialSimulationOptions lab;
+    lab.noisy = o.study.sensors;
+    lab.encoder_noise = o.encoder_noise;
+    sim = SimulateSpatialExperiment(nominal, truth, designed ? *designed : sampled, lab, rng);
+  } catch (const SolverFailure& e) {
+    out.failure = std::string("simulation: ") + e.what();
+    return out;
+  }
+  SpatialIdentifyResult r;
+  try {
+    r = IdentifySpatial(nominal, sim.measurements, id);
+  } catch (const InputError& e) {
+    // The study's check passed at its own poses; these ones leave something unseen.
+    out.failure = std::string("identification: refused (") + e.what() + ")";
+    return out;
+  }
+  if (!r.converged()) {
+    out.failure = std::string("identification: ") + ToString(r.status) + (r.message.empty() ? "" : " (" + r.message + ")");
+    return out;
+  }
+  CABLECAL_CHECK(static_cast<int>(r.poses.size()) == n, "one pose estimate per pose");
+  for (int i = 0; i < m; ++i) {
+    for (int a = 0; a < 3; ++a) out.errors_m.push_back(r.geometry(3 * i + a) - truth.cables[i].p_F_exit_m(a));
+  }
+  for (int i = 0; i < m; ++i) out.errors_m.push_back(r.geometry(3 * m + i) - l0_m(i));
+  for (int j = 0; j < n; ++j) out.errors_m.push_back(r.poses[j](0) - sim.true_poses[j](0));
+  out.ok = true;
+  return out;
+}
+
+}  // namespace
+
+void ValidateSpatialMonteCarloOptions(const SpatialRobot& nominal, const SpatialMonteCarloOptions& o) {
+  const MonteCarloOptions defaults;
+  const MonteCarloOptions& s = o.study;
+  const auto planar_only = [](bool given, const char* flag, const char* why) {
+    if (given) throw InputError(flag, "", std::string("applies to planar robots only: ") + why);
+  };
+  planar_only(s.estimator != defaults.estimator, "--estimator", "a spatial robot's identification is the ml one");
+  planar_only(s.gauge != defaults.gauge, "--gauge",
+              "a spatial study holds the exit coordinates its sensors leave unseen, chosen from the data");
+  planar_only(s.geometry_prior, "--geometry-prior", "not yet served for spatial robots");
+  planar_only(s.equilibrium != defaults.equilibrium, "--equilibrium",
+              "a spatial robot's equilibrium is modelled whenever it carries information");
+  planar_only(s.com_error_m != 0.0, "--com-error", "not yet served for spatial robots");
+  planar_only(s.outliers.rate > 0.0, "--outliers", "not yet served for spatial robots");
+  ValidateStudyOptions(s, 4 * nominal.num_cables());
+  if (!(o.yaw_range_rad > 0.0 && o.yaw_range_rad <= M_PI)) {
+    throw InputError("--yaw-range-deg", "", "must be in (0, 180] degrees");
+  }
+  for (const PoseSetDesign d : s.designs) {
+    if (IsCriterion(d)) {
+      throw InputError("--designs", "", std::string("'") + ToString(d) +
+                                            "' is not yet served for spatial robots (random, grid:2x2x2, grid:3x3x3)");
+    }
+    const int side = GridSide(d);
+    for (const int n : s.pose_counts) {
+      if (side > 0 && n != side * side * side) {
+        throw InputError("--designs", "", std::string(ToString(d)) + " has " + std::to_string(side * side * side) +
+                                              " poses: run it with --poses " + std::to_string(side * side * side) +
+                                              " (got " + std::to_string(n) + ")");
+      }
+    }
+  }
+}
+
+MonteCarloResult RunSpatialMonteCarlo(const SpatialRobot& nominal, const SpatialMonteCarloOptions& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  ValidateSpatialMonteCarloOptions(nominal, o);
+  const std::vector<std::string> held_names = StudyGauge(nominal, o);
+  const std::vector<std::string> names = SpatialGeometryNames(nominal.num_cables(), false, false);
+  std::vector<int> held;
+  for (const std::string& h : held_names) held.push_back(static_cast<int>(std::find(names.begin(), names.end(), h) - names.begin()));
+  const SpatialIdentifyOptions id = TrialIdentifyOptions(o, held_names);
+  // The true l_i0: what the controller pays out at home, on the true robot as on the nominal.
+  const Eigen::VectorXd l0_m = SpatialHome(nominal).paid_out_m;
+  // The grids: the same set in every trial, made once (no random draw).
+  std::map<int, std::vector<SpatialPlanPose>> grids;
+  for (const PoseSetDesign d : o.study.designs) {
+    if (GridSide(d) == 0) continue;
+    try {
+      grids[static_cast<int>(d)] = GridSpatialPoses(nominal, GridSide(d));
+    } catch (const SolverFailure& e) {
+      std::fprintf(stderr, "cablecal: montecarlo: no %s pose set: %s\n", ToString(d), e.what());
+      grids[static_cast<int>(d)] = {};
+    }
+  }
+  std::vector<ShareResult> shares(1);
+  shares[0] = RunShareTrials(o.study, StudyShare{0, 1}, [&](int n, PoseSetDesign d, int trial) {
+    const auto it = grids.find(static_cast<int>(d));
+    return RunSpatialTrial(nominal, o, l0_m, held, id, n, d, trial, it == grids.end() ? nullptr : &it->second);
+  });
+  if (shares[0].error) std::rethrow_exception(shares[0].error);
+  if (!shares[0].failure.empty()) throw std::runtime_error(shares[0].failure);
+  MonteCarloResult result;
+  if (shares[0].interrupted) {
+    result.interrupted = true;
+    return result;
+  }
+  result = AssembleShares(o.study, std::move(shares), StudyNames{names, held_names});
+  result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return result;
+}
+
+}  // namespace cablecal

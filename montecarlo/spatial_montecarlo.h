@@ -1,0 +1,52 @@
+// montecarlo for spatial robots: the same study as the planar one (montecarlo.h: cells of pose
+// count n and pose-set design, a fresh true robot and sensor noise per trial, the errors of
+// the identified geometry, failed trials counted by cause, shares and their assembly), with a
+// spatial robot's trial: its true robot, sampler or grid, simulation and identification.
+//
+// The gauge: a spatial robot's sensors leave some rigid motions of the frame unseen, and the
+// identification holds the exit coordinates that fix them (identify/spatial_identify.h). The
+// study chooses them once, from noise-free readings of the nominal robot at n_min sampled
+// poses, and every trial's identification holds those; each trial's true robot is drawn with
+// them at their nominal values (the frame's definition, as the planar study keeps a1x), so that
+// identified minus true is an error and not a choice of frame.
+//
+// Depends on montecarlo.h (the study's machinery), experiment/ (sample, grid, simulation) and
+// identify/spatial_identify.h.
+#pragma once
+
+#include <vector>
+
+#include "experiment/spatial_plan.h"
+#include "identify/spatial_identify.h"
+#include "model/spatial_robot.h"
+#include "montecarlo/montecarlo.h"
+
+namespace cablecal {
+
+struct SpatialMonteCarloOptions {
+  // pose_counts, designs (random, grid:2x2x2, grid:3x3x3), trials, sensors (which get noise),
+  // geometry_sigma_m (every exit coordinate but the held ones), loss, seed, progress,
+  // interrupted. The planar-only ones (estimator, gauge, geometry prior, equilibrium, com
+  // error, outliers) must stay at their defaults.
+  MonteCarloOptions study;
+  double yaw_range_rad = kDefaultSampleYawRange_rad;  // of the random sets (sample)
+  bool statics = true;  // of every trial's identification (SpatialIdentifyOptions::statics)
+  // false, with study.sensors = NoisySensors::kNone: noise-free readings, so that the errors
+  // are what the identification itself leaves (a check of the study, not a lab's experiment).
+  bool encoder_noise = true;
+};
+
+// The InputErrors of RunSpatialMonteCarlo: the study's own (ValidateOptions without a planar
+// robot), a planar-only option, a design not yet served for spatial robots (the criteria:
+// optimized, a, d, e, condition), a grid with a pose count other than its side^3, and pose
+// counts the robot's sensors cannot identify the geometry from (naming what is missing).
+void ValidateSpatialMonteCarloOptions(const SpatialRobot& nominal, const SpatialMonteCarloOptions& options);
+
+// The study (montecarlo.h's cells, files and statistics). Each trial's errors: the identified
+// minus the true exit coordinates and initial lengths (SpatialGeometryNames' a1x ... lm0; the
+// true l_i0 is the cable paid out at home, what the controller commands there), then every
+// pose's x. Failure causes as planar: sampling, simulation (the true robot cannot hold a pose
+// within its limits), identification (not converged, rank deficient, or refused).
+MonteCarloResult RunSpatialMonteCarlo(const SpatialRobot& nominal, const SpatialMonteCarloOptions& options);
+
+}  // namespace cablecal

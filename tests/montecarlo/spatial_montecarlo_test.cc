@@ -1,0 +1,198 @@
+// The spatial Monte Carlo (montecarlo/spatial_montecarlo.h): its trials recover the true robot
+// in the study's gauge when the sensors are nearly perfect (so that identified minus true is
+// an error, not a choice of frame), the same bytes whatever the thread count, the peer's grid
+// pose sets, and the refusals.
+#include <gtest/gtest.h>
+#include <omp.h>
+
+#include <cmath>
+#include <string>
+
+#include "common/error.h"
+#include "common/random.h"
+#include "experiment/spatial_plan.h"
+#include "model/builtin_spatial_robots.h"
+#include "model/spatial_statics.h"
+#include "montecarlo/spatial_montecarlo.h"
+#include "tests/support/random_spatial_robot.h"
+
+namespace cablecal {
+namespace {
+
+// A random robot of m cables, inextensible, read by its encoders, an inclinometer and a laser
+// with the given sigmas.
+SpatialRobot RandomRobot(std::uint64_t seed, int m, double encoder_sigma_m, double sensor_sigma) {
+  Rng rng(seed);
+  SpatialRobot r = testing::RandomSpatialRobot(rng, "random-" + std::to_string(m), m);
+  for (SpatialCable& c : r.cables) c.stiffness_N.reset();
+  r.sensors.encoder_sigma_m = encoder_sigma_m;
+  r.sensors.inclinometer_rad = RangedNoise{sensor_sigma, 0.0};
+  r.sensors.laser_m = RangedNoise{sensor_sigma, 0.0};
+  return r;
+}
+
+SpatialMonteCarloOptions Study(int n, int trials, double geometry_sigma_m) {
+  SpatialMonteCarloOptions o;
+  o.study.pose_counts = {n};
+  o.study.designs = {PoseSetDesign::kRandom};
+  o.study.trials = trials;
+  o.study.geometry_sigma_m = geometry_sigma_m;
+  o.study.seed = 11;
+  return o;
+}
+
+std::string InputErrorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "no InputError";
+}
+
+// Noise-free readings: every trial's error is then the solver's, far below a micrometre, for
+// every exit coordinate and initial length and every pose's x. A true robot drawn in another
+// frame than the one the identification holds, or a wrong true l_i0, would show up here as
+// millimetres.
+TEST(SpatialMonteCarlo, NoiseFreeTrialsRecoverTheTrueRobotInTheStudysGauge) {
+  for (const int m : {4, 6}) {
+    const SpatialRobot robot = RandomRobot(40 + m, m, 5e-5, 1e-3);
+    SpatialMonteCarloOptions o = Study(12, m == 4 ? 2 : 4, 0.0005);
+    o.study.sensors = NoisySensors::kNone;
+    o.encoder_noise = false;
+    const MonteCarloResult r = RunSpatialMonteCarlo(robot, o);
+    ASSERT_EQ(r.cells.size(), 1u);
+    EXPECT_FALSE(r.held_names.empty());
+    ASSERT_EQ(r.geometry_names.size(), static_cast<std::size_t>(4 * m));
+    int ok = 0;
+    for (const TrialOutcome& t : r.cells[0].trials) {
+      if (!t.ok) {
+        ADD_FAILURE() << "m=" << m << ": " << t.failure;
+        continue;
+      }
+      ++ok;
+      ASSERT_EQ(t.errors_m.size(), static_cast<std::size_t>(4 * m + 12));
+      for (std::size_t k = 0; k < t.errors_m.size(); ++k) {
+        const std::string name = k < r.geometry_names.size() ? r.geometry_names[k] : "x" + std::to_string(k - 4 * m + 1);
+        EXPECT_LT(std::abs(t.errors_m[k]), 1e-6) << "m=" << m << " " << name;
+      }
+      for (const std::string& h : r.held_names) {
+        const std::size_t k = std::find(r.geometry_names.begin(), r.geometry_names.end(), h) - r.geometry_names.begin();
+        EXPECT_EQ(t.errors_m[k], 0.0) << h;
+      }
+    }
+    EXPECT_EQ(ok, m == 4 ? 2 : 4) << "m=" << m;
+  }
+}
+
+// With a lab's sensors the errors are the noise's, propagated linearly: every sensor's sigma
+// doubled (the same standard normal draws, the same true robots), every trial's error vector
+// doubles, in size and direction, to the linearisation's accuracy.
+TEST(SpatialMonteCarlo, ErrorsAreTheNoisesAndDoubleWithIt) {
+  MonteCarloResult r[2];
+  for (int k = 0; k < 2; ++k) {
+    const double scale = k + 1.0;
+    // A position sensor besides: every direction well seen, so that the errors stay where
+    // the model is linear (with an inclinometer and laser alone this robot sees some
+    // directions weakly, and its errors reach centimetres).
+    SpatialRobot robot = RandomRobot(46, 6, scale * 5e-6, scale * 1e-4);
+    robot.sensors.position = SpatialSensors::Position{RangedNoise{scale * 1e-4, 0.0}, Eigen::Vector3d::Zero()};
+    r[k] = RunSpatialMonteCarlo(robot, Study(20, 6, 0.0002));
+  }
+  int compared = 0;
+  double largest = 0.0;
+  for (int t = 0; t < 6; ++t) {
+    const TrialOutcome &one = r[0].cells[0].trials[t], &two = r[1].cells[0].trials[t];
+    ASSERT_EQ(one.ok, two.ok) << one.failure << two.failure;
+    if (!one.ok) continue;
+    ++compared;
+    // The trial's whole error vector (a single small component carries the second-order term
+    // relatively more: up to 7 % here).
+    const Eigen::Map<const Eigen::VectorXd> e1(one.errors_m.data(), one.errors_m.size()),
+        e2(two.errors_m.data(), two.errors_m.size());
+    EXPECT_NEAR(e2.norm() / e1.norm(), 2.0, 0.04) << "trial " << t;
+    EXPECT_GT(e2.normalized().dot(e1.normalized()), 0.999) << "trial " << t;
+    largest = std::max(largest, e1.cwiseAbs().maxCoeff());
+  }
+  EXPECT_GE(compared, 4);
+  EXPECT_GT(largest, 1e-6);  // not zero: the noise is there
+  EXPECT_LT(largest, 1e-3);  // and of its size (0.1 mm sensors), not a wrong minimum's
+}
+
+TEST(SpatialMonteCarlo, SameBytesWhateverTheThreadCount) {
+  const SpatialRobot robot = RandomRobot(47, 5, 5e-5, 1e-3);
+  SpatialMonteCarloOptions o = Study(10, 4, 0.0002);
+  o.study.pose_counts = {10, 12};
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const std::string one = ErrorsCsv(RunSpatialMonteCarlo(robot, o));
+  omp_set_num_threads(2);
+  const std::string two = ErrorsCsv(RunSpatialMonteCarlo(robot, o));
+  omp_set_num_threads(threads);
+  EXPECT_EQ(one, two);
+  EXPECT_GT(one.size(), 1000u);
+}
+
+// The peer's grid: side^3 distinct feasible poses at home's yaw, the same every time.
+TEST(SpatialMonteCarlo, GridPosesAreFeasibleDistinctAndOnePerCell) {
+  for (const SpatialRobot& robot : {BuiltinSpatialRobot("cogiro"), RandomRobot(48, 6, 5e-5, 1e-3)}) {
+    for (const int side : {2, 3}) {
+      const std::vector<SpatialPlanPose> grid = GridSpatialPoses(robot, side);
+      ASSERT_EQ(grid.size(), static_cast<std::size_t>(side * side * side)) << robot.name;
+      Eigen::Vector3d lo = grid[0].q.head<3>(), hi = lo;
+      for (const SpatialPlanPose& p : grid) {
+        lo = lo.cwiseMin(p.q.head<3>());
+        hi = hi.cwiseMax(p.q.head<3>());
+        EXPECT_TRUE(EvaluateSpatialPose(robot, p.q).feasible()) << robot.name;
+        EXPECT_NEAR(p.q(5), robot.home_rpy_rad.z(), 1e-12) << robot.name;
+      }
+      for (std::size_t k = 0; k < grid.size(); ++k) {
+        for (std::size_t l = 0; l < k; ++l) EXPECT_GT((grid[k].q - grid[l].q).norm(), 1e-9) << robot.name;
+      }
+      // On cogiro, whose feasible region at home orientation is box-like: every pose in its own
+      // cell of the box the poses span, in the grid's order. (A random robot's region is not
+      // box-like: a centre outside it takes the nearest feasible point, in another cell.)
+      for (int k = 0; robot.name == "cogiro" && k < static_cast<int>(grid.size()); ++k) {
+        const Eigen::Vector3i cell((k % side), (k / side) % side, k / (side * side));
+        for (int a = 0; a < 3; ++a) {
+          const double f = (grid[k].q(a) - lo(a)) / (hi(a) - lo(a));
+          EXPECT_GE(f, cell(a) / double(side) - 1e-9) << robot.name << " pose " << k << " axis " << a;
+          EXPECT_LE(f, (cell(a) + 1) / double(side) + 1e-9) << robot.name << " pose " << k << " axis " << a;
+        }
+      }
+      const std::vector<SpatialPlanPose> again = GridSpatialPoses(robot, side);
+      for (std::size_t k = 0; k < grid.size(); ++k) EXPECT_EQ(grid[k].q, again[k].q);
+    }
+  }
+}
+
+TEST(SpatialMonteCarlo, RefusesWhatItDoesNotServe) {
+  const SpatialRobot robot = RandomRobot(49, 6, 5e-5, 1e-3);
+  SpatialMonteCarloOptions o = Study(10, 2, 0.002);
+  o.study.designs = {PoseSetDesign::kRandom, PoseSetDesign::kOptimized};
+  EXPECT_NE(InputErrorOf([&] { ValidateSpatialMonteCarloOptions(robot, o); }).find("not yet served"), std::string::npos);
+  o.study.designs = {PoseSetDesign::kGrid2};
+  EXPECT_NE(InputErrorOf([&] { ValidateSpatialMonteCarloOptions(robot, o); }).find("run it with --poses 8"),
+            std::string::npos);
+  o.study.designs = {PoseSetDesign::kRandom};
+  o.study.estimator = Estimator::kPaper;
+  EXPECT_NE(InputErrorOf([&] { ValidateSpatialMonteCarloOptions(robot, o); }).find("--estimator"), std::string::npos);
+  o.study.estimator = Estimator::kMaximumLikelihood;
+  // Encoders alone on 6 inextensible cables: every pose takes all its values, nothing is left
+  // for the geometry.
+  SpatialRobot encoders_only = robot;
+  encoders_only.sensors.inclinometer_rad.reset();
+  encoders_only.sensors.laser_m.reset();
+  const std::string few = InputErrorOf([&] { RunSpatialMonteCarlo(encoders_only, o); });
+  EXPECT_NE(few.find("--poses"), std::string::npos) << few;
+  EXPECT_NE(few.find("cannot identify the geometry"), std::string::npos) << few;
+  // A planar study refuses the grids.
+  MonteCarloOptions planar = o.study;
+  planar.designs = {PoseSetDesign::kGrid3};
+  planar.pose_counts = {27};
+  EXPECT_NE(InputErrorOf([&] { ValidateOptions(planar); }).find("spatial robot's pose set"), std::string::npos);
+  EXPECT_EQ(ParseDesigns("random,grid:3x3x3")[1], PoseSetDesign::kGrid3);
+}
+
+}  // namespace
+}  // namespace cablecal
