@@ -177,19 +177,25 @@ std::string VerifyRobustness(const Robot& robot, const DesignOptions& options, s
       }
     }
   }
-  if (k_sigma == 0.0) return "";
+  // Without robustness an inextensible robot holds its nominal equilibria by construction; an
+  // elastic one settles where its stretch puts it, so the nominal robot itself is the scenario.
+  const bool elastic = std::any_of(robot.cables.begin(), robot.cables.end(), [](const Cable& c) { return c.stiffness_N.has_value(); });
+  if (k_sigma == 0.0 && !elastic) return "";
   if (failing) failing->assign(plan->size(), false);
   std::string first;
   const GeometryVector nominal = GeometryOf(robot);
   const std::vector<std::string> names = GeometryNames(m);
   const CableCommands commands(robot);
-  for (int k = 0; k < nominal.size(); ++k) {
+  for (int k = 0; k < (k_sigma == 0.0 ? 1 : nominal.size()); ++k) {
     for (const double sign : {-1.0, 1.0}) {
+      if (k_sigma == 0.0 && sign > 0) continue;
       GeometryVector g = nominal;
       g(k) += sign * k_sigma;
       const Robot truth = WithGeometry(robot, g);
       const Eigen::VectorXd truth_home_unstretched = HomeUnstretchedLengths(truth, g.tail(m));
-      const std::string scenario = names[k] + (sign > 0 ? " +" : " -") + FormatDouble(options.robust_sigmas) + " sigma";
+      const std::string scenario = k_sigma == 0.0 ? std::string("its elastic cables (nominal geometry)")
+                                                  : names[k] + (sign > 0 ? " +" : " -") +
+                                                        FormatDouble(options.robust_sigmas) + " sigma";
       for (std::size_t j = 0; j < plan->size(); ++j) {
         if (failing && (*failing)[j]) continue;
         PlanPose& pose = (*plan)[j];
@@ -440,7 +446,7 @@ DesignResult DesignPosesAt(const Robot& robot, const DesignOptions& options) {
       if (!failures[k].empty()) break;
       std::vector<bool> failing;
       failures[k] = VerifyRobustness(robot, options, &verified[k], &failing);
-      if (failures[k].empty() || options.geometry_sigma_m == 0.0) break;
+      if (failures[k].empty() || options.robust_sigmas * options.geometry_sigma_m == 0.0) break;
       for (int j = 0; j < n; ++j) {
         if (failing[j]) widening[j] *= kRobustEscalation;
         widest[k] = std::max(widest[k], widening[j]);
