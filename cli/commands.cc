@@ -692,8 +692,19 @@ int RunDesign(const Context& ctx, const DesignCommandOptions& options) {
   design.robust_sigmas = options.robust_sigmas;
   const SigintScope sigint;  // Ctrl-C: Ipopt stops at its next iteration, exit 130, nothing written
   design.interrupted = &SigintFlag();
-  if (!ctx.quiet) design.progress = ProgressBar("design", "starts");
+  if (!ctx.quiet) {
+    design.progress = ProgressBar("design", "starts");
+    const double requested_k = design.robust_sigmas;
+    design.trying_robustness = [requested_k](double k) {
+      std::fprintf(stderr, "cablecal: design: no verified poses at --robust-sigmas %s; searching for the largest k "
+                   "below it that has some: trying %s\n", FormatDouble(requested_k).c_str(),
+                   FormatDouble(k).c_str());
+    };
+  }
   const DesignResult result = DesignPoses(robot, design);
+  // The plan holds for the achieved k: the warnings below speak of it.
+  DesignOptions achieved = design;
+  achieved.robust_sigmas = result.robust_sigmas_achieved;
   AtomicOutput output;
   std::string figure_error;
   const std::string temp_plan =
@@ -740,10 +751,11 @@ int RunDesign(const Context& ctx, const DesignCommandOptions& options) {
     const double factor = Improvement(design.criterion, result.criteria, result.random_median);
     std::printf(", %s", ImprovementText(factor, design.random_sets).c_str());
     if (!(factor > 1.0) && !ctx.quiet) {
-      std::fprintf(stderr, "cablecal: warning: %s\n", NoBetterThanRandomWarning(design, "--geometry-sigma").c_str());
+      std::fprintf(stderr, "cablecal: warning: %s\n", NoBetterThanRandomWarning(achieved, "--geometry-sigma").c_str());
     }
   }
   std::printf(", %.1f s\n", result.wall_time_s);
+  if (result.robustness_lowered()) std::printf("robustness lowered: %s\n", result.robustness_note.c_str());
   if (!figure_error.empty()) {
     throw FigureFailure(figure_error + "; " + options.out_path +
                         (options.summary_path.empty() ? "" : " and " + options.summary_path) + " were written");

@@ -23,6 +23,7 @@
 #include "design/solve_process.h"
 #include "design/objective.h"
 #include "design/robust.h"
+#include "design/robustness_search.h"
 #include "experiment/experiment.h"
 #include "identify/identify.h"
 #include "model/cable.h"
@@ -176,19 +177,25 @@ std::string VerifyRobustness(const Robot& robot, const DesignOptions& options, s
       }
     }
   }
-  if (k_sigma == 0.0) return "";
+  // Without robustness an inextensible robot holds its nominal equilibria by construction; an
+  // elastic one settles where its stretch puts it, so the nominal robot itself is the scenario.
+  const bool elastic = std::any_of(robot.cables.begin(), robot.cables.end(), [](const Cable& c) { return c.stiffness_N.has_value(); });
+  if (k_sigma == 0.0 && !elastic) return "";
   if (failing) failing->assign(plan->size(), false);
   std::string first;
   const GeometryVector nominal = GeometryOf(robot);
   const std::vector<std::string> names = GeometryNames(m);
   const CableCommands commands(robot);
-  for (int k = 0; k < nominal.size(); ++k) {
+  for (int k = 0; k < (k_sigma == 0.0 ? 1 : nominal.size()); ++k) {
     for (const double sign : {-1.0, 1.0}) {
+      if (k_sigma == 0.0 && sign > 0) continue;
       GeometryVector g = nominal;
       g(k) += sign * k_sigma;
       const Robot truth = WithGeometry(robot, g);
       const Eigen::VectorXd truth_home_unstretched = HomeUnstretchedLengths(truth, g.tail(m));
-      const std::string scenario = names[k] + (sign > 0 ? " +" : " -") + FormatDouble(options.robust_sigmas) + " sigma";
+      const std::string scenario = k_sigma == 0.0 ? std::string("its elastic cables (nominal geometry)")
+                                                  : names[k] + (sign > 0 ? " +" : " -") +
+                                                        FormatDouble(options.robust_sigmas) + " sigma";
       for (std::size_t j = 0; j < plan->size(); ++j) {
         if (failing && (*failing)[j]) continue;
         PlanPose& pose = (*plan)[j];
@@ -315,9 +322,31 @@ int MinDesignPoses(int num_cables) {
   return (gauge_fixed + (m - 2)) / (m - 1);
 }
 
+namespace {
+
+// The median of each criterion over options.random_sets random feasible sets of n poses, each
+// from its own stream (seed, r): the same sets whatever the robustness.
+CriteriaValues RandomMedian(const Robot& robot, int n, const DesignOptions& options, const PriorInformation* prior) {
+  const int R = options.random_sets;
+  std::vector<CriteriaValues> random(R);
+  ParallelFor(R, 1, [&](long r) {
+    const auto set = SampleFeasiblePoses(robot, n, StreamSeed(options.seed, {kRandomSetStream, static_cast<std::uint64_t>(r)}));
+    random[r] = EvaluateCriteria(robot, PosesOf(set), prior);
+  });
+  std::vector<double> c, d, a, e;
+  for (const CriteriaValues& v : random) {
+    c.push_back(v.condition_number);
+    d.push_back(v.d_log_det_information);
+    a.push_back(v.a_trace_covariance_m2);
+    e.push_back(v.e_min_eigenvalue);
+  }
+  return {Median(c), Median(d), Median(a), Median(e), GaugeFixedCount(robot.num_cables())};
+}
+
 // Long (~175 lines) for a reason: the design's one sequence (checks, robustness, multi-start
-// Ipopt, verification, random-set comparison), each step using the ones before it.
-DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
+// Ipopt, verification, random-set comparison), each step using the ones before it. At the
+// options' robustness exactly.
+DesignResult DesignPosesAt(const Robot& robot, const DesignOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
   const int n = options.poses;
   const int m = robot.num_cables();
@@ -417,7 +446,7 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
       if (!failures[k].empty()) break;
       std::vector<bool> failing;
       failures[k] = VerifyRobustness(robot, options, &verified[k], &failing);
-      if (failures[k].empty() || options.geometry_sigma_m == 0.0) break;
+      if (failures[k].empty() || options.robust_sigmas * options.geometry_sigma_m == 0.0) break;
       for (int j = 0; j < n; ++j) {
         if (failing[j]) widening[j] *= kRobustEscalation;
         widest[k] = std::max(widest[k], widening[j]);
@@ -472,26 +501,47 @@ DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
   }
   result.poses = verified[result.best_start];
   result.criteria = EvaluateCriteria(robot, PosesOf(result.poses), prior);
+  result.robust_sigmas_requested = result.robust_sigmas_achieved = options.robust_sigmas;
 
-  // Reference: random feasible sets of the same size.
-  const int R = options.random_sets;  // 0: no reference (the Monte Carlo needs none)
-  if (R == 0) {
-    result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    return result;
+  // Reference: random feasible sets of the same size (random_sets 0: none; the Monte Carlo needs none).
+  if (options.random_sets > 0) result.random_median = RandomMedian(robot, n, options, prior);
+  result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return result;
+}
+
+}  // namespace
+
+DesignResult DesignPoses(const Robot& robot, const DesignOptions& options) {
+  if (!options.lower_robustness || !(options.robust_sigmas * options.geometry_sigma_m > 0.0)) {
+    return DesignPosesAt(robot, options);
   }
-  std::vector<CriteriaValues> random(R);
-  ParallelFor(R, 1, [&](long r) {
-    const auto set = SampleFeasiblePoses(robot, n, StreamSeed(options.seed, {kRandomSetStream, static_cast<std::uint64_t>(r)}));
-    random[r] = EvaluateCriteria(robot, PosesOf(set), prior);
-  });
-  std::vector<double> c, d, a, e;
-  for (const CriteriaValues& v : random) {
-    c.push_back(v.condition_number);
-    d.push_back(v.d_log_det_information);
-    a.push_back(v.a_trace_covariance_m2);
-    e.push_back(v.e_min_eigenvalue);
+  const auto t0 = std::chrono::steady_clock::now();
+  RobustnessSearch search;
+  bool first = true;
+  // The requested k as it always ran; the search's designs without the random reference,
+  // which does not depend on k and is drawn once for the plan kept.
+  DesignResult result = DesignAtLargestRobustness(
+      options.robust_sigmas,
+      [&](double k) {
+        DesignOptions at = options;
+        at.robust_sigmas = k;
+        if (!first) {
+          at.random_sets = 0;
+          if (options.trying_robustness) options.trying_robustness(k);
+        }
+        first = false;
+        return DesignPosesAt(robot, at);
+      },
+      &search);
+  if (!search.lowered()) return result;
+  result.robust_sigmas_requested = search.requested_k;
+  result.robust_sigmas_achieved = search.achieved_k;
+  result.robustness_note = LoweredRobustnessText(search, options.geometry_sigma_m);
+  result.robustness_designs = search.designs;
+  if (options.random_sets > 0) {
+    result.random_median = RandomMedian(robot, options.poses, options,
+                                        options.prior_information ? &*options.prior_information : nullptr);
   }
-  result.random_median = {Median(c), Median(d), Median(a), Median(e), GaugeFixedCount(m)};
   result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;
 }
@@ -589,10 +639,17 @@ std::string DesignSummaryYaml(const DesignResult& r, const DesignOptions& option
     o << EndMap;
   }
   o << YAML::EndSeq;
+  // robust_sigmas: the k the plan holds for; the keys below it only when that is less than asked.
   o << Key << "robustness" << Value << Flow << BeginMap << Key << "geometry_sigma_m" << Value
-    << YamlNumber{options.geometry_sigma_m} << Key << "robust_sigmas" << Value << YamlNumber{options.robust_sigmas}
-    << Key << "scenarios" << Value << YamlString{"each of " + GeometryNameList(m, 0) + " moved by +-k sigma alone"}
-    << EndMap;
+    << YamlNumber{options.geometry_sigma_m} << Key << "robust_sigmas" << Value
+    << YamlNumber{r.robustness_lowered() ? r.robust_sigmas_achieved : options.robust_sigmas} << Key << "scenarios"
+    << Value << YamlString{"each of " + GeometryNameList(m, 0) + " moved by +-k sigma alone"} << EndMap;
+  if (r.robustness_lowered()) {
+    o << Key << "robustness_requested_k" << Value << YamlNumber{r.robust_sigmas_requested};
+    o << Key << "robustness_achieved_k" << Value << YamlNumber{r.robust_sigmas_achieved};
+    o << Key << "robustness_lowered" << Value << YamlString{r.robustness_note};
+    o << Key << "robustness_search_designs" << Value << r.robustness_designs;
+  }
   o << Key << "poses_worst_case_tensions_N" << Value
     << YAML::Comment("linearised over the geometry uncertainty, per cable [min, max]") << YAML::BeginSeq;
   for (std::size_t j = 0; j < r.poses.size(); ++j) {

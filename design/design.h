@@ -96,6 +96,13 @@ struct DesignOptions {
   // of nominal (0: nominal bounds only).
   double geometry_sigma_m = 0.01;
   double robust_sigmas = 3.0;
+  // Where no start gives verified poses at robust_sigmas, design at the largest k below it
+  // that gives some (robustness_search.h; README, "Design never gives up for robustness
+  // alone") and say so in the result; off: fail there (SolverFailure), as the Monte Carlo's
+  // first try does.
+  bool lower_robustness = true;
+  // Called before each design of that search, with its k (cablecal design's notice on stderr).
+  std::function<void(double)> trying_robustness;
   // Set (e.g. by SIGINT) to stop: Ipopt ends at its next iteration and DesignPoses throws
   // Interrupted.
   const std::atomic<bool>* interrupted = nullptr;
@@ -138,6 +145,14 @@ struct DesignResult {
   int converged_starts = 0;
   std::vector<StartReport> starts;
   double wall_time_s = 0.0;
+  // The robustness k asked for and the one the plan holds for (lower only when no start gave
+  // verified poses at the asked k: DesignOptions::lower_robustness), and, then, the sentence
+  // that says so (LoweredRobustnessText) and the designs the search ran.
+  double robust_sigmas_requested = 0.0;
+  double robust_sigmas_achieved = 0.0;
+  std::string robustness_note;
+  int robustness_designs = 1;
+  bool robustness_lowered() const { return robust_sigmas_achieved < robust_sigmas_requested; }
 };
 
 // The fewest poses that can identify a robot with m cables: each pose adds m encoder, a laser
@@ -146,7 +161,8 @@ struct DesignResult {
 int MinDesignPoses(int num_cables);
 
 // Throws InputError for bad options (too few poses, spacing that cannot fit) and
-// SolverFailure when no start converges to verified poses.
+// SolverFailure when no start converges to verified poses (with lower_robustness: not even
+// without robustness, k = 0).
 DesignResult DesignPoses(const Robot& robot, const DesignOptions& options);
 
 // Why a designed set can be no better than the median random set on its criterion, and

@@ -267,15 +267,23 @@ std::vector<PlanPose> MakeDesignedSet(const Robot& nominal, const MonteCarloOpti
   opt.geometry_sigma_m = o.geometry_sigma_m;  // the plan must survive the same true robots
   opt.interrupted = o.interrupted;
   opt.solve_in_child_processes = o.design_in_child_processes;
+  opt.lower_robustness = false;  // more starts first, at the full robustness
   try {
     return DesignPoses(nominal, opt).poses;
   } catch (const SolverFailure&) {
     // No start converged within Ipopt's iteration limit: add starts (the first ones are
-    // the same streams, so this only extends the search).
+    // the same streams, so this only extends the search), and if those find none at the
+    // full robustness, take the largest k that gives a set, and say so.
     opt.starts = 4 * o.design_starts;
+    opt.lower_robustness = true;
   }
   try {
-    return DesignPoses(nominal, opt).poses;
+    DesignResult r = DesignPoses(nominal, opt);
+    if (r.robustness_lowered()) {
+      std::fprintf(stderr, "cablecal: montecarlo: the designed set for n=%d, %s: robustness lowered: %s\n", key.n,
+                   ToString(key.design), r.robustness_note.c_str());
+    }
+    return r.poses;
   } catch (const SolverFailure& e) {
     // This cell's trials fail with cause "design"; the other cells still run.
     std::fprintf(stderr, "cablecal: montecarlo: no designed set for n=%d, %s: %s\n", key.n, ToString(key.design),

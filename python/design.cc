@@ -39,6 +39,15 @@ void BindDesign(py::module_& m) {
         return py::str(ImprovementText(Improvement(d.options.criterion, d.result.criteria, d.result.random_median),
                                        d.options.random_sets));
       }, "\"3.2 x better than the median of 100 random sets\" (or worse) on the criterion; None without random sets")
+      .def_property_readonly("robustness_requested_k", [](const PyDesign& d) { return d.result.robust_sigmas_requested; },
+                             "The robust_sigmas asked for.")
+      .def_property_readonly("robustness_achieved_k", [](const PyDesign& d) { return d.result.robust_sigmas_achieved; },
+                             "The k the plan holds for (true geometries within k x geometry_sigma of nominal): the "
+                             "requested one, or the largest below it with verified poses (README, \"Experiment design\").")
+      .def_property_readonly("robustness_note", [](const PyDesign& d) -> py::object {
+        if (!d.result.robustness_lowered()) return py::none();
+        return py::str(d.result.robustness_note);
+      }, "The sentence saying the robustness was lowered and to what; None when the requested one holds.")
       .def_property_readonly("best_start", [](const PyDesign& d) { return d.result.best_start; })
       .def_property_readonly("converged_starts", [](const PyDesign& d) { return d.result.converged_starts; })
       .def_property_readonly("wall_time_s", [](const PyDesign& d) { return d.result.wall_time_s; })
@@ -87,10 +96,17 @@ void BindDesign(py::module_& m) {
         o.interrupted = &stop;
         PyDesign d{Interruptible(stop, [&] { return DesignPoses(robot, o); }), o};
         d.options.interrupted = nullptr;
+        DesignOptions achieved = o;  // the warnings speak of the robustness the plan holds for
+        achieved.robust_sigmas = d.result.robust_sigmas_achieved;
+        if (d.result.robustness_lowered()) {
+          // The CLI's "robustness lowered" line: a plan, but for less than asked.
+          const std::string note = "robustness lowered: " + d.result.robustness_note;
+          if (PyErr_WarnEx(PyExc_UserWarning, note.c_str(), 1) < 0) throw py::error_already_set();
+        }
         if (o.random_sets > 0 && !(Improvement(o.criterion, d.result.criteria, d.result.random_median) > 1.0)) {
           // The CLI's warning: a result, but not a good plan.
           const int warned =
-              PyErr_WarnEx(PyExc_UserWarning, NoBetterThanRandomWarning(o, "geometry_sigma").c_str(), 1);
+              PyErr_WarnEx(PyExc_UserWarning, NoBetterThanRandomWarning(achieved, "geometry_sigma").c_str(), 1);
           if (warned < 0) throw py::error_already_set();  // warnings filtered into errors
         }
         return d;
@@ -98,7 +114,9 @@ void BindDesign(py::module_& m) {
       py::arg("robot"), py::arg("n"), py::arg("criterion") = "a", py::arg("starts") = 8, py::arg("seed") = 1,
       py::arg("min_spacing") = 0.0, py::arg("random_sets") = 100, py::arg("geometry_sigma") = 0.01,
       py::arg("robust_sigmas") = 3.0, py::arg("prior") = py::none(),
-      "Optimal measurement poses (cablecal design); SolverError if no start converges. prior: the path of an earlier "
+      "Optimal measurement poses (cablecal design); at the largest robustness up to robust_sigmas that gives verified "
+      "poses (robustness_achieved_k, with a UserWarning when lower); SolverError if none does, not even without "
+      "robustness. prior: the path of an earlier "
       "identification's result.yaml (design --prior).");
 }
 
