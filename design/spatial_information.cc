@@ -308,7 +308,7 @@ bool StaticsModelled(const SpatialRobot& robot) {
 
 }  // namespace
 
-SpatialInformationLayout SpatialDesignLayout(const SpatialRobot& robot, const std::vector<SpatialPlanPose>& reference) {
+SpatialInformationLayout SpatialSensorLayout(const SpatialRobot& robot) {
   SpatialInformationLayout L;
   L.num_cables = robot.num_cables();
   L.swivel = HasSpatialSensor(robot, SpatialSensor::kSwivel);
@@ -316,6 +316,17 @@ SpatialInformationLayout SpatialDesignLayout(const SpatialRobot& robot, const st
   L.load_cells = HasSpatialSensor(robot, SpatialSensor::kLoadCell);
   L.tensions = StaticsModelled(robot);
   L.names = SpatialGeometryNames(L.num_cables, L.swivel, L.heading);
+  for (int c = 0; c < L.geometry_size(); ++c) L.free.push_back(c);
+  return L;
+}
+
+int SpatialValuesPerPose(const SpatialRobot& robot, const SpatialInformationLayout& layout) {
+  return RowsOf(robot, layout).total;
+}
+
+SpatialInformationLayout SpatialDesignLayout(const SpatialRobot& robot, const std::vector<SpatialPlanPose>& reference) {
+  SpatialInformationLayout L = SpatialSensorLayout(robot);
+  L.free.clear();
   // The identification's own gauge analysis on the readings these poses would give.
   SpatialSimulationOptions quiet;
   quiet.noisy = NoisySensors::kNone;

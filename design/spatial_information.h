@@ -45,6 +45,11 @@ struct SpatialInformationLayout {
   int geometry_size() const { return static_cast<int>(names.size()); }
 };
 
+// The layout for the robot file's sensors without a gauge (held empty, every unknown free).
+SpatialInformationLayout SpatialSensorLayout(const SpatialRobot& robot);
+// The reading values one pose gives (its Jacobian's rows).
+int SpatialValuesPerPose(const SpatialRobot& robot, const SpatialInformationLayout& layout);
+
 // The layout for the robot file's sensors, the gauge that AnalyzeSpatialGauge chooses from
 // noise-free readings at `reference` (simulated on the nominal robot). The null directions of
 // these sensors are rigid motions of the frame, the same whatever the poses, so that a
