@@ -1,0 +1,81 @@
+// Spatial experiment design (README, "Spatial robots", "Experiment design"): n measurement
+// poses of a spatial robot, equilibria inside its feasible workspace, that make the
+// identification of its geometry from the robot file's sensors best conditioned
+// (design/spatial_information.h: the gauge-fixed information S).
+//
+// Ipopt per start, on every pose's 6 coordinates and m tensions (L-BFGS Hessian, exact first
+// derivatives: the criterion's through nested Jets, the constraints' through Jets):
+//   W(q) t + w_g(q) = 0 (6 rows; with m < 6 they make the uncontrolled coordinates follow),
+//   tensions within [min, max], roll and pitch within the tilt limit and cos(tilt) >=
+//   cos(tilt_max), the yaw within home's +-kDefaultSampleYawRange_rad (as sample), the reference
+//   point, the centre of mass and every anchor inside the frame box less the margin, every
+//   anchor at least the margin from its pulley, and the cable geometry valid (an invalid one
+//   is an evaluation error Ipopt steps back from); with --min-spacing every pair of poses'
+//   reference points at least that far apart.
+// Starts: feasible random sets (SampleSpatialPoses), each from its own stream of the seed; the
+// best verified start wins. Verified: each pose re-solved by the model (m < 6: the stable
+// equilibrium SolveSpatialEquilibrium finds from Ipopt's pose must be that pose; m >= 6: the
+// tensions projected exactly onto the equilibrium, or for an identification that does not
+// model the tensions the model's own distribution), then CheckSpatialFeasibility.
+// Not yet: robustness to the unknown true geometry (the planar --geometry-sigma), --prior.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "design/design.h"
+#include "design/spatial_information.h"
+#include "experiment/spatial_plan.h"
+#include "model/spatial_robot.h"
+
+namespace cablecal {
+
+struct SpatialDesignOptions {
+  int poses = 0;
+  Criterion criterion = Criterion::kA;  // as planar (README, "Experiment design")
+  int starts = 8;
+  std::uint64_t seed = 1;
+  double min_spacing_m = 0.0;  // 0: off
+  int random_sets = 100;       // the median of random feasible sets for comparison (0: none)
+  int max_iterations = 500;    // Ipopt, per start
+  const std::atomic<bool>* interrupted = nullptr;
+  std::function<void(long, long)> progress;  // (starts done, starts)
+};
+
+// The fewest poses whose readings can determine the gauge-fixed geometry: each pose adds its
+// reading values less its own unknowns (6, and m tensions when the statics are modelled).
+int MinSpatialDesignPoses(const SpatialRobot& robot, const SpatialInformationLayout& layout);
+
+struct SpatialStartReport {
+  int start = 0;
+  std::string ipopt_status;
+  int iterations = 0;
+  bool converged = false;
+  bool verified = false;
+  std::string verification_failure;
+  double objective = 0.0;  // the exact criterion of the verified poses
+};
+
+struct SpatialDesignResult {
+  SpatialInformationLayout layout;
+  std::vector<SpatialPlanPose> poses;  // verified equilibria of the best start
+  CriteriaValues criteria;             // recomputed from `poses`
+  CriteriaValues random_median;        // over options.random_sets random feasible sets
+  int best_start = -1;
+  int converged_starts = 0;
+  std::vector<SpatialStartReport> starts;
+  double wall_time_s = 0.0;
+};
+
+// InputError for bad options (too few poses, ...); SolverFailure when no start converges to
+// verified poses; Interrupted when options.interrupted was set.
+SpatialDesignResult DesignSpatialPoses(const SpatialRobot& robot, const SpatialDesignOptions& options);
+
+// summary.yaml of `cablecal design` on a spatial robot.
+std::string SpatialDesignSummaryYaml(const SpatialRobot& robot, const SpatialDesignResult& result,
+                                     const SpatialDesignOptions& options, const std::string& command_line);
+
+}  // namespace cablecal

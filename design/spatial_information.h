@@ -1,0 +1,82 @@
+// The information a spatial experiment gives about the robot's geometry (README, "Spatial
+// robots", "Experiment design"): what the spatial identification (identify/spatial_identify.h)
+// would estimate from readings at the given poses with the robot file's sensors, before any
+// reading is taken.
+//
+// For each pose j the whitened Jacobian J_j = [J_q | J_g] of the noise-free readings: the
+// rows the identification has (each encoder, each sensor the robot file has, and when the
+// identification models the statics the pose's 6 equilibrium rows and its load cells), the
+// columns its unknowns: the pose's 6 coordinates and (statics modelled) its m tensions, then
+// the geometry in SpatialIdentifyResult::names order. The rows are the models of
+// model/swivel.h and model/spatial_sensor_model.h differentiated by Jets, one cable at a time.
+// The pose's own unknowns are eliminated (the Schur complement, as an orthogonal projection:
+// M_j = J_g^T (I - J_q J_q^+) J_g), and the information of the geometry is S = sum_j M_j over
+// the unknowns the gauge leaves free: the identification's default gauge, the exit coordinates
+// AnalyzeSpatialGauge holds for these sensors. S^-1 is the covariance the identification
+// predicts at the same poses when the robot is the nominal one.
+//
+// The design criteria on S and their exact gradients with respect to every pose's coordinates
+// and tensions: second derivatives of the readings by nested Jets (identify/nested_jet.h).
+// Depends on identify/ (the gauge, the equilibrium sigmas), experiment/ (noise-free readings
+// for the gauge analysis) and model/.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "design/design.h"  // Criterion
+#include "experiment/spatial_plan.h"
+#include "model/spatial_robot.h"
+
+namespace cablecal {
+
+// What the identification estimates from the robot file's sensors.
+struct SpatialInformationLayout {
+  int num_cables = 0;
+  bool tensions = false;  // each pose's m tensions are unknowns (statics modelled)
+  bool swivel = false;    // sw10 .. swm0 among the geometry
+  bool heading = false;   // yaw0 among the geometry
+  bool load_cells = false;
+  std::vector<std::string> names;  // the geometry unknowns (SpatialGeometryNames)
+  std::vector<int> held;           // the default gauge: indices into names
+  std::vector<int> free;           // the others, in names order: S's rows and columns
+  int local() const { return 6 + (tensions ? num_cables : 0); }
+  int geometry_size() const { return static_cast<int>(names.size()); }
+};
+
+// The layout for the robot file's sensors without a gauge (held empty, every unknown free).
+SpatialInformationLayout SpatialSensorLayout(const SpatialRobot& robot);
+// The reading values one pose gives (its Jacobian's rows).
+int SpatialValuesPerPose(const SpatialRobot& robot, const SpatialInformationLayout& layout);
+
+// The layout for the robot file's sensors, the gauge that AnalyzeSpatialGauge chooses from
+// noise-free readings at `reference` (simulated on the nominal robot). The null directions of
+// these sensors are rigid motions of the frame, the same whatever the poses, so that a
+// reference set of random feasible poses gives the gauge of any set. InputError as the
+// identification's (a sensor set that cannot calibrate, too few values for the unknowns).
+SpatialInformationLayout SpatialDesignLayout(const SpatialRobot& robot, const std::vector<SpatialPlanPose>& reference);
+
+// The whitened Jacobian of one pose's noise-free readings, rows as the file comment, columns
+// local() then the geometry.
+Eigen::MatrixXd SpatialPoseJacobian(const SpatialRobot& robot, const SpatialInformationLayout& layout,
+                                    const SpatialPose<double>& q, const Eigen::VectorXd& tensions_N);
+
+// S (free x free, in 1/unit^2 of each unknown: m for exits and lengths, rad for offsets).
+Eigen::MatrixXd SpatialInformation(const SpatialRobot& robot, const SpatialInformationLayout& layout,
+                                   const std::vector<SpatialPlanPose>& poses);
+
+// The four criteria of S (design.h's CriteriaValues: the condition number here is that of the
+// whitened reduced Jacobian, sqrt(lambda_max / lambda_min) of S; A's trace mixes m^2 and rad^2
+// when the geometry has offsets). Infinite / zero as appropriate when S is singular.
+CriteriaValues SpatialCriteria(const Eigen::MatrixXd& information);
+
+// What the design minimises: log kappa (condition), -log det S (d), log trace S^-1 (a),
+// -log lambda_min (e); for condition and e a smooth surrogate of sharpness `power` (> 0), the
+// exact value for power 0. +inf where S is singular. `gradient`, if given, receives the
+// derivative with respect to every pose's (x, y, z, roll, pitch, yaw, t1..tm), 6 + m per pose.
+double SpatialDesignObjective(const SpatialRobot& robot, const SpatialInformationLayout& layout, Criterion criterion,
+                              const std::vector<SpatialPlanPose>& poses, Eigen::VectorXd* gradient,
+                              double power = 0.0);
+
+}  // namespace cablecal

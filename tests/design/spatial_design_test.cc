@@ -1,0 +1,195 @@
+// The spatial experiment design (design/spatial_information.h, design/spatial_design.h).
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <cstdio>
+
+#include "common/random.h"
+#include "design/spatial_design.h"
+#include "design/spatial_information.h"
+#include "model/forward_statics.h"
+#include "experiment/spatial_plan.h"
+#include "experiment/spatial_simulation.h"
+#include "identify/spatial_identify.h"
+#include "model/builtin_spatial_robots.h"
+#include "tests/support/random_spatial_robot.h"
+
+namespace cablecal {
+namespace {
+
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+// The identification's predicted covariance at noise-free readings of `plan` on the nominal
+// robot itself: the estimate is the nominal geometry, so its covariance is the inverse of the
+// information at the same poses, independently computed (Ceres' residual blocks there).
+MatrixXd IdentificationCovariance(const SpatialRobot& robot, const std::vector<SpatialPlanPose>& plan,
+                                  std::vector<std::string>* held, SpatialRobot* at,
+                                  std::vector<SpatialPlanPose>* estimated) {
+  SpatialSimulationOptions quiet;
+  quiet.noisy = NoisySensors::kNone;
+  quiet.encoder_noise = false;
+  Rng rng(3);
+  const SimulatedSpatialExperiment sim = SimulateSpatialExperiment(robot, robot, plan, quiet, rng);
+  const SpatialIdentifyResult r = IdentifySpatial(robot, sim.measurements, SpatialIdentifyOptions{});
+  EXPECT_TRUE(r.converged()) << r.message << " after " << r.iterations << " iterations, cost " << r.final_cost;
+  *held = r.held;
+  // The estimate is the nominal geometry and poses to the solver's tolerance only: the
+  // information is compared where the covariance was computed, at the estimated exits, poses
+  // and tensions (the other unknowns enter the readings linearly).
+  *at = robot;
+  for (int i = 0; i < robot.num_cables(); ++i) at->cables[i].p_F_exit_m = r.geometry.segment<3>(3 * i);
+  estimated->clear();
+  for (std::size_t j = 0; j < r.poses.size(); ++j) {
+    SpatialPlanPose p = plan[j];
+    p.q = r.poses[j];
+    if (!r.tensions_N.empty()) p.tensions_N = r.tensions_N[j];
+    estimated->push_back(p);
+  }
+  return r.covariance;
+}
+
+void ExpectInformationIsInverseCovariance(const SpatialRobot& robot, int n, std::uint64_t seed) {
+  SCOPED_TRACE(robot.name);
+  const std::vector<SpatialPlanPose> plan = SampleSpatialPoses(robot, n, seed);
+  const SpatialInformationLayout L = SpatialDesignLayout(robot, plan);
+  std::vector<std::string> held;
+  SpatialRobot at;
+  std::vector<SpatialPlanPose> estimated;
+  const MatrixXd covariance = IdentificationCovariance(robot, plan, &held, &at, &estimated);
+  std::vector<std::string> layout_held;
+  for (int h : L.held) layout_held.push_back(L.names[h]);
+  EXPECT_EQ(layout_held, held);
+  ASSERT_EQ(covariance.rows(), L.geometry_size());
+  const MatrixXd S = SpatialInformation(at, L, estimated);
+  // Inverted with S scaled to a unit diagonal (exits in m and offsets in rad differ by orders).
+  const VectorXd d = S.diagonal().cwiseSqrt().cwiseInverse();
+  const MatrixXd scaled = d.asDiagonal() * S * d.asDiagonal();
+  const MatrixXd predicted = d.asDiagonal() * scaled.ldlt().solve(MatrixXd::Identity(S.rows(), S.cols())) * d.asDiagonal();
+  const int f = static_cast<int>(L.free.size());
+  MatrixXd identified(f, f);
+  for (int r = 0; r < f; ++r) {
+    for (int c = 0; c < f; ++c) identified(r, c) = covariance(L.free[r], L.free[c]);
+  }
+  // Inverting S loses cond(S) times the rounding of its entries (the identification's SVD of
+  // the unsquared Jacobian loses only the square root of that): ipanema1 with its encoders,
+  // inclinometer and laser sees a2y to 11 m, cond(S) ~ 1e11, and agrees to 8e-6 there.
+  const Eigen::SelfAdjointEigenSolver<MatrixXd> eig(scaled);
+  const double cond = eig.eigenvalues().maxCoeff() / eig.eigenvalues().minCoeff();
+  const double tolerance = std::max(1e-8, 1e-15 * cond);
+  const double relative = (predicted - identified).norm() / identified.norm();
+  std::printf("%s: relative %.3g, cond %.3g\n", robot.name.c_str(), relative, cond);
+  EXPECT_LT(relative, tolerance) << "information^-1 vs the identification's covariance, cond(S) " << cond;
+  // Every variance on its own too (the small ones hide in the matrix norm).
+  for (int k = 0; k < f; ++k) {
+    EXPECT_NEAR(predicted(k, k), identified(k, k), tolerance * identified(k, k)) << L.names[L.free[k]];
+  }
+}
+
+TEST(SpatialInformation, InverseIsTheIdentificationsCovarianceOnTheBuiltinRobots) {
+  for (const char* name : {"cogiro", "ipanema1", "irma4u"}) {
+    ExpectInformationIsInverseCovariance(BuiltinSpatialRobot(name), 14, 5);
+  }
+}
+
+TEST(SpatialInformation, InverseIsTheIdentificationsCovarianceOnRandomRobots) {
+  Rng rng(2801);
+  for (int m : {4, 5, 8}) {
+    SpatialRobot robot = testing::RandomSpatialRobot(rng, "random" + std::to_string(m), m);
+    // A simulatable robot (at most 6 inextensible cables) with an inclinometer and a laser, so
+    // that more than the encoders' gauge is exercised.
+    for (int i = 6; i < m; ++i) robot.cables[i].stiffness_N = 2e6;
+    robot.sensors.inclinometer_rad = RangedNoise{0.002, 0.001};
+    robot.sensors.laser_m = RangedNoise{0.003, 0.001};
+    ExpectInformationIsInverseCovariance(robot, 12, 7);
+  }
+}
+
+// The gradient of every criterion against central differences of the objective.
+TEST(SpatialInformation, GradientMatchesDifferences) {
+  Rng rng(2802);
+  SpatialRobot random = testing::RandomSpatialRobot(rng, "random5", 5);
+  random.sensors.swivel_rad = RangedNoise{0.01, 0.0};
+  random.sensors.heading_rad = RangedNoise{0.02, 0.0};
+  for (const SpatialRobot& robot : {BuiltinSpatialRobot("cogiro"), BuiltinSpatialRobot("irma4u"), random}) {
+    SCOPED_TRACE(robot.name);
+    const std::vector<SpatialPlanPose> plan = SampleSpatialPoses(robot, 12, 11);
+    const SpatialInformationLayout L = SpatialDesignLayout(robot, plan);
+    const int m = robot.num_cables();
+    for (Criterion c : {Criterion::kCondition, Criterion::kD, Criterion::kA, Criterion::kE}) {
+      SCOPED_TRACE(ToString(c));
+      const double power = (c == Criterion::kD || c == Criterion::kA) ? 0.0 : 8.0;
+      VectorXd g;
+      const double f0 = SpatialDesignObjective(robot, L, c, plan, &g, power);
+      ASSERT_TRUE(std::isfinite(f0));
+      ASSERT_EQ(g.size(), 12 * (6 + m));
+      double scale = g.cwiseAbs().maxCoeff();
+      for (int j : {0, 5}) {
+        for (int k = 0; k < 6 + m; ++k) {
+          const double h = k < 6 ? 1e-6 : 1e-6 * robot.tension_max_N;
+          std::vector<SpatialPlanPose> plus = plan, minus = plan;
+          if (k < 6) {
+            plus[j].q(k) += h;
+            minus[j].q(k) -= h;
+          } else {
+            plus[j].tensions_N(k - 6) += h;
+            minus[j].tensions_N(k - 6) -= h;
+          }
+          const double fd = (SpatialDesignObjective(robot, L, c, plus, nullptr, power) -
+                             SpatialDesignObjective(robot, L, c, minus, nullptr, power)) /
+                            (2 * h);
+          const double unit = k < 6 ? 1.0 : robot.tension_max_N;  // compare per natural step
+          EXPECT_NEAR(g((6 + m) * j + k) * unit, fd * unit, 1e-5 * scale * unit + 1e-7) << "pose " << j << " var " << k;
+        }
+      }
+    }
+  }
+}
+
+// Designed poses hold: each a feasible equilibrium of the nominal robot, and the forward model
+// with the plan's commanded lengths settles the platform there (the robot taken as true).
+void ExpectDesignHolds(const SpatialRobot& robot, int extra_poses, Criterion criterion) {
+  SCOPED_TRACE(robot.name);
+  SpatialDesignOptions options;
+  options.poses = MinSpatialDesignPoses(robot, SpatialDesignLayout(robot, SampleSpatialPoses(robot, 30, 9))) + extra_poses;
+  options.starts = 2;
+  options.random_sets = 20;
+  options.criterion = criterion;
+  options.seed = 28;
+  const SpatialDesignResult r = DesignSpatialPoses(robot, options);
+  ASSERT_EQ(static_cast<int>(r.poses.size()), options.poses);
+  for (std::size_t j = 0; j < r.poses.size(); ++j) {
+    const SpatialPlanPose& p = r.poses[j];
+    EXPECT_EQ(CheckSpatialFeasibility(robot, p.q, p.tensions_N), Feasibility::kFeasible) << "pose " << j + 1;
+    const SpatialForwardResult settled =
+        SolveForwardStatics(robot, CommandedUnstretchedLengths(robot, p.lengths_m, p.tensions_N), &p.q);
+    EXPECT_EQ(settled.status, ForwardStatus::kConverged) << "pose " << j + 1;
+    EXPECT_LT((settled.equilibrium.q - p.q).cwiseAbs().maxCoeff(), 1e-6) << "pose " << j + 1;
+  }
+  const double factor = Improvement(criterion, r.criteria, r.random_median);
+  std::printf("%s: %d poses, %s improvement %.3g over the random median, %.1f s\n", robot.name.c_str(), options.poses,
+              ToString(criterion), factor, r.wall_time_s);
+  EXPECT_GE(factor, 2.0);
+}
+
+TEST(SpatialDesign, CogiroHoldsAndBeatsRandom) { ExpectDesignHolds(BuiltinSpatialRobot("cogiro"), 2, Criterion::kA); }
+
+TEST(SpatialDesign, Irma4uHoldsAndBeatsRandom) { ExpectDesignHolds(BuiltinSpatialRobot("irma4u"), 2, Criterion::kA); }
+
+// An open defect: ipanema1's encoders, inclinometer and laser see a2y only weakly (cond(S) ~
+// 1e12 at 14 random poses; at its fewest poses S is singular in doubles), and with 10 poses
+// more both starts end at Ipopt's iteration cap (Maximum_Iterations_Exceeded, 200 s).
+TEST(SpatialDesign, DISABLED_Ipanema1HoldsAndBeatsRandom) {
+  ExpectDesignHolds(BuiltinSpatialRobot("ipanema1"), 10, Criterion::kA);
+}
+
+TEST(SpatialDesign, RandomRobotHoldsAndBeatsRandom) {
+  Rng rng(2803);
+  SpatialRobot robot = testing::RandomSpatialRobot(rng, "random4", 4);
+  robot.sensors.inclinometer_rad = RangedNoise{0.002, 0.001};
+  ExpectDesignHolds(robot, 2, Criterion::kD);
+}
+
+}  // namespace
+}  // namespace cablecal
