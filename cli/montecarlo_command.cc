@@ -16,7 +16,9 @@
 #include "common/format.h"
 #include "common/yaml_writer.h"
 #include "common/version.h"
+#include "model/spatial_robot.h"
 #include "montecarlo/montecarlo.h"
+#include "montecarlo/spatial_montecarlo.h"
 #ifdef CABLECAL_WITH_MPI
 #include "montecarlo/mpi.h"
 #endif
@@ -30,7 +32,14 @@ const std::vector<std::string> kStudyFiles = {"errors.csv",     "summary.csv",  
                                               "distributions.png", "one_calibration.png"};
 const std::vector<std::string> kStudyFigures = {"sigma_vs_n.png", "distributions.png", "one_calibration.png"};
 
-std::string RunYaml(const Robot& robot, const MonteCarloOptions& o, const std::string& poses_text,
+// The robot studied, as run.yaml names it; a spatial study also says its kind and the exit
+// coordinates its gauge held.
+struct StudiedRobot {
+  std::string name, source;
+  bool spatial = false;
+};
+
+std::string RunYaml(const StudiedRobot& robot, const MonteCarloOptions& o, const std::string& poses_text,
                     const MonteCarloResult& r, const Context& ctx, int threads) {
   using YAML::Key;
   using YAML::Value;
@@ -46,14 +55,22 @@ std::string RunYaml(const Robot& robot, const MonteCarloOptions& o, const std::s
     << Key << "commit" << Value << YamlString{GitCommit()} << YAML::EndMap;
   y << Key << "command" << Value << YamlString{ctx.command_line};
   y << Key << "robot" << Value << YAML::Flow << YAML::BeginMap << Key << "name" << Value << YamlString{robot.name}
-    << Key << "source" << Value << YamlString{robot.source} << YAML::EndMap;
+    << Key << "source" << Value << YamlString{robot.source};
+  if (robot.spatial) y << Key << "kind" << Value << "spatial";
+  y << YAML::EndMap;
   y << Key << "poses" << Value << YamlString{poses_text};
   y << Key << "designs" << Value << YAML::Flow << YAML::BeginSeq;
   for (PoseSetDesign d : o.designs) y << ToString(d);
   y << YAML::EndSeq;
   y << Key << "trials" << Value << o.trials;
-  y << Key << "estimator" << Value << ToString(o.estimator);
-  y << Key << "gauge" << Value << ToString(o.gauge);
+  if (robot.spatial) {
+    y << Key << "gauge_held" << Value << YAML::Flow << YAML::BeginSeq;
+    for (const std::string& h : r.held_names) y << YamlString{h};
+    y << YAML::EndSeq << YAML::Comment("chosen from noise-free readings at the fewest poses");
+  } else {
+    y << Key << "estimator" << Value << ToString(o.estimator);
+    y << Key << "gauge" << Value << ToString(o.gauge);
+  }
   y << Key << "sensors" << Value << ToString(o.sensors);
   y << Key << "geometry_sigma_m" << Value << YamlNumber{o.geometry_sigma_m};
   y << Key << "geometry_prior" << Value << o.geometry_prior;
@@ -77,7 +94,7 @@ std::string RunYaml(const Robot& robot, const MonteCarloOptions& o, const std::s
 }
 
 // Writes the data files of one study into `folder` under `prefix` (staged; the caller commits).
-void WriteStudy(const OutputFolder& folder, const std::string& prefix, const Robot& robot, const MonteCarloOptions& o,
+void WriteStudy(const OutputFolder& folder, const std::string& prefix, const StudiedRobot& robot, const MonteCarloOptions& o,
                 const std::string& poses_text, const MonteCarloResult& r, const Context& ctx, int threads,
                 const std::string& title) {
   folder.WriteText(prefix + "errors.csv", ErrorsCsv(r));
@@ -124,7 +141,56 @@ MonteCarloResult RunStudy(const Context& ctx, const Robot& robot, MonteCarloOpti
 
 }  // namespace
 
+// A spatial robot's study (montecarlo/spatial_montecarlo.h): the planar command's files, on one
+// process (its shares are not yet sent between MPI ranks).
+int RunSpatialMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptions& options) {
+  if (ctx.processes.count > 1) {
+    throw InputError("montecarlo", "", "a spatial robot's study runs on one process for now (got " +
+                                           std::to_string(ctx.processes.count) + "); use the threads of one machine");
+  }
+  const SpatialRobot robot = LoadSpatialRobotFile(options.robot_path);
+  SpatialMonteCarloOptions o;
+  o.study.pose_counts = ParsePoseCounts(options.poses);
+  o.study.designs = ParseDesigns(options.designs);
+  o.study.trials = options.trials;
+  o.study.estimator = ParseEstimator(options.estimator);
+  o.study.gauge = ParseGauge(options.gauge);
+  o.study.sensors = ParseNoisySensors(options.sensors);
+  o.study.geometry_sigma_m = options.geometry_sigma_m;
+  o.study.loss = ParseLoss(options.loss);
+  o.study.geometry_prior = options.geometry_prior;
+  o.study.equilibrium = options.equilibrium == "on";
+  o.study.com_error_m = options.com_error_m;
+  o.study.outliers = ParseOutliers(options.outliers);
+  o.study.seed = options.seed;
+  o.study.design_starts = options.design_starts;
+  ValidateSpatialMonteCarloOptions(robot, o);
+  if (options.threads > 0) omp_set_num_threads(options.threads);
+  const int threads = omp_get_max_threads();
+  OutputFolder folder("--out", options.out_dir, kStudyFiles);
+  folder.RefuseInputs({{"--robot", options.robot_path}});
+  const SigintScope sigint;
+  o.study.interrupted = &SigintFlag();
+  if (!ctx.quiet) o.study.progress = ProgressBar("montecarlo", "trials");
+  const MonteCarloResult r = RunSpatialMonteCarlo(robot, o);
+  if (r.interrupted) throw Interrupted();
+  WriteStudy(folder, "", {robot.name, robot.source, true}, o.study, options.poses, r, ctx, threads,
+             "Monte Carlo: " + robot.name);
+  std::string figure_error;
+  if (options.plot) figure_error = TryPlotStudy(folder, {folder.staging()}, kStudyFigures);
+  folder.Commit();
+  int failures = 0;
+  for (const MonteCarloCell& c : r.cells) failures += c.failures();
+  std::printf("ran %zu cells x %d trials in %.1f s on %d threads (%d failed trials); the gauge held %zu exit "
+              "coordinates; wrote %s/\n",
+              r.cells.size(), o.study.trials, r.wall_time_s, threads, failures, r.held_names.size(),
+              options.out_dir.c_str());
+  if (!figure_error.empty()) throw FigureFailure(figure_error + "; the study's data were written to " + options.out_dir);
+  return kExitOk;
+}
+
 int RunMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptions& options) {
+  if (IsSpatialRobotFile(options.robot_path)) return RunSpatialMonteCarloCommand(ctx, options);
   Robot robot;
   MonteCarloOptions o;
   RunAgreed(ctx.processes, [&] {
@@ -159,7 +225,7 @@ int RunMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptions& opt
   std::string figure_error;
   RunAgreed(ctx.processes, [&] {
     if (!ctx.processes.root()) return;
-    WriteStudy(*folder, "", robot, o, options.poses, r, ctx, threads, "Monte Carlo: " + robot.name);
+    WriteStudy(*folder, "", {robot.name, robot.source}, o, options.poses, r, ctx, threads, "Monte Carlo: " + robot.name);
     if (options.plot) figure_error = TryPlotStudy(*folder, {folder->staging()}, kStudyFigures);
     folder->Commit();
   });
@@ -230,7 +296,7 @@ int RunReproduce(const Context& ctx, const ReproduceOptions& options) {
   RunAgreed(ctx.processes, [&] {
     check_interrupted();
     if (!ctx.processes.root()) return;
-    WriteStudy(*folder, "study/", robot, described,
+    WriteStudy(*folder, "study/", {robot.name, robot.source}, described,
                "6:50 (random), 6:50:4 (optimized = A-optimal, condition), 6:50:8 (d, e)", study, ctx, threads,
                "The paper's study: " + robot.name);
   });
@@ -244,7 +310,7 @@ int RunReproduce(const Context& ctx, const ReproduceOptions& options) {
     RunAgreed(ctx.processes, [&] {
       check_interrupted();
       if (!ctx.processes.root()) return;
-      WriteStudy(*folder, std::string("ablation/") + ToString(s) + "/", robot, ab, "50", r, ctx, threads,
+      WriteStudy(*folder, std::string("ablation/") + ToString(s) + "/", {robot.name, robot.source}, ab, "50", r, ctx, threads,
                  std::string("Sensor ablation, noisy sensors: ") + ToString(s));
     });
   }

@@ -40,6 +40,16 @@ int GridSide(PoseSetDesign d) {
   return d == PoseSetDesign::kGrid2 ? 2 : d == PoseSetDesign::kGrid3 ? 3 : 0;
 }
 
+Criterion CriterionOf(PoseSetDesign d) {
+  switch (d) {
+    case PoseSetDesign::kD: return Criterion::kD;
+    case PoseSetDesign::kA: return Criterion::kA;
+    case PoseSetDesign::kE: return Criterion::kE;
+    case PoseSetDesign::kCondition: return Criterion::kCondition;
+    default: return DesignOptions{}.criterion;  // "optimized": the design's default
+  }
+}
+
 std::vector<PoseSetDesign> ParseDesigns(const std::string& text) {
   std::vector<PoseSetDesign> out;
   std::stringstream ss(text);
@@ -172,15 +182,6 @@ TrialOutcome RunTrial(const Robot& nominal, const MonteCarloOptions& o, int n, P
   return out;
 }
 
-Criterion CriterionOf(PoseSetDesign d) {
-  switch (d) {
-    case PoseSetDesign::kD: return Criterion::kD;
-    case PoseSetDesign::kA: return Criterion::kA;
-    case PoseSetDesign::kE: return Criterion::kE;
-    case PoseSetDesign::kCondition: return Criterion::kCondition;
-    default: return DesignOptions{}.criterion;  // "optimized": the design's default
-  }
-}
 
 }  // namespace
 

@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "design/design.h"  // Criterion
 #include "experiment/experiment.h"
 #include "identify/identify.h"
 #include "model/robot.h"
@@ -40,6 +41,8 @@ const char* ToString(PoseSetDesign d);
 std::vector<PoseSetDesign> ParseDesigns(const std::string& text);  // "random,optimized,d,grid:2x2x2"
 // The grid's side (2, 3), or 0 for a design that is not a grid.
 int GridSide(PoseSetDesign d);
+// A criterion design's criterion ("optimized": the design's default, A).
+Criterion CriterionOf(PoseSetDesign d);
 // "6:50" or "6:50:2" (first:last[:step]); InputError naming --poses otherwise.
 std::vector<int> ParsePoseCounts(const std::string& text);
 // Per pose set of a study (ParsePoseCounts, ValidateOptions): bounds a study's trials and

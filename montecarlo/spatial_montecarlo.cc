@@ -2,19 +2,19 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cstdint>
 #include <map>
 #include <string>
 
 #include "common/error.h"
 #include "common/random.h"
+#include "design/spatial_design.h"
 #include "experiment/spatial_simulation.h"
 
 namespace cablecal {
 
 namespace {
-
-bool IsCriterion(PoseSetDesign d) { return d != PoseSetDesign::kRandom && GridSide(d) == 0; }
 
 // Noise-free readings of the nominal robot at `n` sampled poses (the study's own stream): what
 // the gauge analysis and the identifiability check look at.
@@ -118,6 +118,24 @@ TrialOutcome RunSpatialTrial(const SpatialRobot& nominal, const SpatialMonteCarl
 
 }  // namespace
 
+std::vector<SpatialPlanPose> MakeSpatialDesignedSet(const SpatialRobot& nominal, const SpatialMonteCarloOptions& o,
+                                                    const DesignedSetKey& key) {
+  try {
+    if (GridSide(key.design) > 0) return GridSpatialPoses(nominal, GridSide(key.design));
+    SpatialDesignOptions opt;
+    opt.poses = key.n;
+    opt.criterion = CriterionOf(key.design);
+    opt.starts = o.study.design_starts;
+    opt.seed = StreamSeed(o.study.seed, {static_cast<std::uint64_t>(key.n), static_cast<std::uint64_t>(key.design), 0xde5});
+    opt.random_sets = 0;
+    opt.interrupted = o.study.interrupted;
+    return DesignSpatialPoses(nominal, opt).poses;
+  } catch (const SolverFailure& e) {
+    std::fprintf(stderr, "cablecal: montecarlo: no pose set for n=%d, %s: %s\n", key.n, ToString(key.design), e.what());
+    return {};
+  }
+}
+
 void ValidateSpatialMonteCarloOptions(const SpatialRobot& nominal, const SpatialMonteCarloOptions& o) {
   const MonteCarloOptions defaults;
   const MonteCarloOptions& s = o.study;
@@ -137,10 +155,6 @@ void ValidateSpatialMonteCarloOptions(const SpatialRobot& nominal, const Spatial
     throw InputError("--yaw-range-deg", "", "must be in (0, 180] degrees");
   }
   for (const PoseSetDesign d : s.designs) {
-    if (IsCriterion(d)) {
-      throw InputError("--designs", "", std::string("'") + ToString(d) +
-                                            "' is not yet served for spatial robots (random, grid:2x2x2, grid:3x3x3)");
-    }
     const int side = GridSide(d);
     for (const int n : s.pose_counts) {
       if (side > 0 && n != side * side * side) {
@@ -162,21 +176,21 @@ MonteCarloResult RunSpatialMonteCarlo(const SpatialRobot& nominal, const Spatial
   const SpatialIdentifyOptions id = TrialIdentifyOptions(o, held_names);
   // The true l_i0: what the controller pays out at home, on the true robot as on the nominal.
   const Eigen::VectorXd l0_m = SpatialHome(nominal).paid_out_m;
-  // The grids: the same set in every trial, made once (no random draw).
-  std::map<int, std::vector<SpatialPlanPose>> grids;
-  for (const PoseSetDesign d : o.study.designs) {
-    if (GridSide(d) == 0) continue;
-    try {
-      grids[static_cast<int>(d)] = GridSpatialPoses(nominal, GridSide(d));
-    } catch (const SolverFailure& e) {
-      std::fprintf(stderr, "cablecal: montecarlo: no %s pose set: %s\n", ToString(d), e.what());
-      grids[static_cast<int>(d)] = {};
-    }
-  }
+  // The designed sets and grids: one per (n, design), the same in every trial, made first
+  // (DesignedSetKeys' order, several at once); an empty one fails its cell's trials (cause
+  // "design"), said on stderr.
+  const std::vector<DesignedSetKey> keys = DesignedSetKeys(o.study);
+  std::vector<std::vector<SpatialPlanPose>> sets(keys.size());
+  ForEachDesignedSet(keys, [&](std::size_t i) {
+    if (o.study.interrupted && o.study.interrupted->load()) return;
+    sets[i] = MakeSpatialDesignedSet(nominal, o, keys[i]);
+  });
+  std::map<std::pair<int, int>, std::vector<SpatialPlanPose>> designed;
+  for (std::size_t i = 0; i < keys.size(); ++i) designed[{keys[i].n, static_cast<int>(keys[i].design)}] = std::move(sets[i]);
   std::vector<ShareResult> shares(1);
   shares[0] = RunShareTrials(o.study, StudyShare{0, 1}, [&](int n, PoseSetDesign d, int trial) {
-    const auto it = grids.find(static_cast<int>(d));
-    return RunSpatialTrial(nominal, o, l0_m, held, id, n, d, trial, it == grids.end() ? nullptr : &it->second);
+    const auto it = designed.find({n, static_cast<int>(d)});
+    return RunSpatialTrial(nominal, o, l0_m, held, id, n, d, trial, it == designed.end() ? nullptr : &it->second);
   });
   if (shares[0].error) std::rethrow_exception(shares[0].error);
   if (!shares[0].failure.empty()) throw std::runtime_error(shares[0].failure);

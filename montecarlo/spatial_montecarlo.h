@@ -24,7 +24,7 @@
 namespace cablecal {
 
 struct SpatialMonteCarloOptions {
-  // pose_counts, designs (random, grid:2x2x2, grid:3x3x3), trials, sensors (which get noise),
+  // pose_counts, designs (random, a criterion's design, grid:2x2x2, grid:3x3x3), trials, sensors (which get noise),
   // geometry_sigma_m (every exit coordinate but the held ones), loss, seed, progress,
   // interrupted. The planar-only ones (estimator, gauge, geometry prior, equilibrium, com
   // error, outliers) must stay at their defaults.
@@ -36,11 +36,16 @@ struct SpatialMonteCarloOptions {
   bool encoder_noise = true;
 };
 
-// The InputErrors of RunSpatialMonteCarlo: the study's own (ValidateOptions without a planar
-// robot), a planar-only option, a design not yet served for spatial robots (the criteria:
-// optimized, a, d, e, condition), a grid with a pose count other than its side^3, and pose
-// counts the robot's sensors cannot identify the geometry from (naming what is missing).
+// The InputErrors of RunSpatialMonteCarlo: the study's own (ValidateStudyOptions), a
+// planar-only option, a grid with a pose count other than its side^3, and pose counts the
+// robot's sensors cannot identify the geometry from (naming what is missing).
 void ValidateSpatialMonteCarloOptions(const SpatialRobot& nominal, const SpatialMonteCarloOptions& options);
+
+// One designed set of the study: a grid (GridSpatialPoses) or a criterion's design
+// (design/spatial_design.h: the study's design_starts, its own seed stream, no robustness yet);
+// empty, said on stderr, when none can be made.
+std::vector<SpatialPlanPose> MakeSpatialDesignedSet(const SpatialRobot& nominal, const SpatialMonteCarloOptions& options,
+                                                    const DesignedSetKey& key);
 
 // The study (montecarlo.h's cells, files and statistics). Each trial's errors: the identified
 // minus the true exit coordinates and initial lengths (SpatialGeometryNames' a1x ... lm0; the

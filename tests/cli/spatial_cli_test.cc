@@ -277,3 +277,31 @@ TEST_F(SpatialCli, MessagesNameTheTruthTheCableAndTheGrid) {
   EXPECT_NE(r.output.find("(their centroid is at x = 0, y = 0 m)"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(Path("ws2.csv")));
 }
+
+namespace {
+// montecarlo on a spatial robot: the planar study's files with the spatial robot's names and
+// the held coordinates in run.yaml; the planar-only flags and a grid at another n refused
+// (exit 2, nothing written).
+TEST_F(SpatialCli, MonteCarloWritesTheStudyAndRefusesPlanarOnlyFlags) {
+  const std::string robot = RandomRobotFile(6);
+  const std::string out = Path("mc");
+  const RunResult ok = RunCablecal("montecarlo --robot " + robot + " --poses 8 --trials 3 --designs random,grid:2x2x2 "
+                                   "--geometry-sigma 0.0002 --no-plot --out " + out);
+  ASSERT_EQ(ok.exit_code, 0) << ok.output;
+  const std::string summary = Read("mc/summary.csv");
+  EXPECT_NE(summary.find("\n8,random,a1y,"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\n8,grid:2x2x2,l60,"), std::string::npos) << summary;
+  EXPECT_NE(Read("mc/run.yaml").find("kind: spatial"), std::string::npos);
+  EXPECT_NE(Read("mc/run.yaml").find("gauge_held"), std::string::npos);
+  for (const auto& [flags, named] : std::vector<std::pair<std::string, std::string>>{
+           {"--poses 8 --estimator paper", "--estimator"},
+           {"--poses 8 --equilibrium on", "--equilibrium"},
+           {"--designs grid:3x3x3 --poses 8", "run it with --poses 27"}}) {
+    const RunResult bad = RunCablecal("montecarlo --robot " + robot + " --trials 2 " + flags +
+                                      " --no-plot --out " + Path("bad"));
+    EXPECT_EQ(bad.exit_code, 2) << flags << ": " << bad.output;
+    EXPECT_NE(bad.output.find(named), std::string::npos) << flags << ": " << bad.output;
+    EXPECT_FALSE(fs::exists(Path("bad"))) << flags;
+  }
+}
+}  // namespace
