@@ -7,7 +7,9 @@
 #include <string>
 
 #include "model/robot.h"
+#include "model/spatial_robot.h"
 #include "montecarlo/montecarlo.h"
+#include "montecarlo/spatial_montecarlo.h"
 #include "python/bindings.h"
 #include "python/converters.h"
 #include "python/interrupt.h"
@@ -45,7 +47,10 @@ void BindMonteCarlo(py::module_& m) {
          py::handle gauge, py::handle sensors, py::handle geometry_sigma, py::handle seed, py::handle design_starts,
          py::handle threads, py::handle progress, py::handle loss, py::handle outliers, py::handle geometry_prior,
          py::handle equilibrium, py::handle com_error) {
-        const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
+        // A SpatialRobot's study (montecarlo/spatial_montecarlo.h) takes the same arguments; the
+        // planar-only ones must stay at their defaults.
+        const bool spatial = py::isinstance<SpatialRobot>(robot_arg);
+        const Robot* planar = spatial ? nullptr : &AsObject<Robot>(robot_arg, "robot", "Robot or SpatialRobot");
         MonteCarloOptions o;
         if (py::isinstance<py::str>(poses)) {
           o.pose_counts = ParsePoseCounts(poses.cast<std::string>());
@@ -70,7 +75,13 @@ void BindMonteCarlo(py::module_& m) {
         o.equilibrium = OnOff(equilibrium, "equilibrium");
         o.com_error_m = AsNumber(com_error, "com_error");
         o.design_in_child_processes = false;  // as design() (design.cc)
-        ValidateOptions(o, &robot);
+        SpatialMonteCarloOptions spatial_options;
+        if (spatial) {
+          spatial_options.study = o;
+          ValidateSpatialMonteCarloOptions(robot_arg.cast<const SpatialRobot&>(), spatial_options);
+        } else {
+          ValidateOptions(o, planar);
+        }
         if (!progress.is_none() && !PyCallable_Check(progress.ptr())) Bad("progress", "expected a callable or None");
         std::atomic<bool> stop{false};
         o.interrupted = &stop;
@@ -93,7 +104,12 @@ void BindMonteCarlo(py::module_& m) {
             stop,
             [&] {
               if (thread_count > 0) omp_set_num_threads(thread_count);
-              return RunMonteCarlo(robot, o);
+              if (spatial) {
+                spatial_options.study.progress = o.progress;
+                spatial_options.study.interrupted = o.interrupted;
+                return RunSpatialMonteCarlo(robot_arg.cast<const SpatialRobot&>(), spatial_options);
+              }
+              return RunMonteCarlo(*planar, o);
             },
             report);
         report();  // the last count: (total, total)
@@ -105,7 +121,8 @@ void BindMonteCarlo(py::module_& m) {
       py::arg("threads") = py::none(), py::arg("progress") = py::none(), py::arg("loss") = "none",
       py::arg("outliers") = "0", py::arg("geometry_prior") = false,
       py::arg("equilibrium") = kDefaultEquilibrium ? "on" : "off", py::arg("com_error") = 0.0,
-      "The Monte Carlo study (cablecal montecarlo); Ctrl-C raises KeyboardInterrupt. progress(done, total), if "
+      "The Monte Carlo study (cablecal montecarlo) of a Robot or a SpatialRobot (designs also grid:2x2x2, "
+      "grid:3x3x3; the planar-only arguments at their defaults); Ctrl-C raises KeyboardInterrupt. progress(done, total), if "
       "given, is called now and then with the trials done. geometry_prior: identify every trial with "
       "geometry_sigma as a prior (montecarlo --geometry-prior).");
 }

@@ -911,6 +911,26 @@ def test_spatial_sample_workspace_simulate_equal_cli(tmp_path, name):
     assert set(back.sensors) == set(run.measurements.sensors)
 
 
+def test_spatial_montecarlo_equals_cli(tmp_path):
+    path = robot_file("cogiro")
+    robot = cablecal.Robot.load(path)
+    # The nominal robot as the truth: cogiro's stiff cables take any exit error under their
+    # tension bound at some of 27 poses (README, "Monte Carlo" of spatial robots).
+    result = cablecal.montecarlo(robot, 27, 3, designs="random,grid:3x3x3", geometry_sigma=0, seed=5)
+    cli("montecarlo", "--robot", path, "--poses", "27", "--trials", "3", "--designs", "random,grid:3x3x3",
+        "--geometry-sigma", "0", "--seed", "5", "--no-plot", "--out", str(tmp_path))
+    assert result.summary_csv() == data_lines(tmp_path / "summary.csv")
+    assert {r["design"] for r in result.summary} == {"random", "grid:3x3x3"}
+    assert all(r["failures"] == 0 for r in result.summary)
+    assert "a1y" in {r["parameter"] for r in result.summary}
+    with pytest.raises(cablecal.InputError, match="--gauge"):
+        cablecal.montecarlo(robot, 8, 3, gauge="a1z")
+    with pytest.raises(cablecal.InputError, match="--poses 27"):
+        cablecal.montecarlo(robot, 8, 3, designs="grid:3x3x3")
+    with pytest.raises(cablecal.InputError, match="cannot identify the geometry"):
+        cablecal.montecarlo(robot, 8, 3, designs="random")
+
+
 def test_spatial_arguments_are_checked():
     robot = cablecal.SpatialRobot.builtin("irma4u")
     planar = cablecal.Robot.builtin()
