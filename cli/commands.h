@@ -118,6 +118,7 @@ struct MonteCarloCommandOptions {
   unsigned long long seed = 1;
   bool plot = true;
   bool geometry_prior = false;  // --geometry-prior: identify every trial with geometry_sigma_m as a prior
+  bool skip_infeasible = false;  // spatial robots: each trial skips the poses its true robot cannot hold
 };
 int RunMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptions& options);
 

@@ -285,6 +285,9 @@ int main(int argc, char** argv) {
   mc_cmd->add_option("--threads", mc.threads, "OpenMP threads (default: all cores)")
       ->check(WholeNumberIn(1, kMaxThreads));
   mc_cmd->add_option("--seed", mc.seed, "random seed")->capture_default_str()->check(kSeed);
+  mc_cmd->add_flag("--skip-infeasible", mc.skip_infeasible,
+                    "spatial robots: each trial skips the poses its true robot cannot hold within its limits (as simulate "
+                    "--skip-infeasible) and identifies from the rest, instead of failing");
   mc_cmd->add_flag("!--no-plot", mc.plot, "skip the figures");
   mc_cmd->add_option("--out", mc.out_dir, "output folder")->required();
 

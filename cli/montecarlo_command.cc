@@ -37,6 +37,7 @@ const std::vector<std::string> kStudyFigures = {"sigma_vs_n.png", "distributions
 struct StudiedRobot {
   std::string name, source;
   bool spatial = false;
+  bool skip_infeasible = false;
 };
 
 std::string RunYaml(const StudiedRobot& robot, const MonteCarloOptions& o, const std::string& poses_text,
@@ -80,6 +81,14 @@ std::string RunYaml(const StudiedRobot& robot, const MonteCarloOptions& o, const
   y << Key << "outliers" << Value << YAML::Flow << YAML::BeginMap << Key << "rate" << Value
     << YamlNumber{o.outliers.rate} << Key << "size_sigmas" << Value << YamlNumber{o.outliers.size_sigmas}
     << YAML::EndMap;
+  if (robot.spatial) {
+    long skipped = 0;
+    for (const MonteCarloCell& c : r.cells) {
+      for (const TrialOutcome& t : c.trials) skipped += t.skipped_poses;
+    }
+    y << Key << "skip_infeasible" << Value << robot.skip_infeasible;
+    y << Key << "skipped_poses" << Value << skipped << YAML::Comment("over every trial");
+  }
   y << Key << "design_starts" << Value << o.design_starts;
   y << Key << "seed" << Value << o.seed;
   y << Key << "blas" << Value << YamlString{LoadedLibraryPath("libblas.so")};
@@ -164,6 +173,7 @@ int RunSpatialMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptio
   o.study.outliers = ParseOutliers(options.outliers);
   o.study.seed = options.seed;
   o.study.design_starts = options.design_starts;
+  o.skip_infeasible = options.skip_infeasible;
   ValidateSpatialMonteCarloOptions(robot, o);
   if (options.threads > 0) omp_set_num_threads(options.threads);
   const int threads = omp_get_max_threads();
@@ -174,7 +184,7 @@ int RunSpatialMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptio
   if (!ctx.quiet) o.study.progress = ProgressBar("montecarlo", "trials");
   const MonteCarloResult r = RunSpatialMonteCarlo(robot, o);
   if (r.interrupted) throw Interrupted();
-  WriteStudy(folder, "", {robot.name, robot.source, true}, o.study, options.poses, r, ctx, threads,
+  WriteStudy(folder, "", {robot.name, robot.source, true, o.skip_infeasible}, o.study, options.poses, r, ctx, threads,
              "Monte Carlo: " + robot.name);
   std::string figure_error;
   if (options.plot) figure_error = TryPlotStudy(folder, {folder.staging()}, kStudyFigures);
@@ -191,6 +201,7 @@ int RunSpatialMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptio
 
 int RunMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptions& options) {
   if (IsSpatialRobotFile(options.robot_path)) return RunSpatialMonteCarloCommand(ctx, options);
+  RefuseSpatialOnlyFlag(options.skip_infeasible, "--skip-infeasible");
   Robot robot;
   MonteCarloOptions o;
   RunAgreed(ctx.processes, [&] {

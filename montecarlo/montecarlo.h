@@ -80,6 +80,9 @@ struct TrialOutcome {
   bool ok = false;
   std::string failure;  // "<cause>: why", cause one of FailureCauses()
   std::vector<double> errors_m;    // identified - true: the 3m geometric parameters (a1x a1z ... l10 ...), x1..xn
+  // Spatial studies with skip_infeasible: the poses this trial's true robot could not hold
+  // (their x error is NaN, left out of every statistic and of errors.csv).
+  int skipped_poses = 0;
 };
 
 struct MonteCarloCell {

@@ -33,6 +33,8 @@ ErrorStats Summarise(const MonteCarloCell& cell, const std::vector<std::string>&
       }
     }
   }
+  // A pose a spatial trial skipped has no estimate (NaN): not an error to count.
+  e.erase(std::remove_if(e.begin(), e.end(), [](double v) { return std::isnan(v); }), e.end());
   ErrorStats s;
   s.count = static_cast<int>(e.size());
   if (e.empty()) return s;
@@ -63,6 +65,7 @@ std::string ErrorsCsv(const MonteCarloResult& r) {
       if (!tr.ok) continue;
       const std::string prefix = std::to_string(c.n) + "," + ToString(c.design) + "," + std::to_string(t + 1) + ",";
       for (std::size_t k = 0; k < tr.errors_m.size(); ++k) {
+        if (std::isnan(tr.errors_m[k])) continue;  // a skipped pose (spatial --skip-infeasible)
         const std::string name = k < g ? geometry[k] : "x" + std::to_string(k - g + 1);
         out += prefix + name + "," + FormatDouble(tr.errors_m[k]) + "\n";
       }
@@ -163,6 +166,17 @@ std::string SummaryMarkdown(const MonteCarloResult& r, const std::string& title)
     }
     if (!causes.empty()) o << " (" << causes << ")";
     o << " |\n";
+  }
+  long skipped = 0, held = 0;
+  for (const MonteCarloCell& c : r.cells) {
+    for (const TrialOutcome& t : c.trials) {
+      skipped += t.skipped_poses;
+      if (t.ok) held += c.n - t.skipped_poses;
+    }
+  }
+  if (skipped > 0) {
+    o << "\nThe trials skipped " << skipped << " poses their true robot could not hold within its limits "
+      << "(--skip-infeasible) and identified from the other " << held << ".\n";
   }
   // Before measuring, the lab knew every parameter to geometry_sigma_m (the true geometry is
   // drawn so): a calibration that knows less, or hardly more, is said to be one.

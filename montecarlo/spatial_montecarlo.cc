@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <limits>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -89,6 +90,7 @@ TrialOutcome RunSpatialTrial(const SpatialRobot& nominal, const SpatialMonteCarl
     SpatialSimulationOptions lab;
     lab.noisy = o.study.sensors;
     lab.encoder_noise = o.encoder_noise;
+    lab.skip_infeasible = o.skip_infeasible;
     sim = SimulateSpatialExperiment(nominal, truth, designed ? *designed : sampled, lab, rng);
   } catch (const SolverFailure& e) {
     out.failure = std::string("simulation: ") + e.what();
@@ -106,12 +108,18 @@ TrialOutcome RunSpatialTrial(const SpatialRobot& nominal, const SpatialMonteCarl
     out.failure = std::string("identification: ") + ToString(r.status) + (r.message.empty() ? "" : " (" + r.message + ")");
     return out;
   }
-  CABLECAL_CHECK(static_cast<int>(r.poses.size()) == n, "one pose estimate per pose");
+  CABLECAL_CHECK(static_cast<int>(r.poses.size() + sim.skipped.size()) == n, "one pose estimate per held pose");
   for (int i = 0; i < m; ++i) {
     for (int a = 0; a < 3; ++a) out.errors_m.push_back(r.geometry(3 * i + a) - truth.cables[i].p_F_exit_m(a));
   }
   for (int i = 0; i < m; ++i) out.errors_m.push_back(r.geometry(3 * m + i) - l0_m(i));
-  for (int j = 0; j < n; ++j) out.errors_m.push_back(r.poses[j](0) - sim.true_poses[j](0));
+  // Pose ids are 1..n in plan order; a skipped pose has no reading, hence no estimate.
+  std::vector<double> x_errors(n, std::numeric_limits<double>::quiet_NaN());
+  for (std::size_t k = 0; k < r.pose_ids.size(); ++k) {
+    x_errors[r.pose_ids[k] - 1] = r.poses[k](0) - sim.true_poses[k](0);
+  }
+  out.errors_m.insert(out.errors_m.end(), x_errors.begin(), x_errors.end());
+  out.skipped_poses = static_cast<int>(sim.skipped.size());
   out.ok = true;
   return out;
 }

@@ -34,6 +34,11 @@ struct SpatialMonteCarloOptions {
   // false, with study.sensors = NoisySensors::kNone: noise-free readings, so that the errors
   // are what the identification itself leaves (a check of the study, not a lab's experiment).
   bool encoder_noise = true;
+  // Each trial skips the poses its true robot cannot hold within its limits (what a lab does:
+  // simulate --skip-infeasible) and identifies from the rest; their x errors are NaN (left out
+  // of the statistics), TrialOutcome::skipped_poses counts them. Off: such a trial fails
+  // (cause "simulation"), as planar.
+  bool skip_infeasible = false;
 };
 
 // The InputErrors of RunSpatialMonteCarlo: the study's own (ValidateStudyOptions), a

@@ -166,6 +166,31 @@ TEST(SpatialMonteCarlo, GridPosesAreFeasibleDistinctAndOnePerCell) {
   }
 }
 
+// --skip-infeasible: a trial whose true robot cannot hold some poses skips them (their x error
+// NaN, out of every statistic and of errors.csv) and identifies from the rest, where without
+// it the trial fails.
+TEST(SpatialMonteCarlo, SkippedPosesAreCountedAndLeftOutOfTheStatistics) {
+  const SpatialRobot robot = RandomRobot(46, 6, 5e-5, 1e-3);
+  SpatialMonteCarloOptions o = Study(20, 6, 0.002);
+  const MonteCarloResult failing = RunSpatialMonteCarlo(robot, o);
+  o.skip_infeasible = true;
+  const MonteCarloResult skipping = RunSpatialMonteCarlo(robot, o);
+  EXPECT_GT(failing.cells[0].failures("simulation"), 0);
+  EXPECT_EQ(skipping.cells[0].failures("simulation"), 0);
+  int skipped = 0;
+  for (const TrialOutcome& t : skipping.cells[0].trials) {
+    if (!t.ok) continue;
+    int nan = 0;
+    for (const double e : t.errors_m) nan += std::isnan(e);
+    EXPECT_EQ(nan, t.skipped_poses);
+    skipped += t.skipped_poses;
+  }
+  EXPECT_GT(skipped, 0);
+  EXPECT_TRUE(std::isfinite(Summarise(skipping.cells[0], skipping.geometry_names, "x_all").std));
+  EXPECT_EQ(ErrorsCsv(skipping).find("nan"), std::string::npos);
+  EXPECT_NE(SummaryMarkdown(skipping, "t").find("skipped " + std::to_string(skipped) + " poses"), std::string::npos);
+}
+
 TEST(SpatialMonteCarlo, RefusesWhatItDoesNotServe) {
   const SpatialRobot robot = RandomRobot(49, 6, 5e-5, 1e-3);
   SpatialMonteCarloOptions o = Study(10, 2, 0.002);
