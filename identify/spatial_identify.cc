@@ -939,7 +939,7 @@ Eigen::VectorXd NominalSpatialGeometry(const SpatialRobot& nominal, bool swivel,
   const VectorXd home_lengths = CableLengths<double>(nominal, nominal.home_pose());
   for (int i = 0; i < L.m; ++i) {
     g.segment<3>(L.exit(i)) = nominal.cables[i].p_F_exit_m;
-    g(L.length(i)) = home_lengths(i);
+    g(L.length(i)) = nominal.cables[i].initial_length_m.value_or(home_lengths(i));
   }
   if (heading) g(L.yaw0()) = nominal.home_rpy_rad.z();
   return g;
