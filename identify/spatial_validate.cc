@@ -1,5 +1,7 @@
 #include "identify/spatial_validate.h"
 
+#include <ceres/jet.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -14,6 +16,7 @@
 #include "identify/identify.h"        // EmitProvenance
 #include "model/forward_statics.h"
 #include "model/spatial_sensor_model.h"
+#include "model/swivel.h"
 
 namespace cablecal {
 namespace {
@@ -31,19 +34,53 @@ const char* Unit(SpatialSensor s) {
   return IsAngle(s) ? "rad" : "m";
 }
 
-// Where the forward model starts for a reading: `base` with what the sensors saw of the pose
-// (the inclinometer's roll and pitch, the laser's height, the tracker's point, the heading),
-// so that lengths the platform holds in two places give the place the lab saw.
-SpatialPose<double> SensorGuess(const SpatialRobot& robot, const SpatialMeasurement& r, const SpatialPose<double>& home,
-                                double zero_yaw_rad) {
-  SpatialPose<double> q = home;
-  if (r.has(SpatialSensor::kInclinometer)) q.segment<2>(3) = r.values(SpatialSensor::kInclinometer);
-  if (r.has(SpatialSensor::kHeading)) q(5) = zero_yaw_rad + r.values(SpatialSensor::kHeading)(0);
-  if (r.has(SpatialSensor::kPosition) && robot.sensors.position) {
-    q.head<3>() = r.values(SpatialSensor::kPosition) - Rotation<double>(q) * robot.sensors.position->p_P_target_m;
+// Where the forward model starts for a reading: the pose that best explains it with this
+// robot's geometry, the cables taken as rigid (Gauss-Newton from `start`, steps of at most 0.2 m
+// or rad): its encoders' lengths and the absolute sensors' readings (inclinometer, laser,
+// position, heading), each over its sigma. The forward model's solution must then lie near
+// what the sensors read, and lengths the platform holds in two places give the place the lab saw.
+SpatialPose<double> SensorGuess(const SpatialRobot& robot, const SpatialMeasurement& r,
+                                const Eigen::VectorXd& paid_out_m, const SpatialPose<double>& start,
+                                const SpatialSensorZero& zero) {
+  using Jet = ceres::Jet<double, 6>;
+  const int m = robot.num_cables();
+  const double encoder_sigma = std::max(robot.sensors.encoder_sigma_m, 1e-9);
+  std::vector<std::pair<SpatialSensor, double>> absolute;
+  for (const SpatialSensor s : {SpatialSensor::kInclinometer, SpatialSensor::kLaser, SpatialSensor::kPosition,
+                                SpatialSensor::kHeading}) {
+    const std::optional<RangedNoise> noise = SpatialSensorNoise(robot.sensors, s);
+    if (r.has(s) && noise) absolute.push_back({s, std::max(noise->sigma(), 1e-9)});
   }
-  if (r.has(SpatialSensor::kLaser)) q(2) = robot.p_F_frame_min_m.z() + r.values(SpatialSensor::kLaser)(0);
-  return q;
+  SpatialPose<double> q = start;
+  for (int it = 0; it < 50; ++it) {
+    SpatialPose<Jet> qj;
+    for (int c = 0; c < 6; ++c) qj(c) = Jet(q(c), c);
+    const Eigen::Matrix<Jet, Eigen::Dynamic, 1> l = CableLengths<Jet>(robot, qj);
+    const auto sensors =
+        SpatialSensorReadings<Jet>(robot, qj, Eigen::Matrix<Jet, Eigen::Dynamic, 1>::Zero(m), zero);
+    std::vector<Jet> rows;
+    for (int i = 0; i < m; ++i) rows.push_back((l(i) - Jet(paid_out_m(i))) / encoder_sigma);
+    for (const auto& [s, sigma] : absolute) {
+      const Eigen::VectorXd& reading = r.values(s);
+      for (int k = 0; k < reading.size(); ++k) {
+        Jet e = sensors[static_cast<int>(s)](k) - Jet(reading(k));
+        if (s == SpatialSensor::kHeading) e = WrappedAngle<Jet>(e);
+        rows.push_back(e / sigma);
+      }
+    }
+    Eigen::VectorXd res(rows.size());
+    Eigen::MatrixXd J(rows.size(), 6);
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+      res(k) = rows[k].a;
+      J.row(k) = rows[k].v.transpose();
+    }
+    const Eigen::VectorXd step = J.colPivHouseholderQr().solve(-res);
+    if (!step.allFinite()) break;
+    const double largest = step.cwiseAbs().maxCoeff();
+    q += (largest > 0.2 ? 0.2 / largest : 1.0) * step;
+    if (largest < 1e-10) break;
+  }
+  return q.allFinite() ? q : start;
 }
 
 // One robot's model of the lab: its home lengths, the pose they hold (the relative sensors'
@@ -112,13 +149,8 @@ SpatialValidationResult ValidateSpatial(const SpatialRobot& calibrated, const st
     for (std::size_t j = 0; j < readings.size(); ++j) {
       if (!keep[j]) continue;
       const SpatialMeasurement& r = readings[j];
-      // The coordinates no sensor saw from the model's own solution (home's if it has none), the
-      // others the sensors'; the solution must then lie near what they read.
       const Eigen::VectorXd commanded = model.home_paid_out_m + r.dl_m;
-      const SpatialForwardResult unguided = SolveForwardStatics(*model.robot, commanded);
-      const SpatialPose<double> base =
-          unguided.status == ForwardStatus::kConverged ? unguided.equilibrium.q : model.zero_pose;
-      const SpatialPose<double> guess = SensorGuess(*model.robot, r, base, model.zero.yaw_rad);
+      const SpatialPose<double> guess = SensorGuess(*model.robot, r, commanded, model.zero_pose, model.zero);
       const SpatialForwardResult fwd = SolveForwardStatics(*model.robot, commanded, &guess);
       if (fwd.status == ForwardStatus::kConverged) {
         q[k][j] = fwd.equilibrium.q;
