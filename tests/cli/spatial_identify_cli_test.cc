@@ -279,6 +279,8 @@ TEST_F(SpatialIdentifyCli, HostileInputsExitTwoWithOneMessageAndWriteNothing) {
         << r.output;
     EXPECT_FALSE(fs::exists(Path("out.yaml"))) << c.args;
     EXPECT_FALSE(fs::exists(Path("cal.yaml"))) << c.args;
+    fs::remove(Path("out.yaml"));  // so that a case wrongly accepted leaves no trace for the next
+    fs::remove(Path("cal.yaml"));
   }
   // The spatial gauges are refused on a planar robot, naming the flag.
   const RunResult planar = RunCablecal("identify --measurements " + Path("m.csv") + " --gauge auto" + out);
