@@ -54,6 +54,17 @@ py::object SpatialSample(const SpatialRobot& robot, int n, std::uint64_t seed, p
 py::object SpatialSimulate(const SpatialRobot& robot, py::handle plan, py::handle truth, py::handle geometry_sigma,
                            NoisySensors noisy, bool encoder_noise, std::uint64_t seed, bool systematic_errors,
                            bool skip_infeasible);
+// The spatial halves of identify, calibrated_robot and validate (python/spatial_identify.cc), for
+// a SpatialRobot; SpatialMeasurements from arrays (dl, {sensor name: (n, k)}, pose ids).
+void BindSpatialIdentify(py::module_& m);  // SpatialIdentifyResult, SpatialValidation
+py::object SpatialIdentify(const SpatialRobot& robot, py::handle measurements, py::handle estimator, py::handle gauge,
+                           py::handle max_iterations, py::handle loss, py::handle geometry_prior,
+                           py::handle equilibrium);
+py::object SpatialCalibratedRobot(const SpatialRobot& nominal, py::handle result);
+py::object SpatialValidatePy(const SpatialRobot& robot, py::handle measurements, py::handle nominal,
+                             bool skip_infeasible);
+PySpatialMeasurements MakeSpatialMeasurements(const SpatialRobot& robot, py::handle dl, py::handle sensors,
+                                              py::handle pose_ids);
 void BindExperiment(py::module_& m);  // Plan, Measurements, sample, Experiment, simulate
 void BindDesign(py::module_& m);      // DesignResult, design
 void BindIdentify(py::module_& m);    // IdentifyResult, identify, calibrated_robot, report, Validation, validate
