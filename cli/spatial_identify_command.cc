@@ -62,6 +62,15 @@ int RunSpatialIdentify(const Context& ctx, const IdentifyCommandOptions& options
     RefusePlanarOnlyFlag(true, "--holdout", "for a spatial robot validate the calibrated robot file on held-out readings "
                                             "(cablecal validate --robot CALIBRATED --nominal NOMINAL)");
   }
+  // The report's folder is checked before any work, and no other file may be one it writes.
+  std::unique_ptr<OutputFolder> report;
+  if (!options.report_dir.empty()) {
+    report = std::make_unique<OutputFolder>("--report", options.report_dir, SpatialReportFileNames());
+    report->RefuseInputs({{"--robot", options.robot_path},
+                          {"--measurements", options.measurements_path},
+                          {"--out", options.out_path},
+                          {"--calibrated-robot", options.calibrated_robot_path}});
+  }
   const SpatialRobot nominal = LoadSpatialRobotFile(options.robot_path);
   SpatialIdentifyOptions id;
   id.gauge = ParseSpatialGauge(options.gauge_given ? options.gauge : "auto");
@@ -79,14 +88,6 @@ int RunSpatialIdentify(const Context& ctx, const IdentifyCommandOptions& options
   const std::string result_yaml = options.out_path.empty() && options.report_dir.empty()
                                       ? std::string()
                                       : SpatialIdentifyResultYaml(nominal, id, result, ctx.command_line);
-  std::unique_ptr<OutputFolder> report;
-  if (!options.report_dir.empty()) {
-    report = std::make_unique<OutputFolder>("--report", options.report_dir, SpatialReportFileNames());
-    report->RefuseInputs({{"--robot", options.robot_path},
-                          {"--measurements", options.measurements_path},
-                          {"--out", options.out_path},
-                          {"--calibrated-robot", options.calibrated_robot_path}});
-  }
   AtomicOutput output;
   if (!options.out_path.empty()) output.WriteText(options.out_path, result_yaml);
   if (!options.calibrated_robot_path.empty()) {

@@ -282,6 +282,13 @@ TEST_F(SpatialIdentifyCli, HostileInputsExitTwoWithOneMessageAndWriteNothing) {
     fs::remove(Path("out.yaml"));  // so that a case wrongly accepted leaves no trace for the next
     fs::remove(Path("cal.yaml"));
   }
+  // A solve that stops short is exit 3 with Ceres' reason, and writes nothing.
+  const RunResult stopped =
+      RunCablecal("identify --robot " + robot + " --measurements " + Path("m.csv") + " --max-iterations 1" + out);
+  EXPECT_EQ(stopped.exit_code, 3) << stopped.output;
+  EXPECT_NE(stopped.output.find(Path("m.csv") + ": "), std::string::npos) << stopped.output;
+  EXPECT_FALSE(fs::exists(Path("out.yaml")));
+  EXPECT_FALSE(fs::exists(Path("cal.yaml")));
   // The spatial gauges are refused on a planar robot, naming the flag.
   const RunResult planar = RunCablecal("identify --measurements " + Path("m.csv") + " --gauge auto" + out);
   EXPECT_EQ(planar.exit_code, 2) << planar.output;
