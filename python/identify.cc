@@ -69,7 +69,7 @@ std::string SourceOf(const std::vector<Measurement>& readings, const std::string
 
 }  // namespace
 
-// Long (~240 lines) for a reason: a binding table, each class's properties and each function's
+// Long (~265 lines) for a reason: a binding table, each class's properties and each function's
 // keywords in the order help() shows them.
 void BindIdentify(py::module_& m) {
   // ---- identify
