@@ -385,12 +385,12 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
                      {"--holdout", options.holdout_path}},
                     {{"--out", options.out_path}, {"--calibrated-robot", options.calibrated_robot_path}});
   if (options.out_path.empty() && !options.json) throw InputError("--out", "", "required (or print the result with --json)");
-  if (IsSpatialRobotFile(options.robot_path)) return RunSpatialIdentify(ctx, options);
-  RefuseSpatialOnlyFlag(options.gauge == "auto" || options.gauge.rfind("hold:", 0) == 0, "--gauge " + options.gauge);
   if (!options.holdout_path.empty() && options.report_dir.empty()) {
     throw InputError("--holdout", "", "needs --report DIR: the held-out readings are compared in the report");
   }
   RefuseHoldoutThatIsTheMeasurements(options.holdout_path, options.measurements_path);
+  if (IsSpatialRobotFile(options.robot_path)) return RunSpatialIdentify(ctx, options);
+  RefuseSpatialOnlyFlag(options.gauge == "auto" || options.gauge.rfind("hold:", 0) == 0, "--gauge " + options.gauge);
   // The report's folder is checked before any work, and no other file may be one it writes.
   std::unique_ptr<OutputFolder> report;
   if (!options.report_dir.empty()) {

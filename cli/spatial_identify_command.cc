@@ -58,16 +58,13 @@ int RunSpatialIdentify(const Context& ctx, const IdentifyCommandOptions& options
                        "its Eq. (6) is the planar model's: a spatial robot is identified with ml (the default)");
   RefusePlanarOnlyFlag(options.geometry_prior_given, "--geometry-prior",
                        "for a spatial robot --gauge prior puts the robot file's tracker sigma on every exit coordinate");
-  if (!options.holdout_path.empty()) {
-    RefusePlanarOnlyFlag(true, "--holdout", "for a spatial robot validate the calibrated robot file on held-out readings "
-                                            "(cablecal validate --robot CALIBRATED --nominal NOMINAL)");
-  }
   // The report's folder is checked before any work, and no other file may be one it writes.
   std::unique_ptr<OutputFolder> report;
   if (!options.report_dir.empty()) {
     report = std::make_unique<OutputFolder>("--report", options.report_dir, SpatialReportFileNames());
     report->RefuseInputs({{"--robot", options.robot_path},
                           {"--measurements", options.measurements_path},
+                          {"--holdout", options.holdout_path},
                           {"--out", options.out_path},
                           {"--calibrated-robot", options.calibrated_robot_path}});
   }
@@ -80,6 +77,11 @@ int RunSpatialIdentify(const Context& ctx, const IdentifyCommandOptions& options
   id.statics = !options.equilibrium_given || options.equilibrium == "on";
   const std::vector<SpatialMeasurement> readings =
       ReadSpatialMeasurementsCsv(options.measurements_path, nominal.num_cables(), ParseDelimiter(options.delimiter));
+  // Read before the solve: a bad held-out file is refused before any work.
+  const std::vector<SpatialMeasurement> holdout =
+      options.holdout_path.empty()
+          ? std::vector<SpatialMeasurement>()
+          : ReadSpatialMeasurementsCsv(options.holdout_path, nominal.num_cables(), ParseDelimiter(options.delimiter));
   const SpatialIdentifyResult result = IdentifySpatial(nominal, readings, id);
   if (result.status == SpatialIdentifyStatus::kRankDeficient) {
     throw InputError(options.measurements_path, "", result.message);  // the data cannot calibrate it, as planar
@@ -88,6 +90,13 @@ int RunSpatialIdentify(const Context& ctx, const IdentifyCommandOptions& options
   const std::string result_yaml = options.out_path.empty() && options.report_dir.empty()
                                       ? std::string()
                                       : SpatialIdentifyResultYaml(nominal, id, result, ctx.command_line);
+  // The held-out readings predicted by the calibrated robot and by the nominal one.
+  std::optional<SpatialValidationResult> validation;
+  if (!holdout.empty()) {
+    SpatialRobot calibrated = CalibratedSpatialRobot(nominal, result);
+    calibrated.source = "identified from " + options.measurements_path;  // not the nominal file
+    validation = ValidateSpatial(calibrated, nominal, holdout, options.holdout_path);
+  }
   AtomicOutput output;
   if (!options.out_path.empty()) output.WriteText(options.out_path, result_yaml);
   if (!options.calibrated_robot_path.empty()) {
@@ -107,8 +116,9 @@ int RunSpatialIdentify(const Context& ctx, const IdentifyCommandOptions& options
         return std::string(e.what());
       }
     };
-    const ReportSources sources{ctx.command_line, options.measurements_path, ""};
-    figure_error = StageSpatialReport(*report, nominal, id, result, result_yaml, sources, draw);
+    const ReportSources sources{ctx.command_line, options.measurements_path, options.holdout_path};
+    figure_error = StageSpatialReport(*report, nominal, id, result, result_yaml, validation ? &*validation : nullptr,
+                                      sources, draw);
     if (SigintFlag()) throw Interrupted();
   }
   output.Commit();
@@ -154,6 +164,9 @@ int RunSpatialIdentify(const Context& ctx, const IdentifyCommandOptions& options
               PrintableText(result.worst_where).c_str(), result.worst_sensor.c_str(), result.worst_residual);
   if (!ctx.quiet) {
     for (const std::string& w : result.warnings) std::fprintf(stderr, "cablecal: warning: %s\n", w.c_str());
+    if (validation) {
+      for (const std::string& w : validation->warnings) std::fprintf(stderr, "cablecal: warning: --holdout: %s\n", w.c_str());
+    }
   }
   for (int k = 0; k < static_cast<int>(result.names.size()); ++k) PrintParameter(result, k);
   if (report) std::printf("  report: %s/report.md\n", options.report_dir.c_str());

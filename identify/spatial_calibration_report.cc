@@ -113,9 +113,46 @@ std::string Fixed6(double v) {
   return text;
 }
 
+// Millimetres, milliradians or newtons, 3 significant digits.
+std::string Scaled(SpatialSensor s, double v) {
+  if (s == SpatialSensor::kLoadCell) return Rounded(v);
+  return Rounded(1e3 * v);
+}
+const char* ScaledUnit(SpatialSensor s) {
+  if (s == SpatialSensor::kLoadCell) return "N";
+  return s == SpatialSensor::kLaser || s == SpatialSensor::kPosition ? "mm" : "mrad";
+}
+
+std::string ValidationSection(const SpatialValidationResult& v, const ReportSources& sources) {
+  std::ostringstream o;
+  o << "## Validation on held-out poses\n\n";
+  o << "The readings of " << MarkdownCode(sources.holdout) << " (" << v.num_poses << " poses";
+  if (v.pose_ids.size() != static_cast<std::size_t>(v.num_poses)) o << ", " << v.pose_ids.size() << " readings";
+  o << "), which the identification did not see, predicted by each robot's forward model (where its commanded "
+       "lengths hold the platform) and compared with every sensor they have; error = predicted − measured.\n\n";
+  o << "| sensor | noise σ | calibrated RMS | calibrated max | nominal RMS | nominal max | nominal / calibrated |\n"
+       "|---|---:|---:|---:|---:|---:|---:|\n";
+  for (const SpatialSensor s : kSpatialSensors) {
+    const int i = static_cast<int>(s);
+    if (!v.compared[i]) continue;
+    o << "| " << ToString(s) << " (" << ScaledUnit(s) << ") | "
+      << (std::isfinite(v.sigma[i]) ? Scaled(s, v.sigma[i]) : std::string("")) << " |";
+    for (const SpatialRobotPrediction& p : v.robots) {
+      o << " " << Scaled(s, p.summary[i]->rms) << " | " << Scaled(s, p.summary[i]->max_abs) << " |";
+    }
+    o << " " << Rounded(SpatialRmsRatio(v, s)) << " |\n";
+  }
+  o << "\n";
+  for (const std::string& w : v.warnings) o << "**Warning:** " << PrintableText(w) << ".\n\n";
+  if (!SpatialNotCompared(v).empty()) o << "Not compared: the held-out readings have " << SpatialNotCompared(v) << ".\n\n";
+  o << "Per reading: `validation.csv`; the summary: `validation.yaml`.\n\n";
+  return o.str();
+}
+
 // Long (~90 lines) for a reason: report.md's sections in their order, written once.
 std::string Markdown(const SpatialRobot& nominal, const SpatialIdentifyOptions& options, const SpatialIdentifyResult& r,
-                     const ReportSources& sources, const std::string& figure_error) {
+                     const SpatialValidationResult* validation, const ReportSources& sources,
+                     const std::string& figure_error) {
   std::ostringstream o;
   o << "# Calibration report: " << MarkdownEscaped(nominal.name) << "\n\n";
   o << "The exit points and initial lengths of " << MarkdownEscaped(nominal.name) << " (spatial robot, "
@@ -129,7 +166,8 @@ std::string Markdown(const SpatialRobot& nominal, const SpatialIdentifyOptions& 
   if (!missing.empty()) o << " The robot file's " << QuotedList(missing) << " had no columns in the data: not read.";
   o << "\n\nUnits: positions and lengths in m, their standard deviations (σ) and changes in mm; angles in rad, their σ "
        "in mrad. Every number comes from the files beside this one, which hold all digits: `result.yaml`, "
-       "`parameters.csv`, `exits.csv` and `residuals.csv`.\n\n";
+       "`parameters.csv`, `exits.csv`, `residuals.csv`"
+    << (validation ? ", `validation.csv` and `validation.yaml`" : "") << ".\n\n";
   if (!figure_error.empty()) o << "**The figures could not be made:** " << PrintableText(figure_error) << "\n\n";
 
   o << "## The gauge\n\n";
@@ -207,41 +245,48 @@ std::string Markdown(const SpatialRobot& nominal, const SpatialIdentifyOptions& 
   o << "\n## Warnings\n\n";
   if (r.warnings.empty()) o << "None.\n";
   for (const std::string& w : r.warnings) o << "- " << PrintableText(w) << "\n";
-  o << "\n" << ReportProvenanceSection(sources);
+  o << "\n";
+  if (validation) o << ValidationSection(*validation, sources);
+  o << ReportProvenanceSection(sources);
   return o.str();
 }
 
 }  // namespace
 
 const std::vector<std::string>& SpatialReportFileNames() {
-  static const std::vector<std::string> names = {"report.md",     "result.yaml", "parameters.csv",
-                                                 "exits.csv",     "residuals.csv", kExitsFigure,
+  static const std::vector<std::string> names = {"report.md",      "result.yaml",     "parameters.csv", "exits.csv",
+                                                 "residuals.csv",  "validation.csv",  "validation.yaml", kExitsFigure,
                                                  kResidualsFigure};
   return names;
 }
 
 std::vector<ReportFile> SpatialReportDataFiles(const SpatialRobot& nominal, const SpatialIdentifyOptions& options,
                                                const SpatialIdentifyResult& result, const std::string& result_yaml,
-                                               const ReportSources& sources) {
+                                               const SpatialValidationResult* validation, const ReportSources& sources) {
   const std::string provenance = ProvenanceComment(sources.command_line);
   const bool robust = options.loss.kind != LossKind::kNone;
-  return {{"result.yaml", result_yaml},
-          {"parameters.csv", ParametersCsv(nominal, result, provenance)},
-          {"exits.csv", ExitsCsv(nominal, result, provenance)},
-          {"residuals.csv", ResidualsCsv(result, nominal.num_cables(), robust, provenance)}};
+  std::vector<ReportFile> files = {{"result.yaml", result_yaml},
+                                   {"parameters.csv", ParametersCsv(nominal, result, provenance)},
+                                   {"exits.csv", ExitsCsv(nominal, result, provenance)},
+                                   {"residuals.csv", ResidualsCsv(result, nominal.num_cables(), robust, provenance)}};
+  if (validation) {
+    files.push_back({"validation.csv", SpatialValidationCsv(*validation, provenance)});
+    files.push_back({"validation.yaml", SpatialValidationSummaryYaml(*validation, sources.command_line)});
+  }
+  return files;
 }
 
 std::string SpatialReportMarkdown(const SpatialRobot& nominal, const SpatialIdentifyOptions& options,
-                                  const SpatialIdentifyResult& result, const ReportSources& sources,
-                                  const std::string& figure_error) {
-  return Markdown(nominal, options, result, sources, figure_error);
+                                  const SpatialIdentifyResult& result, const SpatialValidationResult* validation,
+                                  const ReportSources& sources, const std::string& figure_error) {
+  return Markdown(nominal, options, result, validation, sources, figure_error);
 }
 
 std::string StageSpatialReport(const OutputFolder& folder, const SpatialRobot& nominal,
                                const SpatialIdentifyOptions& options, const SpatialIdentifyResult& result,
-                               const std::string& result_yaml, const ReportSources& sources,
-                               const DrawReportFigures& draw) {
-  for (const ReportFile& f : SpatialReportDataFiles(nominal, options, result, result_yaml, sources)) {
+                               const std::string& result_yaml, const SpatialValidationResult* validation,
+                               const ReportSources& sources, const DrawReportFigures& draw) {
+  for (const ReportFile& f : SpatialReportDataFiles(nominal, options, result, result_yaml, validation, sources)) {
     folder.WriteText(f.name, f.content);
   }
   const std::vector<std::string> figures = {kExitsFigure, kResidualsFigure};
@@ -258,7 +303,7 @@ std::string StageSpatialReport(const OutputFolder& folder, const SpatialRobot& n
   if (!figure_error.empty()) {
     for (const std::string& f : figures) std::filesystem::remove(folder.Path(f));
   }
-  folder.WriteText("report.md", Markdown(nominal, options, result, sources, figure_error));
+  folder.WriteText("report.md", Markdown(nominal, options, result, validation, sources, figure_error));
   return figure_error;
 }
 

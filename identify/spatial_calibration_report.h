@@ -13,6 +13,7 @@
 #include "common/atomic_output.h"
 #include "identify/calibration_report.h"  // ReportSources, DrawReportFigures
 #include "identify/spatial_identify.h"
+#include "identify/spatial_validate.h"
 #include "model/spatial_robot.h"
 
 namespace cablecal {
@@ -20,21 +21,22 @@ namespace cablecal {
 // Every name the spatial report may write into its folder.
 const std::vector<std::string>& SpatialReportFileNames();
 
-// The data files: result.yaml (as given), parameters.csv, exits.csv, residuals.csv.
+// The data files: result.yaml (as given), parameters.csv, exits.csv, residuals.csv and, with
+// held-out readings (identify --holdout), validation.csv and validation.yaml.
 std::vector<ReportFile> SpatialReportDataFiles(const SpatialRobot& nominal, const SpatialIdentifyOptions& options,
                                                const SpatialIdentifyResult& result, const std::string& result_yaml,
-                                               const ReportSources& sources);
+                                               const SpatialValidationResult* validation, const ReportSources& sources);
 
 std::string SpatialReportMarkdown(const SpatialRobot& nominal, const SpatialIdentifyOptions& options,
-                                  const SpatialIdentifyResult& result, const ReportSources& sources,
-                                  const std::string& figure_error);
+                                  const SpatialIdentifyResult& result, const SpatialValidationResult* validation,
+                                  const ReportSources& sources, const std::string& figure_error);
 
 // Stages the report in `folder` (the caller commits it), as StageReport: data files, figures
 // through `draw` (scripts/plot_spatial_report.py's arguments: the staging folder first), then
 // report.md. Returns "" or why the figures failed.
 std::string StageSpatialReport(const OutputFolder& folder, const SpatialRobot& nominal,
                                const SpatialIdentifyOptions& options, const SpatialIdentifyResult& result,
-                               const std::string& result_yaml, const ReportSources& sources,
-                               const DrawReportFigures& draw);
+                               const std::string& result_yaml, const SpatialValidationResult* validation,
+                               const ReportSources& sources, const DrawReportFigures& draw);
 
 }  // namespace cablecal

@@ -180,6 +180,13 @@ TEST_F(SpatialIdentifyCli, SimulateIdentifyValidateOnABuiltInAndARandomRobot) {
               5.0 * summary["sensor_noise"]["position_sigma_m"].as<double>())
         << val.output;
     EXPECT_EQ(Split(Read("val.csv").substr(Read("val.csv").find("\npose,") + 1, 200))[1], c.m == 7 ? "roll" : "px");
+    // identify --holdout: the report validates the calibration as validate does.
+    const RunResult rep = RunCablecal("identify --robot " + c.robot + " --measurements " + Path("cal.csv") +
+                                      " --json --report " + Path("report") + " --holdout " + Path("hold.csv"));
+    ASSERT_EQ(rep.exit_code, 0) << rep.output;
+    const YAML::Node in_report = YAML::LoadFile(Path("report/validation.yaml"));
+    EXPECT_NEAR(in_report["nominal_over_calibrated"]["position_rms"].as<double>(), ratio, 1e-6 * ratio);
+    EXPECT_NE(Read("report/report.md").find("## Validation on held-out poses"), std::string::npos);
   }
 }
 
