@@ -4,6 +4,8 @@
 // writes a type into a docstring by its Python name only if that type is bound by then.
 #pragma once
 
+#include <functional>
+
 // Every section sees the same type casters, those the module was written with: a type whose
 // caster a section lacked would still compile and fail only when converted.
 #include <pybind11/eigen.h>
@@ -63,6 +65,10 @@ py::object SpatialIdentify(const SpatialRobot& robot, py::handle measurements, p
 py::object SpatialCalibratedRobot(const SpatialRobot& nominal, py::handle result);
 py::object SpatialValidatePy(const SpatialRobot& robot, py::handle measurements, py::handle nominal,
                              bool skip_infeasible);
+// report() for a SpatialRobot: the spatial report (identify/spatial_calibration_report.h) into
+// `directory`, its figures through `draw`; returns report.md's path.
+std::string SpatialReport(const SpatialRobot& nominal, py::handle result, py::handle directory, py::handle holdout,
+                          const std::function<std::string(const std::vector<std::string>&)>& draw);
 PySpatialMeasurements MakeSpatialMeasurements(const SpatialRobot& robot, py::handle dl, py::handle sensors,
                                               py::handle pose_ids);
 void BindExperiment(py::module_& m);  // Plan, Measurements, sample, Experiment, simulate

@@ -35,10 +35,10 @@ std::string PlotScriptsDir() {
   return here + "/../share/cablecal/scripts";  // named by the failure
 }
 
-// Draws a report's figures with this interpreter (it has NumPy; matplotlib is its own to have):
-// "" or why not, as the CLI's runner says it.
-std::string DrawReportWithPython(const std::vector<std::string>& arguments) {
-  const std::string script = PlotScriptsDir() + "/plot_report.py";
+// Draws a report's figures with this interpreter (it has NumPy; matplotlib is its own to have)
+// by the plotting script `name`: "" or why not, as the CLI's runner says it.
+std::string DrawWithPython(const std::string& name, const std::vector<std::string>& arguments) {
+  const std::string script = PlotScriptsDir() + "/" + name;
   py::list command;
   command.append(py::module_::import("sys").attr("executable"));
   command.append(script);
@@ -216,6 +216,10 @@ void BindIdentify(py::module_& m) {
   m.def(
       "report",
       [](py::handle nominal_arg, py::handle result_arg, py::handle directory, py::handle holdout_arg) {
+        if (py::isinstance<SpatialRobot>(nominal_arg)) {
+          return SpatialReport(nominal_arg.cast<const SpatialRobot&>(), result_arg, directory, holdout_arg,
+                               [](const std::vector<std::string>& a) { return DrawWithPython("plot_spatial_report.py", a); });
+        }
         const Robot& nominal = AsObject<Robot>(nominal_arg, "nominal", "Robot");
         const IdentifyResult& r = AsObject<IdentifyResult>(result_arg, "result", "IdentifyResult");
         RequireResultOfRobot("result", r.robot_name, static_cast<int>(r.geometry.size()) / 3, nominal);
@@ -234,7 +238,8 @@ void BindIdentify(py::module_& m) {
         }
         const std::string figure_error =
             StageReport(folder, nominal, r, IdentifyResultYaml(r, CallText("identify")),
-                        validation ? &*validation : nullptr, sources, DrawReportWithPython);
+                        validation ? &*validation : nullptr, sources,
+                        [](const std::vector<std::string>& a) { return DrawWithPython("plot_report.py", a); });
         folder.Commit();
         if (!figure_error.empty()) throw FigureFailure(ReportWithoutFiguresMessage(dir, figure_error));
         return dir + "/report.md";
@@ -243,7 +248,8 @@ void BindIdentify(py::module_& m) {
       "Writes the calibration report of `result` into `directory` as identify --report does (report.md, its figures "
       "and data files; the folder is created if new, its parent must exist) and returns report.md's path. holdout: "
       "held-out Measurements, validated with the calibrated and the nominal robot. The figures are drawn with this "
-      "interpreter's matplotlib; if they cannot be, the rest is written and FigureError raised.");
+      "interpreter's matplotlib; if they cannot be, the rest is written and FigureError raised. A SpatialRobot "
+      "with its SpatialIdentifyResult (and held-out SpatialMeasurements) writes the spatial report.");
 
   // ---- validate
   py::class_<ValidationResult>(m, "Validation",

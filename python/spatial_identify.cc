@@ -8,6 +8,8 @@
 
 #include "common/error.h"
 #include "common/json.h"
+#include "common/atomic_output.h"
+#include "identify/spatial_calibration_report.h"
 #include "identify/spatial_identify.h"
 #include "identify/spatial_report.h"
 #include "identify/spatial_validate.h"
@@ -127,6 +129,34 @@ py::object SpatialCalibratedRobot(const SpatialRobot& nominal, py::handle result
                       nominal.name + " (" + std::to_string(nominal.num_cables()) + " cables)");
   }
   return py::cast(CalibratedSpatialRobot(nominal, r.result));
+}
+
+std::string SpatialReport(const SpatialRobot& nominal, py::handle result_arg, py::handle directory,
+                          py::handle holdout_arg, const std::function<std::string(const std::vector<std::string>&)>& draw) {
+  const PySpatialIdentifyResult& r = AsObject<PySpatialIdentifyResult>(result_arg, "result", "SpatialIdentifyResult");
+  if (r.nominal.name != nominal.name || r.nominal.num_cables() != nominal.num_cables()) {
+    Bad("result", "identified for " + r.nominal.name + ", not " + nominal.name);
+  }
+  const std::string dir = AsPath(directory, "directory");
+  OutputFolder folder("directory", dir, SpatialReportFileNames());
+  ReportSources sources{CallText("report"), "the measurements given to cablecal.identify", ""};
+  std::optional<SpatialValidationResult> validation;
+  if (!holdout_arg.is_none()) {
+    const PySpatialMeasurements& holdout =
+        AsObject<PySpatialMeasurements>(holdout_arg, "holdout", "SpatialMeasurements");
+    sources.holdout = "the held-out SpatialMeasurements given to cablecal.report";
+    SpatialRobot calibrated = CalibratedSpatialRobot(nominal, r.result);
+    calibrated.source = "identified from " + sources.measurements;
+    py::gil_scoped_release release;
+    validation = ValidateSpatial(calibrated, nominal, holdout.readings, "holdout");
+  }
+  const std::string figure_error =
+      StageSpatialReport(folder, nominal, r.options, r.result,
+                         SpatialIdentifyResultYaml(nominal, r.options, r.result, CallText("identify")),
+                         validation ? &*validation : nullptr, sources, draw);
+  folder.Commit();
+  if (!figure_error.empty()) throw FigureFailure(ReportWithoutFiguresMessage(dir, figure_error));
+  return dir + "/report.md";
 }
 
 py::object SpatialValidatePy(const SpatialRobot& robot, py::handle measurements_arg, py::handle nominal_arg,

@@ -968,6 +968,13 @@ def test_spatial_identify_equals_cli_and_takes_arrays(tmp_path):
     assert isinstance(v, cablecal.SpatialValidation) and v.compared == ["position"]
     assert v.robots["calibrated"]["position"]["rms"] < v.robots["nominal"]["position"]["rms"] / 3
     assert v.robots["calibrated"]["position"]["errors"].shape == (len(v.pose_ids), 3)
+    # The spatial report, drawn with this interpreter, validating on the same readings.
+    path_md = cablecal.report(robot, result, str(tmp_path / "report"), holdout=run.measurements)
+    assert path_md.endswith("report.md")
+    for name in ("result.yaml", "parameters.csv", "exits.csv", "residuals.csv", "validation.yaml", "exits.png",
+                 "residuals.png"):
+        assert (tmp_path / "report" / name).exists(), name
+    assert "## Validation on held-out poses" in (tmp_path / "report" / "report.md").read_text()
 
 
 def test_spatial_identify_refuses_what_it_cannot_do():
