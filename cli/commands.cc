@@ -389,6 +389,8 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
     throw InputError("--holdout", "", "needs --report DIR: the held-out readings are compared in the report");
   }
   RefuseHoldoutThatIsTheMeasurements(options.holdout_path, options.measurements_path);
+  if (IsSpatialRobotFile(options.robot_path)) return RunSpatialIdentify(ctx, options);
+  RefuseSpatialOnlyFlag(options.gauge == "auto" || options.gauge.rfind("hold:", 0) == 0, "--gauge " + options.gauge);
   // The report's folder is checked before any work, and no other file may be one it writes.
   std::unique_ptr<OutputFolder> report;
   if (!options.report_dir.empty()) {
@@ -531,6 +533,7 @@ int RunValidate(const Context& ctx, const ValidateCommandOptions& options) {
                      {"--measurements", options.measurements_path}},
                     {{"--out", options.out_path}, {"--summary", options.summary_path}});
   if (options.out_path.empty() && !options.json) throw InputError("--out", "", "required (or print the result with --json)");
+  if (IsSpatialRobotFile(options.robot_path)) return RunSpatialValidate(ctx, options);
   const Robot calibrated = LoadRobotFile(options.robot_path);
   std::optional<Robot> nominal;
   if (!options.nominal_path.empty()) nominal = LoadRobotFile(options.nominal_path);

@@ -78,6 +78,9 @@ struct IdentifyCommandOptions {
   std::string holdout_path;      // --holdout: held-out readings the report validates the calibration on
   double geometry_prior_sigma_m = 0.0;  // --geometry-prior, when geometry_prior_given
   bool geometry_prior_given = false;    // (given as 0 it is refused, not taken for none)
+  // Whether given: a spatial robot's defaults differ (gauge auto, the library's iteration limit,
+  // the statics on).
+  bool gauge_given = false, max_iterations_given = false, equilibrium_given = false;
 };
 int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options);
 
@@ -88,6 +91,11 @@ struct ValidateCommandOptions {
   bool skip_infeasible = false;  // skip the readings a robot cannot hold (listed on stderr and in the summary)
 };
 int RunValidate(const Context& ctx, const ValidateCommandOptions& options);
+
+// identify and validate for a robot file with `kind: spatial` (cli/spatial_identify_command.cc):
+// RunIdentify and RunValidate hand such a file over to them.
+int RunSpatialIdentify(const Context& ctx, const IdentifyCommandOptions& options);
+int RunSpatialValidate(const Context& ctx, const ValidateCommandOptions& options);
 
 struct SensorsFitOptions {
   std::string robot_path, inclinometer_path, laser_path, out_path;

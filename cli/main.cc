@@ -152,10 +152,24 @@ int main(int argc, char** argv) {
   id_cmd->add_option("--estimator", ident.estimator, "ml (all sensors whitened) or paper (Eq. 6)")
       ->capture_default_str()
       ->check(CLI::IsMember({"ml", "paper"}));
-  id_cmd->add_option("--gauge", ident.gauge, "a1x (hold a1x), prior (tracker prior on exits) or none")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"a1x", "prior", "none"}));
-  id_cmd->add_option("--max-iterations", ident.max_iterations, "Levenberg-Marquardt iteration limit")
+  // Spatial robots also take auto and hold:a1x,a1y,... (ParseSpatialGauge); the planar choices
+  // keep CLI11's own check and message.
+  const CLI::Validator planar_gauge = CLI::IsMember({"a1x", "prior", "none"});
+  CLI::Option* gauge_option =
+      id_cmd
+          ->add_option("--gauge", ident.gauge,
+                       "a1x (hold a1x), prior (tracker prior on exits) or none; spatial robots: auto (default: hold the "
+                       "exit coordinates the readings leave unseen), none, prior or hold:a1x,a1y,...")
+          ->capture_default_str()
+          ->check(CLI::Validator(
+              [planar_gauge](std::string& text) {
+                if (text == "auto" || text.rfind("hold:", 0) == 0) return std::string();
+                return planar_gauge(text);
+              },
+              planar_gauge.get_description()));
+  CLI::Option* max_iterations_option =
+      id_cmd->add_option("--max-iterations", ident.max_iterations,
+                         "Levenberg-Marquardt iteration limit (spatial robots: default 200)")
       ->capture_default_str()
       ->check(WholeNumberIn(1, cablecal::kMaxIdentifyIterations));
   id_cmd->add_option("--out", ident.out_path, "result YAML (required unless --json)");
@@ -171,9 +185,10 @@ int main(int argc, char** argv) {
                      "standard deviation of the nominal exit points and initial lengths, m: a prior, so that the "
                      "result knows at least what the robot file did (ml only; default none)")
       ->each([&ident](const std::string&) { ident.geometry_prior_given = true; });
-  id_cmd->add_option("--equilibrium", ident.equilibrium,
+  CLI::Option* equilibrium_option = id_cmd->add_option("--equilibrium", ident.equilibrium,
                      "on: with 2 cables each pose's static equilibrium is a residual, its sigma the robot file's "
-                     "platform.com_sigma (default 5 mm); off: theta free per pose (ml only)")
+                     "platform.com_sigma (default 5 mm); off: theta free per pose (ml only); spatial robots: the statics "
+                     "(tensions, load cells, equilibrium, stretch), on unless given off")
       ->capture_default_str()
       ->check(CLI::IsMember({"on", "off"}));
   id_cmd->add_option("--report", ident.report_dir,
@@ -356,6 +371,9 @@ int main(int argc, char** argv) {
   FLAGS_minloglevel = verbose ? google::GLOG_INFO : google::GLOG_FATAL;
   google::InitGoogleLogging("cablecal");
   ctx.quiet = quiet;
+  ident.gauge_given = gauge_option->count() > 0;
+  ident.max_iterations_given = max_iterations_option->count() > 0;
+  ident.equilibrium_given = equilibrium_option->count() > 0;
   const bool json = (id_cmd->parsed() && ident.json) || (des_cmd->parsed() && des.json) || (val_cmd->parsed() && val.json);
   if (quiet && !json && std::freopen("/dev/null", "w", stdout) == nullptr) {
     std::fprintf(stderr, "cablecal: error: --quiet: cannot silence the standard output\n");

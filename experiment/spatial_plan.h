@@ -28,7 +28,8 @@ struct SpatialPlanPose {
 };
 
 // The home equilibrium (EvaluateSpatialHome; SolverFailure naming the robot when it has none)
-// and the cables' paid-out lengths there, where the encoders read zero.
+// and the cables' paid-out lengths there, where the encoders read zero (a cable's
+// initial_length where the robot file gives one: a calibrated robot's identified l_i0).
 struct SpatialHomeReference {
   SpatialEquilibrium equilibrium;
   Eigen::VectorXd paid_out_m;

@@ -155,6 +155,10 @@ SpatialPlanSimulation SimulateSpatialPlan(const SpatialRobot& nominal, const std
                                           std::to_string(first.pose_id) + ": " + first.reason +
                                           "): the plan cannot be run on this true robot");
   }
+  // The true robot's encoders read zero where the nominal home's commands were paid out: its
+  // initial lengths, so that the truth file predicts its own readings (validate --robot).
+  const Eigen::VectorXd zero = SpatialHome(nominal).paid_out_m;
+  for (int i = 0; i < run.truth.num_cables(); ++i) run.truth.cables[i].initial_length_m = zero(i);
   return run;
 }
 

@@ -78,7 +78,8 @@ SimulatedSpatialExperiment SimulateSpatialExperiment(const SpatialRobot& nominal
 // (stream 0 of seed; 0: the nominal robot itself); noise from stream 1. InputError naming
 // plan_source when the plan does not suit the true robot, or a truth with another cable count;
 // InputError naming a cable's stiffness when the true robot cannot be simulated
-// (CheckSimulatable).
+// (CheckSimulatable). The returned truth has each cable's initial_length: the nominal home's
+// paid-out length, where its encoder reads zero.
 struct SpatialPlanSimulation {
   SpatialRobot truth;
   SimulatedSpatialExperiment experiment;
@@ -88,7 +89,8 @@ SpatialPlanSimulation SimulateSpatialPlan(const SpatialRobot& nominal, const std
                                           const SpatialSimulationOptions& options, std::uint64_t seed,
                                           const std::string& plan_source);
 
-// Truth file: the true robot in the robot-file format plus `true_poses` (pose, x, y, z, roll,
+// Truth file: the true robot in the robot-file format (with its initial lengths, when
+// SimulateSpatialPlan made it) plus `true_poses` (pose, x, y, z, roll,
 // pitch, yaw: m, rad) where the platform settled, one per reading.
 std::string SpatialTruthYaml(const SpatialRobot& truth, const SimulatedSpatialExperiment& experiment);
 

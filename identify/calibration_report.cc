@@ -469,4 +469,11 @@ std::string StageReport(const OutputFolder& folder, const Robot& nominal, const 
   return figure_error;
 }
 
+std::string MarkdownCode(const std::string& text) { return Code(text); }
+std::string MarkdownEscaped(const std::string& text) { return Escaped(text); }
+std::string MarkdownFigure(const std::string& file, const std::string& caption, const std::string& figure_error) {
+  return Figure(file, caption, figure_error);
+}
+std::string ReportProvenanceSection(const ReportSources& sources) { return ProvenanceSection(sources); }
+
 }  // namespace cablecal

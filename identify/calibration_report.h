@@ -72,4 +72,12 @@ std::string StageReport(const OutputFolder& folder, const Robot& nominal, const 
                         const std::string& result_yaml, const ValidationResult* validation,
                         const ReportSources& sources, const DrawReportFigures& draw);
 
+// report.md's pieces that the spatial report (identify/spatial_calibration_report.h) shares:
+// inline code whatever the text holds, a name in running text with markdown's characters
+// escaped, a figure's link (or why it is not there), and the provenance section.
+std::string MarkdownCode(const std::string& text);
+std::string MarkdownEscaped(const std::string& text);
+std::string MarkdownFigure(const std::string& file, const std::string& caption, const std::string& figure_error);
+std::string ReportProvenanceSection(const ReportSources& sources);
+
 }  // namespace cablecal

@@ -245,6 +245,10 @@ PlanarPose StartingPose(const Robot& robot, const GeometryVector& geometry, cons
 // this robot), a solve that did not converge a SolverFailure. Returns quietly otherwise.
 void RequireUsableResult(const IdentifyResult& result, const std::string& source);
 
+// The provenance every result and summary YAML opens with: `cablecal: {version, commit}` and
+// `command` (the command line).
+void EmitProvenance(YAML::Emitter& out, const std::string& command_line);
+
 // The `sensor_correction` map of result.yaml and of validate's summary: the robot file's
 // systematic sensor errors the readings were corrected for, and `when` ("before the solve").
 void EmitSensorCorrection(YAML::Emitter& out, const SystematicSensorErrors& errors, const std::string& when);

@@ -25,6 +25,12 @@ using YAML::Value;
 
 }  // namespace
 
+void EmitProvenance(YAML::Emitter& o, const std::string& command_line) {
+  o << Key << "cablecal" << Value << Flow << BeginMap << Key << "version" << Value << YamlString{Version()} << Key
+    << "commit" << Value << YamlString{GitCommit()} << EndMap;
+  o << Key << "command" << Value << YamlString{command_line};
+}
+
 void EmitSensorCorrection(YAML::Emitter& o, const SystematicSensorErrors& e, const std::string& when) {
   o << Key << "sensor_correction" << Value << BeginMap << Key << "note" << Value
     << YamlString{"laser and inclinometer readings corrected for the robot file's systematic sensor errors " + when +
@@ -50,9 +56,7 @@ struct ResultParts {
 ResultParts IdentifyResultParts(const IdentifyResult& r, const std::string& command_line, bool json) {
   YAML::Emitter o;
   o << YAML::Comment("cablecal identification result (README, \"identify\"). SI units: m, rad.") << BeginMap;
-  o << Key << "cablecal" << Value << Flow << BeginMap << Key << "version" << Value << YamlString{Version()} << Key
-    << "commit" << Value << YamlString{GitCommit()} << EndMap;
-  o << Key << "command" << Value << YamlString{command_line};
+  EmitProvenance(o, command_line);
   // The robot it was identified for: design --prior and Python refuse the result beside a robot
   // of another name or cable count.
   if (!r.robot_name.empty()) {

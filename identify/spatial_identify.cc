@@ -856,21 +856,25 @@ Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasureme
   for (std::size_t c = 0; c < weak_cols.size(); ++c) {
     a.gauge.weak_directions[c].relative_singular_value = s(weak_cols[c]) / largest;
   }
-  if (k == 0) return a;
+  // A lab's hold: list is checked and held even when the readings see everything (holding every
+  // exit coordinate identifies the lengths, offsets and poses alone).
+  if (k == 0 && options.gauge.kind != SpatialGaugeKind::kHold) return a;
   // A null direction with no exit coordinate cannot be held by any exit: refused whatever the gauge.
   const MatrixXd E = N.topRows(L.exit_coordinates());
-  Eigen::JacobiSVD<MatrixXd> exit_svd(E, Eigen::ComputeFullV);
-  std::vector<int> unheldable;
-  for (int c = 0; c < k; ++c) {
-    if (!(exit_svd.singularValues()(c) > 1e-6)) unheldable.push_back(c);
-  }
-  if (!unheldable.empty()) {
-    MatrixXd U(p, unheldable.size());
-    for (std::size_t c = 0; c < unheldable.size(); ++c) U.col(c) = N * exit_svd.matrixV().col(unheldable[c]);
-    throw InputError("readings", "",
-                     "no reading fixes " + DescribeAll(Describe(U, a.g0, L, a.gauge.names)) +
-                         ", and holding exit coordinates cannot fix it: add a sensor that sees it (swivel "
-                         "offsets need swivel readings at several poses, yaw0 heading readings)");
+  if (k > 0) {
+    Eigen::JacobiSVD<MatrixXd> exit_svd(E, Eigen::ComputeFullV);
+    std::vector<int> unheldable;
+    for (int c = 0; c < k; ++c) {
+      if (!(exit_svd.singularValues()(c) > 1e-6)) unheldable.push_back(c);
+    }
+    if (!unheldable.empty()) {
+      MatrixXd U(p, unheldable.size());
+      for (std::size_t c = 0; c < unheldable.size(); ++c) U.col(c) = N * exit_svd.matrixV().col(unheldable[c]);
+      throw InputError("readings", "",
+                       "no reading fixes " + DescribeAll(Describe(U, a.g0, L, a.gauge.names)) +
+                           ", and holding exit coordinates cannot fix it: add a sensor that sees it (swivel "
+                           "offsets need swivel readings at several poses, yaw0 heading readings)");
+    }
   }
   switch (options.gauge.kind) {
     case SpatialGaugeKind::kAuto: {
@@ -893,6 +897,7 @@ Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasureme
         a.gauge.held.push_back(index);
       }
       std::sort(a.gauge.held.begin(), a.gauge.held.end());
+      if (k == 0) break;
       MatrixXd H(a.gauge.held.size(), k);
       for (std::size_t r = 0; r < a.gauge.held.size(); ++r) H.row(r) = N.row(a.gauge.held[r]);
       Eigen::JacobiSVD<MatrixXd> hold_svd(H, Eigen::ComputeFullV);
@@ -939,7 +944,7 @@ Eigen::VectorXd NominalSpatialGeometry(const SpatialRobot& nominal, bool swivel,
   const VectorXd home_lengths = CableLengths<double>(nominal, nominal.home_pose());
   for (int i = 0; i < L.m; ++i) {
     g.segment<3>(L.exit(i)) = nominal.cables[i].p_F_exit_m;
-    g(L.length(i)) = home_lengths(i);
+    g(L.length(i)) = nominal.cables[i].initial_length_m.value_or(home_lengths(i));
   }
   if (heading) g(L.yaw0()) = nominal.home_rpy_rad.z();
   return g;

@@ -189,7 +189,8 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
 // diagonal. Each names the unknown and the amount.
 std::vector<std::string> SpatialPlausibilityWarnings(const SpatialRobot& nominal, const Eigen::VectorXd& geometry);
 
-// The nominal geometry vector (names order): exits, lengths at the nominal home, zero swivel
+// The nominal geometry vector (names order): exits, lengths at the nominal home (a cable's
+// initial_length where the file gives one), zero swivel
 // offsets (when swivel), the home yaw (when heading).
 Eigen::VectorXd NominalSpatialGeometry(const SpatialRobot& nominal, bool swivel, bool heading);
 std::vector<std::string> SpatialGeometryNames(int num_cables, bool swivel, bool heading);

@@ -282,9 +282,7 @@ std::string ValidationSummaryYaml(const ValidationResult& result, const std::str
   YAML::Emitter o;
   o << YAML::Comment("cablecal validation summary (README, \"Validation\"). SI units: m, rad. error = predicted - measured")
     << YAML::BeginMap;
-  o << YAML::Key << "cablecal" << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key << "version" << YAML::Value
-    << YamlString{Version()} << YAML::Key << "commit" << YAML::Value << YamlString{GitCommit()} << YAML::EndMap;
-  o << YAML::Key << "command" << YAML::Value << YamlString{command_line};
+  EmitProvenance(o, command_line);
   o << YAML::Key << "readings" << YAML::Value << result.pose_ids.size();
   o << YAML::Key << "poses" << YAML::Value << result.num_poses;
   // Only with --skip-infeasible: a summary without it reads as before.

@@ -36,6 +36,10 @@ struct SpatialCable {
   // E*A (N): a cable of unstretched length L is L (1 + t / EA) long under tension t. Absent:
   // inextensible.
   std::optional<double> stiffness_N;
+  // The cable paid out at home, where the encoder reads zero (m): what an identification
+  // estimates as l_i0 (identify --calibrated-robot writes it). Absent: the model's, the
+  // home equilibrium's length (unstretched for a cable with a stiffness).
+  std::optional<double> initial_length_m;
   Eigen::Vector3d p_P_anchor_m = Eigen::Vector3d::Zero();  // b_i in P
 };
 

@@ -150,7 +150,7 @@ SpatialRobot Parse(const YAML::Node& root, const Reader& rd) {
   for (std::size_t i = 0; i < cables.size(); ++i) {
     const std::string key = "cables[" + std::to_string(i) + "]";
     const YAML::Node c = cables[i];
-    rd.ExpectMap(c, key, {"exit", "swivel_axis", "pulley_radius"}, {"stiffness"});
+    rd.ExpectMap(c, key, {"exit", "swivel_axis", "pulley_radius"}, {"stiffness", "initial_length"});
     SpatialCable cable;
     cable.p_F_exit_m = rd.Vector3(c["exit"], key + ".exit");
     // Exit points are on the frame: one well outside the box is a typo or a unit slip; the
@@ -178,6 +178,10 @@ SpatialRobot Parse(const YAML::Node& root, const Reader& rd) {
     if (c["stiffness"]) {
       cable.stiffness_N = rd.Number(c, key, "stiffness");
       rd.Positive(c["stiffness"], key + ".stiffness", *cable.stiffness_N);
+    }
+    if (c["initial_length"]) {
+      cable.initial_length_m = rd.Number(c, key, "initial_length");
+      rd.Positive(c["initial_length"], key + ".initial_length", *cable.initial_length_m);
     }
     cable.p_P_anchor_m = rd.Vector3(anchors[i], "platform.anchors[" + std::to_string(i) + "]");
     robot.cables.push_back(cable);
@@ -450,6 +454,7 @@ std::string SpatialRobotToYaml(const SpatialRobot& robot) {
     v3(c.k_F_swivel_axis);
     o << YAML::Key << "pulley_radius" << YAML::Value << YamlNumber{c.pulley_radius_m};
     if (c.stiffness_N) o << YAML::Key << "stiffness" << YAML::Value << YamlNumber{*c.stiffness_N};
+    if (c.initial_length_m) o << YAML::Key << "initial_length" << YAML::Value << YamlNumber{*c.initial_length_m};
     o << YAML::EndMap;
   }
   o << YAML::EndSeq;

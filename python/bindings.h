@@ -4,6 +4,8 @@
 // writes a type into a docstring by its Python name only if that type is bound by then.
 #pragma once
 
+#include <functional>
+
 // Every section sees the same type casters, those the module was written with: a type whose
 // caster a section lacked would still compile and fail only when converted.
 #include <pybind11/eigen.h>
@@ -54,6 +56,21 @@ py::object SpatialSample(const SpatialRobot& robot, int n, std::uint64_t seed, p
 py::object SpatialSimulate(const SpatialRobot& robot, py::handle plan, py::handle truth, py::handle geometry_sigma,
                            NoisySensors noisy, bool encoder_noise, std::uint64_t seed, bool systematic_errors,
                            bool skip_infeasible);
+// The spatial halves of identify, calibrated_robot and validate (python/spatial_identify.cc), for
+// a SpatialRobot; SpatialMeasurements from arrays (dl, {sensor name: (n, k)}, pose ids).
+void BindSpatialIdentify(py::module_& m);  // SpatialIdentifyResult, SpatialValidation
+py::object SpatialIdentify(const SpatialRobot& robot, py::handle measurements, py::handle estimator, py::handle gauge,
+                           py::handle max_iterations, py::handle loss, py::handle geometry_prior,
+                           py::handle equilibrium);
+py::object SpatialCalibratedRobot(const SpatialRobot& nominal, py::handle result);
+py::object SpatialValidatePy(const SpatialRobot& robot, py::handle measurements, py::handle nominal,
+                             bool skip_infeasible);
+// report() for a SpatialRobot: the spatial report (identify/spatial_calibration_report.h) into
+// `directory`, its figures through `draw`; returns report.md's path.
+std::string SpatialReport(const SpatialRobot& nominal, py::handle result, py::handle directory, py::handle holdout,
+                          const std::function<std::string(const std::vector<std::string>&)>& draw);
+PySpatialMeasurements MakeSpatialMeasurements(const SpatialRobot& robot, py::handle dl, py::handle sensors,
+                                              py::handle pose_ids);
 void BindExperiment(py::module_& m);  // Plan, Measurements, sample, Experiment, simulate
 void BindDesign(py::module_& m);      // DesignResult, design
 void BindIdentify(py::module_& m);    // IdentifyResult, identify, calibrated_robot, report, Validation, validate

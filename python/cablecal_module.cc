@@ -39,6 +39,7 @@ PYBIND11_MODULE(cablecal, m) {
   BindSpatial(m);
   BindExperiment(m);
   BindDesign(m);
+  BindSpatialIdentify(m);
   BindIdentify(m);
   BindSensors(m);
   BindMonteCarlo(m);

@@ -13,6 +13,7 @@
 #include "identify/identify.h"
 #include "identify/validate.h"
 #include "model/robot.h"
+#include "model/spatial_robot.h"
 #include "python/bindings.h"
 #include "python/converters.h"
 #include "experiment/correction.h"
@@ -34,10 +35,10 @@ std::string PlotScriptsDir() {
   return here + "/../share/cablecal/scripts";  // named by the failure
 }
 
-// Draws a report's figures with this interpreter (it has NumPy; matplotlib is its own to have):
-// "" or why not, as the CLI's runner says it.
-std::string DrawReportWithPython(const std::vector<std::string>& arguments) {
-  const std::string script = PlotScriptsDir() + "/plot_report.py";
+// Draws a report's figures with this interpreter (it has NumPy; matplotlib is its own to have)
+// by the plotting script `name`: "" or why not, as the CLI's runner says it.
+std::string DrawWithPython(const std::string& name, const std::vector<std::string>& arguments) {
+  const std::string script = PlotScriptsDir() + "/" + name;
   py::list command;
   command.append(py::module_::import("sys").attr("executable"));
   command.append(script);
@@ -68,7 +69,7 @@ std::string SourceOf(const std::vector<Measurement>& readings, const std::string
 
 }  // namespace
 
-// Long (~240 lines) for a reason: a binding table, each class's properties and each function's
+// Long (~265 lines) for a reason: a binding table, each class's properties and each function's
 // keywords in the order help() shows them.
 void BindIdentify(py::module_& m) {
   // ---- identify
@@ -160,17 +161,24 @@ void BindIdentify(py::module_& m) {
   m.def(
       "identify",
       [](py::handle robot_arg, py::handle measurements_arg, py::handle estimator, py::handle gauge,
-         py::handle max_iterations, py::handle loss, py::handle geometry_prior, py::handle equilibrium) {
+         py::handle max_iterations, py::handle loss, py::handle geometry_prior, py::handle equilibrium) -> py::object {
+        if (py::isinstance<SpatialRobot>(robot_arg)) {
+          return SpatialIdentify(robot_arg.cast<const SpatialRobot&>(), measurements_arg, estimator, gauge,
+                                 max_iterations, loss, geometry_prior, equilibrium);
+        }
         const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
         const PyMeasurements& measurements = AsObject<PyMeasurements>(measurements_arg, "measurements", "Measurements");
         if (measurements.num_cables != robot.num_cables()) Bad("measurements", "read for a robot with another number of cables");
         IdentifyOptions o;
         o.estimator = ParseEstimator(AsText(estimator, "estimator"));
-        o.gauge = ParseGauge(AsText(gauge, "gauge"));
-        o.max_iterations = static_cast<int>(AsInteger(max_iterations, "max_iterations", 1, kMaxIdentifyIterations));
+        // None: the planar defaults (a spatial robot has its own: gauge auto, 200 iterations, statics on).
+        o.gauge = ParseGauge(gauge.is_none() ? "a1x" : AsText(gauge, "gauge"));
+        if (!max_iterations.is_none()) {
+          o.max_iterations = static_cast<int>(AsInteger(max_iterations, "max_iterations", 1, kMaxIdentifyIterations));
+        }
         o.loss = ParseLoss(AsText(loss, "loss"));
         if (!geometry_prior.is_none()) o.geometry_prior_sigma_m = AsNumber(geometry_prior, "geometry_prior");  // 0 refused
-        o.equilibrium = OnOff(equilibrium, "equilibrium");
+        o.equilibrium = equilibrium.is_none() ? kDefaultEquilibrium : OnOff(equilibrium, "equilibrium");
         o.source = "measurements";
         // As the CLI: a robot with systematic sensor errors has them removed before the solve.
         o.readings_as_read = true;
@@ -183,24 +191,35 @@ void BindIdentify(py::module_& m) {
         for (const std::string& w : r.warnings) {
           if (PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 1) < 0) throw py::error_already_set();
         }
-        return r;
+        return py::cast(std::move(r));
       },
-      py::arg("robot"), py::arg("measurements"), py::arg("estimator") = "ml", py::arg("gauge") = "a1x",
-      py::arg("max_iterations") = 100, py::arg("loss") = "none", py::arg("geometry_prior") = py::none(),
-      py::arg("equilibrium") = kDefaultEquilibrium ? "on" : "off",
+      py::arg("robot"), py::arg("measurements"), py::arg("estimator") = "ml", py::arg("gauge") = py::none(),
+      py::arg("max_iterations") = py::none(), py::arg("loss") = "none", py::arg("geometry_prior") = py::none(),
+      py::arg("equilibrium") = py::none(),
       "Identifies exit points and initial lengths (cablecal identify); InputError when the data cannot "
       "calibrate this robot, SolverError when the solve does not converge. geometry_prior: the standard "
-      "deviation (m) of the nominal geometry, a prior as identify --geometry-prior (None: none).");
-  m.def("calibrated_robot", [](py::handle nominal_arg, py::handle result_arg) {
+      "deviation (m) of the nominal geometry, a prior as identify --geometry-prior (None: none). Defaults (None): "
+      "gauge 'a1x', 100 iterations, equilibrium as the CLI's; for a SpatialRobot and SpatialMeasurements: gauge "
+      "'auto' (or 'none', 'prior', 'hold:a1x,a1y,...'), 200 iterations, the statics on ('off' to leave them out), "
+      "estimator 'ml' only, no geometry_prior; it returns a SpatialIdentifyResult.");
+  m.def("calibrated_robot", [](py::handle nominal_arg, py::handle result_arg) -> py::object {
+        if (py::isinstance<SpatialRobot>(nominal_arg)) {
+          return SpatialCalibratedRobot(nominal_arg.cast<const SpatialRobot&>(), result_arg);
+        }
         const Robot& nominal = AsObject<Robot>(nominal_arg, "nominal", "Robot");
         const IdentifyResult& r = AsObject<IdentifyResult>(result_arg, "result", "IdentifyResult");
         RequireResultOfRobot("result", r.robot_name, static_cast<int>(r.geometry.size()) / 3, nominal);
-        return WithGeometry(nominal, r.geometry);
+        return py::cast(WithGeometry(nominal, r.geometry));
       },
-        py::arg("nominal"), py::arg("result"), "The nominal robot with the identified geometry.");
+        py::arg("nominal"), py::arg("result"),
+        "The nominal robot with the identified geometry (a SpatialRobot's with each cable's initial_length).");
   m.def(
       "report",
       [](py::handle nominal_arg, py::handle result_arg, py::handle directory, py::handle holdout_arg) {
+        if (py::isinstance<SpatialRobot>(nominal_arg)) {
+          return SpatialReport(nominal_arg.cast<const SpatialRobot&>(), result_arg, directory, holdout_arg,
+                               [](const std::vector<std::string>& a) { return DrawWithPython("plot_spatial_report.py", a); });
+        }
         const Robot& nominal = AsObject<Robot>(nominal_arg, "nominal", "Robot");
         const IdentifyResult& r = AsObject<IdentifyResult>(result_arg, "result", "IdentifyResult");
         RequireResultOfRobot("result", r.robot_name, static_cast<int>(r.geometry.size()) / 3, nominal);
@@ -219,7 +238,8 @@ void BindIdentify(py::module_& m) {
         }
         const std::string figure_error =
             StageReport(folder, nominal, r, IdentifyResultYaml(r, CallText("identify")),
-                        validation ? &*validation : nullptr, sources, DrawReportWithPython);
+                        validation ? &*validation : nullptr, sources,
+                        [](const std::vector<std::string>& a) { return DrawWithPython("plot_report.py", a); });
         folder.Commit();
         if (!figure_error.empty()) throw FigureFailure(ReportWithoutFiguresMessage(dir, figure_error));
         return dir + "/report.md";
@@ -228,7 +248,8 @@ void BindIdentify(py::module_& m) {
       "Writes the calibration report of `result` into `directory` as identify --report does (report.md, its figures "
       "and data files; the folder is created if new, its parent must exist) and returns report.md's path. holdout: "
       "held-out Measurements, validated with the calibrated and the nominal robot. The figures are drawn with this "
-      "interpreter's matplotlib; if they cannot be, the rest is written and FigureError raised.");
+      "interpreter's matplotlib; if they cannot be, the rest is written and FigureError raised. A SpatialRobot "
+      "with its SpatialIdentifyResult (and held-out SpatialMeasurements) writes the spatial report.");
 
   // ---- validate
   py::class_<ValidationResult>(m, "Validation",
@@ -285,10 +306,13 @@ void BindIdentify(py::module_& m) {
            "The CLI's summary YAML (the command line reads python: cablecal.validate).");
   m.def(
       "validate",
-      [](py::handle robot_arg, py::handle measurements_arg, py::handle nominal_arg, py::handle skip_infeasible) {
-        const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
+      [](py::handle robot_arg, py::handle measurements_arg, py::handle nominal_arg, py::handle skip_infeasible) -> py::object {
         if (!py::isinstance<py::bool_>(skip_infeasible)) Bad("skip_infeasible", "expected True or False");
         const bool skip = skip_infeasible.cast<bool>();
+        if (py::isinstance<SpatialRobot>(robot_arg)) {
+          return SpatialValidatePy(robot_arg.cast<const SpatialRobot&>(), measurements_arg, nominal_arg, skip);
+        }
+        const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
         const PyMeasurements& measurements = AsObject<PyMeasurements>(measurements_arg, "measurements", "Measurements");
         if (measurements.num_cables != robot.num_cables()) Bad("measurements", "read for a robot with another number of cables");
         std::optional<Robot> nominal;
@@ -308,12 +332,13 @@ void BindIdentify(py::module_& m) {
                                 "; Validation.skipped says why)";
           if (PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 1) < 0) throw py::error_already_set();
         }
-        return r;
+        return py::cast(std::move(r));
       },
       py::arg("robot"), py::arg("measurements"), py::arg("nominal") = py::none(), py::arg("skip_infeasible") = false,
       "Predicts every measured pose with `robot` (and `nominal`) and compares z and theta with the readings "
       "(cablecal validate); InputError when a robot cannot hold a pose's lengths, or with skip_infeasible=True "
-      "such readings are left out and listed in Validation.skipped (validate --skip-infeasible).");
+      "such readings are left out and listed in Validation.skipped (validate --skip-infeasible). A SpatialRobot "
+      "and SpatialMeasurements give a SpatialValidation: every sensor the readings have compared.");
 }
 
 }  // namespace cablecal::python

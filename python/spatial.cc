@@ -89,6 +89,13 @@ void BindSpatial(py::module_& m) {
 
   py::class_<PySpatialMeasurements>(m, "SpatialMeasurements",
                                     "A spatial robot's readings: dl (n, m) and, per sensor the data have, its columns.")
+      .def(py::init([](py::handle robot_arg, py::handle dl, py::handle sensors, py::handle pose_ids) {
+             const SpatialRobot& robot = AsObject<SpatialRobot>(robot_arg, "robot", "SpatialRobot");
+             return MakeSpatialMeasurements(robot, dl, sensors, pose_ids);
+           }),
+           py::arg("robot"), py::arg("dl"), py::arg("sensors") = py::none(), py::arg("pose_ids") = py::none(),
+           "Readings from arrays: dl (n, m), m; sensors {name: (n, k)} as the `sensors` property gives them; pose_ids "
+           "(default 1..n).")
       .def_static(
           "load",
           [](py::handle robot_arg, py::handle path) {

@@ -135,7 +135,12 @@ def residuals(folder, title, whitened):
     pose_ids = list(dict.fromkeys(int(r["pose"]) for r in rows))
     slot = {p: k for k, p in enumerate(pose_ids)}
     encoders = sorted({r["sensor"] for r in rows if r["sensor"].startswith("encoder")}, key=lambda s: int(s[7:]))
-    panels = [("encoders", encoders)] + [(s, [s]) for s in ("laser", "inclinometer") if any(r["sensor"] == s for r in rows)]
+    # One panel per sensor besides the encoders: a planar report's laser and inclinometer, a
+    # spatial report's "inclinometer roll", "position px", ... grouped by their first word.
+    others = list(dict.fromkeys(r["sensor"] for r in rows if not r["sensor"].startswith("encoder")))
+    groups = list(dict.fromkeys(s.split(" ")[0] for s in others))
+    groups.sort(key=lambda g: ("laser", "inclinometer").index(g) if g in ("laser", "inclinometer") else 2)
+    panels = [("encoders", encoders)] + [(g, [s for s in others if s.split(" ")[0] == g]) for g in groups]
     values = np.array([number(r["residual_sigmas"]) for r in rows])
     down = np.array([r["down_weighted"] == "1" for r in rows])
     # The axis spans the readings the fit kept in full; a down-weighted reading far beyond is
@@ -151,7 +156,8 @@ def residuals(folder, title, whitened):
         dodge = min(0.7 / max(1, len(sensors)), 0.15)
         handles = []
         for i, sensor in enumerate(sensors):
-            colour = colours(i % 10) if label == "encoders" else ("tab:olive" if sensor == "laser" else "tab:cyan")
+            colour = (colours(i % 10) if label == "encoders" or len(sensors) > 1
+                      else ("tab:olive" if sensor.startswith("laser") else "tab:cyan"))
             offset = (i - (len(sensors) - 1) / 2) * dodge
             picked = [(slot[int(r["pose"])] + offset, number(r["residual_sigmas"]), r["down_weighted"] == "1", r)
                       for r in rows if r["sensor"] == sensor]

@@ -153,6 +153,10 @@ TEST(SpatialRobotFile, RoundTripKeepsEveryValue) {
   all.sensors.load_cell_N = RangedNoise{3.0, 1.0};
   all.home_rpy_rad = Eigen::Vector3d(0.05, -0.1, 0.1);  // within IPAnema 1's feasible orientations at home
   robots.push_back(all);
+  // A calibrated robot's initial lengths (identify --calibrated-robot).
+  SpatialRobot calibrated = robots[0];
+  for (int i = 0; i < calibrated.num_cables(); ++i) calibrated.cables[i].initial_length_m = 9.5 + 0.1 * i;
+  robots.push_back(calibrated);
   for (const SpatialRobot& r : robots) {
     const std::string text = SpatialRobotToYaml(r);
     const SpatialRobot back = LoadSpatialRobotFromString(text, "roundtrip");
@@ -165,6 +169,7 @@ TEST(SpatialRobotFile, RoundTripKeepsEveryValue) {
       EXPECT_EQ(back.cables[i].p_P_anchor_m, r.cables[i].p_P_anchor_m);
       EXPECT_EQ(back.cables[i].pulley_radius_m, r.cables[i].pulley_radius_m);
       EXPECT_EQ(back.cables[i].stiffness_N, r.cables[i].stiffness_N);
+      EXPECT_EQ(back.cables[i].initial_length_m, r.cables[i].initial_length_m);
     }
     EXPECT_EQ(back.p_F_frame_min_m, r.p_F_frame_min_m);
     EXPECT_EQ(back.p_F_frame_max_m, r.p_F_frame_max_m);

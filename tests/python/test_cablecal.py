@@ -7,6 +7,7 @@ built here as a dict (exit points at different heights, centre of mass off the b
 only the built-in one.
 """
 import os
+import json
 import signal
 import subprocess
 import threading
@@ -945,3 +946,67 @@ def test_spatial_arguments_are_checked():
         cablecal.simulate(robot, plan, truth=robot, geometry_sigma=0.001)
     run = cablecal.simulate(robot, plan, sensors="none", encoder_noise=False)
     np.testing.assert_array_equal(run.measurements.dl, plan.length_changes)
+
+
+def test_spatial_identify_equals_cli_and_takes_arrays(tmp_path):
+    path = robot_file("cogiro")
+    robot = cablecal.Robot.load(path)
+    plan = cablecal.sample(robot, 16, seed=2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        run = cablecal.simulate(robot, plan, geometry_sigma=0.002, seed=2, skip_infeasible=True)
+    csv = tmp_path / "m.csv"
+    csv.write_text(run.measurements.to_csv())
+    result = cablecal.identify(robot, run.measurements)
+    assert isinstance(result, cablecal.SpatialIdentifyResult) and result.status == "converged"
+    out = tmp_path / "r.yaml"
+    stdout = cli("identify", "--robot", path, "--measurements", str(csv), "--out", str(out))
+    assert "(ml, gauge auto, statics)" in stdout
+    doc = json.loads(cli("identify", "--robot", path, "--measurements", str(csv), "--json"))
+    assert list(doc["parameters"]) == result.names
+    # The same solve; the last bits may differ with the heap's alignment (Eigen's summation order).
+    np.testing.assert_allclose([doc["parameters"][n]["value"] for n in result.names], result.values, rtol=1e-12)
+    np.testing.assert_allclose([doc["parameters"][n]["std"] for n in result.names], result.sigma, rtol=1e-6)
+    assert result.covariance.shape == (32, 32) and result.poses.shape == (len(result.pose_ids), 6)
+    assert result.tensions.shape == (len(result.pose_ids), 8)
+    assert result.held == doc["held"] == [] and result.null_directions == []
+    assert result.worst_reading["pose_id"] == doc["worst_reading"]["pose"]
+    mine = json.loads(result.to_json())
+    assert set(mine) == set(doc) and mine["command"].startswith("python: cablecal.identify")
+    assert result.to_yaml().startswith("# cablecal identification result") and "\nheld: []\n" in result.to_yaml()
+    # From arrays: the same readings, the same estimate.
+    again = cablecal.SpatialMeasurements(robot, run.measurements.dl, run.measurements.sensors,
+                                         run.measurements.pose_ids)
+    np.testing.assert_allclose(cablecal.identify(robot, again).values, result.values, rtol=1e-12)
+    # The calibrated robot: a SpatialRobot with the identified exits and initial lengths.
+    calibrated = cablecal.calibrated_robot(robot, result)
+    cables = calibrated.to_dict()["cables"]
+    np.testing.assert_array_equal([c["exit"] for c in cables], result.values[:24].reshape(8, 3))
+    np.testing.assert_array_equal([c["initial_length"] for c in cables], result.values[24:32])
+    # validate: on the calibration's own readings the calibrated robot beats the nominal one.
+    v = cablecal.validate(calibrated, run.measurements, nominal=robot)
+    assert isinstance(v, cablecal.SpatialValidation) and v.compared == ["position"]
+    assert v.robots["calibrated"]["position"]["rms"] < v.robots["nominal"]["position"]["rms"] / 3
+    assert v.robots["calibrated"]["position"]["errors"].shape == (len(v.pose_ids), 3)
+    # The spatial report, drawn with this interpreter, validating on the same readings.
+    path_md = cablecal.report(robot, result, str(tmp_path / "report"), holdout=run.measurements)
+    assert path_md.endswith("report.md")
+    for name in ("result.yaml", "parameters.csv", "exits.csv", "residuals.csv", "validation.yaml", "exits.png",
+                 "residuals.png"):
+        assert (tmp_path / "report" / name).exists(), name
+    assert "## Validation on held-out poses" in (tmp_path / "report" / "report.md").read_text()
+
+
+def test_spatial_identify_refuses_what_it_cannot_do():
+    robot = cablecal.SpatialRobot.builtin("cogiro")
+    run = cablecal.simulate(robot, cablecal.sample(robot, 12, seed=1), seed=1, skip_infeasible=True)
+    with pytest.raises(cablecal.InputError, match="planar robots only"):
+        cablecal.identify(robot, run.measurements, estimator="paper")
+    with pytest.raises(cablecal.InputError, match="planar robots only"):
+        cablecal.identify(robot, run.measurements, geometry_prior=0.001)
+    with pytest.raises(cablecal.InputError, match="'a9x' is not an exit coordinate"):
+        cablecal.identify(robot, run.measurements, gauge="hold:a9x")
+    with pytest.raises(cablecal.InputError, match="SpatialMeasurements"):
+        cablecal.identify(robot, cablecal.Measurements(cablecal.Robot.builtin(), np.zeros((3, 2))))
+    with pytest.raises(cablecal.InputError, match="no spatial sensor"):
+        cablecal.SpatialMeasurements(robot, run.measurements.dl, {"compass": np.zeros((len(run.measurements), 1))})

@@ -1,0 +1,279 @@
+#include "identify/spatial_report.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "common/error.h"
+#include "common/format.h"
+#include "common/json.h"
+#include "common/yaml_writer.h"
+#include "identify/identify.h"  // EmitProvenance, kOutlierSigmas
+#include "model/spatial_sensor_model.h"
+
+namespace cablecal {
+namespace {
+
+using YAML::BeginMap;
+using YAML::BeginSeq;
+using YAML::EndMap;
+using YAML::EndSeq;
+using YAML::Flow;
+using YAML::Key;
+using YAML::Value;
+
+const char* SpatialUnitOf(SpatialSensor s) {
+  switch (s) {
+    case SpatialSensor::kLaser:
+    case SpatialSensor::kPosition: return "m";
+    case SpatialSensor::kLoadCell: return "N";
+    default: return "rad";
+  }
+}
+
+bool SensorRead(const SpatialIdentifyResult& r, SpatialSensor s) {
+  return std::any_of(r.fits.begin(), r.fits.end(),
+                     [s](const SpatialReadingFit& f) { return f.sensors[static_cast<int>(s)].size() > 0; });
+}
+
+std::string JoinNames(const std::vector<std::string>& names) {
+  std::string out;
+  for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
+  return out;
+}
+
+bool IsHeldName(const SpatialIdentifyResult& r, const std::string& name) {
+  return std::find(r.held.begin(), r.held.end(), name) != r.held.end();
+}
+
+std::string GaugeNote(const SpatialIdentifyOptions& options, const SpatialIdentifyResult& r) {
+  const std::string held = r.held.empty() ? std::string("nothing") : JoinNames(r.held);
+  switch (options.gauge.kind) {
+    case SpatialGaugeKind::kAuto:
+      return r.null_directions.empty()
+                 ? "the readings see every direction of the geometry: nothing held"
+                 : "held at their nominal values: " + held +
+                       " (the exit coordinates a column-pivoted QR of the null directions picks, one per direction)";
+    case SpatialGaugeKind::kHold: return "held at their nominal values, the lab's choice: " + held;
+    case SpatialGaugeKind::kNone:
+      return "no gauge: the null directions below are unobservable; standard deviations are from the "
+             "pseudo-inverse and exclude them";
+    case SpatialGaugeKind::kPrior: return "laser-tracker prior on every exit coordinate (sensors.tracker.sigma)";
+  }
+  return "";
+}
+
+void EmitDirections(YAML::Emitter& o, const char* key, const std::vector<SpatialDirection>& directions,
+                    const std::string& comment) {
+  o << Key << key << Value;
+  if (!comment.empty()) o << YAML::Comment(comment);
+  if (directions.empty()) o << Flow;
+  o << BeginSeq;
+  for (const SpatialDirection& d : directions) {
+    o << BeginMap << Key << "description" << Value << YamlString{d.description} << Key << "relative_singular_value"
+      << Value << YamlNumber{d.relative_singular_value} << Key << "vector" << Value << Flow << BeginSeq;
+    for (int k = 0; k < d.geometry.size(); ++k) o << YamlNumber{d.geometry(k)};
+    o << EndSeq << EndMap;
+  }
+  o << EndSeq;
+}
+
+struct ResultParts {
+  std::string head, poses, readings;
+};
+
+// Long (~150 lines) for a reason: result.yaml's keys in the file's order, written once for
+// the YAML and the JSON.
+ResultParts Parts(const SpatialRobot& nominal, const SpatialIdentifyOptions& options, const SpatialIdentifyResult& r,
+                  const std::string& command_line, bool json) {
+  YAML::Emitter o;
+  o << YAML::Comment("cablecal identification result (README, \"identify\"; spatial robot). SI units: m, rad, N.")
+    << BeginMap;
+  EmitProvenance(o, command_line);
+  const int m = nominal.num_cables();
+  o << Key << "robot" << Value << Flow << BeginMap << Key << "name" << Value << YamlString{nominal.name} << Key
+    << "cables" << Value << m << Key << "kind" << Value << "spatial" << EndMap;
+  o << Key << "status" << Value << ToString(r.status);
+  if (!r.message.empty()) o << Key << "message" << Value << YamlString{r.message};
+  o << Key << "estimator" << Value << "ml";
+  o << Key << "gauge" << Value << YamlString{ToString(options.gauge)};
+  o << Key << "gauge_note" << Value << YamlString{GaugeNote(options, r)};
+  o << Key << "held" << Value << Flow << BeginSeq;
+  for (const std::string& h : r.held) o << h;
+  o << EndSeq;
+  EmitDirections(o, "null_directions", r.null_directions,
+                 "what no reading sees (at the nominal geometry, before holding anything); vector: over the "
+                 "parameters, in their order");
+  EmitDirections(o, "weak_directions", r.weak_directions,
+                 "seen, but below " + FormatDouble(kSpatialWeakThreshold) + " of the best-seen direction");
+  o << Key << "iterations" << Value << r.iterations;
+  o << Key << "final_cost" << Value << YamlNumber{r.final_cost}
+    << YAML::Comment("half the sum of squared whitened residuals");
+  o << Key << "residual_rms" << Value << Flow << BeginMap;
+  for (const auto& [key, value] : SpatialResidualRms(nominal, r)) o << Key << key << Value << YamlNumber{value};
+  o << EndMap;
+  const std::vector<std::string> missing = MissingSpatialSensors(nominal, r);
+  if (!missing.empty()) {
+    o << Key << "missing_sensors" << Value << Flow << BeginSeq;
+    for (const std::string& s : missing) o << s;
+    o << EndSeq << YAML::Comment("in the robot file, but no such columns in the measurements: not read");
+  }
+  if (!r.unused_sensors.empty()) {
+    o << Key << "unused_sensors" << Value << Flow << BeginSeq;
+    for (const std::string& s : r.unused_sensors) o << s;
+    o << EndSeq << YAML::Comment("read but not modelled (statics off)");
+  }
+  o << Key << "worst_reading" << Value << Flow << BeginMap << Key << "pose" << Value << r.worst_pose_id << Key
+    << "sensor" << Value << YamlString{r.worst_sensor} << Key << "where" << Value << YamlString{r.worst_where} << Key
+    << "sigmas" << Value << YamlNumber{r.worst_residual} << EndMap
+    << YAML::Comment("the largest whitened residual (model - reading) / sigma");
+  if (!r.warnings.empty()) {
+    o << Key << "warnings" << Value << BeginSeq;
+    for (const std::string& w : r.warnings) o << YamlString{w};
+    o << EndSeq;
+  }
+  o << Key << "statics" << Value << (options.statics ? "on" : "off");
+  o << Key << "loss" << Value << ToString(options.loss);
+  const int n = static_cast<int>(r.names.size());
+  const bool has_covariance = r.covariance.rows() == n && n > 0;
+  o << Key << "parameters" << Value << BeginMap;
+  for (int k = 0; k < n; ++k) {
+    o << Key << r.names[k] << Value << Flow << BeginMap << Key << "value" << Value << YamlNumber{r.geometry(k)};
+    if (has_covariance) o << Key << "std" << Value << YamlNumber{r.sigma(k)};
+    if (IsHeldName(r, r.names[k])) o << Key << "held" << Value << true;
+    o << EndMap;
+  }
+  o << EndMap;
+  if (has_covariance) {
+    // A held parameter has no variance: its correlations are written 0.
+    o << Key << "correlation" << Value << YAML::Comment("the parameters, in the order above; held: 0") << BeginSeq;
+    for (int a = 0; a < n; ++a) {
+      o << Flow << BeginSeq;
+      for (int b = 0; b < n; ++b) {
+        const double s = r.sigma(a) * r.sigma(b);
+        o << YamlNumber{s > 0.0 ? r.covariance(a, b) / s : 0.0};
+      }
+      o << EndSeq;
+    }
+    o << EndSeq;
+    o << Key << "covariance" << Value << YAML::Comment("the parameters, in the order above (m, rad)") << BeginSeq;
+    for (int a = 0; a < n; ++a) {
+      o << Flow << BeginSeq;
+      for (int b = 0; b < n; ++b) o << YamlNumber{r.covariance(a, b)};
+      o << EndSeq;
+    }
+    o << EndSeq;
+  }
+  o << EndMap;
+
+  const FlowRows::Syntax syntax = json ? FlowRows::Syntax::kJson : FlowRows::Syntax::kYaml;
+  const auto number = [](FlowRows& rows, const std::string& key, double value) {
+    rows.Key(key.c_str());
+    rows.Number(value);
+  };
+  const auto list = [](FlowRows& rows, const std::string& key, const Eigen::VectorXd& values) {
+    rows.Key(key.c_str());
+    rows.BeginList();
+    for (int i = 0; i < values.size(); ++i) rows.Number(values(i));
+    rows.EndList();
+  };
+  FlowRows poses(syntax);
+  for (std::size_t j = 0; j < r.poses.size(); ++j) {
+    poses.BeginRow();
+    poses.Key("pose");
+    poses.Int(r.pose_ids[j]);
+    for (int k = 0; k < SpatialKind::kPoseDim; ++k) number(poses, SpatialKind::kPoseNames[k], r.poses[j](k));
+    if (j < r.tensions_N.size() && r.tensions_N[j].size() > 0) list(poses, "tensions_N", r.tensions_N[j]);
+    poses.EndRow();
+  }
+  FlowRows readings(syntax);
+  for (std::size_t k = 0; k < r.fits.size(); ++k) {
+    const SpatialReadingFit& f = r.fits[k];
+    readings.BeginRow();
+    readings.Key("reading");
+    readings.Int(static_cast<long long>(k + 1));
+    readings.Key("pose");
+    readings.Int(f.pose_id);
+    list(readings, "encoder_sigmas", f.encoders);
+    for (const SpatialSensor s : kSpatialSensors) {
+      const Eigen::VectorXd& v = f.sensors[static_cast<int>(s)];
+      if (v.size() > 0) list(readings, std::string(ToString(s)) + "_sigmas", v);
+    }
+    if (f.equilibrium.size() > 0) list(readings, "equilibrium_sigmas", f.equilibrium);
+    readings.EndRow();
+  }
+  return {YamlText(o),
+          poses.Finish("poses", r.tensions_N.empty() ? "identified poses: x, y, z (m), roll, pitch, yaw (rad)"
+                                                     : "identified poses: x, y, z (m), roll, pitch, yaw (rad), "
+                                                       "cable tensions (N)"),
+          readings.Finish("readings",
+                          "per reading (data row), each value's residual (model - reading) over its sigma; "
+                          "equilibrium: force then moment rows, on a pose's first reading")};
+}
+
+}  // namespace
+
+const char* SpatialGeometryUnit(const std::string& name) {
+  return name.rfind("sw", 0) == 0 || name == "yaw0" ? "rad" : "m";
+}
+
+std::vector<std::string> MissingSpatialSensors(const SpatialRobot& nominal, const SpatialIdentifyResult& result) {
+  std::vector<std::string> missing;
+  for (const SpatialSensor s : kSpatialSensors) {
+    const bool unused = std::find(result.unused_sensors.begin(), result.unused_sensors.end(), ToString(s)) !=
+                        result.unused_sensors.end();
+    if (HasSpatialSensor(nominal, s) && !unused && !SensorRead(result, s)) missing.push_back(ToString(s));
+  }
+  return missing;
+}
+
+std::vector<std::pair<std::string, double>> SpatialResidualRms(const SpatialRobot& nominal,
+                                                               const SpatialIdentifyResult& r) {
+  const auto rms = [&r](const auto& values_of, double sigma) {
+    double sum = 0.0;
+    long count = 0;
+    for (const SpatialReadingFit& f : r.fits) {
+      const Eigen::VectorXd& v = values_of(f);
+      sum += (v * sigma).squaredNorm();
+      count += v.size();
+    }
+    return count ? std::sqrt(sum / count) : 0.0;
+  };
+  std::vector<std::pair<std::string, double>> out = {
+      {"encoder_m", rms([](const SpatialReadingFit& f) -> const Eigen::VectorXd& { return f.encoders; },
+                        nominal.sensors.encoder_sigma_m)}};
+  for (const SpatialSensor s : kSpatialSensors) {
+    const std::optional<RangedNoise> noise = SpatialSensorNoise(nominal.sensors, s);
+    if (!noise || !SensorRead(r, s)) continue;
+    const auto values = [s](const SpatialReadingFit& f) -> const Eigen::VectorXd& {
+      return f.sensors[static_cast<int>(s)];
+    };
+    out.emplace_back(std::string(ToString(s)) + "_" + SpatialUnitOf(s), rms(values, noise->sigma()));
+  }
+  return out;
+}
+
+std::string SpatialIdentifyResultYaml(const SpatialRobot& nominal, const SpatialIdentifyOptions& options,
+                                      const SpatialIdentifyResult& result, const std::string& command_line) {
+  const ResultParts parts = Parts(nominal, options, result, command_line, false);
+  return parts.head + parts.poses + parts.readings;
+}
+
+std::string SpatialIdentifyResultJson(const SpatialRobot& nominal, const SpatialIdentifyOptions& options,
+                                      const SpatialIdentifyResult& result, const std::string& command_line) {
+  const ResultParts parts = Parts(nominal, options, result, command_line, true);
+  return MergeJsonObjects({ToJson(YAML::Load(parts.head)), parts.poses, parts.readings});
+}
+
+SpatialRobot CalibratedSpatialRobot(const SpatialRobot& nominal, const SpatialIdentifyResult& result) {
+  const int m = nominal.num_cables();
+  CABLECAL_CHECK(static_cast<int>(result.names.size()) >= 4 * m && result.names[4 * m - 1] == "l" + std::to_string(m) + "0",
+                 "a spatial result of another robot");
+  SpatialRobot calibrated = nominal;
+  for (int i = 0; i < m; ++i) {
+    calibrated.cables[i].p_F_exit_m = result.geometry.segment<3>(3 * i);
+    calibrated.cables[i].initial_length_m = result.geometry(3 * m + i);
+  }
+  return calibrated;
+}
+
+}  // namespace cablecal

@@ -1,0 +1,44 @@
+// What `identify` writes for a spatial robot (README, "Spatial robots", "Identification of a
+// spatial robot"): result.yaml and its JSON, with the planar result's keys where they apply
+// (provenance, robot, status, estimator, gauge, iterations, final_cost, residual_rms, warnings,
+// loss, parameters, correlation, poses, readings) and the spatial ones (held, null_directions,
+// weak_directions, worst_reading, covariance, statics, unused and missing sensors); the
+// calibrated robot file. Depends on identify/ (the planar writer's provenance) and
+// identify/spatial_identify.h.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "identify/spatial_identify.h"
+#include "model/spatial_robot.h"
+
+namespace cablecal {
+
+// The robot file's sensors whose readings the identification had none of (by the fits: a
+// sensor read at no reading), in SpatialSensor order: the data simply did not read them.
+std::vector<std::string> MissingSpatialSensors(const SpatialRobot& nominal, const SpatialIdentifyResult& result);
+
+// The RMS of each read sensor's residual (model - reading) in its own unit, the whitened
+// residual times the robot file's sigma: "encoder_m", then "inclinometer_rad", "laser_m",
+// "position_m", "swivel_rad", "heading_rad", "load_cell_N" for the sensors read.
+std::vector<std::pair<std::string, double>> SpatialResidualRms(const SpatialRobot& nominal,
+                                                               const SpatialIdentifyResult& result);
+
+// A geometry unknown's unit: "rad" for the swivel offsets and yaw0, "m" otherwise.
+const char* SpatialGeometryUnit(const std::string& name);
+
+// result.yaml of a spatial identification.
+std::string SpatialIdentifyResultYaml(const SpatialRobot& nominal, const SpatialIdentifyOptions& options,
+                                      const SpatialIdentifyResult& result, const std::string& command_line);
+// The same content as one line of JSON (identify --json).
+std::string SpatialIdentifyResultJson(const SpatialRobot& nominal, const SpatialIdentifyOptions& options,
+                                      const SpatialIdentifyResult& result, const std::string& command_line);
+
+// The nominal robot with the identified exit points and, as each cable's initial_length, the
+// identified l_i0 (the cable paid out at home, where its encoder reads zero); every other value
+// the nominal robot's. The identified swivel offsets and yaw0 are not robot-file keys: the
+// relative sensors are zeroed at home (README). CABLECAL_CHECK on a result of another robot.
+SpatialRobot CalibratedSpatialRobot(const SpatialRobot& nominal, const SpatialIdentifyResult& result);
+
+}  // namespace cablecal

@@ -1,0 +1,315 @@
+// End-to-end for identify and validate on spatial robots: sample -> simulate -> identify ->
+// validate through the binary on a built-in robot and a random asymmetric robot file; the
+// estimates against the truth file in their sigmas; the calibrated robot file's round trip;
+// --json, --report; hostile inputs (exit 2, one message, nothing written).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <yaml-cpp/yaml.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "common/random.h"
+#include "model/spatial_robot.h"
+#include "tests/support/random_spatial_robot.h"
+#include "tests/support/temp_dir.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct RunResult {
+  int exit_code;
+  std::string output;  // stdout and stderr
+};
+
+RunResult RunCablecal(const std::string& args) {
+  const std::string command = std::string(CABLECAL_BINARY) + " " + args + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  std::string output;
+  std::array<char, 4096> buffer;
+  while (fgets(buffer.data(), buffer.size(), pipe)) output += buffer.data();
+  const int status = pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+std::vector<std::string> Split(const std::string& line) {
+  std::vector<std::string> cells;
+  std::stringstream in(line);
+  for (std::string cell; std::getline(in, cell, ',');) cells.push_back(cell);
+  return cells;
+}
+
+class SpatialIdentifyCli : public ::testing::Test {
+ protected:
+  std::string Path(const std::string& name) const { return tmp_.Path(name); }
+  std::string Read(const std::string& name) const { return tmp_.Read(name); }
+  static std::string Builtin(const std::string& name) {
+    return std::string(CABLECAL_SOURCE_DIR) + "/robots/" + name + ".yaml";
+  }
+  // A random asymmetric 7-cable robot (tilted swivel axes, offset centre of mass, exits at
+  // different heights) with every sensor and every cable stiff, as a file.
+  std::string RandomRobotFile(bool relative_sensors = false) const {
+    cablecal::Rng rng(107);
+    cablecal::SpatialRobot r = cablecal::testing::RandomSpatialRobot(rng, "random-asymmetric", 7);
+    const double deg = M_PI / 180.0;
+    r.sensors.inclinometer_rad = cablecal::RangedNoise{0.1 * deg, 0.05 * deg};
+    r.sensors.laser_m = cablecal::RangedNoise{0.006, 0.0015};
+    r.sensors.position = cablecal::SpatialSensors::Position{cablecal::RangedNoise{3e-4, 1e-4}, Eigen::Vector3d(0.02, 0, 0)};
+    r.sensors.load_cell_N = cablecal::RangedNoise{3.0, 1.0};
+    if (relative_sensors) {
+      r.sensors.swivel_rad = cablecal::RangedNoise{0.1 * deg, 0.05 * deg};
+      r.sensors.heading_rad = cablecal::RangedNoise{1.0 * deg, 0.5 * deg};
+    }
+    for (cablecal::SpatialCable& c : r.cables) c.stiffness_N = c.stiffness_N.value_or(2e6);
+    const std::string path = Path(relative_sensors ? "random7_all.yaml" : "random7.yaml");
+    std::ofstream(path) << cablecal::SpatialRobotToYaml(r);
+    return path;
+  }
+  // The measurement CSV `from` with only the named columns kept (and the provenance lines).
+  void KeepColumns(const std::string& from, const std::string& to, const std::vector<std::string>& prefixes) {
+    std::istringstream in(Read(from));
+    std::ofstream out(Path(to));
+    std::vector<bool> keep;
+    for (std::string line; std::getline(in, line);) {
+      if (line.rfind("#", 0) == 0) continue;
+      const std::vector<std::string> cells = Split(line);
+      if (keep.empty()) {
+        for (const std::string& c : cells) {
+          bool k = false;
+          for (const std::string& p : prefixes) k = k || c == p || (c.rfind(p, 0) == 0 && std::isdigit(c[p.size()]));
+          keep.push_back(k);
+        }
+      }
+      std::string row;
+      for (std::size_t i = 0; i < cells.size(); ++i) {
+        if (keep[i]) row += (row.empty() ? "" : ",") + cells[i];
+      }
+      out << row << "\n";
+    }
+  }
+  // sample -> simulate with a geometry error: the plan, the readings and the truth file.
+  void Simulate(const std::string& robot, int poses, const std::string& sigma, int seed, const std::string& stem) {
+    const std::string s = std::to_string(seed);
+    RunResult r = RunCablecal("sample --robot " + robot + " --poses " + std::to_string(poses) + " --seed " + s + " --out " +
+                              Path(stem + "_plan.csv"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    r = RunCablecal("simulate --robot " + robot + " --plan " + Path(stem + "_plan.csv") + " --geometry-sigma " + sigma +
+                    " --seed " + s + " --skip-infeasible --out " + Path(stem + ".csv") + " --truth-out " +
+                    Path(stem + "_truth.yaml"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  // Every identified, not held, exit coordinate against the truth, in its sigma: the largest.
+  static double WorstExitSigmas(const YAML::Node& result, const YAML::Node& truth) {
+    double worst = 0.0;
+    for (std::size_t i = 0; i < truth["cables"].size(); ++i) {
+      for (int c = 0; c < 3; ++c) {
+        const YAML::Node p = result["parameters"]["a" + std::to_string(i + 1) + "xyz"[c]];
+        if (p["held"]) continue;
+        const double error = p["value"].as<double>() - truth["cables"][i]["exit"][c].as<double>();
+        worst = std::max(worst, std::abs(error) / p["std"].as<double>());
+      }
+    }
+    return worst;
+  }
+  cablecal::testing_support::TempDir tmp_;
+};
+
+// Cogiro (its position sensor) and a random robot (every sensor): the exits within 4.5 sigma of
+// the truth (the outlier bound: 24 and 21 coordinates), the calibrated robot file loads and
+// holds the identified geometry, and validate prefers it to the nominal robot on held-out poses.
+TEST_F(SpatialIdentifyCli, SimulateIdentifyValidateOnABuiltInAndARandomRobot) {
+  struct Case {
+    std::string robot, sigma;
+    int m;
+  };
+  for (const Case& c : {Case{Builtin("cogiro"), "0.002", 8}, Case{RandomRobotFile(), "0.0003", 7}}) {
+    SCOPED_TRACE(c.robot);
+    Simulate(c.robot, 24, c.sigma, 1, "cal");
+    const RunResult id = RunCablecal("identify --robot " + c.robot + " --measurements " + Path("cal.csv") + " --out " +
+                                     Path("result.yaml") + " --calibrated-robot " + Path("calibrated.yaml"));
+    ASSERT_EQ(id.exit_code, 0) << id.output;
+    EXPECT_NE(id.output.find("(ml, gauge auto, statics)"), std::string::npos) << id.output;
+    EXPECT_NE(id.output.find("worst reading: pose "), std::string::npos) << id.output;
+    const YAML::Node result = YAML::LoadFile(Path("result.yaml"));
+    const YAML::Node truth = YAML::LoadFile(Path("cal_truth.yaml"));
+    EXPECT_EQ(result["status"].as<std::string>(), "converged");
+    EXPECT_EQ(result["robot"]["kind"].as<std::string>(), "spatial");
+    EXPECT_EQ(result["parameters"].size(), static_cast<std::size_t>(4 * c.m));
+    EXPECT_EQ(result["covariance"].size(), static_cast<std::size_t>(4 * c.m));
+    EXPECT_LT(WorstExitSigmas(result, truth), 4.5);
+    // The initial lengths: what the winches paid out at home, the nominal home's commands.
+    // The calibrated robot file: every identified value, every other key the nominal file's.
+    const cablecal::SpatialRobot nominal = cablecal::LoadSpatialRobotFile(c.robot);
+    const cablecal::SpatialRobot calibrated = cablecal::LoadSpatialRobotFile(Path("calibrated.yaml"));
+    for (int i = 0; i < c.m; ++i) {
+      const std::string k = std::to_string(i + 1);
+      for (int a = 0; a < 3; ++a) {
+        EXPECT_EQ(calibrated.cables[i].p_F_exit_m(a), result["parameters"]["a" + k + "xyz"[a]]["value"].as<double>());
+      }
+      ASSERT_TRUE(calibrated.cables[i].initial_length_m);
+      EXPECT_EQ(*calibrated.cables[i].initial_length_m, result["parameters"]["l" + k + "0"]["value"].as<double>());
+      EXPECT_EQ(calibrated.cables[i].p_P_anchor_m, nominal.cables[i].p_P_anchor_m);
+      EXPECT_EQ(calibrated.cables[i].stiffness_N, nominal.cables[i].stiffness_N);
+    }
+    EXPECT_EQ(calibrated.name, nominal.name);
+    EXPECT_EQ(calibrated.platform_mass_kg, nominal.platform_mass_kg);
+    EXPECT_EQ(cablecal::SpatialRobotToYaml(calibrated).find("initial_length") != std::string::npos, true);
+
+    // Held-out poses of the same true robot: the calibrated robot predicts them better.
+    const RunResult plan = RunCablecal("sample --robot " + c.robot + " --poses 10 --seed 9 --out " + Path("hold_plan.csv"));
+    ASSERT_EQ(plan.exit_code, 0) << plan.output;
+    const RunResult sim = RunCablecal("simulate --robot " + c.robot + " --plan " + Path("hold_plan.csv") + " --truth " +
+                                      Path("cal_truth.yaml") + " --seed 9 --skip-infeasible --out " + Path("hold.csv"));
+    ASSERT_EQ(sim.exit_code, 0) << sim.output;
+    const RunResult val = RunCablecal("validate --robot " + Path("calibrated.yaml") + " --nominal " + c.robot +
+                                      " --measurements " + Path("hold.csv") + " --out " + Path("val.csv") +
+                                      " --summary " + Path("val.yaml"));
+    ASSERT_EQ(val.exit_code, 0) << val.output;
+    const YAML::Node summary = YAML::LoadFile(Path("val.yaml"));
+    const double ratio = summary["nominal_over_calibrated"]["position_rms"].as<double>();
+    EXPECT_GT(ratio, 2.0) << val.output;
+    // Within a few times the tracker's noise: the calibration explains the held-out readings.
+    EXPECT_LT(summary["calibrated"]["position"]["rms_m"].as<double>(),
+              5.0 * summary["sensor_noise"]["position_sigma_m"].as<double>())
+        << val.output;
+    EXPECT_EQ(Split(Read("val.csv").substr(Read("val.csv").find("\npose,") + 1, 200))[1], c.m == 7 ? "roll" : "px");
+    // identify --holdout: the report validates the calibration as validate does.
+    const RunResult rep = RunCablecal("identify --robot " + c.robot + " --measurements " + Path("cal.csv") +
+                                      " --json --report " + Path("report") + " --holdout " + Path("hold.csv"));
+    ASSERT_EQ(rep.exit_code, 0) << rep.output;
+    const YAML::Node in_report = YAML::LoadFile(Path("report/validation.yaml"));
+    EXPECT_NEAR(in_report["nominal_over_calibrated"]["position_rms"].as<double>(), ratio, 1e-6 * ratio);
+    EXPECT_NE(Read("report/report.md").find("## Validation on held-out poses"), std::string::npos);
+  }
+}
+
+// The readings lack a position sensor: encoders, inclinometer, laser and load cells leave the
+// frame's x and y unseen (its yaw is seen through the tilted swivel axes); the default gauge
+// holds two exit coordinates and names the directions; --json carries the same content;
+// --report writes its files.
+TEST_F(SpatialIdentifyCli, TheGaugeFromTheDataJsonAndReport) {
+  const std::string robot = RandomRobotFile();
+  Simulate(robot, 20, "0.00002", 3, "m");
+  KeepColumns("m.csv", "tilt.csv", {"pose", "dl", "roll", "pitch", "z", "f"});
+  const RunResult id = RunCablecal("identify --robot " + robot + " --measurements " + Path("tilt.csv") + " --out " +
+                                   Path("r.yaml") + " --report " + Path("report"));
+  ASSERT_EQ(id.exit_code, 0) << id.output;
+  EXPECT_NE(id.output.find("unseen by the readings (2): a translation along x of the frame; a translation along y "
+                           "of the frame"),
+            std::string::npos)
+      << id.output;
+  EXPECT_NE(id.output.find("held at nominal (the gauge): "), std::string::npos) << id.output;
+  EXPECT_NE(id.output.find("not in the data (no columns): position"), std::string::npos) << id.output;
+  const YAML::Node r = YAML::LoadFile(Path("r.yaml"));
+  EXPECT_EQ(r["held"].size(), 2u);
+  EXPECT_EQ(r["null_directions"].size(), 2u);
+  EXPECT_EQ(r["null_directions"][0]["vector"].size(), 28u);
+  for (const YAML::Node& h : r["held"]) EXPECT_TRUE(r["parameters"][h.as<std::string>()]["held"].as<bool>());
+  EXPECT_EQ(r["missing_sensors"][0].as<std::string>(), "position");
+  for (const char* file : {"report.md", "result.yaml", "parameters.csv", "exits.csv", "residuals.csv", "exits.png",
+                           "residuals.png"}) {
+    EXPECT_TRUE(fs::exists(Path(std::string("report/") + file))) << file;
+  }
+  EXPECT_NE(Read("report/report.md").find("## The gauge"), std::string::npos);
+  const RunResult json = RunCablecal("identify --robot " + robot + " --measurements " + Path("tilt.csv") + " --json");
+  ASSERT_EQ(json.exit_code, 0) << json.output;
+  const YAML::Node j = YAML::Load(json.output);  // JSON is YAML
+  EXPECT_EQ(j["held"].size(), 2u);
+  // Two runs of the solver agree to rounding (the heap's alignment changes Eigen's summation
+  // order in the last bits), not bit for bit.
+  EXPECT_NEAR(j["parameters"]["l10"]["value"].as<double>(), r["parameters"]["l10"]["value"].as<double>(), 1e-9);
+  EXPECT_EQ(j["poses"].size(), r["poses"].size());
+  EXPECT_EQ(j["readings"].size(), r["readings"].size());
+}
+
+// validate's model of the lab against simulate's: the truth file (its initial lengths the
+// nominal home's commands) predicts its own noise-free readings, every sensor (the swivel
+// encoders and the heading zeroed where it settles at home), to rounding.
+TEST_F(SpatialIdentifyCli, TheTruthPredictsItsOwnNoiseFreeReadings) {
+  const std::string robot = RandomRobotFile(true);
+  RunResult r = RunCablecal("sample --robot " + robot + " --poses 8 --seed 2 --out " + Path("plan.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = RunCablecal("simulate --robot " + robot + " --plan " + Path("plan.csv") +
+                  " --geometry-sigma 0.00002 --sensors none --no-encoder-noise --skip-infeasible --seed 2 --out " +
+                  Path("m.csv") + " --truth-out " + Path("truth.yaml"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = RunCablecal("validate --robot " + Path("truth.yaml") + " --nominal " + robot + " --measurements " + Path("m.csv") +
+                  " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const YAML::Node v = YAML::Load(r.output);
+  ASSERT_EQ(v["compared"].size(), 6u) << r.output;
+  const std::vector<std::pair<std::string, double>> bounds = {
+      {"inclinometer", 1e-9}, {"laser", 1e-9}, {"position", 1e-9}, {"swivel", 1e-9}, {"heading", 1e-9}, {"load_cell", 1e-5}};
+  for (const auto& [sensor, bound] : bounds) {
+    const YAML::Node e = v["calibrated"][sensor];
+    ASSERT_TRUE(e.IsMap()) << sensor;
+    const std::string unit = sensor == "load_cell" ? "N" : (sensor == "laser" || sensor == "position" ? "m" : "rad");
+    EXPECT_LT(e["max_abs_" + unit].as<double>(), bound) << sensor;
+    // The nominal robot, 20 um off in every exit coordinate, is seen off by more.
+    EXPECT_GT(v["nominal"][sensor]["max_abs_" + unit].as<double>(), 100 * bound) << sensor;
+  }
+  EXPECT_EQ(v["rows"].size(), v["readings"].as<std::size_t>());
+}
+
+TEST_F(SpatialIdentifyCli, HostileInputsExitTwoWithOneMessageAndWriteNothing) {
+  const std::string robot = RandomRobotFile();
+  Simulate(robot, 12, "0", 5, "m");
+  KeepColumns("m.csv", "tilt.csv", {"pose", "dl", "roll", "pitch", "z", "f"});
+  std::string other = Read("m.csv");
+  other.replace(other.find("\npose,dl1"), 9, "\npose,dx1");
+  std::ofstream(Path("misspelt.csv")) << other;
+  const std::string out = " --out " + Path("out.yaml") + " --calibrated-robot " + Path("cal.yaml");
+  struct Case {
+    std::string args, expected;
+  };
+  const std::vector<Case> cases = {
+      {"--measurements " + Path("misspelt.csv"), "dx1"},
+      {"--measurements " + Path("m.csv") + " --gauge hold:a8x", "'a8x' is not an exit coordinate of this 7-cable robot"},
+      {"--measurements " + Path("tilt.csv") + " --gauge hold:a1x", "does not fix the gauge: no reading fixes"},
+      {"--measurements " + Path("m.csv") + " --estimator paper", "--estimator paper: serves planar robots only"},
+      {"--measurements " + Path("m.csv") + " --geometry-prior 0.001", "--geometry-prior: serves planar robots only"},
+      {"--measurements " + Path("m.csv") + " --gauge bogus", "--gauge: bogus not in"},
+      {"--measurements " + Builtin("cogiro"), "column"},
+  };
+  for (const Case& c : cases) {
+    const RunResult r = RunCablecal("identify --robot " + robot + " " + c.args + out);
+    EXPECT_EQ(r.exit_code, 2) << c.args << "\n" << r.output;
+    EXPECT_NE(r.output.find(c.expected), std::string::npos) << c.args << "\nexpected: " << c.expected << "\ngot: " << r.output;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), c.args.find("bogus") != std::string::npos ? 2 : 1)
+        << r.output;
+    EXPECT_FALSE(fs::exists(Path("out.yaml"))) << c.args;
+    EXPECT_FALSE(fs::exists(Path("cal.yaml"))) << c.args;
+    fs::remove(Path("out.yaml"));  // so that a case wrongly accepted leaves no trace for the next
+    fs::remove(Path("cal.yaml"));
+  }
+  // A solve that stops short is exit 3 with Ceres' reason, and writes nothing.
+  const RunResult stopped =
+      RunCablecal("identify --robot " + robot + " --measurements " + Path("m.csv") + " --max-iterations 1" + out);
+  EXPECT_EQ(stopped.exit_code, 3) << stopped.output;
+  EXPECT_NE(stopped.output.find(Path("m.csv") + ": "), std::string::npos) << stopped.output;
+  EXPECT_FALSE(fs::exists(Path("out.yaml")));
+  EXPECT_FALSE(fs::exists(Path("cal.yaml")));
+  // The spatial gauges are refused on a planar robot, naming the flag.
+  const RunResult planar = RunCablecal("identify --measurements " + Path("m.csv") + " --gauge auto" + out);
+  EXPECT_EQ(planar.exit_code, 2) << planar.output;
+  EXPECT_NE(planar.output.find("--gauge auto: serves spatial robots only"), std::string::npos) << planar.output;
+  // validate: another robot's readings, a planar nominal.
+  RunResult r = RunCablecal("validate --robot " + robot + " --nominal " + std::string(CABLECAL_SOURCE_DIR) +
+                            "/robots/wang2022.yaml --measurements " + Path("m.csv") + " --out " + Path("v.csv"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--nominal: "), std::string::npos) << r.output;
+  KeepColumns("m.csv", "enc.csv", {"pose", "dl"});
+  r = RunCablecal("validate --robot " + robot + " --measurements " + Path("enc.csv") + " --out " + Path("v.csv"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("nothing to compare the predictions with"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(Path("v.csv")));
+}
+
+}  // namespace
