@@ -60,28 +60,88 @@ struct CableData {
   }
 };
 
-// Encoder: dl = l(q, D) - l0 for an inextensible cable.
-struct EncoderCost {
-  CableData cable;
-  double dl_m, inv_sigma;
-  template <typename T>
-  bool operator()(const T* q, const T* d, const T* l0, T* r) const {
-    r[0] = (cable.At(q, d).length_m - l0[0] - T(dl_m)) * T(inv_sigma);
+// The cable's state at pose q and, when asked, d length / d q (1 x 6, row-major) and
+// d length / d D (1 x 3), by the chain rule through the model's own gradient: the length
+// depends on B - D only (SwivelCable reads rho = B - D), so dl/dB = e_F_free and dl/dD =
+// -e_F_free; dB/dq is the identity on x, y, z and d(R b)/d(roll, pitch, yaw) from Jets on the
+// three angles. An AutoDiff of the whole construction on the 10 components of (q, D, l0) cost
+// ten times as much (bench/README.md, "Spatial identification").
+struct CableWithGradient {
+  SwivelCableState<double> state;
+  double d_pose[6];
+  double d_exit[3];
+};
+CableWithGradient CableAndGradient(const CableData& cable, const double* q, const double* d, bool gradient) {
+  using J3 = ceres::Jet<double, 3>;
+  const SpatialPose<double> pose = PoseOf(q);
+  CableWithGradient out;
+  if (!gradient) {
+    out.state = cable.At(q, d);
+    return out;
+  }
+  const Eigen::Matrix<J3, 3, 3> R = Rotation<J3>(J3(pose(3), 0), J3(pose(4), 1), J3(pose(5), 2));
+  const Vec3<J3> r_F_anchor = R * cable.p_P_anchor_m.cast<J3>();
+  Vector3d p_F_anchor_m;
+  for (int a = 0; a < 3; ++a) p_F_anchor_m(a) = pose(a) + r_F_anchor(a).a;
+  out.state = SwivelCable<double>(Eigen::Map<const Vector3d>(d), cable.k_F_swivel_axis, cable.pulley_radius_m,
+                                  p_F_anchor_m);
+  const Vector3d& e = out.state.e_F_free;
+  for (int a = 0; a < 3; ++a) {
+    out.d_pose[a] = e(a);
+    out.d_exit[a] = -e(a);
+    out.d_pose[3 + a] = e(0) * r_F_anchor(0).v(a) + e(1) * r_F_anchor(1).v(a) + e(2) * r_F_anchor(2).v(a);
+  }
+  return out;
+}
+
+// Encoder: dl = l(q, D) - l0 for an inextensible cable. Parameters: q (6), D (3), l0 (1).
+class EncoderCost final : public ceres::SizedCostFunction<1, 6, 3, 1> {
+ public:
+  EncoderCost(const CableData& cable, double dl_m, double inv_sigma)
+      : cable_(cable), dl_m_(dl_m), inv_sigma_(inv_sigma) {}
+  bool Evaluate(double const* const* p, double* r, double** J) const override {
+    const bool gradient = J != nullptr && (J[0] != nullptr || J[1] != nullptr);
+    const CableWithGradient c = CableAndGradient(cable_, p[0], p[1], gradient);
+    r[0] = (c.state.length_m - p[2][0] - dl_m_) * inv_sigma_;
+    if (J == nullptr) return true;
+    if (J[0]) for (int a = 0; a < 6; ++a) J[0][a] = c.d_pose[a] * inv_sigma_;
+    if (J[1]) for (int a = 0; a < 3; ++a) J[1][a] = c.d_exit[a] * inv_sigma_;
+    if (J[2]) J[2][0] = -inv_sigma_;
     return true;
   }
+
+ private:
+  CableData cable_;
+  double dl_m_, inv_sigma_;
 };
 
 // Encoder of an elastic cable: the paid-out (unstretched) length at the pose's tension t of the
-// cable, model/robot.h's elastic law (UnstretchedLength), less its value at home l0.
-struct ElasticEncoderCost {
-  CableData cable;
-  std::optional<double> stiffness_N;
-  double dl_m, inv_sigma;
-  template <typename T>
-  bool operator()(const T* q, const T* t, const T* d, const T* l0, T* r) const {
-    r[0] = (UnstretchedLength<T>(stiffness_N, cable.At(q, d).length_m, t[0]) - l0[0] - T(dl_m)) * T(inv_sigma);
+// cable, model/robot.h's elastic law (UnstretchedLength), less its value at home l0; its
+// derivatives in the length and the tension from Jets on those two, the length's as above.
+// Parameters: q (6), t (1), D (3), l0 (1).
+class ElasticEncoderCost final : public ceres::SizedCostFunction<1, 6, 1, 3, 1> {
+ public:
+  ElasticEncoderCost(const CableData& cable, std::optional<double> stiffness_N, double dl_m, double inv_sigma)
+      : cable_(cable), stiffness_N_(stiffness_N), dl_m_(dl_m), inv_sigma_(inv_sigma) {}
+  bool Evaluate(double const* const* p, double* r, double** J) const override {
+    using J2 = ceres::Jet<double, 2>;
+    const bool gradient = J != nullptr && (J[0] != nullptr || J[2] != nullptr);
+    const CableWithGradient c = CableAndGradient(cable_, p[0], p[2], gradient);
+    const J2 paid_out = UnstretchedLength<J2>(stiffness_N_, J2(c.state.length_m, 0), J2(p[1][0], 1));
+    r[0] = (paid_out.a - p[3][0] - dl_m_) * inv_sigma_;
+    if (J == nullptr) return true;
+    const double dl = paid_out.v(0) * inv_sigma_;
+    if (J[0]) for (int a = 0; a < 6; ++a) J[0][a] = c.d_pose[a] * dl;
+    if (J[1]) J[1][0] = paid_out.v(1) * inv_sigma_;
+    if (J[2]) for (int a = 0; a < 3; ++a) J[2][a] = c.d_exit[a] * dl;
+    if (J[3]) J[3][0] = -inv_sigma_;
     return true;
   }
+
+ private:
+  CableData cable_;
+  std::optional<double> stiffness_N_;
+  double dl_m_, inv_sigma_;
 };
 
 // Load cell: the cable's tension (the pose block is a parameter only to tie the term to its pose).
@@ -371,11 +431,10 @@ Model BuildModel(const SpatialRobot& robot, const std::vector<SpatialMeasurement
       const SpatialCable& c = robot.cables[i];
       const CableData cable{c.k_F_swivel_axis, c.pulley_radius_m, c.p_P_anchor_m};
       if (model.nt > 0 && c.stiffness_N) {
-        add(Cost<ElasticEncoderCost, 1, 6, 1, 3, 1>(ElasticEncoderCost{cable, c.stiffness_N, r.dl_m(i), inv_encoder}),
+        add(std::make_unique<ElasticEncoderCost>(cable, c.stiffness_N, r.dl_m(i), inv_encoder),
             {L.exit(i), L.length(i)}, {3, 1}, -1, i, {i});
       } else {
-        add(Cost<EncoderCost, 1, 6, 3, 1>(EncoderCost{cable, r.dl_m(i), inv_encoder}), {L.exit(i), L.length(i)},
-            {3, 1}, -1, i);
+        add(std::make_unique<EncoderCost>(cable, r.dl_m(i), inv_encoder), {L.exit(i), L.length(i)}, {3, 1}, -1, i);
       }
     }
     for (const SpatialSensor s : kSpatialSensors) {
@@ -445,61 +504,93 @@ using Locals = std::vector<VectorXd>;
 
 // A term's residuals and (when asked) its Jacobians: d r / d local (size x (6 + nt): the pose's
 // coordinates, then its tensions) and d r / d geometry (size x p, only its blocks' columns
-// nonzero).
-void EvaluateTerm(const Term& t, const VectorXd& g, const Locals& locals, double* residuals, MatrixXd* d_local,
-                  MatrixXd* d_geometry) {
-  std::vector<const double*> params;
-  if (t.pose >= 0) params.push_back(locals[t.pose].data());
-  for (int i : t.tension_cables) params.push_back(locals[t.pose].data() + 6 + i);
-  for (int b : t.block_offset) params.push_back(g.data() + b);
+// nonzero); `local` is the term's pose's local unknowns (ignored for a term of no pose). The
+// blocks not asked for are not computed (nullptr to the cost).
+void EvaluateTerm(const Term& t, const VectorXd& g, const double* local, int local_size, double* residuals,
+                  MatrixXd* d_local, MatrixXd* d_geometry) {
+  constexpr int kMaxBlocks = 64;
+  const double* params[kMaxBlocks];
+  int np = 0;
+  const int tensions = static_cast<int>(t.tension_cables.size());
+  CABLECAL_CHECK(2 + tensions + static_cast<int>(t.block_offset.size()) <= kMaxBlocks, "too many parameter blocks");
+  if (t.pose >= 0) params[np++] = local;
+  for (int i : t.tension_cables) params[np++] = local + 6 + i;
+  for (int b : t.block_offset) params[np++] = g.data() + b;
   const int n = t.size();
   using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-  std::vector<RowMajor> jac;
-  std::vector<double*> jac_ptr;
-  if (d_local || d_geometry) {
-    if (t.pose >= 0) jac.emplace_back(n, 6);
-    for (std::size_t i = 0; i < t.tension_cables.size(); ++i) jac.emplace_back(n, 1);
-    for (int s : t.block_size) jac.emplace_back(n, s);
-    for (RowMajor& j : jac) jac_ptr.push_back(j.data());
+  // Row-major per block, as Ceres writes them: the pose's n x 6, each tension's n x 1, each
+  // geometry block's n x size, one buffer.
+  int total = 0;
+  if (t.pose >= 0 && d_local) total += n * (6 + tensions);
+  if (d_geometry) {
+    for (int s : t.block_size) total += n * s;
   }
-  const bool ok = t.cost->Evaluate(params.data(), residuals, jac_ptr.empty() ? nullptr : jac_ptr.data());
-  CABLECAL_CHECK(ok, "a spatial residual could not be evaluated");
-  if (jac_ptr.empty()) return;
-  int next = 0;
+  double buffer_stack[256];
+  std::vector<double> buffer_heap;
+  double* buffer = buffer_stack;
+  if (total > 256) {
+    buffer_heap.resize(total);
+    buffer = buffer_heap.data();
+  }
+  double* jac_ptr[kMaxBlocks];
+  int next = 0, offset = 0;
   if (t.pose >= 0) {
-    if (d_local) {
-      d_local->setZero(n, locals[t.pose].size());
-      d_local->leftCols(6) = jac[0];
-      for (std::size_t k = 0; k < t.tension_cables.size(); ++k) d_local->col(6 + t.tension_cables[k]) = jac[1 + k];
+    jac_ptr[next++] = d_local ? buffer : nullptr;
+    if (d_local) offset += 6 * n;
+    for (int k = 0; k < tensions; ++k) {
+      jac_ptr[next++] = d_local ? buffer + offset : nullptr;
+      if (d_local) offset += n;
     }
-    next = 1 + static_cast<int>(t.tension_cables.size());
-  } else if (d_local) {
-    d_local->setZero(n, 6);
+  }
+  const int first_geometry = next;
+  for (int s : t.block_size) {
+    jac_ptr[next++] = d_geometry ? buffer + offset : nullptr;
+    if (d_geometry) offset += n * s;
+  }
+  const bool any = d_local || d_geometry;
+  const bool ok = t.cost->Evaluate(params, residuals, any ? jac_ptr : nullptr);
+  CABLECAL_CHECK(ok, "a spatial residual could not be evaluated");
+  if (!any) return;
+  if (d_local) {
+    if (t.pose >= 0) {
+      d_local->setZero(n, local_size);
+      d_local->leftCols(6) = Eigen::Map<const RowMajor>(jac_ptr[0], n, 6);
+      for (int k = 0; k < tensions; ++k) {
+        d_local->col(6 + t.tension_cables[k]) = Eigen::Map<const VectorXd>(jac_ptr[1 + k], n);
+      }
+    } else {
+      d_local->setZero(n, 6);
+    }
   }
   if (d_geometry) {
     d_geometry->setZero(n, g.size());
     for (std::size_t b = 0; b < t.block_offset.size(); ++b) {
-      d_geometry->middleCols(t.block_offset[b], t.block_size[b]) = jac[next + b];
+      d_geometry->middleCols(t.block_offset[b], t.block_size[b]) =
+          Eigen::Map<const RowMajor>(jac_ptr[first_geometry + b], n, t.block_size[b]);
     }
   }
+}
+void EvaluateTerm(const Term& t, const VectorXd& g, const Locals& locals, double* residuals, MatrixXd* d_local,
+                  MatrixXd* d_geometry) {
+  const VectorXd* local = t.pose >= 0 ? &locals[t.pose] : nullptr;
+  EvaluateTerm(t, g, local ? local->data() : nullptr, local ? static_cast<int>(local->size()) : 0, residuals, d_local,
+               d_geometry);
 }
 
 // The starting local unknowns of pose j: Levenberg-Marquardt on its own readings (and its
 // equilibrium) alone, from `start` (home and the first tensions), with the geometry g (nominal:
 // exits as in the file, l_i0 the nominal home's lengths).
 VectorXd StartingLocal(const Model& model, int j, const VectorXd& g, const VectorXd& start) {
-  Locals q(model.pose_ids.size(), start);
   const int rows = model.pose_values[j];
   const int cols = start.size();
+  MatrixXd jp;
   const auto evaluate = [&](const VectorXd& x, VectorXd* r, MatrixXd* J) {
-    q[j] = x;
     r->resize(rows);
     if (J) J->resize(rows, cols);
     int row = 0;
     for (int k : model.pose_terms[j]) {
       const Term& t = model.terms[k];
-      MatrixXd jp;
-      EvaluateTerm(t, g, q, r->data() + row, J ? &jp : nullptr, nullptr);
+      EvaluateTerm(t, g, x.data(), cols, r->data() + row, J ? &jp : nullptr, nullptr);
       if (J) J->middleRows(row, t.size()) = jp;
       row += t.size();
     }
