@@ -1,8 +1,8 @@
 #!/usr/bin/python3
 """An independent identification of bench/spatial_experiment.h's problem with scipy, for bench/.
 
-cogiro (robots/cogiro.yaml, taken as inextensible) with an inclinometer (sigma 3 mrad) and a
-vertical laser (0.3 mm) added; the ml estimator: every reading whitened by its sensor's sigma,
+cogiro (robots/cogiro.yaml, taken as inextensible) with an inclinometer (sigma 1 mrad: RangedNoise{0.003, 0}, a 3-sigma range) and a
+vertical laser (0.1 mm) added; the ml estimator: every reading whitened by its sensor's sigma,
 unknowns the exit points and initial lengths (the coordinates cablecal's default gauge held,
 given on the command line, fixed at nominal) and each pose's (x, y, z, roll, pitch, yaw).
 The swivel-pulley cable model written for this bench in numpy from the README's description
@@ -61,7 +61,7 @@ def main():
     anchors = np.array(robot["platform"]["anchors"], float)
     floor_z = robot["frame"]["min"][2]
     home = np.array(robot["home"] + [0.0, 0.0, 0.0])
-    s_enc, s_inc, s_las = robot["sensors"]["encoder"]["sigma"], 0.003, 0.0003
+    s_enc, s_inc, s_las = robot["sensors"]["encoder"]["sigma"], 0.001, 0.0001
 
     rows = [line for line in open(readings_path) if line.strip() and not line.startswith("#")]
     header = rows[0].strip().split(",")

@@ -1,6 +1,6 @@
 // The spatial identification's bench problem (bench_identify's BM_SpatialIdentify*, and
-// time_spatial_identify for bench/spatial_identify_vs_scipy.sh): cogiro (8 cables) with an
-// inclinometer (sigma 3 mrad) and a vertical laser (0.3 mm) added, taken as inextensible (the
+// time_spatial_identify, beside bench/scipy_spatial_identify.py): cogiro (8 cables) with an
+// inclinometer (sigma 1 mrad: RangedNoise{0.003, 0}, a 3-sigma range) and a vertical laser (0.1 mm) added, taken as inextensible (the
 // spatial simulation refuses an 8-cable robot without stiffness: its commanded lengths could
 // not all hold), exits perturbed by 1 cm (seed 7); n poses within +-1.5 m in x and y, +-0.9 m
 // in z, +-0.1 rad of home (those with a valid cable geometry), each read by the model's lengths

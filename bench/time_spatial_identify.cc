@@ -1,5 +1,5 @@
 // The spatial identification of bench/spatial_experiment.h's problem timed in-process, for
-// bench/spatial_identify_vs_scipy.sh: writes the readings (CSV) and prints the median wall time
+// bench/scipy_spatial_identify.py (bench/README.md): writes the readings (CSV) and prints the median wall time
 // of IdentifySpatial (default gauge, the whole call), the held coordinates and the estimates.
 //   time_spatial_identify N READINGS_OUT.csv [REPETITIONS]
 #include <algorithm>
@@ -36,11 +36,16 @@ int main(int argc, char** argv) {
       }
     }
     std::nth_element(seconds.begin(), seconds.begin() + seconds.size() / 2, seconds.end());
-    std::printf("median_s %.9g\niterations %d\nheld", seconds[seconds.size() / 2], result.iterations);
+    std::printf("median_s %.9g\niterations %d final_cost %.9g\nheld", seconds[seconds.size() / 2], result.iterations, result.final_cost);
     for (const std::string& h : result.held) std::printf(" %s", h.c_str());
     std::printf("\n");
     for (std::size_t k = 0; k < result.names.size(); ++k) {
       std::printf("%s %.17g\n", result.names[k].c_str(), result.geometry(k));
+    }
+    for (std::size_t j = 0; j < result.poses.size(); ++j) {
+      std::printf("pose%d", result.pose_ids[j]);
+      for (int a = 0; a < 6; ++a) std::printf(" %.17g", result.poses[j](a));
+      std::printf("\n");
     }
     return 0;
   } catch (const std::exception& e) {
