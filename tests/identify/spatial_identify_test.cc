@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <cmath>
+#include <limits>
 #include <set>
 #include <string>
 #include <vector>
@@ -541,7 +542,7 @@ SpreadCheck CompareWithSpread(const SpatialRobot& nominal, const std::vector<Spa
   }
   EXPECT_EQ(out.failed, 0) << nominal.name;
   EXPECT_EQ(out.compared, p - static_cast<int>(at_clean.held.size())) << nominal.name;
-  double lowest = 1.0;
+  double lowest = std::numeric_limits<double>::infinity();
   for (int k = 0; k < p; ++k) {
     if (predicted(k) > 0.0) lowest = std::min(lowest, spread(k) / predicted(k));
   }
