@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <cstdlib>
 #include <map>
 #include <memory>
@@ -707,9 +708,8 @@ MatrixXd ReducedJacobian(const Model& model, const VectorXd& g, const Locals& lo
   return A;
 }
 
-// The SVD of A through its p x p triangular factor (A may have thousands of rows); Eigen's
-// divide and conquer (BDCSVD): faster than JacobiSVD at p = 32 (bench/README.md), as accurate.
-Eigen::BDCSVD<MatrixXd> SmallSvd(const MatrixXd& A) {
+// A's p x p triangular factor R (A = Q R; A may have thousands of rows): R^T R = A^T A.
+MatrixXd TriangularFactor(const MatrixXd& A) {
   const int p = A.cols();
   MatrixXd R = MatrixXd::Zero(p, p);
   if (A.rows() >= p) {
@@ -718,7 +718,209 @@ Eigen::BDCSVD<MatrixXd> SmallSvd(const MatrixXd& A) {
   } else {
     R.topRows(A.rows()) = A;
   }
-  return Eigen::BDCSVD<MatrixXd>(R, Eigen::ComputeFullV);
+  return R;
+}
+
+// The SVD of A through its triangular factor; Eigen's divide and conquer (BDCSVD): faster than
+// JacobiSVD at p = 32 (bench/README.md), as accurate.
+Eigen::BDCSVD<MatrixXd> SmallSvd(const MatrixXd& A) {
+  return Eigen::BDCSVD<MatrixXd>(TriangularFactor(A), Eigen::ComputeFullV);
+}
+
+// ---- The solve without a robust loss: Levenberg-Marquardt on the block-arrow structure ----
+//
+// identify/least_squares.h's iterations (Ceres' Levenberg-Marquardt: damping mu diag(J^T J),
+// mu = 1 / radius, the diagonal clamped to [1e-6, 1e32], the radius from each step's quality,
+// the gradient, step and relative-cost tests of LevenbergMarquardtSettings; the step that meets
+// the last two is not taken), on the spatial Model's terms: each pose's local unknowns
+// eliminated, the geometry's Schur complement (p x p) solved. Ceres' general machinery (its
+// Problem, block-sparse bookkeeping and generic Schur eliminator over 2m small geometry
+// blocks) was half of every 30-pose identification (bench/README.md).
+
+// One pose's share of the normal equations: A (local x local), B (p x local), its gradient.
+struct PoseNormal {
+  MatrixXd a, b, damped_inverse;
+  VectorXd gradient;
+};
+
+struct BlockArrowSummary {
+  bool converged = false;
+  int iterations = 0;
+  std::string message;
+};
+
+// Every term of every pose, and the pose-free terms (the prior): the normal equations and the
+// cost (1/2 sum of squares; infinite where a residual is not). Only the geometry columns a
+// term reads are accumulated.
+double BlockArrowNormal(const Model& model, const VectorXd& g, const Locals& locals, std::vector<PoseNormal>& poses,
+                        MatrixXd& h, VectorXd& gradient) {
+  const int p = g.size();
+  const int local = model.local();
+  h.setZero(p, p);
+  gradient.setZero(p);
+  double sum = 0.0;
+  MatrixXd jq, jg;
+  VectorXd r;
+  std::vector<int> cols;
+  const auto add = [&](const Term& t, PoseNormal* pose) {
+    r.resize(t.size());
+    EvaluateTerm(t, g, locals, r.data(), pose ? &jq : nullptr, &jg);
+    sum += r.squaredNorm();
+    cols.clear();
+    for (std::size_t b = 0; b < t.block_offset.size(); ++b) {
+      for (int c = 0; c < t.block_size[b]; ++c) cols.push_back(t.block_offset[b] + c);
+    }
+    for (std::size_t x = 0; x < cols.size(); ++x) {
+      const auto jx = jg.col(cols[x]);
+      gradient(cols[x]) += jx.dot(r);
+      for (std::size_t y = 0; y < cols.size(); ++y) h(cols[x], cols[y]) += jx.dot(jg.col(cols[y]));
+      if (pose) pose->b.row(cols[x]).noalias() += jx.transpose() * jq;
+    }
+    if (pose) {
+      pose->a.noalias() += jq.transpose() * jq;
+      pose->gradient.noalias() += jq.transpose() * r;
+    }
+  };
+  for (std::size_t j = 0; j < model.pose_ids.size(); ++j) {
+    PoseNormal& pose = poses[j];
+    pose.a.setZero(local, local);
+    pose.b.setZero(p, local);
+    pose.gradient.setZero(local);
+    for (int k : model.pose_terms[j]) add(model.terms[k], &pose);
+  }
+  for (int k : model.prior_terms) add(model.terms[k], nullptr);
+  return std::isfinite(sum) ? 0.5 * sum : std::numeric_limits<double>::infinity();
+}
+
+// Minimises the cost over g (its `held` entries fixed) and the locals, in place.
+BlockArrowSummary SolveBlockArrow(const Model& model, VectorXd& g, Locals& locals, const std::vector<int>& held,
+                                  int max_iterations) {
+  constexpr internal::LevenbergMarquardtSettings kSettings;
+  constexpr double kMinRelativeDecrease = 1e-3, kMaxRadius = 1e16, kMinRadius = 1e-32;
+  constexpr int kMaxConsecutiveInvalidSteps = 5;
+  const auto clamped = [](const MatrixXd& normal) { return normal.diagonal().cwiseMax(1e-6).cwiseMin(1e32); };
+  double radius = kSettings.initial_trust_region_radius, decrease_factor = 2.0;
+  const int n = static_cast<int>(locals.size());
+  const int p = g.size();
+  const int local = model.local();
+  BlockArrowSummary summary;
+  std::vector<PoseNormal> poses(n);
+  MatrixXd h;
+  VectorXd gradient;
+  double cost = BlockArrowNormal(model, g, locals, poses, h, gradient);
+  for (int k : held) gradient(k) = 0.0;
+  if (!std::isfinite(cost)) {
+    summary.message = "a residual is not finite at the start (an anchor inside its pulley?)";
+    return summary;
+  }
+  const auto stop = [&](bool converged, const std::string& why) {
+    summary.converged = converged;
+    summary.message = why;
+    return summary;
+  };
+  const auto gradient_small = [&]() {
+    double largest = gradient.cwiseAbs().maxCoeff();
+    for (const PoseNormal& pose : poses) largest = std::max(largest, pose.gradient.cwiseAbs().maxCoeff());
+    return largest <= kSettings.gradient_tolerance;
+  };
+  if (gradient_small()) return stop(true, "Gradient tolerance reached");
+  const auto at_limit = [&]() { return summary.iterations >= max_iterations; };
+  const std::string limit_reached = "Maximum number of iterations reached";
+  Locals candidate_locals = locals;
+  std::vector<VectorXd> step_q(n);
+  int invalid_steps = 0;
+  for (;;) {
+    const double mu = 1.0 / radius;
+    bool valid = true;
+    MatrixXd schur = h;
+    schur.diagonal() += mu * clamped(h);
+    VectorXd rhs = gradient;
+    for (int j = 0; j < n && valid; ++j) {
+      PoseNormal& pose = poses[j];
+      MatrixXd damped = pose.a;
+      damped.diagonal() += mu * clamped(pose.a);
+      const Eigen::LLT<MatrixXd> llt(damped);
+      if (llt.info() != Eigen::Success) {
+        valid = false;
+        break;
+      }
+      pose.damped_inverse = llt.solve(MatrixXd::Identity(local, local));
+      const MatrixXd bc = pose.b * pose.damped_inverse;
+      schur.noalias() -= bc * pose.b.transpose();
+      rhs.noalias() -= bc * pose.gradient;
+    }
+    VectorXd step_g = VectorXd::Zero(p);
+    if (valid) {
+      for (int k : held) {
+        schur.row(k).setZero();
+        schur.col(k).setZero();
+        schur(k, k) = 1.0;
+        rhs(k) = 0.0;
+      }
+      const Eigen::LDLT<MatrixXd> ldlt(schur);
+      step_g = -ldlt.solve(rhs);
+      valid = ldlt.info() == Eigen::Success && step_g.allFinite();
+    }
+    double model_decrease = 0.0, step_norm2 = step_g.squaredNorm(), x_norm2 = g.squaredNorm();
+    if (valid) {
+      double jstep2 = step_g.dot(h * step_g);
+      model_decrease = -gradient.dot(step_g);
+      for (int j = 0; j < n; ++j) {
+        const PoseNormal& pose = poses[j];
+        step_q[j] = -pose.damped_inverse * (pose.gradient + pose.b.transpose() * step_g);
+        jstep2 += step_q[j].dot(pose.a * step_q[j]) + 2.0 * step_g.dot(pose.b * step_q[j]);
+        model_decrease -= pose.gradient.dot(step_q[j]);
+        step_norm2 += step_q[j].squaredNorm();
+        x_norm2 += locals[j].squaredNorm();
+      }
+      model_decrease -= 0.5 * jstep2;
+      valid = std::isfinite(model_decrease) && model_decrease > 0.0;
+    }
+    if (!valid) {
+      if (at_limit()) return stop(false, limit_reached);
+      ++summary.iterations;
+      if (++invalid_steps >= kMaxConsecutiveInvalidSteps) {
+        return stop(false, "the linear solve failed " + std::to_string(kMaxConsecutiveInvalidSteps) + " times in a row");
+      }
+      radius /= decrease_factor;
+      decrease_factor *= 2.0;
+      if (radius < kMinRadius) return stop(false, "the trust region became too small");
+      continue;
+    }
+    invalid_steps = 0;
+    if (std::sqrt(step_norm2) <= kSettings.parameter_tolerance * (std::sqrt(x_norm2) + kSettings.parameter_tolerance)) {
+      return stop(true, "Parameter tolerance reached");
+    }
+    const VectorXd candidate_g = g + step_g;
+    double candidate_cost = 0.0;
+    for (int j = 0; j < n; ++j) candidate_locals[j] = locals[j] + step_q[j];
+    for (const Term& t : model.terms) {
+      VectorXd r(t.size());
+      EvaluateTerm(t, candidate_g, candidate_locals, r.data(), nullptr, nullptr);
+      candidate_cost += 0.5 * r.squaredNorm();
+    }
+    if (!std::isfinite(candidate_cost)) candidate_cost = std::numeric_limits<double>::infinity();
+    const double cost_change = cost - candidate_cost;
+    if (std::isfinite(candidate_cost) && std::abs(cost_change) <= kSettings.function_tolerance * cost) {
+      return stop(true, "Function tolerance reached");
+    }
+    const double quality = cost_change / model_decrease;
+    if (at_limit()) return stop(false, limit_reached);
+    ++summary.iterations;
+    if (!std::isfinite(candidate_cost) || !(quality > kMinRelativeDecrease)) {
+      radius /= decrease_factor;
+      decrease_factor *= 2.0;
+      if (radius < kMinRadius) return stop(false, "the trust region became too small");
+      continue;
+    }
+    g = candidate_g;
+    locals.swap(candidate_locals);
+    radius = std::min(kMaxRadius, radius / std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * quality - 1.0, 3)));
+    decrease_factor = 2.0;
+    cost = BlockArrowNormal(model, g, locals, poses, h, gradient);
+    for (int k : held) gradient(k) = 0.0;
+    if (gradient_small()) return stop(true, "Gradient tolerance reached");
+  }
 }
 
 // ---- Directions in words ----
@@ -1120,6 +1322,15 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
 
   VectorXd g = a.g0;
   Locals locals = a.start;
+  bool converged = false;
+  int iterations = 0;
+  std::string message;
+  if (options.loss.kind == LossKind::kNone) {
+    const BlockArrowSummary solved = SolveBlockArrow(model, g, locals, a.gauge.held, options.max_iterations);
+    converged = solved.converged;
+    iterations = solved.iterations + 1;  // with the start, as Ceres counts them
+    message = solved.message;
+  } else {  // a robust loss: Ceres, which reweights each residual block by it
   const int local = model.local();
   std::vector<std::unique_ptr<ceres::CostFunction>> adapters;
   ceres::Problem::Options problem_options;
@@ -1186,13 +1397,17 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
   solver.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
   ceres::Solve(solver, &problem, &summary);
+  converged = summary.termination_type == ceres::CONVERGENCE;
+  iterations = static_cast<int>(summary.iterations.size());
+  message = summary.message;
+  }
 
   result.geometry = g;
   for (const VectorXd& x : locals) {
     result.poses.push_back(x.head<6>());
     if (model.nt > 0) result.tensions_N.push_back(x.tail(model.nt));
   }
-  result.iterations = static_cast<int>(summary.iterations.size());
+  result.iterations = iterations;
   // Plain whitened residuals (before the loss) per reading.
   result.fits.resize(readings.size());
   for (std::size_t k = 0; k < readings.size(); ++k) {
@@ -1242,10 +1457,10 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
                               " sigma off the fit: an outlier, or a model that does not fit the data");
   }
 
-  if (summary.termination_type != ceres::CONVERGENCE) {
+  if (!converged) {
     result.status = SpatialIdentifyStatus::kNotConverged;
     result.message = "the solver stopped after " + std::to_string(result.iterations) +
-                     " iterations without converging: " + summary.message;
+                     " iterations without converging: " + message;
     return result;
   }
   // Covariance at the estimate with the gauge held.
@@ -1256,17 +1471,24 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
   }
   MatrixXd A_free(A.rows(), free.size());
   for (std::size_t c = 0; c < free.size(); ++c) A_free.col(c) = A.col(free[c]);
-  const Eigen::BDCSVD<MatrixXd> svd = SmallSvd(A_free);
-  const VectorXd& s = svd.singularValues();
+  // Every direction seen (the usual case): (A^T A)^-1 = R^-1 R^-T from the triangular factor,
+  // its singular values only to say so; else the pseudo-inverse from the SVD.
+  const MatrixXd R = TriangularFactor(A_free);
   const int f = static_cast<int>(free.size());
-  MatrixXd cov_free = MatrixXd::Zero(f, f);
+  const VectorXd values = Eigen::BDCSVD<MatrixXd>(R).singularValues();
   int unseen = 0;
-  for (int c = 0; c < f; ++c) {
-    if (!(s(c) > kSpatialNullThreshold * s(0))) {
-      ++unseen;
-      continue;
+  for (int c = 0; c < f; ++c) unseen += !(values(c) > kSpatialNullThreshold * values(0));
+  MatrixXd cov_free = MatrixXd::Zero(f, f);
+  if (unseen == 0) {
+    const MatrixXd R_inv = R.triangularView<Eigen::Upper>().solve(MatrixXd::Identity(f, f));
+    cov_free = R_inv * R_inv.transpose();
+  } else {
+    const Eigen::BDCSVD<MatrixXd> svd(R, Eigen::ComputeFullV);
+    const VectorXd& s = svd.singularValues();
+    for (int c = 0; c < f; ++c) {
+      if (!(s(c) > kSpatialNullThreshold * s(0))) continue;
+      cov_free += svd.matrixV().col(c) * svd.matrixV().col(c).transpose() / (s(c) * s(c));
     }
-    cov_free += svd.matrixV().col(c) * svd.matrixV().col(c).transpose() / (s(c) * s(c));
   }
   result.covariance = MatrixXd::Zero(p, p);
   for (int r = 0; r < f; ++r) {
