@@ -644,6 +644,22 @@ std::string LocalCoordinateNames(const VectorXd& v) {
   return out;
 }
 
+// Whether the upper-triangular R's singular values satisfy s_min > kSpatialNullThreshold s_max,
+// cheaply when the answer is clearly yes: s_min >= 1 / |R^-1|_F and s_max <= |R|_F (each
+// within a factor sqrt(size) of the truth), so that a ratio of the bounds above the threshold
+// settles it; otherwise (a deficient matrix, or one within that factor of the threshold) the
+// singular values decide. `inverse` receives R^-1 when computed.
+bool SurelyOfFullRank(const MatrixXd& R, MatrixXd* inverse = nullptr) {
+  const int k = R.cols();
+  MatrixXd R_inv = R.triangularView<Eigen::Upper>().solve(MatrixXd::Identity(k, k));
+  const double bound = 1.0 / R_inv.norm();
+  const bool certain = R_inv.allFinite() && bound > kSpatialNullThreshold * R.norm();
+  if (inverse) *inverse = std::move(R_inv);
+  if (certain) return true;
+  const VectorXd s = Eigen::BDCSVD<MatrixXd>(R).singularValues();
+  return s(k - 1) > kSpatialNullThreshold * s(0);
+}
+
 // The reduced geometry Jacobian: for each pose, its rows projected onto the orthogonal
 // complement of its own pose columns (Householder QR, nothing squared), so that the stacked
 // rows see exactly the geometry directions no pose change can compensate; the prior's rows as
@@ -672,8 +688,7 @@ MatrixXd ReducedJacobian(const Model& model, const VectorXd& g, const Locals& lo
     bool deficient = rows < cols;
     if (!deficient) {
       const MatrixXd R = qr.matrixQR().topRows(cols).triangularView<Eigen::Upper>();
-      const VectorXd s = Eigen::JacobiSVD<MatrixXd>(R).singularValues();
-      deficient = !(s(cols - 1) > kSpatialNullThreshold * s(0));
+      deficient = !SurelyOfFullRank(R);
     }
     if (deficient) {
       if (!refuse) continue;
@@ -1471,22 +1486,23 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
   }
   MatrixXd A_free(A.rows(), free.size());
   for (std::size_t c = 0; c < free.size(); ++c) A_free.col(c) = A.col(free[c]);
-  // Every direction seen (the usual case): (A^T A)^-1 = R^-1 R^-T from the triangular factor,
-  // its singular values only to say so; else the pseudo-inverse from the SVD.
+  // Every direction seen (the usual case): (A^T A)^-1 = R^-1 R^-T from the triangular factor;
+  // else the pseudo-inverse from the SVD.
   const MatrixXd R = TriangularFactor(A_free);
   const int f = static_cast<int>(free.size());
-  const VectorXd values = Eigen::BDCSVD<MatrixXd>(R).singularValues();
+  MatrixXd R_inv;
   int unseen = 0;
-  for (int c = 0; c < f; ++c) unseen += !(values(c) > kSpatialNullThreshold * values(0));
   MatrixXd cov_free = MatrixXd::Zero(f, f);
-  if (unseen == 0) {
-    const MatrixXd R_inv = R.triangularView<Eigen::Upper>().solve(MatrixXd::Identity(f, f));
+  if (SurelyOfFullRank(R, &R_inv)) {
     cov_free = R_inv * R_inv.transpose();
   } else {
     const Eigen::BDCSVD<MatrixXd> svd(R, Eigen::ComputeFullV);
     const VectorXd& s = svd.singularValues();
     for (int c = 0; c < f; ++c) {
-      if (!(s(c) > kSpatialNullThreshold * s(0))) continue;
+      if (!(s(c) > kSpatialNullThreshold * s(0))) {
+        ++unseen;
+        continue;
+      }
       cov_free += svd.matrixV().col(c) * svd.matrixV().col(c).transpose() / (s(c) * s(c));
     }
   }
