@@ -701,7 +701,8 @@ MatrixXd ReducedJacobian(const Model& model, const VectorXd& g, const Locals& lo
                            unknowns + " (unseen: " + LocalCoordinateNames(svd.matrixV().col(cols - 1)) +
                            "): no reading fixes it; add a sensor that sees it, or more cables' encoders");
     }
-    MatrixXd projected = qr.householderQ().transpose() * Jg;
+    Jg.applyOnTheLeft(qr.householderQ().adjoint());  // Q^T Jg without forming Q
+    const MatrixXd& projected = Jg;
     blocks.push_back(projected.bottomRows(rows - cols));
     total += rows - cols;
   }
