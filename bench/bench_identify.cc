@@ -13,6 +13,7 @@
 #include "common/random.h"
 #include "model/swivel.h"
 #include "workspace/workspace.h"
+#include "bench/spatial_experiment.h"
 
 namespace {
 
@@ -103,42 +104,24 @@ BENCHMARK(BM_IdentifyFullMlCables)->Arg(3)->Arg(4)->Unit(benchmark::kMicrosecond
 }  // namespace
 
 
-// Spatial identification (identify/spatial_identify.h): cogiro (8 cables) with an inclinometer
-// and a laser added, exits perturbed by 1 cm, n poses within +-0.5 m, +-0.1 rad of home,
-// noise-free readings from the model; the default gauge. The whole call: gauge analysis,
-// starting poses, Ceres (DENSE_SCHUR), covariance.
+// Spatial identification (identify/spatial_identify.h) of bench/spatial_experiment.h's problem
+// (cogiro, encoders + inclinometer + laser, noisy readings): the whole call, default gauge
+// (gauge analysis, starting poses, Ceres DENSE_SCHUR, covariance).
 void BM_SpatialIdentifyCogiroEncodersInclinometerLaser(benchmark::State& state) {
-  SpatialRobot nominal = LoadSpatialRobotFile(std::string(CABLECAL_SOURCE_DIR) + "/robots/cogiro.yaml");
-  // Inextensible: the readings are geometric lengths, and the problem timed is the geometry's
-  // (with the file's stiffness each pose would get 8 tension unknowns and an equilibrium).
-  for (SpatialCable& c : nominal.cables) c.stiffness_N.reset();
-  nominal.sensors.inclinometer_rad = RangedNoise{0.003, 0.0};
-  nominal.sensors.laser_m = RangedNoise{0.0003, 0.0};
-  Rng rng(7);
-  SpatialRobot truth = nominal;
-  for (SpatialCable& c : truth.cables) {
-    for (int a = 0; a < 3; ++a) c.p_F_exit_m(a) += rng.Normal(0.0, 0.01);
-  }
-  const Eigen::VectorXd l0 = CableLengths<double>(truth, nominal.home_pose());
-  std::vector<SpatialMeasurement> readings;
-  while (static_cast<int>(readings.size()) < state.range(0)) {
-    SpatialPose<double> q = nominal.home_pose();
-    for (int a = 0; a < 3; ++a) q(a) += rng.Uniform(-0.5, 0.5);
-    for (int a = 3; a < 6; ++a) q(a) += rng.Uniform(-0.1, 0.1);
-    if (!CableGeometryAt(truth, q).valid()) continue;
-    SpatialMeasurement r;
-    r.pose_id = static_cast<int>(readings.size()) + 1;
-    r.dl_m = CableLengths<double>(truth, q) - l0;
-    r.values(SpatialSensor::kInclinometer) = Eigen::Vector2d(q(3), q(4));
-    r.values(SpatialSensor::kLaser) = Eigen::VectorXd::Constant(1, q(2) - nominal.p_F_frame_min_m.z());
-    readings.push_back(r);
-  }
+  const SpatialRobot nominal = bench::SpatialBenchRobot(CABLECAL_SOURCE_DIR);
+  const std::vector<SpatialMeasurement> readings = bench::SpatialBenchReadings(nominal, static_cast<int>(state.range(0)));
+  int iterations = 0;
   for (auto _ : state) {
     const SpatialIdentifyResult result = IdentifySpatial(nominal, readings, {});
     if (!result.converged()) state.SkipWithError(result.message.c_str());
+    iterations = result.iterations;
     benchmark::DoNotOptimize(result.geometry.data());
   }
+  state.counters["lm_iterations"] = iterations;
+  state.counters["us_per_pose"] = benchmark::Counter(static_cast<double>(state.range(0)) * state.iterations(),
+                                                     benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
-BENCHMARK(BM_SpatialIdentifyCogiroEncodersInclinometerLaser)->Arg(30)->Arg(300)->Arg(3000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SpatialIdentifyCogiroEncodersInclinometerLaser)
+    ->Arg(30)->Arg(100)->Arg(300)->Arg(1000)->Arg(3000)->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();

@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
+#include <cstdlib>
 #include <map>
 #include <memory>
 #include <sstream>
@@ -60,28 +62,88 @@ struct CableData {
   }
 };
 
-// Encoder: dl = l(q, D) - l0 for an inextensible cable.
-struct EncoderCost {
-  CableData cable;
-  double dl_m, inv_sigma;
-  template <typename T>
-  bool operator()(const T* q, const T* d, const T* l0, T* r) const {
-    r[0] = (cable.At(q, d).length_m - l0[0] - T(dl_m)) * T(inv_sigma);
+// The cable's state at pose q and, when asked, d length / d q (1 x 6, row-major) and
+// d length / d D (1 x 3), by the chain rule through the model's own gradient: the length
+// depends on B - D only (SwivelCable reads rho = B - D), so dl/dB = e_F_free and dl/dD =
+// -e_F_free; dB/dq is the identity on x, y, z and d(R b)/d(roll, pitch, yaw) from Jets on the
+// three angles. An AutoDiff of the whole construction on the 10 components of (q, D, l0) cost
+// ten times as much (bench/README.md, "Spatial identification").
+struct CableWithGradient {
+  SwivelCableState<double> state;
+  double d_pose[6];
+  double d_exit[3];
+};
+CableWithGradient CableAndGradient(const CableData& cable, const double* q, const double* d, bool gradient) {
+  using J3 = ceres::Jet<double, 3>;
+  const SpatialPose<double> pose = PoseOf(q);
+  CableWithGradient out;
+  if (!gradient) {
+    out.state = cable.At(q, d);
+    return out;
+  }
+  const Eigen::Matrix<J3, 3, 3> R = Rotation<J3>(J3(pose(3), 0), J3(pose(4), 1), J3(pose(5), 2));
+  const Vec3<J3> r_F_anchor = R * cable.p_P_anchor_m.cast<J3>();
+  Vector3d p_F_anchor_m;
+  for (int a = 0; a < 3; ++a) p_F_anchor_m(a) = pose(a) + r_F_anchor(a).a;
+  out.state = SwivelCable<double>(Eigen::Map<const Vector3d>(d), cable.k_F_swivel_axis, cable.pulley_radius_m,
+                                  p_F_anchor_m);
+  const Vector3d& e = out.state.e_F_free;
+  for (int a = 0; a < 3; ++a) {
+    out.d_pose[a] = e(a);
+    out.d_exit[a] = -e(a);
+    out.d_pose[3 + a] = e(0) * r_F_anchor(0).v(a) + e(1) * r_F_anchor(1).v(a) + e(2) * r_F_anchor(2).v(a);
+  }
+  return out;
+}
+
+// Encoder: dl = l(q, D) - l0 for an inextensible cable. Parameters: q (6), D (3), l0 (1).
+class EncoderCost final : public ceres::SizedCostFunction<1, 6, 3, 1> {
+ public:
+  EncoderCost(const CableData& cable, double dl_m, double inv_sigma)
+      : cable_(cable), dl_m_(dl_m), inv_sigma_(inv_sigma) {}
+  bool Evaluate(double const* const* p, double* r, double** J) const override {
+    const bool gradient = J != nullptr && (J[0] != nullptr || J[1] != nullptr);
+    const CableWithGradient c = CableAndGradient(cable_, p[0], p[1], gradient);
+    r[0] = (c.state.length_m - p[2][0] - dl_m_) * inv_sigma_;
+    if (J == nullptr) return true;
+    if (J[0]) for (int a = 0; a < 6; ++a) J[0][a] = c.d_pose[a] * inv_sigma_;
+    if (J[1]) for (int a = 0; a < 3; ++a) J[1][a] = c.d_exit[a] * inv_sigma_;
+    if (J[2]) J[2][0] = -inv_sigma_;
     return true;
   }
+
+ private:
+  CableData cable_;
+  double dl_m_, inv_sigma_;
 };
 
 // Encoder of an elastic cable: the paid-out (unstretched) length at the pose's tension t of the
-// cable, model/robot.h's elastic law (UnstretchedLength), less its value at home l0.
-struct ElasticEncoderCost {
-  CableData cable;
-  std::optional<double> stiffness_N;
-  double dl_m, inv_sigma;
-  template <typename T>
-  bool operator()(const T* q, const T* t, const T* d, const T* l0, T* r) const {
-    r[0] = (UnstretchedLength<T>(stiffness_N, cable.At(q, d).length_m, t[0]) - l0[0] - T(dl_m)) * T(inv_sigma);
+// cable, model/robot.h's elastic law (UnstretchedLength), less its value at home l0; its
+// derivatives in the length and the tension from Jets on those two, the length's as above.
+// Parameters: q (6), t (1), D (3), l0 (1).
+class ElasticEncoderCost final : public ceres::SizedCostFunction<1, 6, 1, 3, 1> {
+ public:
+  ElasticEncoderCost(const CableData& cable, std::optional<double> stiffness_N, double dl_m, double inv_sigma)
+      : cable_(cable), stiffness_N_(stiffness_N), dl_m_(dl_m), inv_sigma_(inv_sigma) {}
+  bool Evaluate(double const* const* p, double* r, double** J) const override {
+    using J2 = ceres::Jet<double, 2>;
+    const bool gradient = J != nullptr && (J[0] != nullptr || J[2] != nullptr);
+    const CableWithGradient c = CableAndGradient(cable_, p[0], p[2], gradient);
+    const J2 paid_out = UnstretchedLength<J2>(stiffness_N_, J2(c.state.length_m, 0), J2(p[1][0], 1));
+    r[0] = (paid_out.a - p[3][0] - dl_m_) * inv_sigma_;
+    if (J == nullptr) return true;
+    const double dl = paid_out.v(0) * inv_sigma_;
+    if (J[0]) for (int a = 0; a < 6; ++a) J[0][a] = c.d_pose[a] * dl;
+    if (J[1]) J[1][0] = paid_out.v(1) * inv_sigma_;
+    if (J[2]) for (int a = 0; a < 3; ++a) J[2][a] = c.d_exit[a] * dl;
+    if (J[3]) J[3][0] = -inv_sigma_;
     return true;
   }
+
+ private:
+  CableData cable_;
+  std::optional<double> stiffness_N_;
+  double dl_m_, inv_sigma_;
 };
 
 // Load cell: the cable's tension (the pose block is a parameter only to tie the term to its pose).
@@ -371,11 +433,10 @@ Model BuildModel(const SpatialRobot& robot, const std::vector<SpatialMeasurement
       const SpatialCable& c = robot.cables[i];
       const CableData cable{c.k_F_swivel_axis, c.pulley_radius_m, c.p_P_anchor_m};
       if (model.nt > 0 && c.stiffness_N) {
-        add(Cost<ElasticEncoderCost, 1, 6, 1, 3, 1>(ElasticEncoderCost{cable, c.stiffness_N, r.dl_m(i), inv_encoder}),
+        add(std::make_unique<ElasticEncoderCost>(cable, c.stiffness_N, r.dl_m(i), inv_encoder),
             {L.exit(i), L.length(i)}, {3, 1}, -1, i, {i});
       } else {
-        add(Cost<EncoderCost, 1, 6, 3, 1>(EncoderCost{cable, r.dl_m(i), inv_encoder}), {L.exit(i), L.length(i)},
-            {3, 1}, -1, i);
+        add(std::make_unique<EncoderCost>(cable, r.dl_m(i), inv_encoder), {L.exit(i), L.length(i)}, {3, 1}, -1, i);
       }
     }
     for (const SpatialSensor s : kSpatialSensors) {
@@ -445,87 +506,126 @@ using Locals = std::vector<VectorXd>;
 
 // A term's residuals and (when asked) its Jacobians: d r / d local (size x (6 + nt): the pose's
 // coordinates, then its tensions) and d r / d geometry (size x p, only its blocks' columns
-// nonzero).
-void EvaluateTerm(const Term& t, const VectorXd& g, const Locals& locals, double* residuals, MatrixXd* d_local,
-                  MatrixXd* d_geometry) {
-  std::vector<const double*> params;
-  if (t.pose >= 0) params.push_back(locals[t.pose].data());
-  for (int i : t.tension_cables) params.push_back(locals[t.pose].data() + 6 + i);
-  for (int b : t.block_offset) params.push_back(g.data() + b);
+// nonzero); `local` is the term's pose's local unknowns (ignored for a term of no pose). The
+// blocks not asked for are not computed (nullptr to the cost).
+void EvaluateTerm(const Term& t, const VectorXd& g, const double* local, int local_size, double* residuals,
+                  MatrixXd* d_local, MatrixXd* d_geometry) {
+  constexpr int kMaxBlocks = 64;
+  const double* params[kMaxBlocks];
+  int np = 0;
+  const int tensions = static_cast<int>(t.tension_cables.size());
+  CABLECAL_CHECK(2 + tensions + static_cast<int>(t.block_offset.size()) <= kMaxBlocks, "too many parameter blocks");
+  if (t.pose >= 0) params[np++] = local;
+  for (int i : t.tension_cables) params[np++] = local + 6 + i;
+  for (int b : t.block_offset) params[np++] = g.data() + b;
   const int n = t.size();
   using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-  std::vector<RowMajor> jac;
-  std::vector<double*> jac_ptr;
-  if (d_local || d_geometry) {
-    if (t.pose >= 0) jac.emplace_back(n, 6);
-    for (std::size_t i = 0; i < t.tension_cables.size(); ++i) jac.emplace_back(n, 1);
-    for (int s : t.block_size) jac.emplace_back(n, s);
-    for (RowMajor& j : jac) jac_ptr.push_back(j.data());
+  // Row-major per block, as Ceres writes them: the pose's n x 6, each tension's n x 1, each
+  // geometry block's n x size, one buffer.
+  int total = 0;
+  if (t.pose >= 0 && d_local) total += n * (6 + tensions);
+  if (d_geometry) {
+    for (int s : t.block_size) total += n * s;
   }
-  const bool ok = t.cost->Evaluate(params.data(), residuals, jac_ptr.empty() ? nullptr : jac_ptr.data());
-  CABLECAL_CHECK(ok, "a spatial residual could not be evaluated");
-  if (jac_ptr.empty()) return;
-  int next = 0;
+  double buffer_stack[256];
+  std::vector<double> buffer_heap;
+  double* buffer = buffer_stack;
+  if (total > 256) {
+    buffer_heap.resize(total);
+    buffer = buffer_heap.data();
+  }
+  double* jac_ptr[kMaxBlocks];
+  int next = 0, offset = 0;
   if (t.pose >= 0) {
-    if (d_local) {
-      d_local->setZero(n, locals[t.pose].size());
-      d_local->leftCols(6) = jac[0];
-      for (std::size_t k = 0; k < t.tension_cables.size(); ++k) d_local->col(6 + t.tension_cables[k]) = jac[1 + k];
+    jac_ptr[next++] = d_local ? buffer : nullptr;
+    if (d_local) offset += 6 * n;
+    for (int k = 0; k < tensions; ++k) {
+      jac_ptr[next++] = d_local ? buffer + offset : nullptr;
+      if (d_local) offset += n;
     }
-    next = 1 + static_cast<int>(t.tension_cables.size());
-  } else if (d_local) {
-    d_local->setZero(n, 6);
+  }
+  const int first_geometry = next;
+  for (int s : t.block_size) {
+    jac_ptr[next++] = d_geometry ? buffer + offset : nullptr;
+    if (d_geometry) offset += n * s;
+  }
+  const bool any = d_local || d_geometry;
+  const bool ok = t.cost->Evaluate(params, residuals, any ? jac_ptr : nullptr);
+  CABLECAL_CHECK(ok, "a spatial residual could not be evaluated");
+  if (!any) return;
+  if (d_local) {
+    if (t.pose >= 0) {
+      d_local->setZero(n, local_size);
+      d_local->leftCols(6) = Eigen::Map<const RowMajor>(jac_ptr[0], n, 6);
+      for (int k = 0; k < tensions; ++k) {
+        d_local->col(6 + t.tension_cables[k]) = Eigen::Map<const VectorXd>(jac_ptr[1 + k], n);
+      }
+    } else {
+      d_local->setZero(n, 6);
+    }
   }
   if (d_geometry) {
     d_geometry->setZero(n, g.size());
     for (std::size_t b = 0; b < t.block_offset.size(); ++b) {
-      d_geometry->middleCols(t.block_offset[b], t.block_size[b]) = jac[next + b];
+      d_geometry->middleCols(t.block_offset[b], t.block_size[b]) =
+          Eigen::Map<const RowMajor>(jac_ptr[first_geometry + b], n, t.block_size[b]);
     }
   }
+}
+void EvaluateTerm(const Term& t, const VectorXd& g, const Locals& locals, double* residuals, MatrixXd* d_local,
+                  MatrixXd* d_geometry) {
+  const VectorXd* local = t.pose >= 0 ? &locals[t.pose] : nullptr;
+  EvaluateTerm(t, g, local ? local->data() : nullptr, local ? static_cast<int>(local->size()) : 0, residuals, d_local,
+               d_geometry);
 }
 
 // The starting local unknowns of pose j: Levenberg-Marquardt on its own readings (and its
 // equilibrium) alone, from `start` (home and the first tensions), with the geometry g (nominal:
 // exits as in the file, l_i0 the nominal home's lengths).
 VectorXd StartingLocal(const Model& model, int j, const VectorXd& g, const VectorXd& start) {
-  Locals q(model.pose_ids.size(), start);
   const int rows = model.pose_values[j];
   const int cols = start.size();
+  MatrixXd jp;
   const auto evaluate = [&](const VectorXd& x, VectorXd* r, MatrixXd* J) {
-    q[j] = x;
     r->resize(rows);
     if (J) J->resize(rows, cols);
     int row = 0;
     for (int k : model.pose_terms[j]) {
       const Term& t = model.terms[k];
-      MatrixXd jp;
-      EvaluateTerm(t, g, q, r->data() + row, J ? &jp : nullptr, nullptr);
+      EvaluateTerm(t, g, x.data(), cols, r->data() + row, J ? &jp : nullptr, nullptr);
       if (J) J->middleRows(row, t.size()) = jp;
       row += t.size();
     }
   };
   VectorXd x = start;
-  VectorXd r;
-  MatrixXd J;
+  VectorXd r, r_new;
+  MatrixXd J, J_new;
   evaluate(x, &r, &J);
   double cost = r.squaredNorm(), lambda = 1e-6;
+  // A start needs no more than a tenth of a nanometre: a step below 1e-10 (1 + |x|) ends it,
+  // taken or not (one refused that small is rounding), as does a cost that no longer falls by
+  // 1e-12 of itself. Ceres polishes from here; before this rule a pose that the nominal
+  // geometry does not fit exactly spent 10 to 30 evaluations raising the damping to 1e12.
   for (int it = 0; it < 200 && cost > 0.0; ++it) {
     const MatrixXd H = J.transpose() * J;
     const VectorXd grad = J.transpose() * r;
     MatrixXd damped = H;
     damped.diagonal() += lambda * (H.diagonal().array() + 1e-12).matrix();
     const VectorXd step = damped.ldlt().solve(-grad);
-    VectorXd r_new;
+    const bool negligible = step.norm() < 1e-10 * (1.0 + x.norm());
     const VectorXd trial = x + step;
-    evaluate(trial, &r_new, nullptr);
+    evaluate(trial, &r_new, &J_new);
     const double cost_new = r_new.squaredNorm();
     if (std::isfinite(cost_new) && cost_new < cost) {
+      const bool stalled = cost - cost_new < 1e-12 * cost;
       x = trial;
       cost = cost_new;
       lambda = std::max(lambda / 10.0, 1e-12);
-      evaluate(x, &r, &J);
-      if (step.norm() < 1e-13 * (1.0 + x.norm())) break;
+      r.swap(r_new);
+      J.swap(J_new);
+      if (negligible || stalled) break;
     } else {
+      if (negligible) break;
       lambda *= 10.0;
       if (lambda > 1e12) break;
     }
@@ -542,6 +642,22 @@ std::string LocalCoordinateNames(const VectorXd& v) {
     }
   }
   return out;
+}
+
+// Whether the upper-triangular R's singular values satisfy s_min > kSpatialNullThreshold s_max,
+// cheaply when the answer is clearly yes: s_min >= 1 / |R^-1|_F and s_max <= |R|_F (each
+// within a factor sqrt(size) of the truth), so that a ratio of the bounds above the threshold
+// settles it; otherwise (a deficient matrix, or one within that factor of the threshold) the
+// singular values decide. `inverse` receives R^-1 when computed.
+bool SurelyOfFullRank(const MatrixXd& R, MatrixXd* inverse = nullptr) {
+  const int k = R.cols();
+  MatrixXd R_inv = R.triangularView<Eigen::Upper>().solve(MatrixXd::Identity(k, k));
+  const double bound = 1.0 / R_inv.norm();
+  const bool certain = R_inv.allFinite() && bound > kSpatialNullThreshold * R.norm();
+  if (inverse) *inverse = std::move(R_inv);
+  if (certain) return true;
+  const VectorXd s = Eigen::BDCSVD<MatrixXd>(R).singularValues();
+  return s(k - 1) > kSpatialNullThreshold * s(0);
 }
 
 // The reduced geometry Jacobian: for each pose, its rows projected onto the orthogonal
@@ -566,11 +682,17 @@ MatrixXd ReducedJacobian(const Model& model, const VectorXd& g, const Locals& lo
       Jg.middleRows(row, t.size()) = jg;
       row += t.size();
     }
-    Eigen::JacobiSVD<MatrixXd> svd(Jq, Eigen::ComputeFullV);
-    const VectorXd& s = svd.singularValues();
-    const bool deficient = rows < cols || !(s(cols - 1) > kSpatialNullThreshold * s(0));
+    // The pose's singular values from the QR's triangular factor (the same as Jq's), its full
+    // SVD only to name what a refused pose leaves unseen.
+    Eigen::HouseholderQR<MatrixXd> qr(Jq);
+    bool deficient = rows < cols;
+    if (!deficient) {
+      const MatrixXd R = qr.matrixQR().topRows(cols).triangularView<Eigen::Upper>();
+      deficient = !SurelyOfFullRank(R);
+    }
     if (deficient) {
       if (!refuse) continue;
+      const Eigen::JacobiSVD<MatrixXd> svd(Jq, Eigen::ComputeFullV);
       const std::string unknowns = model.nt > 0 ? "6 coordinates and " + std::to_string(model.nt) + " tensions"
                                                 : "6 coordinates";
       throw InputError(model.pose_where[j], "pose " + std::to_string(model.pose_ids[j]),
@@ -579,8 +701,8 @@ MatrixXd ReducedJacobian(const Model& model, const VectorXd& g, const Locals& lo
                            unknowns + " (unseen: " + LocalCoordinateNames(svd.matrixV().col(cols - 1)) +
                            "): no reading fixes it; add a sensor that sees it, or more cables' encoders");
     }
-    Eigen::HouseholderQR<MatrixXd> qr(Jq);
-    MatrixXd projected = qr.householderQ().transpose() * Jg;
+    Jg.applyOnTheLeft(qr.householderQ().adjoint());  // Q^T Jg without forming Q
+    const MatrixXd& projected = Jg;
     blocks.push_back(projected.bottomRows(rows - cols));
     total += rows - cols;
   }
@@ -602,8 +724,8 @@ MatrixXd ReducedJacobian(const Model& model, const VectorXd& g, const Locals& lo
   return A;
 }
 
-// The SVD of A through its p x p triangular factor (A may have thousands of rows).
-Eigen::JacobiSVD<MatrixXd> SmallSvd(const MatrixXd& A) {
+// A's p x p triangular factor R (A = Q R; A may have thousands of rows): R^T R = A^T A.
+MatrixXd TriangularFactor(const MatrixXd& A) {
   const int p = A.cols();
   MatrixXd R = MatrixXd::Zero(p, p);
   if (A.rows() >= p) {
@@ -612,7 +734,209 @@ Eigen::JacobiSVD<MatrixXd> SmallSvd(const MatrixXd& A) {
   } else {
     R.topRows(A.rows()) = A;
   }
-  return Eigen::JacobiSVD<MatrixXd>(R, Eigen::ComputeFullV);
+  return R;
+}
+
+// The SVD of A through its triangular factor; Eigen's divide and conquer (BDCSVD): faster than
+// JacobiSVD at p = 32 (bench/README.md), as accurate.
+Eigen::BDCSVD<MatrixXd> SmallSvd(const MatrixXd& A) {
+  return Eigen::BDCSVD<MatrixXd>(TriangularFactor(A), Eigen::ComputeFullV);
+}
+
+// ---- The solve without a robust loss: Levenberg-Marquardt on the block-arrow structure ----
+//
+// identify/least_squares.h's iterations (Ceres' Levenberg-Marquardt: damping mu diag(J^T J),
+// mu = 1 / radius, the diagonal clamped to [1e-6, 1e32], the radius from each step's quality,
+// the gradient, step and relative-cost tests of LevenbergMarquardtSettings; the step that meets
+// the last two is not taken), on the spatial Model's terms: each pose's local unknowns
+// eliminated, the geometry's Schur complement (p x p) solved. Ceres' general machinery (its
+// Problem, block-sparse bookkeeping and generic Schur eliminator over 2m small geometry
+// blocks) was half of every 30-pose identification (bench/README.md).
+
+// One pose's share of the normal equations: A (local x local), B (p x local), its gradient.
+struct PoseNormal {
+  MatrixXd a, b, damped_inverse;
+  VectorXd gradient;
+};
+
+struct BlockArrowSummary {
+  bool converged = false;
+  int iterations = 0;
+  std::string message;
+};
+
+// Every term of every pose, and the pose-free terms (the prior): the normal equations and the
+// cost (1/2 sum of squares; infinite where a residual is not). Only the geometry columns a
+// term reads are accumulated.
+double BlockArrowNormal(const Model& model, const VectorXd& g, const Locals& locals, std::vector<PoseNormal>& poses,
+                        MatrixXd& h, VectorXd& gradient) {
+  const int p = g.size();
+  const int local = model.local();
+  h.setZero(p, p);
+  gradient.setZero(p);
+  double sum = 0.0;
+  MatrixXd jq, jg;
+  VectorXd r;
+  std::vector<int> cols;
+  const auto add = [&](const Term& t, PoseNormal* pose) {
+    r.resize(t.size());
+    EvaluateTerm(t, g, locals, r.data(), pose ? &jq : nullptr, &jg);
+    sum += r.squaredNorm();
+    cols.clear();
+    for (std::size_t b = 0; b < t.block_offset.size(); ++b) {
+      for (int c = 0; c < t.block_size[b]; ++c) cols.push_back(t.block_offset[b] + c);
+    }
+    for (std::size_t x = 0; x < cols.size(); ++x) {
+      const auto jx = jg.col(cols[x]);
+      gradient(cols[x]) += jx.dot(r);
+      for (std::size_t y = 0; y < cols.size(); ++y) h(cols[x], cols[y]) += jx.dot(jg.col(cols[y]));
+      if (pose) pose->b.row(cols[x]).noalias() += jx.transpose() * jq;
+    }
+    if (pose) {
+      pose->a.noalias() += jq.transpose() * jq;
+      pose->gradient.noalias() += jq.transpose() * r;
+    }
+  };
+  for (std::size_t j = 0; j < model.pose_ids.size(); ++j) {
+    PoseNormal& pose = poses[j];
+    pose.a.setZero(local, local);
+    pose.b.setZero(p, local);
+    pose.gradient.setZero(local);
+    for (int k : model.pose_terms[j]) add(model.terms[k], &pose);
+  }
+  for (int k : model.prior_terms) add(model.terms[k], nullptr);
+  return std::isfinite(sum) ? 0.5 * sum : std::numeric_limits<double>::infinity();
+}
+
+// Minimises the cost over g (its `held` entries fixed) and the locals, in place.
+BlockArrowSummary SolveBlockArrow(const Model& model, VectorXd& g, Locals& locals, const std::vector<int>& held,
+                                  int max_iterations) {
+  constexpr internal::LevenbergMarquardtSettings kSettings;
+  constexpr double kMinRelativeDecrease = 1e-3, kMaxRadius = 1e16, kMinRadius = 1e-32;
+  constexpr int kMaxConsecutiveInvalidSteps = 5;
+  const auto clamped = [](const MatrixXd& normal) { return normal.diagonal().cwiseMax(1e-6).cwiseMin(1e32); };
+  double radius = kSettings.initial_trust_region_radius, decrease_factor = 2.0;
+  const int n = static_cast<int>(locals.size());
+  const int p = g.size();
+  const int local = model.local();
+  BlockArrowSummary summary;
+  std::vector<PoseNormal> poses(n);
+  MatrixXd h;
+  VectorXd gradient;
+  double cost = BlockArrowNormal(model, g, locals, poses, h, gradient);
+  for (int k : held) gradient(k) = 0.0;
+  if (!std::isfinite(cost)) {
+    summary.message = "a residual is not finite at the start (an anchor inside its pulley?)";
+    return summary;
+  }
+  const auto stop = [&](bool converged, const std::string& why) {
+    summary.converged = converged;
+    summary.message = why;
+    return summary;
+  };
+  const auto gradient_small = [&]() {
+    double largest = gradient.cwiseAbs().maxCoeff();
+    for (const PoseNormal& pose : poses) largest = std::max(largest, pose.gradient.cwiseAbs().maxCoeff());
+    return largest <= kSettings.gradient_tolerance;
+  };
+  if (gradient_small()) return stop(true, "Gradient tolerance reached");
+  const auto at_limit = [&]() { return summary.iterations >= max_iterations; };
+  const std::string limit_reached = "Maximum number of iterations reached";
+  Locals candidate_locals = locals;
+  std::vector<VectorXd> step_q(n);
+  int invalid_steps = 0;
+  for (;;) {
+    const double mu = 1.0 / radius;
+    bool valid = true;
+    MatrixXd schur = h;
+    schur.diagonal() += mu * clamped(h);
+    VectorXd rhs = gradient;
+    for (int j = 0; j < n && valid; ++j) {
+      PoseNormal& pose = poses[j];
+      MatrixXd damped = pose.a;
+      damped.diagonal() += mu * clamped(pose.a);
+      const Eigen::LLT<MatrixXd> llt(damped);
+      if (llt.info() != Eigen::Success) {
+        valid = false;
+        break;
+      }
+      pose.damped_inverse = llt.solve(MatrixXd::Identity(local, local));
+      const MatrixXd bc = pose.b * pose.damped_inverse;
+      schur.noalias() -= bc * pose.b.transpose();
+      rhs.noalias() -= bc * pose.gradient;
+    }
+    VectorXd step_g = VectorXd::Zero(p);
+    if (valid) {
+      for (int k : held) {
+        schur.row(k).setZero();
+        schur.col(k).setZero();
+        schur(k, k) = 1.0;
+        rhs(k) = 0.0;
+      }
+      const Eigen::LDLT<MatrixXd> ldlt(schur);
+      step_g = -ldlt.solve(rhs);
+      valid = ldlt.info() == Eigen::Success && step_g.allFinite();
+    }
+    double model_decrease = 0.0, step_norm2 = step_g.squaredNorm(), x_norm2 = g.squaredNorm();
+    if (valid) {
+      double jstep2 = step_g.dot(h * step_g);
+      model_decrease = -gradient.dot(step_g);
+      for (int j = 0; j < n; ++j) {
+        const PoseNormal& pose = poses[j];
+        step_q[j] = -pose.damped_inverse * (pose.gradient + pose.b.transpose() * step_g);
+        jstep2 += step_q[j].dot(pose.a * step_q[j]) + 2.0 * step_g.dot(pose.b * step_q[j]);
+        model_decrease -= pose.gradient.dot(step_q[j]);
+        step_norm2 += step_q[j].squaredNorm();
+        x_norm2 += locals[j].squaredNorm();
+      }
+      model_decrease -= 0.5 * jstep2;
+      valid = std::isfinite(model_decrease) && model_decrease > 0.0;
+    }
+    if (!valid) {
+      if (at_limit()) return stop(false, limit_reached);
+      ++summary.iterations;
+      if (++invalid_steps >= kMaxConsecutiveInvalidSteps) {
+        return stop(false, "the linear solve failed " + std::to_string(kMaxConsecutiveInvalidSteps) + " times in a row");
+      }
+      radius /= decrease_factor;
+      decrease_factor *= 2.0;
+      if (radius < kMinRadius) return stop(false, "the trust region became too small");
+      continue;
+    }
+    invalid_steps = 0;
+    if (std::sqrt(step_norm2) <= kSettings.parameter_tolerance * (std::sqrt(x_norm2) + kSettings.parameter_tolerance)) {
+      return stop(true, "Parameter tolerance reached");
+    }
+    const VectorXd candidate_g = g + step_g;
+    double candidate_cost = 0.0;
+    for (int j = 0; j < n; ++j) candidate_locals[j] = locals[j] + step_q[j];
+    for (const Term& t : model.terms) {
+      VectorXd r(t.size());
+      EvaluateTerm(t, candidate_g, candidate_locals, r.data(), nullptr, nullptr);
+      candidate_cost += 0.5 * r.squaredNorm();
+    }
+    if (!std::isfinite(candidate_cost)) candidate_cost = std::numeric_limits<double>::infinity();
+    const double cost_change = cost - candidate_cost;
+    if (std::isfinite(candidate_cost) && std::abs(cost_change) <= kSettings.function_tolerance * cost) {
+      return stop(true, "Function tolerance reached");
+    }
+    const double quality = cost_change / model_decrease;
+    if (at_limit()) return stop(false, limit_reached);
+    ++summary.iterations;
+    if (!std::isfinite(candidate_cost) || !(quality > kMinRelativeDecrease)) {
+      radius /= decrease_factor;
+      decrease_factor *= 2.0;
+      if (radius < kMinRadius) return stop(false, "the trust region became too small");
+      continue;
+    }
+    g = candidate_g;
+    locals.swap(candidate_locals);
+    radius = std::min(kMaxRadius, radius / std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * quality - 1.0, 3)));
+    decrease_factor = 2.0;
+    cost = BlockArrowNormal(model, g, locals, poses, h, gradient);
+    for (int k : held) gradient(k) = 0.0;
+    if (gradient_small()) return stop(true, "Gradient tolerance reached");
+  }
 }
 
 // ---- Directions in words ----
@@ -833,7 +1157,7 @@ Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasureme
     a.start.push_back(StartingLocal(a.model, j, a.g0, s));
   }
   const MatrixXd A = ReducedJacobian(a.model, a.g0, a.start, true, false);  // what the readings alone see
-  const Eigen::JacobiSVD<MatrixXd> svd = SmallSvd(A);
+  const Eigen::BDCSVD<MatrixXd> svd = SmallSvd(A);
   const VectorXd& s = svd.singularValues();
   const double largest = s(0);
   std::vector<int> null_cols, weak_cols;
@@ -1019,6 +1343,15 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
 
   VectorXd g = a.g0;
   Locals locals = a.start;
+  bool converged = false;
+  int iterations = 0;
+  std::string message;
+  if (options.loss.kind == LossKind::kNone) {
+    const BlockArrowSummary solved = SolveBlockArrow(model, g, locals, a.gauge.held, options.max_iterations);
+    converged = solved.converged;
+    iterations = solved.iterations + 1;  // with the start, as Ceres counts them
+    message = solved.message;
+  } else {  // a robust loss: Ceres, which reweights each residual block by it
   const int local = model.local();
   std::vector<std::unique_ptr<ceres::CostFunction>> adapters;
   ceres::Problem::Options problem_options;
@@ -1093,13 +1426,17 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
   ceres::Solver::Summary summary;
   ceres::Solve(solver, &problem, &summary);
   for (int j = 0; j < n; ++j) locals[j] = Eigen::Map<const VectorXd>(block(j), local);
+  converged = summary.termination_type == ceres::CONVERGENCE;
+  iterations = static_cast<int>(summary.iterations.size());
+  message = summary.message;
+  }
 
   result.geometry = g;
   for (const VectorXd& x : locals) {
     result.poses.push_back(x.head<6>());
     if (model.nt > 0) result.tensions_N.push_back(x.tail(model.nt));
   }
-  result.iterations = static_cast<int>(summary.iterations.size());
+  result.iterations = iterations;
   // Plain whitened residuals (before the loss) per reading.
   result.fits.resize(readings.size());
   for (std::size_t k = 0; k < readings.size(); ++k) {
@@ -1149,10 +1486,10 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
                               " sigma off the fit: an outlier, or a model that does not fit the data");
   }
 
-  if (summary.termination_type != ceres::CONVERGENCE) {
+  if (!converged) {
     result.status = SpatialIdentifyStatus::kNotConverged;
     result.message = "the solver stopped after " + std::to_string(result.iterations) +
-                     " iterations without converging: " + summary.message;
+                     " iterations without converging: " + message;
     return result;
   }
   // Covariance at the estimate with the gauge held.
@@ -1163,17 +1500,25 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
   }
   MatrixXd A_free(A.rows(), free.size());
   for (std::size_t c = 0; c < free.size(); ++c) A_free.col(c) = A.col(free[c]);
-  const Eigen::JacobiSVD<MatrixXd> svd = SmallSvd(A_free);
-  const VectorXd& s = svd.singularValues();
+  // Every direction seen (the usual case): (A^T A)^-1 = R^-1 R^-T from the triangular factor;
+  // else the pseudo-inverse from the SVD.
+  const MatrixXd R = TriangularFactor(A_free);
   const int f = static_cast<int>(free.size());
-  MatrixXd cov_free = MatrixXd::Zero(f, f);
+  MatrixXd R_inv;
   int unseen = 0;
-  for (int c = 0; c < f; ++c) {
-    if (!(s(c) > kSpatialNullThreshold * s(0))) {
-      ++unseen;
-      continue;
+  MatrixXd cov_free = MatrixXd::Zero(f, f);
+  if (SurelyOfFullRank(R, &R_inv)) {
+    cov_free = R_inv * R_inv.transpose();
+  } else {
+    const Eigen::BDCSVD<MatrixXd> svd(R, Eigen::ComputeFullV);
+    const VectorXd& s = svd.singularValues();
+    for (int c = 0; c < f; ++c) {
+      if (!(s(c) > kSpatialNullThreshold * s(0))) {
+        ++unseen;
+        continue;
+      }
+      cov_free += svd.matrixV().col(c) * svd.matrixV().col(c).transpose() / (s(c) * s(c));
     }
-    cov_free += svd.matrixV().col(c) * svd.matrixV().col(c).transpose() / (s(c) * s(c));
   }
   result.covariance = MatrixXd::Zero(p, p);
   for (int r = 0; r < f; ++r) {

@@ -45,6 +45,8 @@
 // nominal values, the exit coordinates chosen by a column-pivoted QR of the transposed null
 // basis restricted to the exit-coordinate rows (the first k pivots for k null directions: the
 // coordinates the null directions move most independently).
+// Solver: Levenberg-Marquardt with the poses eliminated (our block-arrow iterations without a robust
+// loss, Ceres DENSE_SCHUR with one), from each pose's own start at the nominal geometry.
 // Depends on model/ (header-only parts and the robot), Ceres and experiment/spatial_measurements.h.
 #pragma once
 

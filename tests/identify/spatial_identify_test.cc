@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <cmath>
+#include <limits>
 #include <set>
 #include <string>
 #include <vector>
@@ -125,12 +126,13 @@ struct Experiment {
   double yaw0_rad = 0.0;
 };
 
-// n poses near home (within +-0.25 m, +-0.15 m in z, +-0.1 rad), valid for the true robot,
+// n poses near home (within +-0.25 m, +-0.15 m in z, those times `reach`, +-0.1 rad), valid for the true robot,
 // each read by the encoders (zeroed at the nominal home pose on the true robot) and the
 // sensors of `bits`. The swivel encoders are zeroed there too; their offsets are relative to
 // the nominal geometry's pulley directions at home (the identification's reference); the IMU
 // is zeroed at a yaw 0.05 rad off home's.
-Experiment MakeExperiment(const SpatialRobot& nominal, const SpatialRobot& truth, int n, int bits, Rng& rng) {
+Experiment MakeExperiment(const SpatialRobot& nominal, const SpatialRobot& truth, int n, int bits, Rng& rng,
+                          double reach = 1.0) {
   Experiment e;
   e.truth = truth;
   const int m = nominal.num_cables();
@@ -143,9 +145,9 @@ Experiment MakeExperiment(const SpatialRobot& nominal, const SpatialRobot& truth
   e.yaw0_rad = home(5) + 0.05;
   while (static_cast<int>(e.poses.size()) < n) {
     SpatialPose<double> q = home;
-    q(0) += rng.Uniform(-0.25, 0.25);
-    q(1) += rng.Uniform(-0.25, 0.25);
-    q(2) += rng.Uniform(-0.15, 0.15);
+    q(0) += reach * rng.Uniform(-0.25, 0.25);
+    q(1) += reach * rng.Uniform(-0.25, 0.25);
+    q(2) += reach * rng.Uniform(-0.15, 0.15);
     for (int a = 3; a < 6; ++a) q(a) += rng.Uniform(-0.1, 0.1);
     VectorXd t;
     if (m < 6) {
@@ -463,56 +465,167 @@ TEST(SpatialIdentify, PriorGaugeHoldsNothing) {
 
 // ---- Covariance against the spread of simulated experiments -------------------------------
 
-// ipanema1, encoders + inclinometer + laser, 12 poses, default gauge (3 exit coordinates held at
-// their nominal values); 200 experiments with the robot file's sigmas: the spread of every
-// free geometry unknown within 20 % of its predicted sigma (the sample standard deviation of
-// 200 draws is within 20 % of the true one with probability > 1 - 1e-8 each).
-TEST(SpatialIdentify, PredictedSigmasMatchTheMonteCarloSpread) {
-  Rng rng(1234);
-  const SpatialRobot nominal = Builtin("ipanema1");
-  const Experiment clean = MakeExperiment(nominal, PerturbedExits(nominal, rng, 0.01), 12, kInc | kLaser, rng);
-  const double s_enc = nominal.sensors.encoder_sigma_m;
-  const double s_inc = nominal.sensors.inclinometer_rad->sigma();
-  const double s_las = nominal.sensors.laser_m->sigma();
-  constexpr int kTrials = 200;
-  std::vector<VectorXd> estimates;
-  VectorXd predicted;
-  std::vector<std::string> held;
-  for (int t = 0; t < kTrials; ++t) {
-    std::vector<SpatialMeasurement> noisy = clean.readings;
-    for (SpatialMeasurement& r : noisy) {
-      for (int i = 0; i < r.dl_m.size(); ++i) r.dl_m(i) += rng.Normal(0.0, s_enc);
-      for (int a = 0; a < 2; ++a) r.values(SpatialSensor::kInclinometer)(a) += rng.Normal(0.0, s_inc);
-      r.values(SpatialSensor::kLaser)(0) += rng.Normal(0.0, s_las);
-    }
-    const SpatialIdentifyResult r = IdentifySpatial(nominal, noisy, {});
-    ASSERT_TRUE(r.converged()) << r.message;
-    if (t == 0) {
-      predicted = r.sigma;
-      held = r.held;
-    }
-    EXPECT_EQ(r.held, held);
-    estimates.push_back(r.geometry);
+// Each built-in spatial robot and a random one, default gauge (its exit coordinates held at
+// their nominal values): N experiments of fresh noise (the robot's sigmas) on one set of
+// poses, each identified; the spread of every free geometry unknown against the sigma
+// predicted at the noise-free readings. With N experiments a sample standard deviation has a
+// relative standard error of about 1 / sqrt(2 N): 2.2 % at N = 1000, so that 10 % is 4.5
+// standard errors (P ~ 7e-6 per unknown, ~1e-3 over the ~130 compared here; at N = 300 it
+// would be 2.4, and with 130 unknowns a few would fail by chance). The noise is drawn serially
+// (one stream), the identifications run in parallel (OpenMP), so that nothing depends on the
+// thread count. CABLECAL_COVARIANCE_EXPERIMENTS overrides N (bench/README.md).
+struct SpreadCheck {
+  double worst_ratio = 1.0;  // spread / predicted, the farthest from 1
+  std::string worst;
+  int compared = 0;
+  int failed = 0;  // identifications that did not converge
+};
+// `noisy(x, z)`: experiment x's readings from its standard normal draws z (drawn here,
+// serially, `draws` per experiment); called in parallel.
+// Within `tolerance` of 1; tolerance < 0: only never above 1.1 (a conservative prediction).
+template <typename Noisy>
+SpreadCheck CompareWithSpread(const SpatialRobot& nominal, const std::vector<SpatialMeasurement>& clean,
+                              int experiments, int draws, Rng& rng, const Noisy& noisy,
+                              const SpatialIdentifyOptions& options = {}, double tolerance = 0.1) {
+  const SpatialIdentifyResult at_clean = IdentifySpatial(nominal, clean, options);
+  EXPECT_TRUE(at_clean.converged()) << at_clean.message;
+  const VectorXd predicted = at_clean.sigma;
+  std::vector<VectorXd> z(experiments, VectorXd(draws));
+  for (VectorXd& v : z) {
+    for (int k = 0; k < draws; ++k) v(k) = rng.Normal(0.0, 1.0);
   }
+  std::vector<VectorXd> estimates(experiments);
+  std::vector<char> converged(experiments, 0);
+#pragma omp parallel for schedule(dynamic)
+  for (int x = 0; x < experiments; ++x) {
+    const SpatialIdentifyResult r = IdentifySpatial(nominal, noisy(x, z[x]), options);
+    converged[x] = r.converged() && r.held == at_clean.held;
+    estimates[x] = r.geometry;
+  }
+  SpreadCheck out;
   const int p = predicted.size();
   VectorXd mean = VectorXd::Zero(p);
-  for (const VectorXd& g : estimates) mean += g / kTrials;
-  VectorXd spread = VectorXd::Zero(p);
-  for (const VectorXd& g : estimates) spread += (g - mean).cwiseAbs2() / (kTrials - 1);
-  spread = spread.cwiseSqrt();
-  const std::vector<std::string> names = SpatialGeometryNames(8, false, false);
-  int compared = 0;
-  for (int k = 0; k < p; ++k) {
-    if (std::find(held.begin(), held.end(), names[k]) != held.end()) {
-      EXPECT_EQ(predicted(k), 0.0);
-      EXPECT_LT(spread(k), 1e-12);
+  for (int x = 0; x < experiments; ++x) {
+    if (!converged[x]) {
+      ++out.failed;
       continue;
     }
-    EXPECT_NEAR(spread(k) / predicted(k), 1.0, 0.2) << names[k] << " predicted " << predicted(k) << " spread "
-                                                     << spread(k);
-    ++compared;
+    mean += estimates[x];
   }
-  EXPECT_EQ(compared, p - 3);
+  const int used = experiments - out.failed;
+  mean /= used;
+  VectorXd spread = VectorXd::Zero(p);
+  for (int x = 0; x < experiments; ++x) {
+    if (converged[x]) spread += (estimates[x] - mean).cwiseAbs2() / (used - 1);
+  }
+  spread = spread.cwiseSqrt();
+  for (int k = 0; k < p; ++k) {
+    if (std::find(at_clean.held.begin(), at_clean.held.end(), at_clean.names[k]) != at_clean.held.end()) {
+      EXPECT_EQ(predicted(k), 0.0) << at_clean.names[k];
+      EXPECT_LT(spread(k), 1e-12) << at_clean.names[k];
+      continue;
+    }
+    const double ratio = spread(k) / predicted(k);
+    if (std::getenv("CABLECAL_PRINT_RATIOS")) std::printf("  %s %.3f (sigma %.3g)\n", at_clean.names[k].c_str(), ratio, predicted(k));
+    if (tolerance >= 0.0) {
+      EXPECT_NEAR(ratio, 1.0, tolerance) << nominal.name << " " << at_clean.names[k] << ": predicted " << predicted(k)
+                                         << ", spread " << spread(k) << " over " << used << " experiments";
+    } else {
+      EXPECT_LT(ratio, 1.1) << nominal.name << " " << at_clean.names[k] << ": predicted " << predicted(k)
+                            << ", spread " << spread(k) << " over " << used << " experiments";
+    }
+    if (std::abs(ratio - 1.0) > std::abs(out.worst_ratio - 1.0)) {
+      out.worst_ratio = ratio;
+      out.worst = at_clean.names[k];
+    }
+    ++out.compared;
+  }
+  EXPECT_EQ(out.failed, 0) << nominal.name;
+  EXPECT_EQ(out.compared, p - static_cast<int>(at_clean.held.size())) << nominal.name;
+  double lowest = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < p; ++k) {
+    if (predicted(k) > 0.0) lowest = std::min(lowest, spread(k) / predicted(k));
+  }
+  std::printf("%s%s: %d experiments, %d unknowns compared, worst spread / predicted %.3f (%s), lowest %.3f\n",
+              nominal.name.c_str(), options.statics ? "" : " (statics off)", experiments, out.compared,
+              out.worst_ratio, out.worst.c_str(), lowest);
+  return out;
+}
+
+// The readings' noise alone: each value plus its sensor's sigma times a draw.
+std::vector<SpatialMeasurement> WithSensorNoise(const SpatialRobot& nominal, std::vector<SpatialMeasurement> readings,
+                                                const VectorXd& z) {
+  int k = 0;
+  for (SpatialMeasurement& r : readings) {
+    for (int i = 0; i < r.dl_m.size(); ++i) r.dl_m(i) += nominal.sensors.encoder_sigma_m * z(k++);
+    for (const SpatialSensor s : kSpatialSensors) {
+      if (!r.has(s)) continue;
+      const double sigma = SpatialSensorNoise(nominal.sensors, s)->sigma();
+      for (int v = 0; v < r.values(s).size(); ++v) r.values(s)(v) += sigma * z(k++);
+    }
+  }
+  return readings;
+}
+int NoiseDraws(const std::vector<SpatialMeasurement>& readings) {
+  int k = 0;
+  for (const SpatialMeasurement& r : readings) {
+    k += r.dl_m.size();
+    for (const SpatialSensor s : kSpatialSensors) k += r.has(s) ? r.values(s).size() : 0;
+  }
+  return k;
+}
+
+int CovarianceExperiments() {
+  const char* env = std::getenv("CABLECAL_COVARIANCE_EXPERIMENTS");
+  return env ? std::atoi(env) : 1000;
+}
+
+// Each built-in spatial robot and a random one, default gauge (its exit coordinates held at
+// their nominal values): N experiments of fresh noise (the robot's sigmas) on one set of 20
+// poses spread over a quarter of the frame or so (near home only, cogiro's exits have sigmas of
+// decimetres and the estimator is no longer linear at that scale), each identified; the
+// spread of every free geometry unknown against the sigma predicted at the noise-free
+// readings, within 10 %. With N experiments a sample standard deviation has a relative
+// standard error of about 1 / sqrt(2 N): 2.2 % at N = 1000, so that 10 % is 4.5 standard
+// errors (P ~ 7e-6 per unknown, ~1e-3 over the ~110 compared here; at N = 300 it would be 2.4,
+// and among 110 unknowns a few would fail by chance). The draws are serial (one stream), the
+// identifications parallel (OpenMP): nothing depends on the thread count.
+// CABLECAL_COVARIANCE_EXPERIMENTS overrides N (bench/README.md gives the figures),
+// CABLECAL_PRINT_RATIOS prints every ratio.
+TEST(SpatialIdentify, PredictedSigmasMatchTheMonteCarloSpread) {
+  const int experiments = CovarianceExperiments();
+  ASSERT_GE(experiments, 30);
+  Rng rng(1234);
+  // cogiro, ipanema1 and a random 7-cable robot (tilted swivel axes, offset centre of mass):
+  // encoders + inclinometer + laser.
+  const std::vector<std::pair<SpatialRobot, double>> robots = {
+      {WithSensors(Builtin("cogiro"), kInc | kLaser), 6.0},
+      {WithSensors(Builtin("ipanema1"), kInc | kLaser), 2.0},
+      {WithSensors(RandomInextensible(rng, "random7", 7), kInc | kLaser), 2.5}};
+  for (const auto& [nominal, reach] : robots) {
+    const Experiment clean = MakeExperiment(nominal, PerturbedExits(nominal, rng, 0.01), 20, kInc | kLaser, rng, reach);
+    CompareWithSpread(nominal, clean.readings, experiments, NoiseDraws(clean.readings), rng,
+                      [&](int, const VectorXd& z) { return WithSensorNoise(nominal, clean.readings, z); });
+  }
+}
+
+// irma4u (4 cables, its poses equilibria, its tensions unknowns tied to them by the
+// equilibrium) with encoders + swivel encoders + inclinometer, 20 poses: NOT within 10 %. The
+// equilibrium rows are not readings but the model's allowance for the platform's mass and
+// centre of mass (kEquilibriumWeightRelativeSigma, kDefaultComSigma_m); this simulation's
+// statics are exact, so the prediction is conservative: the spread is 0.6 to 1.0 of it
+// (bench/README.md). Without the statics (options.statics = false) the readings alone leave
+// decimetre sigmas, far outside the linear regime. What is checked: never optimistic (every
+// ratio below 1.1), over 300 experiments (CABLECAL_COVARIANCE_EXPERIMENTS overrides).
+TEST(SpatialIdentify, PredictedSigmasAreConservativeForTheUnderactuatedIrma4u) {
+  const int experiments = std::getenv("CABLECAL_COVARIANCE_EXPERIMENTS") ? CovarianceExperiments() : 300;
+  ASSERT_GE(experiments, 30);
+  Rng rng(4321);
+  const int bits = kSwivel | kInc;
+  const SpatialRobot nominal = WithSensors(Builtin("irma4u"), bits);
+  const Experiment clean = MakeExperiment(nominal, PerturbedExits(nominal, rng, 0.01), 20, bits, rng);
+  CompareWithSpread(nominal, clean.readings, experiments, NoiseDraws(clean.readings), rng,
+                    [&](int, const VectorXd& z) { return WithSensorNoise(nominal, clean.readings, z); }, {}, -1.0);
 }
 
 // ---- Statics as information -----------------------------------------------------------------
