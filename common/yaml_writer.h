@@ -12,6 +12,9 @@
 #include <initializer_list>
 #include <string>
 #include <utility>
+#include <vector>
+
+#include "common/format.h"
 
 namespace cablecal {
 
@@ -66,5 +69,52 @@ class FlowRows {
   long long rows_ = 0;
   std::string text_;
 };
+
+// An n x n matrix as a block sequence of flow rows ([a, b, ...] per row), entry(a, b) each:
+// the correlation and covariance matrices of the results.
+template <typename EntryOf>
+void EmitMatrixRows(YAML::Emitter& o, int n, const EntryOf& entry) {
+  o << YAML::BeginSeq;
+  for (int a = 0; a < n; ++a) {
+    o << YAML::Flow << YAML::BeginSeq;
+    for (int b = 0; b < n; ++b) o << YamlNumber{entry(a, b)};
+    o << YAML::EndSeq;
+  }
+  o << YAML::EndSeq;
+}
+
+// A table of numbers with one row per pose, its first column the pose id (columns[0]) and the
+// rest row(j)'s values: as CSV (after `provenance`, the '#' lines) or as the JSON member
+// "rows" (FlowRows). The validation tables of both kinds of robot are written so.
+template <typename RowOf>
+std::string PoseTableCsv(const std::vector<std::string>& columns, const std::vector<int>& pose_ids, const RowOf& row,
+                         const std::string& provenance) {
+  std::string out = provenance;
+  for (std::size_t k = 0; k < columns.size(); ++k) out += (k ? "," : "") + columns[k];
+  out += "\n";
+  for (std::size_t j = 0; j < pose_ids.size(); ++j) {
+    out += std::to_string(pose_ids[j]);
+    for (const double v : row(j)) out += "," + FormatDouble(v);
+    out += "\n";
+  }
+  return out;
+}
+template <typename RowOf>
+std::string PoseTableRowsJson(const std::vector<std::string>& columns, const std::vector<int>& pose_ids,
+                              const RowOf& row) {
+  FlowRows rows(FlowRows::Syntax::kJson);
+  for (std::size_t j = 0; j < pose_ids.size(); ++j) {
+    rows.BeginRow();
+    rows.Key(columns[0].c_str());
+    rows.Int(pose_ids[j]);
+    const std::vector<double> values = row(j);
+    for (std::size_t k = 0; k < values.size(); ++k) {
+      rows.Key(columns[k + 1].c_str());
+      rows.Number(values[k]);
+    }
+    rows.EndRow();
+  }
+  return rows.Finish("rows");
+}
 
 }  // namespace cablecal

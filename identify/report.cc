@@ -145,13 +145,8 @@ ResultParts IdentifyResultParts(const IdentifyResult& r, const std::string& comm
   }
   o << EndMap;
   if (r.has_covariance) {
-    o << Key << "correlation" << Value << YAML::Comment("geometric parameters, in the order above") << BeginSeq;
-    for (int a = 0; a < geometry_size; ++a) {
-      o << Flow << BeginSeq;
-      for (int b = 0; b < geometry_size; ++b) o << YamlNumber{r.geometry_correlation(a, b)};
-      o << EndSeq;
-    }
-    o << EndSeq;
+    o << Key << "correlation" << Value << YAML::Comment("geometric parameters, in the order above");
+    EmitMatrixRows(o, geometry_size, [&](int a, int b) { return r.geometry_correlation(a, b); });
   }
   o << EndMap;
   // The per-pose and per-reading tables (up to 100,000 rows each) by a writer of their own: the

@@ -145,23 +145,13 @@ ResultParts Parts(const SpatialRobot& nominal, const SpatialIdentifyOptions& opt
   o << EndMap;
   if (has_covariance) {
     // A held parameter has no variance: its correlations are written 0.
-    o << Key << "correlation" << Value << YAML::Comment("the parameters, in the order above; held: 0") << BeginSeq;
-    for (int a = 0; a < n; ++a) {
-      o << Flow << BeginSeq;
-      for (int b = 0; b < n; ++b) {
-        const double s = r.sigma(a) * r.sigma(b);
-        o << YamlNumber{s > 0.0 ? r.covariance(a, b) / s : 0.0};
-      }
-      o << EndSeq;
-    }
-    o << EndSeq;
-    o << Key << "covariance" << Value << YAML::Comment("the parameters, in the order above (m, rad)") << BeginSeq;
-    for (int a = 0; a < n; ++a) {
-      o << Flow << BeginSeq;
-      for (int b = 0; b < n; ++b) o << YamlNumber{r.covariance(a, b)};
-      o << EndSeq;
-    }
-    o << EndSeq;
+    o << Key << "correlation" << Value << YAML::Comment("the parameters, in the order above; held: 0");
+    EmitMatrixRows(o, n, [&](int a, int b) {
+      const double s = r.sigma(a) * r.sigma(b);
+      return s > 0.0 ? r.covariance(a, b) / s : 0.0;
+    });
+    o << Key << "covariance" << Value << YAML::Comment("the parameters, in the order above (m, rad)");
+    EmitMatrixRows(o, n, [&](int a, int b) { return r.covariance(a, b); });
   }
   o << EndMap;
 

@@ -282,33 +282,11 @@ std::vector<double> Row(const SpatialValidationResult& result, std::size_t j) {
 }  // namespace
 
 std::string SpatialValidationCsv(const SpatialValidationResult& result, const std::string& provenance) {
-  std::string out = provenance;
-  const std::vector<std::string> columns = Columns(result);
-  for (std::size_t k = 0; k < columns.size(); ++k) out += (k ? "," : "") + columns[k];
-  out += "\n";
-  for (std::size_t j = 0; j < result.pose_ids.size(); ++j) {
-    out += std::to_string(result.pose_ids[j]);
-    for (const double v : Row(result, j)) out += "," + FormatDouble(v);
-    out += "\n";
-  }
-  return out;
+  return PoseTableCsv(Columns(result), result.pose_ids, [&](std::size_t j) { return Row(result, j); }, provenance);
 }
 
 std::string SpatialValidationRowsJson(const SpatialValidationResult& result) {
-  const std::vector<std::string> columns = Columns(result);
-  FlowRows rows(FlowRows::Syntax::kJson);
-  for (std::size_t j = 0; j < result.pose_ids.size(); ++j) {
-    rows.BeginRow();
-    rows.Key(columns[0].c_str());
-    rows.Int(result.pose_ids[j]);
-    const std::vector<double> row = Row(result, j);
-    for (std::size_t k = 0; k < row.size(); ++k) {
-      rows.Key(columns[k + 1].c_str());
-      rows.Number(row[k]);
-    }
-    rows.EndRow();
-  }
-  return rows.Finish("rows");
+  return PoseTableRowsJson(Columns(result), result.pose_ids, [&](std::size_t j) { return Row(result, j); });
 }
 
 std::string SpatialValidationSummaryYaml(const SpatialValidationResult& result, const std::string& command_line) {
