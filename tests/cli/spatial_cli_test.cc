@@ -217,8 +217,7 @@ TEST_F(SpatialCli, HostileInputsExitTwoNamingWhereAndWriteNothing) {
     EXPECT_FALSE(fs::exists(Path("out.csv"))) << c.args;
   }
   // The commands of the next issues still refuse a spatial file.
-  for (const std::string& command :
-       {"identify --measurements " + Path("plan.csv") + " --out " + Path("out.csv"), "design --poses 4 --out " + Path("out.csv")}) {
+  for (const std::string& command : {"identify --measurements " + Path("plan.csv") + " --out " + Path("out.csv")}) {
     const RunResult r = RunCablecal(command + " --robot " + robot);
     EXPECT_EQ(r.exit_code, 2) << r.output;
     EXPECT_NE(r.output.find("serves planar robots only so far"), std::string::npos) << r.output;
