@@ -677,6 +677,7 @@ int RunDesign(const Context& ctx, const DesignCommandOptions& options) {
   CheckPngPath("--plot", options.plot_path);
   if (options.out_path.empty() && !options.json) throw InputError("--out", "", "required (or print the poses with --json)");
   if (options.out_path.empty() && !options.plot_path.empty()) throw InputError("--plot", "", "needs --out (the plan it draws)");
+  if (IsSpatialRobotFile(options.robot_path)) return RunSpatialDesign(ctx, options);
   Robot robot = LoadRobotOption(options.robot_path);
   DesignOptions design;
   if (!options.prior_path.empty()) {

@@ -111,10 +111,13 @@ struct DesignCommandOptions {
   unsigned long long seed = 1;
   double min_spacing_m = 0.0;
   double geometry_sigma_m = 0.01, robust_sigmas = 3.0;
+  bool geometry_sigma_given = false, robust_sigmas_given = false;  // typed (a spatial robot refuses them)
   std::string prior_path;
   bool json = false;  // the summary and the poses on stdout as JSON (then --out is optional)
 };
 int RunDesign(const Context& ctx, const DesignCommandOptions& options);
+// design for a robot file with `kind: spatial` (cli/spatial_commands.cc): RunDesign hands it over.
+int RunSpatialDesign(const Context& ctx, const DesignCommandOptions& options);
 
 struct MonteCarloCommandOptions {
   std::string robot_path, poses, designs = "random,optimized", estimator = "ml", gauge = "a1x", sensors = "both",

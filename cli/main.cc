@@ -237,7 +237,10 @@ int main(int argc, char** argv) {
   cablecal::cli::DesignCommandOptions des;
   CLI::App* des_cmd = app.add_subcommand("design", "choose optimal measurement poses (Ipopt)");
   AddRobotOption(des_cmd, &des.robot_path);
-  des_cmd->add_option("--poses", des.poses, "number of poses (at least 5 with 2 cables, 4 with 3 to 8)")->required();
+  des_cmd->add_option("--poses", des.poses,
+                     "number of poses (at least 5 with 2 cables, 4 with 3 to 8; spatial robots: as their sensors need, "
+                     "named when too few)")
+      ->required();
   des_cmd->add_option("--criterion", des.criterion, "a|d|e|condition")
       ->capture_default_str()
       ->check(CLI::IsMember({"condition", "d", "a", "e"}));
@@ -252,10 +255,14 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(WholeNumberIn(0, 100000));
   des_cmd->add_option("--geometry-sigma", des.geometry_sigma_m,
-                      "uncertainty of the true exit points and initial lengths the plan must survive, m (0: off)")
-      ->capture_default_str();
-  des_cmd->add_option("--robust-sigmas", des.robust_sigmas, "k: poses hold for geometry errors up to k sigma")
-      ->capture_default_str();
+                      "uncertainty of the true exit points and initial lengths the plan must survive, m (0: off; "
+                      "planar robots only)")
+      ->capture_default_str()
+      ->each([&des](const std::string&) { des.geometry_sigma_given = true; });
+  des_cmd->add_option("--robust-sigmas", des.robust_sigmas,
+                      "k: poses hold for geometry errors up to k sigma (planar robots only)")
+      ->capture_default_str()
+      ->each([&des](const std::string&) { des.robust_sigmas_given = true; });
   des_cmd->add_option("--prior", des.prior_path,
                       "result.yaml of an earlier identification: plan the next poses around its estimate and "
                       "count its information");

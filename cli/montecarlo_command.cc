@@ -195,6 +195,18 @@ int RunSpatialMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptio
               "coordinates; wrote %s/\n",
               r.cells.size(), o.study.trials, r.wall_time_s, threads, failures, r.held_names.size(),
               options.out_dir.c_str());
+  const long trials = static_cast<long>(r.cells.size()) * o.study.trials;
+  if (!ctx.quiet && 2 * failures > trials) {
+    std::string causes;
+    for (const std::string& cause : FailureCauses()) {
+      int count = 0;
+      for (const MonteCarloCell& c : r.cells) count += c.failures(cause);
+      if (count > 0) causes += (causes.empty() ? "" : ", ") + cause + " " + std::to_string(count);
+    }
+    std::fprintf(stderr, "cablecal: warning: %d of %ld trials failed (%s): the statistics speak of the few that did "
+                 "not; failures.csv says why (a smaller --geometry-sigma, --skip-infeasible, more poses or another "
+                 "sensor may help)\n", failures, trials, causes.c_str());
+  }
   if (!figure_error.empty()) throw FigureFailure(figure_error + "; the study's data were written to " + options.out_dir);
   return kExitOk;
 }

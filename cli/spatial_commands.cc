@@ -1,4 +1,4 @@
-// workspace, sample and simulate for a robot file with `kind: spatial` (README, "Spatial
+// workspace, sample, simulate and design for a robot file with `kind: spatial` (README, "Spatial
 // robots"): the same flags and outputs as the planar commands, in the spatial formats.
 #include <unistd.h>
 
@@ -7,12 +7,18 @@
 #include <optional>
 #include <sstream>
 
+#include <yaml-cpp/yaml.h>
+
 #include "cli/commands.h"
+#include "cli/sigint.h"
 #include "common/atomic_output.h"
 #include "common/error.h"
 #include "common/format.h"
+#include "common/json.h"
 #include "common/version.h"
+#include "common/yaml_writer.h"
 #include "design/design.h"  // kMaxGeometrySigma_m
+#include "design/spatial_design.h"
 #include "experiment/spatial_plan.h"
 #include "experiment/spatial_simulation.h"
 #include "model/spatial_robot.h"
@@ -49,6 +55,29 @@ Eigen::Vector3d ParseRpyDeg(const std::string& text) {
 std::string DegreesText(const Eigen::Vector3d& rpy_rad) {
   return "roll " + Rounded(rpy_rad(0) * kDegPerRad) + ", pitch " + Rounded(rpy_rad(1) * kDegPerRad) + ", yaw " +
          Rounded(rpy_rad(2) * kDegPerRad) + " deg";
+}
+
+// --json's plan: the plan CSV's columns, one map per pose.
+std::string SpatialPlanJsonYaml(const std::vector<SpatialPlanPose>& plan) {
+  YAML::Emitter o;
+  o << YAML::BeginSeq;
+  for (std::size_t j = 0; j < plan.size(); ++j) {
+    const SpatialPlanPose& p = plan[j];
+    o << YAML::Flow << YAML::BeginMap << YAML::Key << "pose" << YAML::Value << j + 1;
+    for (int k = 0; k < SpatialKind::kPoseDim; ++k) {
+      o << YAML::Key << SpatialKind::kPoseNames[k] << YAML::Value << YamlNumber{p.q(k)};
+    }
+    const std::pair<const char*, const Eigen::VectorXd*> columns[3] = {
+        {"t", &p.tensions_N}, {"l", &p.lengths_m}, {"dl", &p.length_change_m}};
+    for (const auto& [prefix, values] : columns) {
+      for (Eigen::Index i = 0; i < values->size(); ++i) {
+        o << YAML::Key << prefix + std::to_string(i + 1) << YAML::Value << YamlNumber{(*values)(i)};
+      }
+    }
+    o << YAML::EndMap;
+  }
+  o << YAML::EndSeq;
+  return YamlText(o);
 }
 
 }  // namespace
@@ -161,6 +190,71 @@ int RunSpatialSimulate(const Context& ctx, const SimulateOptions& options) {
               experiment.measurements.size(), PrintableText(nominal.name).c_str(), skipped.c_str(),
               sensors.empty() ? "" : ", ", sensors.c_str(), ToString(sim.noisy), sim.encoder_noise ? "on" : "off",
               options.out_path.c_str());
+  return kExitOk;
+}
+
+// The planar design's robustness search and sequential design are not served for spatial
+// robots yet: their flags are refused (typed), never silently ignored.
+int RunSpatialDesign(const Context& ctx, const DesignCommandOptions& options) {
+  const std::string not_yet = "is not yet served for spatial robots";
+  if (options.geometry_sigma_given) {
+    throw InputError("--geometry-sigma", "", "robustness to the true geometry " + not_yet +
+                                                 ": the designed poses hold on the robot file's nominal geometry");
+  }
+  if (options.robust_sigmas_given) {
+    throw InputError("--robust-sigmas", "", "robustness to the true geometry " + not_yet +
+                                                ": the designed poses hold on the robot file's nominal geometry");
+  }
+  if (!options.prior_path.empty()) {
+    throw InputError("--prior", "", "sequential design (planning around an earlier identification) " + not_yet);
+  }
+  if (!options.plot_path.empty()) {
+    throw InputError("--plot", "", "a figure of a spatial plan " + not_yet + " (the plan CSV has every pose's x, y, z)");
+  }
+  const SpatialRobot robot = LoadSpatialRobotFile(options.robot_path);
+  SpatialDesignOptions design;
+  design.poses = options.poses;
+  design.criterion = ParseCriterion(options.criterion);
+  design.starts = options.starts;
+  design.seed = options.seed;
+  design.min_spacing_m = options.min_spacing_m;
+  design.random_sets = options.random_sets;
+  const SigintScope sigint;  // Ctrl-C: Ipopt stops at its next iteration, exit 130, nothing written
+  design.interrupted = &SigintFlag();
+  if (!ctx.quiet) design.progress = ProgressBar("design", "starts");
+  const SpatialDesignResult result = DesignSpatialPoses(robot, design);
+  const std::string summary = SpatialDesignSummaryYaml(robot, result, design, ctx.command_line);
+  AtomicOutput output;
+  if (!options.out_path.empty()) {
+    output.WriteText(options.out_path, SpatialPlanCsv(result.poses, ProvenanceComment(ctx.command_line)));
+  }
+  if (!options.summary_path.empty()) output.WriteText(options.summary_path, summary);
+  output.Commit();
+  if (options.json) {
+    // The summary's content, and the poses as the plan CSV's columns.
+    YAML::Node doc = YAML::Load(summary);
+    doc["plan"] = YAML::Load(SpatialPlanJsonYaml(result.poses));
+    std::printf("%s\n", ToJson(doc).c_str());
+    return kExitOk;
+  }
+  int verified = 0;
+  for (const SpatialStartReport& s : result.starts) verified += s.verified ? 1 : 0;
+  std::printf("designed %zu poses of %s (criterion %s, best of %d starts, %d converged, %d verified): %s",
+              result.poses.size(), PrintableText(robot.name).c_str(), ToString(design.criterion), design.starts,
+              result.converged_starts, verified, DescribeCriterion(design.criterion, result.criteria).c_str());
+  if (design.random_sets > 0) {
+    const double factor = Improvement(design.criterion, result.criteria, result.random_median);
+    std::printf(", %s", ImprovementText(factor, design.random_sets).c_str());
+    if (!(factor > 1.0) && !ctx.quiet) {
+      std::fprintf(stderr, "cablecal: warning: the designed set is no better than the median random set on its "
+                           "criterion: try more --starts, or another --seed\n");
+    }
+  }
+  std::printf(", %.1f s\n", result.wall_time_s);
+  std::string held;
+  for (int h : result.layout.held) held += (held.empty() ? "" : " ") + result.layout.names[h];
+  std::printf("  the gauge holds %s; the poses hold on the nominal geometry (robustness to the true geometry is not "
+              "modelled for spatial robots yet)\n", held.c_str());
   return kExitOk;
 }
 

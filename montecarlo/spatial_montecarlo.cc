@@ -96,6 +96,7 @@ TrialOutcome RunSpatialTrial(const SpatialRobot& nominal, const SpatialMonteCarl
     out.failure = std::string("simulation: ") + e.what();
     return out;
   }
+  out.skipped_poses = static_cast<int>(sim.skipped.size());  // counted in a failed trial too
   SpatialIdentifyResult r;
   try {
     r = IdentifySpatial(nominal, sim.measurements, id);
@@ -119,7 +120,6 @@ TrialOutcome RunSpatialTrial(const SpatialRobot& nominal, const SpatialMonteCarl
     x_errors[r.pose_ids[k] - 1] = r.poses[k](0) - sim.true_poses[k](0);
   }
   out.errors_m.insert(out.errors_m.end(), x_errors.begin(), x_errors.end());
-  out.skipped_poses = static_cast<int>(sim.skipped.size());
   out.ok = true;
   return out;
 }

@@ -1,11 +1,14 @@
 // Binds the experiment design: cablecal.design and the cablecal.DesignResult it returns (the plan,
-// its criteria against random sets, and each Ipopt start).
+// its criteria against random sets, and each Ipopt start), or for a cablecal.SpatialRobot the
+// cablecal.SpatialDesignResult (design/spatial_design.h).
 
 #include <atomic>
 #include <string>
 
 #include "design/design.h"
+#include "design/spatial_design.h"
 #include "model/robot.h"
+#include "model/spatial_robot.h"
 #include "python/bindings.h"
 #include "python/converters.h"
 #include "python/interrupt.h"
@@ -27,9 +30,95 @@ py::dict CriteriaDict(const CriteriaValues& v) {
   return d;
 }
 
+struct PySpatialDesign {
+  SpatialRobot robot;
+  SpatialDesignResult result;
+  SpatialDesignOptions options;  // as run, without the interrupt flag
+};
+
+std::vector<std::string> LayoutNames(const SpatialInformationLayout& layout, const std::vector<int>& columns) {
+  std::vector<std::string> names;
+  for (int c : columns) names.push_back(layout.names[c]);
+  return names;
+}
+
+void BindSpatialDesignResult(py::module_& m) {
+  py::class_<PySpatialDesign>(m, "SpatialDesignResult", "cablecal.design on a SpatialRobot (README, \"Spatial robots\").")
+      .def_property_readonly("plan", [](const PySpatialDesign& d) {
+        return PySpatialPlan{d.result.poses, d.robot.num_cables()};
+      })
+      .def_property_readonly("criteria", [](const PySpatialDesign& d) { return CriteriaDict(d.result.criteria); })
+      .def_property_readonly("random_median", [](const PySpatialDesign& d) { return CriteriaDict(d.result.random_median); })
+      .def_property_readonly("comparison", [](const PySpatialDesign& d) -> py::object {
+        if (d.options.random_sets == 0) return py::none();
+        return py::str(ImprovementText(Improvement(d.options.criterion, d.result.criteria, d.result.random_median),
+                                       d.options.random_sets));
+      }, "\"3.2 x better than the median of 100 random sets\" (or worse) on the criterion; None without random sets")
+      .def_property_readonly("held", [](const PySpatialDesign& d) { return LayoutNames(d.result.layout, d.result.layout.held); },
+                             "The exit coordinates the gauge holds (a1x, ...).")
+      .def_property_readonly("free", [](const PySpatialDesign& d) { return LayoutNames(d.result.layout, d.result.layout.free); },
+                             "The gauge-fixed geometric unknowns the criteria are about.")
+      .def_property_readonly("best_start", [](const PySpatialDesign& d) { return d.result.best_start; })
+      .def_property_readonly("converged_starts", [](const PySpatialDesign& d) { return d.result.converged_starts; })
+      .def_property_readonly("wall_time_s", [](const PySpatialDesign& d) { return d.result.wall_time_s; })
+      .def_property_readonly("starts", [](const PySpatialDesign& d) {
+        py::list l;
+        for (const SpatialStartReport& s : d.result.starts) {
+          py::dict e;
+          e["start"] = s.start;
+          e["ipopt_status"] = s.ipopt_status;
+          e["iterations"] = s.iterations;
+          e["converged"] = s.converged;
+          e["verified"] = s.verified;
+          e["verification_failure"] = s.verification_failure;
+          e["objective"] = s.objective;
+          l.append(e);
+        }
+        return l;
+      }, "Per Ipopt start: status, iterations, converged, verified, objective.")
+      .def("to_yaml", [](const PySpatialDesign& d) {
+        return SpatialDesignSummaryYaml(d.robot, d.result, d.options, CallText("design"));
+      }, "The CLI's summary.yaml.");
+}
+
+// The spatial design takes the planar one's arguments but robustness and a prior, which it does
+// not serve yet: given, they are refused (never silently ignored).
+py::object SpatialDesign(const SpatialRobot& robot, py::handle n, py::handle criterion, py::handle starts,
+                         py::handle seed, py::handle min_spacing, py::handle random_sets, py::handle geometry_sigma,
+                         py::handle robust_sigmas, py::handle prior) {
+  const std::string robustness =
+      "robustness to the true geometry is not yet served for spatial robots: the designed poses hold on the robot "
+      "file's nominal geometry";
+  if (!geometry_sigma.is_none()) Bad("geometry_sigma", robustness);
+  if (!robust_sigmas.is_none()) Bad("robust_sigmas", robustness);
+  if (!prior.is_none()) {
+    Bad("prior", "sequential design (planning around an earlier identification) is not yet served for spatial robots");
+  }
+  SpatialDesignOptions o;
+  o.poses = static_cast<int>(AsInteger(n, "n", 1, kMaxPlanPoses));
+  o.criterion = ParseCriterion(AsText(criterion, "criterion"));
+  o.starts = static_cast<int>(AsInteger(starts, "starts", 1, 1000));
+  o.seed = AsSeed(seed);
+  o.min_spacing_m = AsNumber(min_spacing, "min_spacing");
+  o.random_sets = static_cast<int>(AsInteger(random_sets, "random_sets", 0, 100000));
+  std::atomic<bool> stop{false};
+  o.interrupted = &stop;
+  PySpatialDesign d{robot, Interruptible(stop, [&] { return DesignSpatialPoses(robot, o); }), o};
+  d.options.interrupted = nullptr;
+  if (o.random_sets > 0 && !(Improvement(o.criterion, d.result.criteria, d.result.random_median) > 1.0)) {
+    // The CLI's warning: a result, but not a good plan.
+    const int warned = PyErr_WarnEx(PyExc_UserWarning,
+                                    "the designed set is no better than the median random set on its criterion: try "
+                                    "more starts, or another seed", 1);
+    if (warned < 0) throw py::error_already_set();
+  }
+  return py::cast(std::move(d));
+}
+
 }  // namespace
 
 void BindDesign(py::module_& m) {
+  BindSpatialDesignResult(m);
   py::class_<PyDesign>(m, "DesignResult")
       .def_property_readonly("plan", [](const PyDesign& d) { return PyPlan{d.result.poses, d.result.num_cables}; })
       .def_property_readonly("criteria", [](const PyDesign& d) { return CriteriaDict(d.result.criteria); })
@@ -72,7 +161,11 @@ void BindDesign(py::module_& m) {
       "design",
       [](py::handle robot_arg, py::handle n, py::handle criterion, py::handle starts, py::handle seed,
          py::handle min_spacing, py::handle random_sets, py::handle geometry_sigma, py::handle robust_sigmas,
-         py::handle prior) {
+         py::handle prior) -> py::object {
+        if (py::isinstance<SpatialRobot>(robot_arg)) {
+          return SpatialDesign(robot_arg.cast<const SpatialRobot&>(), n, criterion, starts, seed, min_spacing,
+                               random_sets, geometry_sigma, robust_sigmas, prior);
+        }
         Robot robot = AsObject<Robot>(robot_arg, "robot", "Robot");
         DesignOptions o;
         if (!prior.is_none()) {
@@ -87,8 +180,9 @@ void BindDesign(py::module_& m) {
         o.seed = AsSeed(seed);
         o.min_spacing_m = AsNumber(min_spacing, "min_spacing");
         o.random_sets = static_cast<int>(AsInteger(random_sets, "random_sets", 0, 100000));
-        o.geometry_sigma_m = AsNumber(geometry_sigma, "geometry_sigma");
-        o.robust_sigmas = AsNumber(robust_sigmas, "robust_sigmas");
+        // None: the CLI's defaults (DesignOptions').
+        if (!geometry_sigma.is_none()) o.geometry_sigma_m = AsNumber(geometry_sigma, "geometry_sigma");
+        if (!robust_sigmas.is_none()) o.robust_sigmas = AsNumber(robust_sigmas, "robust_sigmas");
         // In process: a Python process may run threads of its own, and a fork copies them
         // half-way; the plans are bit for bit the same (tests/design).
         o.solve_in_child_processes = false;
@@ -109,15 +203,17 @@ void BindDesign(py::module_& m) {
               PyErr_WarnEx(PyExc_UserWarning, NoBetterThanRandomWarning(achieved, "geometry_sigma").c_str(), 1);
           if (warned < 0) throw py::error_already_set();  // warnings filtered into errors
         }
-        return d;
+        return py::cast(std::move(d));
       },
       py::arg("robot"), py::arg("n"), py::arg("criterion") = "a", py::arg("starts") = 8, py::arg("seed") = 1,
-      py::arg("min_spacing") = 0.0, py::arg("random_sets") = 100, py::arg("geometry_sigma") = 0.01,
-      py::arg("robust_sigmas") = 3.0, py::arg("prior") = py::none(),
+      py::arg("min_spacing") = 0.0, py::arg("random_sets") = 100, py::arg("geometry_sigma") = py::none(),
+      py::arg("robust_sigmas") = py::none(), py::arg("prior") = py::none(),
       "Optimal measurement poses (cablecal design); at the largest robustness up to robust_sigmas that gives verified "
       "poses (robustness_achieved_k, with a UserWarning when lower); SolverError if none does, not even without "
       "robustness. prior: the path of an earlier "
-      "identification's result.yaml (design --prior).");
+      "identification's result.yaml (design --prior). geometry_sigma and robust_sigmas: None is 0.01 m and 3. "
+      "For a SpatialRobot: a SpatialDesignResult; geometry_sigma, robust_sigmas and prior are not served yet "
+      "(InputError when given).");
 }
 
 }  // namespace cablecal::python

@@ -2079,13 +2079,13 @@ TEST_F(Cli, HostileCableCountsAndKeysAreRefused) {
 }
 
 // A spatial robot file (kind: spatial) through the commands that serve planar robots only
-// (workspace, sample and simulate serve both: tests/cli/spatial_cli_test.cc): one message
-// naming the file, the line and `kind`, exit 2, nothing written.
+// (workspace, sample, simulate, design and montecarlo serve both: tests/cli/spatial_cli_test.cc,
+// tests/cli/spatial_design_cli_test.cc): one message naming the file, the line and `kind`,
+// exit 2, nothing written.
 TEST_F(Cli, SpatialRobotFilesAreRefusedByThePlanarCommands) {
   for (const char* file : {"cogiro.yaml", "ipanema1.yaml", "irma4u.yaml"}) {
     const std::string robot = std::string(CABLECAL_SOURCE_DIR) + "/robots/" + file;
-    for (const std::string& command :
-         {"design --poses 4 --out " + Path("design.csv"), "montecarlo --poses 6 --trials 2 --out " + Path("mc")}) {
+    for (const std::string& command : {"reproduce --trials 2 --out " + Path("mc")}) {
       const RunResult r = RunCablecal(command + " --robot " + robot);
       EXPECT_EQ(r.exit_code, 2) << command << ": " << r.output;
       EXPECT_TRUE(std::regex_search(

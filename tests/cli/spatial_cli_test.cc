@@ -216,9 +216,9 @@ TEST_F(SpatialCli, HostileInputsExitTwoNamingWhereAndWriteNothing) {
     EXPECT_NE(r.output.find(c.expected), std::string::npos) << c.args << "\nexpected: " << c.expected << "\ngot: " << r.output;
     EXPECT_FALSE(fs::exists(Path("out.csv"))) << c.args;
   }
-  // The commands of the next issues still refuse a spatial file (identify takes it:
-  // spatial_identify_cli_test.cc).
-  for (const std::string& command : {"design --poses 4 --out " + Path("out.csv")}) {
+  // The commands of the next issues still refuse a spatial file (identify, design and
+  // montecarlo take it: spatial_identify_cli_test.cc, spatial_design_cli_test.cc, above).
+  for (const std::string& command : {"reproduce --out " + Path("repro")}) {
     const RunResult r = RunCablecal(command + " --robot " + robot);
     EXPECT_EQ(r.exit_code, 2) << r.output;
     EXPECT_NE(r.output.find("serves planar robots only so far"), std::string::npos) << r.output;

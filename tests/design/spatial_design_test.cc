@@ -152,9 +152,13 @@ TEST(SpatialInformation, GradientMatchesDifferences) {
 void ExpectDesignHolds(const SpatialRobot& robot, int extra_poses, Criterion criterion) {
   SCOPED_TRACE(robot.name);
   SpatialDesignOptions options;
-  options.poses = MinSpatialDesignPoses(robot, SpatialDesignLayout(robot, SampleSpatialPoses(robot, 30, 9))) + extra_poses;
+  // The layout (what is held, what is free) from 12 random poses: more than any of these robots'
+  // fewest, and sampling is most of this test's time (irma4u: 0.25 s a pose).
+  options.poses = MinSpatialDesignPoses(robot, SpatialDesignLayout(robot, SampleSpatialPoses(robot, 12, 9))) + extra_poses;
   options.starts = 2;
-  options.random_sets = 20;
+  // 9 random sets: the improvements are 10 to 100 times (measured), far from the 2x asserted;
+  // more sets would steady the median, not change what the test shows.
+  options.random_sets = 9;
   options.criterion = criterion;
   options.seed = 28;
   const SpatialDesignResult r = DesignSpatialPoses(robot, options);

@@ -1010,3 +1010,29 @@ def test_spatial_identify_refuses_what_it_cannot_do():
         cablecal.identify(robot, cablecal.Measurements(cablecal.Robot.builtin(), np.zeros((3, 2))))
     with pytest.raises(cablecal.InputError, match="no spatial sensor"):
         cablecal.SpatialMeasurements(robot, run.measurements.dl, {"compass": np.zeros((len(run.measurements), 1))})
+
+
+def test_spatial_design_equals_cli_and_refuses_what_it_does_not_serve(tmp_path):
+    path = robot_file("irma4u")
+    robot = cablecal.Robot.load(path)
+    design = cablecal.design(robot, 2, starts=2, random_sets=3, seed=5)
+    assert isinstance(design, cablecal.SpatialDesignResult)
+    plan_csv, summary = tmp_path / "plan.csv", tmp_path / "summary.yaml"
+    cli("design", "--robot", path, "--poses", "2", "--starts", "2", "--random-sets", "3", "--seed", "5",
+        "--out", str(plan_csv), "--summary", str(summary))
+    assert design.plan.to_csv() == data_lines(plan_csv)
+    assert yaml_without_provenance(design.to_yaml()) == yaml_without_provenance(open(summary).read())
+    assert design.plan.poses.shape == (2, 6)
+    assert design.held == ["a1x", "a1y", "a1z"] and "a2x" in design.free
+    assert design.best_start >= 0 and 1 <= design.converged_starts <= 2
+    assert design.criteria["a_trace_covariance_m2"] < design.random_median["a_trace_covariance_m2"]
+    assert design.comparison.endswith("better than the median of 3 random sets")
+    # The plan is the robot's: simulate takes it as the CLI's simulate takes the file.
+    run = cablecal.simulate(robot, design.plan, sensors="none", encoder_noise=False)
+    np.testing.assert_array_equal(run.measurements.dl, design.plan.length_changes)
+    for kwargs, named in [({"geometry_sigma": 0.01}, "geometry_sigma"), ({"robust_sigmas": 2}, "robust_sigmas"),
+                          ({"prior": str(summary)}, "prior")]:
+        with pytest.raises(cablecal.InputError, match=named + ".*not yet served for spatial robots"):
+            cablecal.design(robot, 2, **kwargs)
+    with pytest.raises(cablecal.InputError, match="at least 2 poses"):
+        cablecal.design(robot, 1)
