@@ -176,7 +176,7 @@ std::string SummaryMarkdown(const MonteCarloResult& r, const std::string& title)
   }
   if (skipped > 0) {
     o << "\nThe trials skipped " << skipped << " poses their true robot could not hold within its limits "
-      << "(--skip-infeasible) and identified from the other " << held << ".\n";
+      << "(--skip-infeasible); the successful ones identified from " << held << " poses.\n";
   }
   // Before measuring, the lab knew every parameter to geometry_sigma_m (the true geometry is
   // drawn so): a calibration that knows less, or hardly more, is said to be one.
