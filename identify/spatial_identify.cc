@@ -1488,7 +1488,9 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
 
   if (!converged) {
     result.status = SpatialIdentifyStatus::kNotConverged;
-    result.message = "the solver stopped after " + std::to_string(result.iterations) +
+    // result.iterations counts the start too (as Ceres' summary does); the message counts steps,
+    // so that a cap of --max-iterations N reads "after N".
+    result.message = "the solver stopped after " + std::to_string(std::max(0, result.iterations - 1)) +
                      " iterations without converging: " + message;
     return result;
   }
