@@ -23,6 +23,9 @@
 
 namespace cablecal {
 
+// Each trial's identification iteration cap (identify's default: 200).
+constexpr int kSpatialTrialMaxIterations = 2000;
+
 struct SpatialMonteCarloOptions {
   // pose_counts, designs (random, a criterion's design, grid:2x2x2, grid:3x3x3), trials, sensors (which get noise),
   // geometry_sigma_m (every exit coordinate but the held ones), loss, seed, progress,
