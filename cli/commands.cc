@@ -527,6 +527,33 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   return kExitOk;
 }
 
+bool WriteValidationOutputs(const Context& ctx, const ValidateCommandOptions& options, const std::string& csv,
+                            const std::string& summary_yaml, const std::string& rows_json,
+                            const std::vector<SkippedReading>& skipped, std::size_t readings) {
+  AtomicOutput output;
+  if (!options.out_path.empty()) output.WriteText(options.out_path, csv);
+  if (!options.summary_path.empty()) output.WriteText(options.summary_path, summary_yaml);
+  output.Commit();
+  if (!ctx.quiet) {
+    for (const SkippedReading& k : skipped) {
+      std::fprintf(stderr, "cablecal: skipped pose %d (%s): %s\n", k.pose_id, PrintableText(k.where).c_str(),
+                   PrintableText(k.reason).c_str());
+    }
+    if (options.skip_infeasible) {
+      std::fprintf(stderr, "cablecal: skipped %zu of %zu readings that a robot cannot hold (--skip-infeasible)\n",
+                   skipped.size(), readings);
+    }
+  }
+  if (!options.json) return false;
+  std::printf("%s\n", MergeJsonObjects({ToJson(YAML::Load(summary_yaml)), rows_json}).c_str());
+  return true;
+}
+
+std::string CountedReadings(std::size_t kept, int num_poses) {
+  return num_poses == static_cast<int>(kept) ? std::to_string(kept) + " poses"
+                                             : std::to_string(kept) + " readings (" + std::to_string(num_poses) + " poses)";
+}
+
 int RunValidate(const Context& ctx, const ValidateCommandOptions& options) {
   CheckCommandPaths({{"--robot", options.robot_path},
                      {"--nominal", options.nominal_path},
@@ -543,32 +570,14 @@ int RunValidate(const Context& ctx, const ValidateCommandOptions& options) {
       Validate(calibrated, nominal, measurements, options.measurements_path, options.skip_infeasible);
   if (calibrated.sensors.systematic.any()) result.corrected_for = calibrated.sensors.systematic;
   const std::string summary_yaml = ValidationSummaryYaml(result, ctx.command_line);
-  AtomicOutput output;
-  if (!options.out_path.empty()) {
-    output.WriteText(options.out_path, ValidationCsv(result, ProvenanceComment(ctx.command_line)));
-  }
-  if (!options.summary_path.empty()) output.WriteText(options.summary_path, summary_yaml);
-  output.Commit();
-  if (!ctx.quiet) {
-    for (const SkippedReading& k : result.skipped) {
-      std::fprintf(stderr, "cablecal: skipped pose %d (%s): %s\n", k.pose_id, PrintableText(k.where).c_str(),
-                   PrintableText(k.reason).c_str());
-    }
-    if (options.skip_infeasible) {
-      std::fprintf(stderr, "cablecal: skipped %zu of %zu readings that a robot cannot hold (--skip-infeasible)\n",
-                   result.skipped.size(), measurements.size());
-    }
-  }
-  if (options.json) {
-    std::printf("%s\n", MergeJsonObjects({ToJson(YAML::Load(summary_yaml)), ValidationRowsJson(result)}).c_str());
+  if (WriteValidationOutputs(ctx, options, ValidationCsv(result, ProvenanceComment(ctx.command_line)), summary_yaml,
+                             ValidationRowsJson(result), result.skipped, measurements.size())) {
     return kExitOk;
   }
   // Millimetres and milliradians, 3 significant digits: what a reader compares; the files keep
   // every digit.
   const std::size_t kept = result.pose_ids.size();
-  const std::string readings = result.num_poses == static_cast<int>(kept)
-                                   ? std::to_string(kept) + " poses"
-                                   : std::to_string(kept) + " readings (" + std::to_string(result.num_poses) + " poses)";
+  const std::string readings = CountedReadings(kept, result.num_poses);
   std::string noise;
   if (result.has_laser) noise += "laser " + Rounded(1e3 * result.laser_sigma_m) + " mm";
   if (result.has_inclinometer) {

@@ -10,6 +10,7 @@
 #include "cli/processes.h"
 #include "common/atomic_output.h"
 #include "identify/identify.h"
+#include "identify/validate.h"  // SkippedReading
 #include "model/robot.h"
 
 namespace cablecal::cli {
@@ -91,6 +92,13 @@ struct ValidateCommandOptions {
   bool skip_infeasible = false;  // skip the readings a robot cannot hold (listed on stderr and in the summary)
 };
 int RunValidate(const Context& ctx, const ValidateCommandOptions& options);
+// validate's outputs, both kinds: the CSV and summary written as one set, the skipped readings
+// named on stderr, and with --json the summary and rows printed (true: nothing else to print).
+bool WriteValidationOutputs(const Context& ctx, const ValidateCommandOptions& options, const std::string& csv,
+                            const std::string& summary_yaml, const std::string& rows_json,
+                            const std::vector<SkippedReading>& skipped, std::size_t readings);
+// "12 poses", or "14 readings (12 poses)" when poses were read more than once.
+std::string CountedReadings(std::size_t kept, int num_poses);
 
 // identify and validate for a robot file with `kind: spatial` (cli/spatial_identify_command.cc):
 // RunIdentify and RunValidate hand such a file over to them.

@@ -188,30 +188,12 @@ int RunSpatialValidate(const Context& ctx, const ValidateCommandOptions& options
   const SpatialValidationResult result =
       ValidateSpatial(calibrated, nominal, readings, options.measurements_path, options.skip_infeasible);
   const std::string summary_yaml = SpatialValidationSummaryYaml(result, ctx.command_line);
-  AtomicOutput output;
-  if (!options.out_path.empty()) {
-    output.WriteText(options.out_path, SpatialValidationCsv(result, ProvenanceComment(ctx.command_line)));
-  }
-  if (!options.summary_path.empty()) output.WriteText(options.summary_path, summary_yaml);
-  output.Commit();
-  if (!ctx.quiet) {
-    for (const SkippedReading& k : result.skipped) {
-      std::fprintf(stderr, "cablecal: skipped pose %d (%s): %s\n", k.pose_id, PrintableText(k.where).c_str(),
-                   PrintableText(k.reason).c_str());
-    }
-    if (options.skip_infeasible) {
-      std::fprintf(stderr, "cablecal: skipped %zu of %zu readings that a robot cannot hold (--skip-infeasible)\n",
-                   result.skipped.size(), readings.size());
-    }
-  }
-  if (options.json) {
-    std::printf("%s\n", MergeJsonObjects({ToJson(YAML::Load(summary_yaml)), SpatialValidationRowsJson(result)}).c_str());
+  if (WriteValidationOutputs(ctx, options, SpatialValidationCsv(result, ProvenanceComment(ctx.command_line)),
+                             summary_yaml, SpatialValidationRowsJson(result), result.skipped, readings.size())) {
     return kExitOk;
   }
   const std::size_t kept = result.pose_ids.size();
-  const std::string counted = result.num_poses == static_cast<int>(kept)
-                                  ? std::to_string(kept) + " poses"
-                                  : std::to_string(kept) + " readings (" + std::to_string(result.num_poses) + " poses)";
+  const std::string counted = CountedReadings(kept, result.num_poses);
   // Millimetres, milliradians and newtons, 3 significant digits; the files keep every digit.
   const auto scaled = [](SpatialSensor s, double v) {
     return s == SpatialSensor::kLoadCell ? Rounded(v) + " N"
