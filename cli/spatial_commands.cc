@@ -19,6 +19,7 @@
 #include "common/yaml_writer.h"
 #include "design/design.h"  // kMaxGeometrySigma_m
 #include "design/spatial_design.h"
+#include "experiment/plan.h"  // PlanJsonYaml
 #include "experiment/spatial_plan.h"
 #include "experiment/spatial_simulation.h"
 #include "model/spatial_robot.h"
@@ -57,28 +58,6 @@ std::string DegreesText(const Eigen::Vector3d& rpy_rad) {
          Rounded(rpy_rad(2) * kDegPerRad) + " deg";
 }
 
-// --json's plan: the plan CSV's columns, one map per pose.
-std::string SpatialPlanJsonYaml(const std::vector<SpatialPlanPose>& plan) {
-  YAML::Emitter o;
-  o << YAML::BeginSeq;
-  for (std::size_t j = 0; j < plan.size(); ++j) {
-    const SpatialPlanPose& p = plan[j];
-    o << YAML::Flow << YAML::BeginMap << YAML::Key << "pose" << YAML::Value << j + 1;
-    for (int k = 0; k < SpatialKind::kPoseDim; ++k) {
-      o << YAML::Key << SpatialKind::kPoseNames[k] << YAML::Value << YamlNumber{p.q(k)};
-    }
-    const std::pair<const char*, const Eigen::VectorXd*> columns[3] = {
-        {"t", &p.tensions_N}, {"l", &p.lengths_m}, {"dl", &p.length_change_m}};
-    for (const auto& [prefix, values] : columns) {
-      for (Eigen::Index i = 0; i < values->size(); ++i) {
-        o << YAML::Key << prefix + std::to_string(i + 1) << YAML::Value << YamlNumber{(*values)(i)};
-      }
-    }
-    o << YAML::EndMap;
-  }
-  o << YAML::EndSeq;
-  return YamlText(o);
-}
 
 }  // namespace
 
@@ -233,7 +212,7 @@ int RunSpatialDesign(const Context& ctx, const DesignCommandOptions& options) {
   if (options.json) {
     // The summary's content, and the poses as the plan CSV's columns.
     YAML::Node doc = YAML::Load(summary);
-    doc["plan"] = YAML::Load(SpatialPlanJsonYaml(result.poses));
+    doc["plan"] = YAML::Load(PlanJsonYaml<SpatialKind>(result.poses));
     std::printf("%s\n", ToJson(doc).c_str());
     return kExitOk;
   }

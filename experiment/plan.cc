@@ -141,27 +141,7 @@ void CheckPlanMatchesRobot(const Robot& robot, const std::vector<PlanPose>& plan
   }
 }
 
-std::string PosePlanJsonYaml(const std::vector<PlanPose>& poses) {
-  YAML::Emitter o;
-  o << YAML::BeginSeq;
-  for (std::size_t j = 0; j < poses.size(); ++j) {
-    const PlanPose& p = poses[j];
-    o << YAML::Flow << YAML::BeginMap << YAML::Key << "pose" << YAML::Value << j + 1;
-    for (int k = 0; k < PlanarKind::kPoseDim; ++k) {
-      o << YAML::Key << PlanarKind::kPoseNames[k] << YAML::Value << YamlNumber{p.q(k)};
-    }
-    const std::pair<const char*, const Eigen::VectorXd*> columns[3] = {
-        {"t", &p.tensions_N}, {"l", &p.lengths_m}, {"dl", &p.length_change_m}};
-    for (const auto& [prefix, values] : columns) {
-      for (Eigen::Index i = 0; i < values->size(); ++i) {
-        o << YAML::Key << prefix + std::to_string(i + 1) << YAML::Value << YamlNumber{(*values)(i)};
-      }
-    }
-    o << YAML::EndMap;
-  }
-  o << YAML::EndSeq;
-  return YamlText(o);
-}
+std::string PosePlanJsonYaml(const std::vector<PlanPose>& poses) { return PlanJsonYaml<PlanarKind>(poses); }
 
 std::vector<PlanPose> ReadPosePlanCsv(const std::string& path, int num_cables) {
   std::ifstream in(path, std::ios::binary);

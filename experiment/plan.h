@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "common/yaml_writer.h"
 #include "model/robot.h"
 #include "model/kind.h"
 #include "model/statics.h"
@@ -48,6 +49,30 @@ std::string PosePlanCsv(const std::vector<PlanPose>& plan, const std::string& pr
 // The same poses as a YAML sequence of maps, the CSV's columns as keys (pose, x, z, theta in m
 // and rad, t1.., l1.., dl1.. in N and m; no worst-case columns), for design --json.
 std::string PosePlanJsonYaml(const std::vector<PlanPose>& plan);
+// The same for a plan of any kind (PlanPose, SpatialPlanPose: q, tensions_N, lengths_m,
+// length_change_m): one flow map per pose, the plan CSV's columns.
+template <typename Kind, typename PoseOfPlan>
+std::string PlanJsonYaml(const std::vector<PoseOfPlan>& poses) {
+  YAML::Emitter o;
+  o << YAML::BeginSeq;
+  for (std::size_t j = 0; j < poses.size(); ++j) {
+    const PoseOfPlan& p = poses[j];
+    o << YAML::Flow << YAML::BeginMap << YAML::Key << "pose" << YAML::Value << j + 1;
+    for (int k = 0; k < Kind::kPoseDim; ++k) {
+      o << YAML::Key << Kind::kPoseNames[k] << YAML::Value << YamlNumber{p.q(k)};
+    }
+    const std::pair<const char*, const Eigen::VectorXd*> columns[3] = {
+        {"t", &p.tensions_N}, {"l", &p.lengths_m}, {"dl", &p.length_change_m}};
+    for (const auto& [prefix, values] : columns) {
+      for (Eigen::Index i = 0; i < values->size(); ++i) {
+        o << YAML::Key << prefix + std::to_string(i + 1) << YAML::Value << YamlNumber{(*values)(i)};
+      }
+    }
+    o << YAML::EndMap;
+  }
+  o << YAML::EndSeq;
+  return YamlText(o);
+}
 
 // Reads a pose plan CSV; '#' lines are comments. Throws InputError naming file, line and
 // column on a wrong header, a bad number, a duplicate or non-positive pose id.
