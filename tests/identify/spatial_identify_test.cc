@@ -602,7 +602,10 @@ TEST(SpatialIdentify, PredictedSigmasMatchTheMonteCarloSpread) {
       {WithSensors(Builtin("cogiro"), kInc | kLaser), 6.0},
       {WithSensors(Builtin("ipanema1"), kInc | kLaser), 2.0},
       {WithSensors(RandomInextensible(rng, "random7", 7), kInc | kLaser), 2.5}};
-  for (const auto& [nominal, reach] : robots) {
+  for (const auto& robot_and_reach : robots) {
+    // Named, not a structured binding: C++17 lambdas cannot capture one (clang refuses).
+    const SpatialRobot& nominal = robot_and_reach.first;
+    const double reach = robot_and_reach.second;
     const Experiment clean = MakeExperiment(nominal, PerturbedExits(nominal, rng, 0.01), 20, kInc | kLaser, rng, reach);
     CompareWithSpread(nominal, clean.readings, experiments, NoiseDraws(clean.readings), rng,
                       [&](int, const VectorXd& z) { return WithSensorNoise(nominal, clean.readings, z); });
