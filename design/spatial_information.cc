@@ -101,10 +101,20 @@ bool PoseModel(const SpatialRobot& robot, const T* z, T* out) {
 
 // f's outputs, their Jacobian d out / d z (J, out x NZ) and, if dJ is given, that Jacobian's
 // derivatives with respect to the first NX entries of z (dJ[k], out x NZ): nested Jets, the
-// outer over z, the inner over z's first NX entries.
+// outer over z, the inner over z's first NX entries. Without dJ, plain Jets over z: the same
+// arithmetic on the same values (J identical to the last bit), without the inner layer's cost.
 template <int NZ, int NX, int NOUT, typename F>
 bool Differentiate(const double* z, const F& f, Eigen::Matrix<double, NOUT, NZ>* J,
                    std::array<Eigen::Matrix<double, NOUT, NZ>, NX>* dJ) {
+  if (!dJ) {
+    using T = ceres::Jet<double, NZ>;
+    std::array<T, NZ> zj;
+    for (int c = 0; c < NZ; ++c) zj[c] = T(z[c], c);
+    std::array<T, NOUT> out;
+    if (!f(zj.data(), out.data())) return false;
+    for (int r = 0; r < NOUT; ++r) J->row(r) = out[r].v.transpose();
+    return true;
+  }
   using Inner = nested_jet::InnerJet<NX>;
   using T = nested_jet::Outer<NX, NZ>;
   std::array<T, NZ> zj;
@@ -119,9 +129,7 @@ bool Differentiate(const double* z, const F& f, Eigen::Matrix<double, NOUT, NZ>*
   for (int r = 0; r < NOUT; ++r) {
     for (int c = 0; c < NZ; ++c) {
       (*J)(r, c) = out[r].v[c].a;
-      if (dJ) {
-        for (int k = 0; k < NX; ++k) (*dJ)[k](r, c) = out[r].v[c].v[k];
-      }
+      for (int k = 0; k < NX; ++k) (*dJ)[k](r, c) = out[r].v[c].v[k];
     }
   }
   return true;
