@@ -15,6 +15,7 @@
 #include <cerrno>
 #include <cstdint>
 #include <cstring>
+#include <functional>
 #include <new>
 #include <stdexcept>
 #include <string>
@@ -27,41 +28,8 @@ namespace {
 // What the child sends: a tag, then the outcome or the error's kind and message.
 enum Tag : std::int32_t { kOutcome = 1, kSolverFailure = 2, kInputError = 3, kOutOfMemory = 4, kOtherError = 5 };
 
-struct Writer {
-  std::string bytes;
-  template <typename T>
-  void Put(const T& value) {
-    bytes.append(reinterpret_cast<const char*>(&value), sizeof(T));
-  }
-  void PutString(const std::string& s) {
-    Put(static_cast<std::int64_t>(s.size()));
-    bytes += s;
-  }
-};
-
-struct Reader {
-  const std::string& bytes;
-  std::size_t at = 0;
-  template <typename T>
-  T Get() {
-    CABLECAL_CHECK(at + sizeof(T) <= bytes.size(), "a design child's message is whole");
-    T value;
-    std::memcpy(&value, bytes.data() + at, sizeof(T));
-    at += sizeof(T);
-    return value;
-  }
-  std::string GetString() {
-    const auto size = static_cast<std::size_t>(Get<std::int64_t>());
-    CABLECAL_CHECK(at + size <= bytes.size(), "a design child's message is whole");
-    std::string s = bytes.substr(at, size);
-    at += size;
-    return s;
-  }
-};
-
 std::string Encode(const StartOutcome& o) {
-  Writer w;
-  w.Put(kOutcome);
+  ByteWriter w;
   w.PutString(o.status);
   w.Put(static_cast<std::int32_t>(o.iterations));
   w.Put(static_cast<std::int32_t>(o.converged));
@@ -78,17 +46,7 @@ std::string Encode(const StartOutcome& o) {
 }
 
 StartOutcome Decode(const std::string& bytes) {
-  Reader r{bytes};
-  const auto tag = r.Get<std::int32_t>();
-  if (tag != kOutcome) {
-    const std::string message = r.GetString();
-    switch (tag) {
-      case kSolverFailure: throw SolverFailure(message);
-      case kInputError: throw InputError("", "", message);
-      case kOutOfMemory: throw std::bad_alloc();
-      default: throw std::runtime_error(message);
-    }
-  }
+  ByteReader r{bytes};
   StartOutcome o;
   o.status = r.GetString();
   o.iterations = r.Get<std::int32_t>();
@@ -116,18 +74,21 @@ bool WriteAll(int fd, const std::string& bytes) {
   return true;
 }
 
-[[noreturn]] void RunChild(int fd, pid_t parent, const Robot& robot, const DesignOptions& options,
-                           const std::vector<PlanPose>& start, const std::vector<double>* widening) {
+[[noreturn]] void RunChild(int fd, pid_t parent, const std::function<std::string()>& solve) {
   // A child outlives no parent: killed with it (a killed cablecal leaves no solver running).
   ::prctl(PR_SET_PDEATHSIG, SIGKILL);
   if (::getppid() != parent) ::_exit(1);
-  Writer w;
+  ByteWriter w;
   try {
-    w.bytes = Encode(SolveDesignNlp(robot, options, start, widening));
+    const std::string outcome = solve();
+    w.Put(kOutcome);
+    w.bytes += outcome;
   } catch (const SolverFailure& e) {
+    w.bytes.clear();
     w.Put(kSolverFailure);
     w.PutString(e.what());
   } catch (const InputError& e) {
+    w.bytes.clear();
     w.Put(kInputError);
     w.PutString(e.what());
   } catch (const std::bad_alloc&) {
@@ -135,6 +96,7 @@ bool WriteAll(int fd, const std::string& bytes) {
     w.Put(kOutOfMemory);
     w.PutString("");
   } catch (const std::exception& e) {
+    w.bytes.clear();
     w.Put(kOtherError);
     w.PutString(e.what());
   }
@@ -143,14 +105,13 @@ bool WriteAll(int fd, const std::string& bytes) {
 
 }  // namespace
 
-std::optional<StartOutcome> SolveDesignNlpInChildProcess(const Robot& robot, const DesignOptions& options,
-                                                         const std::vector<PlanPose>& start,
-                                                         const std::vector<double>* widening) {
+std::optional<std::string> RunInChildProcess(const std::function<std::string()>& solve,
+                                             const std::atomic<bool>* interrupted) {
 #if defined(CABLECAL_ADDRESS_SANITIZER)
   // A child forked while another thread holds AddressSanitizer's allocator lock waits for it
   // forever (seen in CI: a design test's child stuck in the allocator): the instrumented build
   // solves in this process, taking turns, which gives the same outcome.
-  (void)robot, (void)options, (void)start, (void)widening;
+  (void)solve, (void)interrupted;
   return std::nullopt;
 #endif
   int fds[2];
@@ -164,7 +125,7 @@ std::optional<StartOutcome> SolveDesignNlpInChildProcess(const Robot& robot, con
   }
   if (pid == 0) {
     ::close(fds[0]);
-    RunChild(fds[1], parent, robot, options, start, widening);
+    RunChild(fds[1], parent, solve);
   }
   ::close(fds[1]);
   std::string bytes;
@@ -173,7 +134,7 @@ std::optional<StartOutcome> SolveDesignNlpInChildProcess(const Robot& robot, con
   for (;;) {
     // Ctrl-C at a terminal reaches the child too, a SIGINT sent to this process alone does
     // not: pass it on, so that the child's Ipopt stops at its next iteration as ours would.
-    if (!told_child && options.interrupted && options.interrupted->load()) {
+    if (!told_child && interrupted && interrupted->load()) {
       ::kill(pid, SIGINT);
       told_child = true;
     }
@@ -194,7 +155,27 @@ std::optional<StartOutcome> SolveDesignNlpInChildProcess(const Robot& robot, con
                                                 : "ended with exit code " + std::to_string(WEXITSTATUS(status));
     throw SolverFailure("the process solving a design start " + how + " before reporting");
   }
-  return Decode(bytes);
+  ByteReader r{bytes};
+  const auto tag = r.Get<std::int32_t>();
+  if (tag != kOutcome) {
+    const std::string message = r.GetString();
+    switch (tag) {
+      case kSolverFailure: throw SolverFailure(message);
+      case kInputError: throw InputError("", "", message);
+      case kOutOfMemory: throw std::bad_alloc();
+      default: throw std::runtime_error(message);
+    }
+  }
+  return bytes.substr(r.at);
+}
+
+std::optional<StartOutcome> SolveDesignNlpInChildProcess(const Robot& robot, const DesignOptions& options,
+                                                         const std::vector<PlanPose>& start,
+                                                         const std::vector<double>* widening) {
+  const std::optional<std::string> bytes =
+      RunInChildProcess([&] { return Encode(SolveDesignNlp(robot, options, start, widening)); }, options.interrupted);
+  if (!bytes) return std::nullopt;
+  return Decode(*bytes);
 }
 
 }  // namespace cablecal::internal

@@ -11,7 +11,9 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <limits>
+#include <optional>
 
 #include "common/error.h"
 #include "common/format.h"
@@ -19,6 +21,7 @@
 #include "common/random.h"
 #include "common/version.h"
 #include "common/yaml_writer.h"
+#include "design/solve_process.h"
 #include "model/spatial_statics.h"
 #include "model/swivel.h"
 
@@ -344,6 +347,60 @@ Outcome SolveNlp(const SpatialRobot& robot, const SpatialInformationLayout& layo
   return out;
 }
 
+// An outcome through a child process's pipe (design/solve_process.h).
+std::string Encode(const Outcome& o) {
+  internal::ByteWriter w;
+  w.PutString(o.status);
+  w.Put(static_cast<std::int32_t>(o.iterations));
+  w.Put(static_cast<std::int32_t>(o.converged));
+  w.Put(static_cast<std::int64_t>(o.poses.size()));
+  for (const SpatialPlanPose& p : o.poses) {
+    for (int a = 0; a < 6; ++a) w.Put(p.q(a));
+    w.Put(static_cast<std::int64_t>(p.tensions_N.size()));
+    for (Eigen::Index i = 0; i < p.tensions_N.size(); ++i) w.Put(p.tensions_N(i));
+  }
+  return w.bytes;
+}
+
+Outcome Decode(const std::string& bytes) {
+  internal::ByteReader r{bytes};
+  Outcome o;
+  o.status = r.GetString();
+  o.iterations = r.Get<std::int32_t>();
+  o.converged = r.Get<std::int32_t>() != 0;
+  o.poses.resize(static_cast<std::size_t>(r.Get<std::int64_t>()));
+  for (SpatialPlanPose& p : o.poses) {
+    for (int a = 0; a < 6; ++a) p.q(a) = r.Get<double>();
+    p.tensions_N.resize(r.Get<std::int64_t>());
+    for (Eigen::Index i = 0; i < p.tensions_N.size(); ++i) p.tensions_N(i) = r.Get<double>();
+  }
+  return o;
+}
+
+// SolveNlp in a child process of its own when asked and one can be had (the starts then solve
+// at once, the outcome the same bit for bit), else in this process, one solve at a time
+// (Debian's MUMPS is not thread-safe; the planar design's solves take the same turns).
+Outcome SolveNlpSomewhere(const SpatialRobot& robot, const SpatialInformationLayout& layout,
+                          const SpatialDesignOptions& options, const std::vector<SpatialPlanPose>& start) {
+  if (options.solve_in_child_processes) {
+    const std::optional<std::string> bytes =
+        internal::RunInChildProcess([&] { return Encode(SolveNlp(robot, layout, options, start)); }, options.interrupted);
+    if (bytes) return Decode(*bytes);
+  }
+  Outcome outcome;
+  std::exception_ptr solve_error;  // an exception must not leave the critical section
+#pragma omp critical(cablecal_ipopt)
+  {
+    try {
+      outcome = SolveNlp(robot, layout, options, start);
+    } catch (...) {
+      solve_error = std::current_exception();
+    }
+  }
+  if (solve_error) std::rethrow_exception(solve_error);
+  return outcome;
+}
+
 double Weight(const SpatialRobot& robot) { return robot.platform_mass_kg * robot.gravity_mps2; }
 
 // The file comment's verification; "" when every pose holds, else the first failure.
@@ -449,13 +506,18 @@ SpatialDesignResult DesignSpatialPoses(const SpatialRobot& robot, const SpatialD
   std::vector<Outcome> outcomes(K);
   std::vector<std::vector<SpatialPlanPose>> verified(K);
   std::vector<std::string> failures(K);
-  // Debian's MUMPS is not thread-safe: the starts take turns.
-  for (int k = 0; k < K; ++k) {
-    if (options.interrupted && options.interrupted->load()) break;
-    outcomes[k] = SolveNlp(robot, layout, options, starts[k]);
+  // Each start in a child process of its own (SolveNlpSomewhere): as many at once as threads.
+  std::atomic<long> starts_done{0};
+  ParallelFor(K, 1, [&](long k) {
+    if (options.interrupted && options.interrupted->load()) return;
+    outcomes[k] = SolveNlpSomewhere(robot, layout, options, starts[k]);
     if (outcomes[k].converged) failures[k] = Verify(robot, layout, options, outcomes[k].poses, home, &verified[k]);
-    if (options.progress) options.progress(k + 1, K);
-  }
+    const long done = ++starts_done;
+    if (options.progress) {
+#pragma omp critical(cablecal_design_progress)
+      options.progress(done, K);
+    }
+  });
   if (options.interrupted && options.interrupted->load()) throw Interrupted();
 
   SpatialDesignResult result;

@@ -12,11 +12,12 @@
 //   anchor at least the margin from its pulley, and the cable geometry valid (an invalid one
 //   is an evaluation error Ipopt steps back from); with --min-spacing every pair of poses'
 //   reference points at least that far apart.
-// Starts: feasible random sets (SampleSpatialPoses), each from its own stream of the seed; the
-// best verified start wins. Verified: each pose re-solved by the model (m < 6: the stable
-// equilibrium SolveSpatialEquilibrium finds from Ipopt's pose must be that pose; m >= 6: the
-// tensions projected exactly onto the equilibrium, or for an identification that does not
-// model the tensions the model's own distribution), then CheckSpatialFeasibility.
+// Starts: feasible random sets (SampleSpatialPoses), each from its own stream of the seed,
+// solved at once in child processes (as the planar design's); the best verified start wins.
+// Verified: each pose re-solved by the model (m < 6: the stable equilibrium
+// SolveSpatialEquilibrium finds from Ipopt's pose must be that pose; m >= 6: the tensions
+// projected exactly onto the equilibrium, or for an identification that does not model the
+// tensions the model's own distribution), then CheckSpatialFeasibility.
 // Not yet: robustness to the unknown true geometry (the planar --geometry-sigma), --prior.
 #pragma once
 
@@ -41,6 +42,10 @@ struct SpatialDesignOptions {
   double min_spacing_m = 0.0;  // 0: off
   int random_sets = 100;       // the median of random feasible sets for comparison (0: none)
   int max_iterations = 500;    // Ipopt, per start
+  // Each start's Ipopt solve in a child process of its own, so that starts solve at once on
+  // several cores (DesignOptions::solve_in_child_processes: the outcome is the same bit for
+  // bit). Off: the solves take turns in this process (Python, an MPI rank).
+  bool solve_in_child_processes = true;
   const std::atomic<bool>* interrupted = nullptr;
   std::function<void(long, long)> progress;  // (starts done, starts)
 };

@@ -98,6 +98,7 @@ py::object SpatialDesign(const SpatialRobot& robot, py::handle n, py::handle cri
   o.poses = static_cast<int>(AsInteger(n, "n", 1, kMaxPlanPoses));
   o.criterion = ParseCriterion(AsText(criterion, "criterion"));
   o.starts = static_cast<int>(AsInteger(starts, "starts", 1, 1000));
+  o.solve_in_child_processes = false;  // in process, as the planar design() (a fork copies Python's threads)
   o.seed = AsSeed(seed);
   o.min_spacing_m = AsNumber(min_spacing, "min_spacing");
   o.random_sets = static_cast<int>(AsInteger(random_sets, "random_sets", 0, 100000));
