@@ -142,6 +142,7 @@ std::vector<SpatialPlanPose> MakeSpatialDesignedSet(const SpatialRobot& nominal,
     opt.seed = StreamSeed(o.study.seed, {static_cast<std::uint64_t>(key.n), static_cast<std::uint64_t>(key.design), 0xde5});
     opt.random_sets = 0;
     opt.interrupted = o.study.interrupted;
+    opt.solve_in_child_processes = o.study.design_in_child_processes;
     return DesignSpatialPoses(nominal, opt).poses;
   } catch (const SolverFailure& e) {
     std::fprintf(stderr, "cablecal: montecarlo: no pose set for n=%d, %s: %s\n", key.n, ToString(key.design), e.what());
