@@ -177,6 +177,29 @@ void ExpectDesignHolds(const SpatialRobot& robot, int extra_poses, Criterion cri
   EXPECT_GE(factor, 2.0);
 }
 
+// Each start's Ipopt solve in a child process (the default, so that starts solve at once) gives
+// the design the same solves in this process give, bit for bit: statuses, iterations, each
+// start's criterion and the plan.
+TEST(SpatialDesign, SolvesInChildProcessesEqualSolvesInProcess) {
+  const SpatialRobot robot = BuiltinSpatialRobot("cogiro");
+  SpatialDesignOptions options;
+  options.poses = 13;
+  options.starts = 2;
+  options.random_sets = 0;
+  options.seed = 5;
+  options.solve_in_child_processes = true;
+  const SpatialDesignResult children = DesignSpatialPoses(robot, options);
+  options.solve_in_child_processes = false;
+  const SpatialDesignResult here = DesignSpatialPoses(robot, options);
+  EXPECT_EQ(SpatialPlanCsv(children.poses, ""), SpatialPlanCsv(here.poses, ""));
+  ASSERT_EQ(children.starts.size(), here.starts.size());
+  for (std::size_t k = 0; k < here.starts.size(); ++k) {
+    EXPECT_EQ(children.starts[k].ipopt_status, here.starts[k].ipopt_status) << "start " << k;
+    EXPECT_EQ(children.starts[k].iterations, here.starts[k].iterations) << "start " << k;
+    EXPECT_EQ(children.starts[k].objective, here.starts[k].objective) << "start " << k;
+  }
+}
+
 TEST(SpatialDesign, CogiroHoldsAndBeatsRandom) { ExpectDesignHolds(BuiltinSpatialRobot("cogiro"), 2, Criterion::kA); }
 
 TEST(SpatialDesign, Irma4uHoldsAndBeatsRandom) { ExpectDesignHolds(BuiltinSpatialRobot("irma4u"), 2, Criterion::kA); }
