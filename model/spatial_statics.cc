@@ -118,8 +118,16 @@ NewtonRoot EquilibriumNewton(const SpatialRobot& robot, const SpatialPose<double
     return q;
   };
   // r(y) and, if asked, its Jacobian: the angles' columns by Jets, the tensions' columns W.
+  // Without J, in doubles: the same arithmetic as the Jets' values, a quarter of the cost (the
+  // line search's rejected trials need no Jacobian).
   const auto residual = [&](const Eigen::VectorXd& y, Eigen::Matrix<double, 6, Eigen::Dynamic>* J) {
     const SpatialPose<double> q = pose_of(y);
+    if (!J) {
+      const Eigen::Matrix<double, 6, Eigen::Dynamic> W = WrenchMatrix<double>(robot, q);
+      const Eigen::VectorXd s = y.tail(m);
+      const Eigen::Matrix<double, 6, 1> r = W * s + GravityWrench<double>(robot, q) / weight_N;
+      return r;
+    }
     SpatialPose<Jet3> qj = q.cast<Jet3>();
     for (int k = 3; k < 6; ++k) qj(k) = Jet3(q(k), k - 3);
     const Eigen::Matrix<Jet3, 6, Eigen::Dynamic> W = WrenchMatrix<Jet3>(robot, qj);
@@ -157,9 +165,10 @@ NewtonRoot EquilibriumNewton(const SpatialRobot& robot, const SpatialPose<double
     Eigen::Matrix<double, 6, 1> r_new;
     for (int ls = 0; ls < 30; ++ls) {
       y_new = y + lambda * step;
-      r_new = residual(y_new, &J_new);
+      r_new = residual(y_new, nullptr);
       if (r_new.allFinite() && r_new.squaredNorm() < r.squaredNorm()) {
         descent = true;
+        r_new = residual(y_new, &J_new);
         break;
       }
       lambda *= 0.5;
@@ -245,14 +254,15 @@ SpatialEquilibriumResult SolveSpatialEquilibrium(const SpatialRobot& robot, cons
     const Eigen::VectorXd tensions_N = ChooseTensions(robot, root.q, root.tensions_N);
     if (!(tensions_N.minCoeff() > kTautFraction * weight_N)) continue;
     any_taut = true;
+    // Only a root nearer than the best so far can be kept: the stability test (the costliest
+    // step) is for those alone.
+    const double distance = OrientationDistance(guess, root.q);
+    if (!(distance < best_distance)) continue;
     const SpatialEquilibrium eq = MakeEquilibrium(robot, root.q, tensions_N);
     if (!eq.stable) continue;
-    const double distance = OrientationDistance(guess, root.q);
-    if (distance < best_distance) {
-      best_distance = distance;
-      result.equilibrium = eq;
-      result.status = EquilibriumStatus::kFound;
-    }
+    best_distance = distance;
+    result.equilibrium = eq;
+    result.status = EquilibriumStatus::kFound;
   }
   if (result.status == EquilibriumStatus::kFound) return result;
   if (any_taut) {
