@@ -44,7 +44,8 @@ struct SpatialDesignOptions {
   int max_iterations = 500;    // Ipopt, per start
   // Each start's Ipopt solve in a child process of its own, so that starts solve at once on
   // several cores (DesignOptions::solve_in_child_processes: the outcome is the same bit for
-  // bit). Off: the solves take turns in this process (Python, an MPI rank).
+  // bit). Off: the solves take turns in this process (Python; montecarlo's
+  // design_in_child_processes).
   bool solve_in_child_processes = true;
   const std::atomic<bool>* interrupted = nullptr;
   std::function<void(long, long)> progress;  // (starts done, starts)
