@@ -138,13 +138,19 @@ struct MonteCarloCommandOptions {
   bool plot = true;
   bool geometry_prior = false;  // --geometry-prior: identify every trial with geometry_sigma_m as a prior
   bool skip_infeasible = false;  // spatial robots: each trial skips the poses its true robot cannot hold
+  double tension_margin_N = 0.0;  // spatial robots: SpatialMonteCarloOptions::plan_tension_margin_N
+  int random_pool = 0;            // spatial robots: SpatialMonteCarloOptions::random_pool
 };
 int RunMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptions& options);
 
 struct ReproduceOptions {
   std::string robot_path, out_dir = "results";
+  std::string study = "paper";  // "paper" (the planar study) or "spatial" (README, "The spatial study")
   int trials = 500, threads = 0;
   unsigned long long seed = 2022;
+  // Spatial study, for tests: the pose counts of the random and optimized cells (default: each
+  // configuration's own) and the designs run (default: random, optimized, grid:2x2x2, grid:3x3x3).
+  std::string poses, designs;
 };
 int RunReproduce(const Context& ctx, const ReproduceOptions& options);
 
