@@ -148,9 +148,11 @@ struct ReproduceOptions {
   std::string study = "paper";  // "paper" (the planar study) or "spatial" (README, "The spatial study")
   int trials = 500, threads = 0;
   unsigned long long seed = 2022;
-  // Spatial study, for tests: the pose counts of the random and optimized cells (default: each
-  // configuration's own) and the designs run (default: random, optimized, grid:2x2x2, grid:3x3x3).
-  std::string poses, designs;
+  // Spatial study, for tests: only the first `pose_counts` of each configuration's pose counts
+  // (0: all) and the designs run (default: random, optimized, grid:2x2x2, grid:3x3x3).
+  int pose_counts = 0;
+  std::string designs;
+  bool plot = true;
 };
 int RunReproduce(const Context& ctx, const ReproduceOptions& options);
 

@@ -331,8 +331,11 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::IsMember({"paper", "spatial"}));
   // Testing aids of the spatial study (README, "The spatial study"): hidden from --help.
-  rep_cmd->add_option("--poses", rep.poses, "spatial study: the random and optimized cells' pose counts")->group("");
+  rep_cmd->add_option("--pose-counts", rep.pose_counts, "spatial study: the first K pose counts of each configuration")
+      ->check(WholeNumberIn(1, 100))
+      ->group("");
   rep_cmd->add_option("--designs", rep.designs, "spatial study: the designs run")->group("");
+  rep_cmd->add_flag("!--no-plot", rep.plot, "skip the figures");
   rep_cmd->add_option("--trials", rep.trials, "trials per cell")->capture_default_str()->check(WholeNumberIn(1, 100000000));
   rep_cmd->add_option("--threads", rep.threads, "OpenMP threads (default: all cores)")
       ->check(WholeNumberIn(1, kMaxThreads));

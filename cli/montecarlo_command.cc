@@ -310,7 +310,7 @@ struct SpatialStudyConfiguration {
   bool statics = true;
   double geometry_sigma_m = 0.0;
   double tension_margin_N = 0.0;
-  int random_pool = 0;
+  int random_pool_per_pose = 0;  // random sets drawn from a pool of this many times the largest n (0: fresh samples)
   std::string poses;  // the random and optimized cells' pose counts
 };
 
@@ -325,7 +325,7 @@ std::vector<SpatialStudyConfiguration> SpatialStudyConfigurations() {
   SpatialStudyConfiguration encoders{"cogiro_encoders", "cogiro", "cogiro: encoders alone (statics left out)",
                                      {}, false, false, 0.0005, 150.0, 0, "13:40:7"};
   SpatialStudyConfiguration irma{"irma4u", "irma4u", "irma4u: encoders, swivel encoders and inclinometer",
-                                 {"swivel", "inclinometer"}, false, true, 0.01, 0.0, 120, "4:40:6"};
+                                 {"swivel", "inclinometer"}, false, true, 0.01, 0.0, 3, "4:40:6"};
   return {laser, encoders, irma};
 }
 
@@ -374,9 +374,17 @@ int RunSpatialReproduce(const Context& ctx, const ReproduceOptions& options) {
     base.statics = c.statics;
     base.skip_infeasible = false;
     base.plan_tension_margin_N = c.tension_margin_N;
-    base.random_pool = c.random_pool;
     SpatialMonteCarloOptions cells = base;
-    cells.study.pose_counts = ParsePoseCounts(options.poses.empty() ? c.poses : options.poses);
+    cells.study.pose_counts = ParsePoseCounts(c.poses);
+    if (options.pose_counts > 0 && options.pose_counts < static_cast<int>(cells.study.pose_counts.size())) {
+      cells.study.pose_counts.resize(options.pose_counts);
+    }
+    const int largest = *std::max_element(cells.study.pose_counts.begin(), cells.study.pose_counts.end());
+    base.random_pool = cells.random_pool = c.random_pool_per_pose * largest;
+    p.poses_text = c.poses;
+    if (options.pose_counts > 0) {
+      p.poses_text = "the first " + std::to_string(cells.study.pose_counts.size()) + " of " + c.poses;
+    }
     for (const PoseSetDesign d : {PoseSetDesign::kRandom, PoseSetDesign::kOptimized}) {
       if (has(d)) cells.study.designs.push_back(d);
     }
@@ -386,7 +394,6 @@ int RunSpatialReproduce(const Context& ctx, const ReproduceOptions& options) {
                                               ToString(d) + ")");
       }
     }
-    p.poses_text = options.poses.empty() ? c.poses : options.poses;
     if (!cells.study.designs.empty()) p.runs.push_back(cells);
     const int fewest = *std::min_element(cells.study.pose_counts.begin(), cells.study.pose_counts.end());
     for (const PoseSetDesign d : {PoseSetDesign::kGrid2, PoseSetDesign::kGrid3}) {
@@ -440,7 +447,7 @@ int RunSpatialReproduce(const Context& ctx, const ReproduceOptions& options) {
     comparison += "\n## " + p.c.title + "\n\n" + DesignComparisonMarkdown(all, PoseSetDesign::kOptimized);
     std::vector<std::string> figures;
     for (const std::string& f : kStudyFigures) figures.push_back(p.c.folder + "/" + f);
-    const std::string e = TryPlotStudy(folder, {folder.Path(p.c.folder)}, figures);
+    const std::string e = options.plot ? TryPlotStudy(folder, {folder.Path(p.c.folder)}, figures) : "";
     if (!e.empty() && figure_error.empty()) figure_error = e;
   }
   folder.WriteText("comparison.md", comparison);
@@ -456,8 +463,8 @@ int RunSpatialReproduce(const Context& ctx, const ReproduceOptions& options) {
 
 int RunReproduce(const Context& ctx, const ReproduceOptions& options) {
   if (options.study == "spatial") return RunSpatialReproduce(ctx, options);
-  if (!options.poses.empty() || !options.designs.empty()) {
-    throw InputError(options.poses.empty() ? "--designs" : "--poses", "", "applies to --study spatial only");
+  if (options.pose_counts > 0 || !options.designs.empty()) {
+    throw InputError(options.designs.empty() ? "--pose-counts" : "--designs", "", "applies to --study spatial only");
   }
   Robot robot;
   std::unique_ptr<OutputFolder> folder;
@@ -531,7 +538,9 @@ int RunReproduce(const Context& ctx, const ReproduceOptions& options) {
     std::vector<std::string> figures;
     for (const std::string& f : kStudyFigures) figures.push_back("study/" + f);
     figures.push_back("ablation/ablation.png");
-    figure_error = TryPlotStudy(*folder, {folder->Path("study"), "--ablation", folder->Path("ablation")}, figures);
+    if (options.plot) {
+      figure_error = TryPlotStudy(*folder, {folder->Path("study"), "--ablation", folder->Path("ablation")}, figures);
+    }
     folder->Commit();
   });
   if (!ctx.processes.root()) return kExitOk;

@@ -203,7 +203,8 @@ void ValidateSpatialMonteCarloOptions(const SpatialRobot& nominal, const Spatial
   ValidateStudyOptions(s, 4 * nominal.num_cables());
   PlanningRobot(nominal, o);
   if (o.random_pool < 0) throw InputError("--random-pool", "", "must be 0 (a fresh sample per trial) or a pose count");
-  if (o.random_pool > 0) {
+  const bool any_random = std::find(s.designs.begin(), s.designs.end(), PoseSetDesign::kRandom) != s.designs.end();
+  if (o.random_pool > 0 && any_random) {
     for (const int n : s.pose_counts) {
       if (n > o.random_pool) {
         throw InputError("--random-pool", "", "a pool of " + std::to_string(o.random_pool) + " poses cannot give " +

@@ -11,3 +11,5 @@ cd "$root"
 mkdir -p results
 "$build/cablecal" workspace --out results/workspace.csv --plot results/workspace.png
 "$build/cablecal" reproduce --out results "$@"
+# The spatial study (cogiro and irma4u) into results/spatial/ (README, "The spatial study").
+"$build/cablecal" reproduce --study spatial --out results "$@"
