@@ -311,8 +311,14 @@ struct SpatialStudyConfiguration {
   double geometry_sigma_m = 0.0;
   double tension_margin_N = 0.0;
   int random_pool_per_pose = 0;  // random sets drawn from a pool of this many times the largest n (0: fresh samples)
-  std::string poses;  // the random and optimized cells' pose counts
+  std::vector<int> poses;  // the random and optimized cells' pose counts, from the fewest the sensors need to 40
 };
+
+std::string PoseCountsText(const std::vector<int>& poses) {
+  std::string text;
+  for (const int n : poses) text += (text.empty() ? "" : ",") + std::to_string(n);
+  return text;
+}
 
 std::vector<SpatialStudyConfiguration> SpatialStudyConfigurations() {
   // cogiro's exits were surveyed with a laser tracker (its file's tracker sigma, 0.5 mm): the
@@ -321,11 +327,11 @@ std::vector<SpatialStudyConfiguration> SpatialStudyConfigurations() {
   // 150 N, from the bounds. irma4u's frame is taken as measured with a tape (10 mm); its
   // cables are inextensible and the platform follows its equilibrium, so no margin.
   SpatialStudyConfiguration laser{"cogiro_inclinometer_laser", "cogiro", "cogiro: encoders, inclinometer and laser",
-                                  {}, true, true, 0.0005, 150.0, 0, "10:40:6"};
+                                  {}, true, true, 0.0005, 150.0, 0, {10, 14, 20, 27, 34, 40}};
   SpatialStudyConfiguration encoders{"cogiro_encoders", "cogiro", "cogiro: encoders alone (statics left out)",
-                                     {}, false, false, 0.0005, 150.0, 0, "13:40:7"};
+                                     {}, false, false, 0.0005, 150.0, 0, {13, 20, 27, 34, 40}};
   SpatialStudyConfiguration irma{"irma4u", "irma4u", "irma4u: encoders, swivel encoders and inclinometer",
-                                 {"swivel", "inclinometer"}, false, true, 0.01, 0.0, 3, "4:40:6"};
+                                 {"swivel", "inclinometer"}, false, true, 0.01, 0.0, 3, {4, 8, 14, 20, 27, 34, 40}};
   return {laser, encoders, irma};
 }
 
@@ -375,16 +381,13 @@ int RunSpatialReproduce(const Context& ctx, const ReproduceOptions& options) {
     base.skip_infeasible = false;
     base.plan_tension_margin_N = c.tension_margin_N;
     SpatialMonteCarloOptions cells = base;
-    cells.study.pose_counts = ParsePoseCounts(c.poses);
+    cells.study.pose_counts = c.poses;
     if (options.pose_counts > 0 && options.pose_counts < static_cast<int>(cells.study.pose_counts.size())) {
       cells.study.pose_counts.resize(options.pose_counts);
     }
     const int largest = *std::max_element(cells.study.pose_counts.begin(), cells.study.pose_counts.end());
     base.random_pool = cells.random_pool = c.random_pool_per_pose * largest;
-    p.poses_text = c.poses;
-    if (options.pose_counts > 0) {
-      p.poses_text = "the first " + std::to_string(cells.study.pose_counts.size()) + " of " + c.poses;
-    }
+    p.poses_text = PoseCountsText(cells.study.pose_counts);
     for (const PoseSetDesign d : {PoseSetDesign::kRandom, PoseSetDesign::kOptimized}) {
       if (has(d)) cells.study.designs.push_back(d);
     }
