@@ -314,6 +314,12 @@ int main(int argc, char** argv) {
                      "spatial robots: N; plan every pose set with the tension bounds narrowed by this, so the true robot's "
                      "tensions keep room (its limits stay the file's)")
       ->capture_default_str();
+  mc_cmd->add_option("--frame-margin", mc.frame_margin_m,
+                     "spatial robots: m; plan every pose set with the frame margin widened by this")
+      ->capture_default_str();
+  mc_cmd->add_option("--tilt-margin-deg", mc.tilt_margin_deg,
+                     "spatial robots: degrees; plan every pose set with the tilt limit lowered by this")
+      ->capture_default_str();
   mc_cmd->add_option("--random-pool", mc.random_pool,
                      "spatial robots: draw each trial's random set from P poses sampled once per study (0: a fresh sample "
                      "per trial)")

@@ -18,16 +18,17 @@ namespace cablecal {
 
 namespace {
 
-// Noise-free readings of the nominal robot at `n` sampled poses (the study's own stream): what
-// the gauge analysis and the identifiability check look at.
-std::vector<SpatialMeasurement> NominalReadings(const SpatialRobot& nominal, const SpatialMonteCarloOptions& o, int n) {
+// Noise-free readings of the nominal robot at `n` poses the planning robot samples (the study's
+// own stream): what the gauge analysis and the identifiability check look at.
+std::vector<SpatialMeasurement> NominalReadings(const SpatialRobot& nominal, const SpatialRobot& planning,
+                                                const SpatialMonteCarloOptions& o, int n) {
   const std::vector<SpatialPlanPose> plan =
-      SampleSpatialPoses(nominal, n, StreamSeed(o.study.seed, {0x9a0e, static_cast<std::uint64_t>(n)}), o.yaw_range_rad);
+      SampleSpatialPoses(planning, n, StreamSeed(o.study.seed, {0x9a0e, static_cast<std::uint64_t>(n)}), o.yaw_range_rad);
   SpatialSimulationOptions clean;
   clean.noisy = NoisySensors::kNone;
   clean.encoder_noise = false;
   Rng unused(0);
-  return SimulateSpatialExperiment(nominal, nominal, plan, clean, unused).measurements;
+  return SimulateSpatialExperiment(planning, nominal, plan, clean, unused).measurements;
 }
 
 SpatialIdentifyOptions TrialIdentifyOptions(const SpatialMonteCarloOptions& o, const std::vector<std::string>& held) {
@@ -46,11 +47,12 @@ SpatialIdentifyOptions TrialIdentifyOptions(const SpatialMonteCarloOptions& o, c
 
 // The exit coordinates the study holds (file comment): the default gauge's choice on noise-free
 // readings at the fewest poses, which also says whether those poses can identify the geometry.
-std::vector<std::string> StudyGauge(const SpatialRobot& nominal, const SpatialMonteCarloOptions& o) {
+std::vector<std::string> StudyGauge(const SpatialRobot& nominal, const SpatialRobot& planning,
+                                    const SpatialMonteCarloOptions& o) {
   const int fewest = *std::min_element(o.study.pose_counts.begin(), o.study.pose_counts.end());
   std::vector<SpatialMeasurement> readings;
   try {
-    readings = NominalReadings(nominal, o, fewest);
+    readings = NominalReadings(nominal, planning, o, fewest);
   } catch (const SolverFailure& e) {
     throw InputError("--poses", "", "no " + std::to_string(fewest) + " feasible poses to study: " + e.what());
   }
@@ -58,7 +60,7 @@ std::vector<std::string> StudyGauge(const SpatialRobot& nominal, const SpatialMo
   id.statics = o.statics;
   SpatialGaugeAnalysis gauge;
   try {
-    gauge = AnalyzeSpatialGauge(nominal, readings, id);
+    gauge = AnalyzeSpatialGauge(planning, readings, id);
   } catch (const InputError& e) {
     throw InputError("--poses", "", std::to_string(fewest) + " poses of " + nominal.name +
                                         " with its sensors cannot identify the geometry: " + e.what());
@@ -156,14 +158,25 @@ SpatialRobot PlanningRobot(const SpatialRobot& nominal, const SpatialMonteCarloO
   SpatialRobot planning = nominal;
   planning.tension_min_N += o.plan_tension_margin_N;
   planning.tension_max_N -= o.plan_tension_margin_N;
+  planning.margin_m += o.plan_margin_m;
+  planning.tilt_max_rad -= o.plan_tilt_margin_rad;
+  const auto refuse = [&nominal](const char* flag, const std::string& limits, const std::string& value) {
+    throw InputError(flag, "", "must be at least 0 and leave room: " + nominal.name + "'s " + limits + " (got " + value + ")");
+  };
   if (!(o.plan_tension_margin_N >= 0.0) || !(planning.tension_min_N < planning.tension_max_N)) {
-    throw InputError("--tension-margin", "", "must be at least 0 N and leave bounds: " + nominal.name + "'s tensions are [" +
-                                                 FormatDouble(nominal.tension_min_N) + ", " +
-                                                 FormatDouble(nominal.tension_max_N) + "] N (got " +
-                                                 FormatDouble(o.plan_tension_margin_N) + " N)");
+    refuse("--tension-margin",
+           "tensions are [" + FormatDouble(nominal.tension_min_N) + ", " + FormatDouble(nominal.tension_max_N) + "] N",
+           FormatDouble(o.plan_tension_margin_N) + " N");
   }
-  if (!o.statics) {
-    for (SpatialCable& c : planning.cables) c.stiffness_N.reset();
+  const Eigen::Vector3d side_m = nominal.p_F_frame_max_m - nominal.p_F_frame_min_m;
+  if (!(o.plan_margin_m >= 0.0) || !(2.0 * planning.margin_m < side_m.minCoeff())) {
+    refuse("--frame-margin", "frame box's smallest side is " + FormatDouble(side_m.minCoeff()) + " m, its margin " +
+                                 FormatDouble(nominal.margin_m) + " m",
+           FormatDouble(o.plan_margin_m) + " m");
+  }
+  if (!(o.plan_tilt_margin_rad >= 0.0) || !(planning.tilt_max_rad > 0.0)) {
+    refuse("--tilt-margin-deg", "tilt limit is " + FormatDouble(nominal.tilt_max_rad * 180.0 / M_PI) + " degrees",
+           FormatDouble(o.plan_tilt_margin_rad * 180.0 / M_PI) + " degrees");
   }
   return planning;
 }
@@ -178,8 +191,22 @@ std::vector<SpatialPlanPose> MakeSpatialDesignedSet(const SpatialRobot& planning
     opt.starts = o.study.design_starts;
     opt.seed = StreamSeed(o.study.seed, {static_cast<std::uint64_t>(key.n), static_cast<std::uint64_t>(key.design), 0xde5});
     opt.random_sets = 0;
+    opt.max_iterations = o.design_max_iterations;
     opt.interrupted = o.study.interrupted;
-    return DesignSpatialPoses(planning, opt).poses;
+    if (o.statics) return DesignSpatialPoses(planning, opt).poses;
+    // Without the statics the identification takes the cables as inextensible: the design's
+    // information is that model's, and each designed pose is then planned on the planning robot
+    // (its tensions, and its commands with the stretch the lab expects).
+    SpatialRobot rigid = planning;
+    for (SpatialCable& c : rigid.cables) c.stiffness_N.reset();
+    const SpatialHomeReference home = SpatialHome(planning);
+    std::vector<SpatialPlanPose> poses;
+    for (const SpatialPlanPose& p : DesignSpatialPoses(rigid, opt).poses) {
+      const SpatialPoseEvaluation e = EvaluateSpatialPose(planning, p.q);
+      if (!e.feasible()) throw SolverFailure("a designed pose is not feasible with the stretching cables");
+      poses.push_back(MakeSpatialPlanPose(planning, e.equilibrium, home));
+    }
+    return poses;
   } catch (const SolverFailure& e) {
     std::fprintf(stderr, "cablecal: montecarlo: no pose set for n=%d, %s: %s\n", key.n, ToString(key.design), e.what());
     return {};
@@ -231,7 +258,7 @@ MonteCarloResult RunSpatialMonteCarlo(const SpatialRobot& nominal, const Spatial
   const auto t0 = std::chrono::steady_clock::now();
   ValidateSpatialMonteCarloOptions(nominal, o);
   const SpatialRobot planning = PlanningRobot(nominal, o);
-  const std::vector<std::string> held_names = StudyGauge(planning, o);
+  const std::vector<std::string> held_names = StudyGauge(nominal, planning, o);
   const std::vector<std::string> names = SpatialGeometryNames(nominal.num_cables(), false, false);
   std::vector<int> held;
   for (const std::string& h : held_names) held.push_back(static_cast<int>(std::find(names.begin(), names.end(), h) - names.begin()));
