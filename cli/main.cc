@@ -336,11 +336,12 @@ int main(int argc, char** argv) {
   rep_cmd->add_option("--study", rep.study, "paper (the planar study) or spatial (cogiro and irma4u)")
       ->capture_default_str()
       ->check(CLI::IsMember({"paper", "spatial"}));
-  // Testing aids of the spatial study (README, "The spatial study"): hidden from --help.
+  // A testing aid of the spatial study (README, "The spatial study"): hidden from --help.
   rep_cmd->add_option("--pose-counts", rep.pose_counts, "spatial study: the first K pose counts of each configuration")
       ->check(WholeNumberIn(1, 100))
       ->group("");
-  rep_cmd->add_option("--designs", rep.designs, "spatial study: the designs run")->group("");
+  rep_cmd->add_option("--designs", rep.designs,
+                      "spatial study: the designs run, of random,optimized,grid:2x2x2,grid:3x3x3 (default: all four)");
   rep_cmd->add_flag("!--no-plot", rep.plot, "skip the figures");
   rep_cmd->add_option("--trials", rep.trials, "trials per cell")->capture_default_str()->check(WholeNumberIn(1, 100000000));
   rep_cmd->add_option("--threads", rep.threads, "OpenMP threads (default: all cores)")

@@ -46,6 +46,13 @@ struct StudiedRobot {
   std::vector<std::string> sensors;  // the readings the trials take (spatial), encoders first
 };
 
+StudiedRobot PlanarStudied(const Robot& robot) {
+  StudiedRobot s;
+  s.name = robot.name;
+  s.source = robot.source;
+  return s;
+}
+
 StudiedRobot Studied(const SpatialRobot& robot, const SpatialMonteCarloOptions& o) {
   StudiedRobot s{robot.name,         robot.source,   true,
                  o.skip_infeasible,  o.plan_tension_margin_N, o.plan_margin_m,
@@ -283,7 +290,7 @@ int RunMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptions& opt
   std::string figure_error;
   RunAgreed(ctx.processes, [&] {
     if (!ctx.processes.root()) return;
-    WriteStudy(*folder, "", {robot.name, robot.source}, o, options.poses, r, ctx, threads, "Monte Carlo: " + robot.name);
+    WriteStudy(*folder, "", PlanarStudied(robot), o, options.poses, r, ctx, threads, "Monte Carlo: " + robot.name);
     if (options.plot) figure_error = TryPlotStudy(*folder, {folder->staging()}, kStudyFigures);
     folder->Commit();
   });
@@ -426,6 +433,23 @@ int RunSpatialReproduce(const Context& ctx, const ReproduceOptions& options) {
   }
   std::vector<std::string> owned = {"comparison.md"};
   for (const Planned& p : planned) owned.push_back(p.c.folder + "/");
+  // OUT is made as the planar study's would be (its parent must exist), and removed again if
+  // the run ends without writing (OutputFolder checks and makes OUT/spatial itself).
+  struct MadeFolder {
+    std::filesystem::path path;
+    bool made = false;
+    ~MadeFolder() {
+      std::error_code ignored;
+      if (made) std::filesystem::remove(path, ignored);  // only if still empty
+    }
+  } made_out{options.out_dir};
+  {
+    std::error_code ec;
+    const std::filesystem::path parent = std::filesystem::absolute(options.out_dir).parent_path();
+    if (!std::filesystem::exists(options.out_dir, ec) && std::filesystem::is_directory(parent, ec)) {
+      made_out.made = std::filesystem::create_directory(options.out_dir, ec);
+    }
+  }
   OutputFolder folder("--out", (std::filesystem::path(options.out_dir) / "spatial").string(), owned);
   if (options.threads > 0) omp_set_num_threads(options.threads);
   const int threads = omp_get_max_threads();
@@ -468,6 +492,7 @@ int RunSpatialReproduce(const Context& ctx, const ReproduceOptions& options) {
   }
   folder.WriteText("comparison.md", comparison);
   folder.Commit();
+  made_out.made = false;
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::printf("reproduced the spatial study in %.1f s on %d threads; wrote %s/\n", wall, threads,
               (std::filesystem::path(options.out_dir) / "spatial").string().c_str());
@@ -529,7 +554,7 @@ int RunReproduce(const Context& ctx, const ReproduceOptions& options) {
   RunAgreed(ctx.processes, [&] {
     check_interrupted();
     if (!ctx.processes.root()) return;
-    WriteStudy(*folder, "study/", {robot.name, robot.source}, described,
+    WriteStudy(*folder, "study/", PlanarStudied(robot), described,
                "6:50 (random), 6:50:4 (optimized = A-optimal, condition), 6:50:8 (d, e)", study, ctx, threads,
                "The paper's study: " + robot.name);
   });
@@ -543,7 +568,7 @@ int RunReproduce(const Context& ctx, const ReproduceOptions& options) {
     RunAgreed(ctx.processes, [&] {
       check_interrupted();
       if (!ctx.processes.root()) return;
-      WriteStudy(*folder, std::string("ablation/") + ToString(s) + "/", {robot.name, robot.source}, ab, "50", r, ctx, threads,
+      WriteStudy(*folder, std::string("ablation/") + ToString(s) + "/", PlanarStudied(robot), ab, "50", r, ctx, threads,
                  std::string("Sensor ablation, noisy sensors: ") + ToString(s));
     });
   }
