@@ -296,13 +296,28 @@ TEST_F(SpatialCli, MonteCarloWritesTheStudyAndRefusesPlanarOnlyFlags) {
   for (const auto& [flags, named] : std::vector<std::pair<std::string, std::string>>{
            {"--poses 8 --estimator paper", "--estimator"},
            {"--poses 8 --equilibrium on", "--equilibrium"},
-           {"--designs grid:3x3x3 --poses 8", "run it with --poses 27"}}) {
+           {"--designs grid:3x3x3 --poses 8", "run it with --poses 27"},
+           {"--poses 8 --tension-margin 1e9", "--tension-margin: must be at least 0 and leave room"},
+           {"--poses 8 --tilt-margin-deg -1", "--tilt-margin-deg"},
+           {"--poses 8 --frame-margin 100", "--frame-margin"},
+           {"--poses 8 --random-pool 4", "--random-pool: a pool of 4 poses cannot give 8"}}) {
     const RunResult bad = RunCablecal("montecarlo --robot " + robot + " --trials 2 " + flags +
                                       " --no-plot --out " + Path("bad"));
     EXPECT_EQ(bad.exit_code, 2) << flags << ": " << bad.output;
     EXPECT_NE(bad.output.find(named), std::string::npos) << flags << ": " << bad.output;
     EXPECT_FALSE(fs::exists(Path("bad"))) << flags;
   }
+  const RunResult planar = RunCablecal("montecarlo --poses 6 --trials 2 --tension-margin 10 --no-plot --out " + Path("bad"));
+  EXPECT_EQ(planar.exit_code, 2) << planar.output;
+  EXPECT_NE(planar.output.find("--tension-margin: serves spatial robots only"), std::string::npos) << planar.output;
+  // Random sets drawn from a pool, with plan margins: recorded in run.yaml.
+  const RunResult pooled = RunCablecal("montecarlo --robot " + robot + " --poses 8 --trials 3 --designs random "
+                                       "--random-pool 16 --tension-margin 1 --frame-margin 0.001 --tilt-margin-deg 0.1 "
+                                       "--geometry-sigma 0.0002 --no-plot --out " + Path("pool"));
+  ASSERT_EQ(pooled.exit_code, 0) << pooled.output;
+  const std::string run = Read("pool/run.yaml");
+  EXPECT_NE(run.find("random_pool: 16"), std::string::npos) << run;
+  EXPECT_NE(run.find("plan_margins: {tension_N: 1, frame_m: 0.001, tilt_deg: 0.1}"), std::string::npos) << run;
 }
 
 // reproduce --study spatial on a reduced configuration (each configuration's fewest poses, 2
