@@ -138,13 +138,23 @@ struct MonteCarloCommandOptions {
   bool plot = true;
   bool geometry_prior = false;  // --geometry-prior: identify every trial with geometry_sigma_m as a prior
   bool skip_infeasible = false;  // spatial robots: each trial skips the poses its true robot cannot hold
+  double tension_margin_N = 0.0;  // spatial robots: SpatialMonteCarloOptions::plan_tension_margin_N
+  double frame_margin_m = 0.0;    // spatial robots: SpatialMonteCarloOptions::plan_margin_m
+  double tilt_margin_deg = 0.0;   // spatial robots: SpatialMonteCarloOptions::plan_tilt_margin_rad, in degrees
+  int random_pool = 0;            // spatial robots: SpatialMonteCarloOptions::random_pool
 };
 int RunMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptions& options);
 
 struct ReproduceOptions {
   std::string robot_path, out_dir = "results";
+  std::string study = "paper";  // "paper" (the planar study) or "spatial" (README, "The spatial study")
   int trials = 500, threads = 0;
   unsigned long long seed = 2022;
+  // Spatial study, for tests: only the first `pose_counts` of each configuration's pose counts
+  // (0: all) and the designs run (default: random, optimized, grid:2x2x2, grid:3x3x3).
+  int pose_counts = 0;
+  std::string designs;
+  bool plot = true;
 };
 int RunReproduce(const Context& ctx, const ReproduceOptions& options);
 

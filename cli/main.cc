@@ -310,12 +310,39 @@ int main(int argc, char** argv) {
   mc_cmd->add_flag("--skip-infeasible", mc.skip_infeasible,
                     "spatial robots: each trial skips the poses its true robot cannot hold within its limits (as simulate "
                     "--skip-infeasible) and identifies from the rest, instead of failing");
+  mc_cmd->add_option("--tension-margin", mc.tension_margin_N,
+                     "spatial robots: N; plan every pose set with the tension bounds narrowed by this, so the true robot's "
+                     "tensions keep room (its limits stay the file's)")
+      ->capture_default_str();
+  mc_cmd->add_option("--frame-margin", mc.frame_margin_m,
+                     "spatial robots: m; plan every pose set with the frame margin widened by this")
+      ->capture_default_str();
+  mc_cmd->add_option("--tilt-margin-deg", mc.tilt_margin_deg,
+                     "spatial robots: degrees; plan every pose set with the tilt limit lowered by this")
+      ->capture_default_str();
+  mc_cmd->add_option("--random-pool", mc.random_pool,
+                     "spatial robots: draw each trial's random set from P poses sampled once per study (0: a fresh sample "
+                     "per trial)")
+      ->capture_default_str()
+      ->check(WholeNumberIn(0, 100000));
   mc_cmd->add_flag("!--no-plot", mc.plot, "skip the figures");
   mc_cmd->add_option("--out", mc.out_dir, "output folder")->required();
 
   cablecal::cli::ReproduceOptions rep;
-  CLI::App* rep_cmd = app.add_subcommand("reproduce", "run the paper's study on the built-in robot into results/");
+  CLI::App* rep_cmd = app.add_subcommand(
+      "reproduce", "run the paper's study on the built-in robot into results/ (--study spatial: the spatial study into "
+                   "results/spatial/)");
   AddRobotOption(rep_cmd, &rep.robot_path);
+  rep_cmd->add_option("--study", rep.study, "paper (the planar study) or spatial (cogiro and irma4u)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"paper", "spatial"}));
+  // A testing aid of the spatial study (README, "The spatial study"): hidden from --help.
+  rep_cmd->add_option("--pose-counts", rep.pose_counts, "spatial study: the first K pose counts of each configuration")
+      ->check(WholeNumberIn(1, 100))
+      ->group("");
+  rep_cmd->add_option("--designs", rep.designs,
+                      "spatial study: the designs run, of random,optimized,grid:2x2x2,grid:3x3x3 (default: all four)");
+  rep_cmd->add_flag("!--no-plot", rep.plot, "skip the figures");
   rep_cmd->add_option("--trials", rep.trials, "trials per cell")->capture_default_str()->check(WholeNumberIn(1, 100000000));
   rep_cmd->add_option("--threads", rep.threads, "OpenMP threads (default: all cores)")
       ->check(WholeNumberIn(1, kMaxThreads));

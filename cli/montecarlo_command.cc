@@ -16,7 +16,9 @@
 #include "common/format.h"
 #include "common/yaml_writer.h"
 #include "common/version.h"
+#include "model/builtin_spatial_robots.h"
 #include "model/spatial_robot.h"
+#include "model/spatial_sensor_model.h"
 #include "montecarlo/montecarlo.h"
 #include "montecarlo/spatial_montecarlo.h"
 #ifdef CABLECAL_WITH_MPI
@@ -38,7 +40,26 @@ struct StudiedRobot {
   std::string name, source;
   bool spatial = false;
   bool skip_infeasible = false;
+  double tension_margin_N = 0.0, frame_margin_m = 0.0, tilt_margin_deg = 0.0;
+  int random_pool = 0;
+  bool statics = true;
+  std::vector<std::string> sensors;  // the readings the trials take (spatial), encoders first
 };
+
+StudiedRobot PlanarStudied(const Robot& robot) {
+  StudiedRobot s;
+  s.name = robot.name;
+  s.source = robot.source;
+  return s;
+}
+
+StudiedRobot Studied(const SpatialRobot& robot, const SpatialMonteCarloOptions& o) {
+  StudiedRobot s{robot.name,         robot.source,   true,
+                 o.skip_infeasible,  o.plan_tension_margin_N, o.plan_margin_m,
+                 o.plan_tilt_margin_rad * 180.0 / M_PI, o.random_pool, o.statics, {}};
+  s.sensors = SpatialSensorNames(robot.sensors);
+  return s;
+}
 
 std::string RunYaml(const StudiedRobot& robot, const MonteCarloOptions& o, const std::string& poses_text,
                     const MonteCarloResult& r, const Context& ctx, int threads) {
@@ -88,6 +109,19 @@ std::string RunYaml(const StudiedRobot& robot, const MonteCarloOptions& o, const
     }
     y << Key << "skip_infeasible" << Value << robot.skip_infeasible;
     y << Key << "skipped_poses" << Value << skipped << YAML::Comment("over every trial");
+    y << Key << "readings" << Value << YAML::Flow << YAML::BeginSeq;
+    for (const std::string& s : robot.sensors) y << s;
+    y << YAML::EndSeq;
+    y << Key << "statics" << Value << (robot.statics ? "on" : "off")
+      << YAML::Comment(robot.statics ? "tensions, equilibrium and stretch modelled where they carry information"
+                                     : "left out: cables identified as inextensible");
+    y << Key << "plan_margins" << Value << YAML::Flow << YAML::BeginMap << Key << "tension_N" << Value
+      << YamlNumber{robot.tension_margin_N} << Key << "frame_m" << Value << YamlNumber{robot.frame_margin_m} << Key
+      << "tilt_deg" << Value << YamlNumber{robot.tilt_margin_deg} << YAML::EndMap
+      << YAML::Comment("the plans keep these from the file's limits");
+    y << Key << "random_pool" << Value << robot.random_pool
+      << YAML::Comment(robot.random_pool > 0 ? "random sets drawn from this many poses sampled once per study"
+                                             : "a fresh random set per trial");
   }
   y << Key << "design_starts" << Value << o.design_starts;
   y << Key << "seed" << Value << o.seed;
@@ -174,6 +208,10 @@ int RunSpatialMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptio
   o.study.seed = options.seed;
   o.study.design_starts = options.design_starts;
   o.skip_infeasible = options.skip_infeasible;
+  o.plan_tension_margin_N = options.tension_margin_N;
+  o.plan_margin_m = options.frame_margin_m;
+  o.plan_tilt_margin_rad = options.tilt_margin_deg * M_PI / 180.0;
+  o.random_pool = options.random_pool;
   ValidateSpatialMonteCarloOptions(robot, o);
   if (options.threads > 0) omp_set_num_threads(options.threads);
   const int threads = omp_get_max_threads();
@@ -184,7 +222,7 @@ int RunSpatialMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptio
   if (!ctx.quiet) o.study.progress = ProgressBar("montecarlo", "trials");
   const MonteCarloResult r = RunSpatialMonteCarlo(robot, o);
   if (r.interrupted) throw Interrupted();
-  WriteStudy(folder, "", {robot.name, robot.source, true, o.skip_infeasible}, o.study, options.poses, r, ctx, threads,
+  WriteStudy(folder, "", Studied(robot, o), o.study, options.poses, r, ctx, threads,
              "Monte Carlo: " + robot.name);
   std::string figure_error;
   if (options.plot) figure_error = TryPlotStudy(folder, {folder.staging()}, kStudyFigures);
@@ -214,6 +252,10 @@ int RunSpatialMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptio
 int RunMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptions& options) {
   if (IsSpatialRobotFile(options.robot_path)) return RunSpatialMonteCarloCommand(ctx, options);
   RefuseSpatialOnlyFlag(options.skip_infeasible, "--skip-infeasible");
+  RefuseSpatialOnlyFlag(options.tension_margin_N != 0.0, "--tension-margin");
+  RefuseSpatialOnlyFlag(options.frame_margin_m != 0.0, "--frame-margin");
+  RefuseSpatialOnlyFlag(options.tilt_margin_deg != 0.0, "--tilt-margin-deg");
+  RefuseSpatialOnlyFlag(options.random_pool != 0, "--random-pool");
   Robot robot;
   MonteCarloOptions o;
   RunAgreed(ctx.processes, [&] {
@@ -248,7 +290,7 @@ int RunMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptions& opt
   std::string figure_error;
   RunAgreed(ctx.processes, [&] {
     if (!ctx.processes.root()) return;
-    WriteStudy(*folder, "", {robot.name, robot.source}, o, options.poses, r, ctx, threads, "Monte Carlo: " + robot.name);
+    WriteStudy(*folder, "", PlanarStudied(robot), o, options.poses, r, ctx, threads, "Monte Carlo: " + robot.name);
     if (options.plot) figure_error = TryPlotStudy(*folder, {folder->staging()}, kStudyFigures);
     folder->Commit();
   });
@@ -271,7 +313,200 @@ int RunMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptions& opt
   return kExitOk;
 }
 
+namespace {
+
+// One configuration of the spatial study (README, "The spatial study"): a built-in robot, the
+// sensors it calibrates with, what the lab knows before measuring, and how it plans.
+struct SpatialStudyConfiguration {
+  std::string folder;  // under results/spatial/
+  std::string robot;   // a built-in spatial robot
+  std::string title;
+  std::vector<std::string> sensors;  // kept of the file's (KeepSpatialSensors), besides the encoders
+  bool add_inclinometer_laser = false;  // the planar study's inclinometer and laser (robots/wang2022.yaml)
+  bool statics = true;
+  double geometry_sigma_m = 0.0;
+  double tension_margin_N = 0.0, frame_margin_m = 0.0, tilt_margin_deg = 0.0;  // the plans' (PlanningRobot)
+  int random_pool_per_pose = 0;  // random sets drawn from a pool of this many times the largest n (0: fresh samples)
+  std::vector<int> poses;  // the random and optimized cells' pose counts, from the fewest the sensors need to 40
+};
+
+std::string PoseCountsText(const std::vector<int>& poses) {
+  std::string text;
+  for (const int n : poses) text += (text.empty() ? "" : ",") + std::to_string(n);
+  return text;
+}
+
+std::vector<SpatialStudyConfiguration> SpatialStudyConfigurations() {
+  // cogiro's exits were surveyed with a laser tracker (its file's tracker sigma, 0.5 mm): the
+  // study's true robots are drawn with that. Its cables are stiff (E*A 8.2e5 N over about 9 m):
+  // a length error of 0.5 mm moves a tension by up to about 45 N, so its plans keep 150 N from
+  // the tension bounds (with 50 N, 6 of 100 random trials failed on a tension; 150 N, none), 5 mm
+  // more from the frame and 0.5 degrees from the tilt limit (a designed pose sits on them: without
+  // these every optimized trial failed, the platform settling just outside).
+  // irma4u is not run: with inextensible cables its four-cable platform is a four-legged table,
+  // and on a true robot whose exits are off by as little as 0.1 mm one cable goes slack at home
+  // already (every trial failed in the simulation at 0.1, 1, 3 and 10 mm).
+  SpatialStudyConfiguration laser{"cogiro_inclinometer_laser", "cogiro", "cogiro: encoders, inclinometer and laser",
+                                  {}, true, true, 0.0005, 150.0, 0.005, 0.5, 0, {11, 20, 27, 40}};
+  SpatialStudyConfiguration encoders{"cogiro_encoders", "cogiro", "cogiro: encoders alone (statics left out)",
+                                     {}, false, false, 0.0005, 150.0, 0.005, 0.5, 0, {16, 27, 40}};
+  return {laser, encoders};
+}
+
+SpatialRobot StudyRobot(const SpatialStudyConfiguration& c) {
+  SpatialRobot robot = BuiltinSpatialRobot(c.robot);
+  robot.sensors = KeepSpatialSensors(robot.sensors, c.sensors);
+  if (c.add_inclinometer_laser) {
+    const SensorNoise& planar = BuiltinRobot().sensors;
+    robot.sensors.inclinometer_rad = RangedNoise{planar.inclinometer_accuracy_rad, planar.inclinometer_repeatability_rad};
+    robot.sensors.laser_m = RangedNoise{planar.laser_accuracy_m, planar.laser_repeatability_m};
+  }
+  return robot;
+}
+
+// `reproduce --study spatial`: every configuration's random and optimized cells, then the grids
+// at their pose counts, into OUT/spatial/<configuration>/ (the montecarlo command's files and
+// figures) and OUT/spatial/comparison.md. One process (the spatial study's shares are not sent
+// between MPI ranks).
+int RunSpatialReproduce(const Context& ctx, const ReproduceOptions& options) {
+  if (!options.robot_path.empty()) {
+    throw InputError("--robot", "", "the spatial study runs on the built-in cogiro and irma4u; give no --robot");
+  }
+  if (ctx.processes.count > 1) {
+    throw InputError("reproduce", "", "the spatial study runs on one process for now (got " +
+                                          std::to_string(ctx.processes.count) + "); use the threads of one machine");
+  }
+  const std::vector<SpatialStudyConfiguration> configurations = SpatialStudyConfigurations();
+  const std::vector<PoseSetDesign> designs =
+      ParseDesigns(options.designs.empty() ? "random,optimized,grid:2x2x2,grid:3x3x3" : options.designs);
+  const auto has = [&designs](PoseSetDesign d) { return std::find(designs.begin(), designs.end(), d) != designs.end(); };
+  // Every study's options, checked before any work.
+  struct Planned {
+    SpatialStudyConfiguration c;
+    SpatialRobot robot;
+    std::vector<SpatialMonteCarloOptions> runs;  // the random/optimized cells, then each grid alone
+    std::string poses_text;
+  };
+  std::vector<Planned> planned;
+  for (const SpatialStudyConfiguration& c : configurations) {
+    Planned p{c, StudyRobot(c), {}, ""};
+    SpatialMonteCarloOptions base;
+    base.study.trials = options.trials;
+    base.study.seed = options.seed;
+    base.study.geometry_sigma_m = c.geometry_sigma_m;
+    base.study.design_starts = 1;
+    base.statics = c.statics;
+    base.skip_infeasible = false;
+    base.plan_tension_margin_N = c.tension_margin_N;
+    base.plan_margin_m = c.frame_margin_m;
+    base.plan_tilt_margin_rad = c.tilt_margin_deg * M_PI / 180.0;
+    SpatialMonteCarloOptions cells = base;
+    cells.study.pose_counts = c.poses;
+    if (options.pose_counts > 0 && options.pose_counts < static_cast<int>(cells.study.pose_counts.size())) {
+      cells.study.pose_counts.resize(options.pose_counts);
+    }
+    const int largest = *std::max_element(cells.study.pose_counts.begin(), cells.study.pose_counts.end());
+    base.random_pool = cells.random_pool = c.random_pool_per_pose * largest;
+    p.poses_text = PoseCountsText(cells.study.pose_counts);
+    for (const PoseSetDesign d : {PoseSetDesign::kRandom, PoseSetDesign::kOptimized}) {
+      if (has(d)) cells.study.designs.push_back(d);
+    }
+    for (const PoseSetDesign d : designs) {
+      if (GridSide(d) == 0 && d != PoseSetDesign::kRandom && d != PoseSetDesign::kOptimized) {
+        throw InputError("--designs", "", std::string("the spatial study runs random, optimized and the grids (got ") +
+                                              ToString(d) + ")");
+      }
+    }
+    if (!cells.study.designs.empty()) p.runs.push_back(cells);
+    const int fewest = *std::min_element(cells.study.pose_counts.begin(), cells.study.pose_counts.end());
+    for (const PoseSetDesign d : {PoseSetDesign::kGrid2, PoseSetDesign::kGrid3}) {
+      const int n = GridSide(d) * GridSide(d) * GridSide(d);
+      if (!has(d) || n < fewest) continue;  // a grid of fewer poses than the configuration needs is not run
+      SpatialMonteCarloOptions grid = base;
+      grid.study.pose_counts = {n};
+      grid.study.designs = {d};
+      p.runs.push_back(grid);
+      p.poses_text += std::string(", ") + std::to_string(n) + " (" + ToString(d) + ")";
+    }
+    for (const SpatialMonteCarloOptions& run : p.runs) ValidateSpatialMonteCarloOptions(p.robot, run);
+    planned.push_back(std::move(p));
+  }
+  std::vector<std::string> owned = {"comparison.md"};
+  for (const Planned& p : planned) owned.push_back(p.c.folder + "/");
+  // OUT is made as the planar study's would be (its parent must exist), and removed again if
+  // the run ends without writing (OutputFolder checks and makes OUT/spatial itself).
+  struct MadeFolder {
+    std::filesystem::path path;
+    bool made = false;
+    ~MadeFolder() {
+      std::error_code ignored;
+      if (made) std::filesystem::remove(path, ignored);  // only if still empty
+    }
+  } made_out{options.out_dir};
+  {
+    std::error_code ec;
+    const std::filesystem::path parent = std::filesystem::absolute(options.out_dir).parent_path();
+    if (!std::filesystem::exists(options.out_dir, ec) && std::filesystem::is_directory(parent, ec)) {
+      made_out.made = std::filesystem::create_directory(options.out_dir, ec);
+    }
+  }
+  OutputFolder folder("--out", (std::filesystem::path(options.out_dir) / "spatial").string(), owned);
+  if (options.threads > 0) omp_set_num_threads(options.threads);
+  const int threads = omp_get_max_threads();
+  const auto t0 = std::chrono::steady_clock::now();
+  const SigintScope sigint;
+  std::string comparison =
+      "# The spatial study: optimized against random and the grids\n\n"
+      "Written by `cablecal reproduce --study spatial` (results/spatial/README.md reads it). Per configuration and n:\n"
+      "of the geometric parameters the gauge leaves free, how many the optimized sets know better (a smaller sigma)\n"
+      "than the other design's, the median and the largest ratio sigma(optimized) / sigma(other), the failed trials\n"
+      "of both, and whether optimized holds there (every sigma smaller, at most 2 % of the trials more failed).\n";
+  std::string figure_error;
+  for (const Planned& p : planned) {
+    MonteCarloResult all;
+    SpatialMonteCarloOptions described = p.runs.front();
+    described.study.designs.clear();
+    for (std::size_t k = 0; k < p.runs.size(); ++k) {
+      SpatialMonteCarloOptions o = p.runs[k];
+      o.study.interrupted = &SigintFlag();
+      if (!ctx.quiet) o.study.progress = ProgressBar(p.c.folder + (k == 0 ? "" : ", grid"), "trials");
+      MonteCarloResult r = RunSpatialMonteCarlo(p.robot, o);
+      if (r.interrupted) throw Interrupted();
+      if (k == 0) {
+        all = std::move(r);
+      } else {
+        // Every run chooses its gauge the same way; errors of different gauges would not compare.
+        CABLECAL_CHECK(r.held_names == all.held_names, "one gauge for every run of a configuration");
+        all.cells.insert(all.cells.end(), r.cells.begin(), r.cells.end());
+        all.wall_time_s += r.wall_time_s;
+      }
+      for (const PoseSetDesign d : o.study.designs) described.study.designs.push_back(d);
+    }
+    WriteStudy(folder, p.c.folder + "/", Studied(p.robot, described), described.study, p.poses_text, all, ctx, threads,
+               "The spatial study, " + p.c.title);
+    comparison += "\n## " + p.c.title + "\n\n" + DesignComparisonMarkdown(all, PoseSetDesign::kOptimized);
+    std::vector<std::string> figures;
+    for (const std::string& f : kStudyFigures) figures.push_back(p.c.folder + "/" + f);
+    const std::string e = options.plot ? TryPlotStudy(folder, {folder.Path(p.c.folder)}, figures) : "";
+    if (!e.empty() && figure_error.empty()) figure_error = e;
+  }
+  folder.WriteText("comparison.md", comparison);
+  folder.Commit();
+  made_out.made = false;
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("reproduced the spatial study in %.1f s on %d threads; wrote %s/\n", wall, threads,
+              (std::filesystem::path(options.out_dir) / "spatial").string().c_str());
+  if (!figure_error.empty()) throw FigureFailure(figure_error + "; the study's data were written to " + options.out_dir);
+  return kExitOk;
+}
+
+}  // namespace
+
 int RunReproduce(const Context& ctx, const ReproduceOptions& options) {
+  if (options.study == "spatial") return RunSpatialReproduce(ctx, options);
+  if (options.pose_counts > 0 || !options.designs.empty()) {
+    throw InputError(options.designs.empty() ? "--pose-counts" : "--designs", "", "applies to --study spatial only");
+  }
   Robot robot;
   std::unique_ptr<OutputFolder> folder;
   RunAgreed(ctx.processes, [&] {
@@ -319,7 +554,7 @@ int RunReproduce(const Context& ctx, const ReproduceOptions& options) {
   RunAgreed(ctx.processes, [&] {
     check_interrupted();
     if (!ctx.processes.root()) return;
-    WriteStudy(*folder, "study/", {robot.name, robot.source}, described,
+    WriteStudy(*folder, "study/", PlanarStudied(robot), described,
                "6:50 (random), 6:50:4 (optimized = A-optimal, condition), 6:50:8 (d, e)", study, ctx, threads,
                "The paper's study: " + robot.name);
   });
@@ -333,7 +568,7 @@ int RunReproduce(const Context& ctx, const ReproduceOptions& options) {
     RunAgreed(ctx.processes, [&] {
       check_interrupted();
       if (!ctx.processes.root()) return;
-      WriteStudy(*folder, std::string("ablation/") + ToString(s) + "/", {robot.name, robot.source}, ab, "50", r, ctx, threads,
+      WriteStudy(*folder, std::string("ablation/") + ToString(s) + "/", PlanarStudied(robot), ab, "50", r, ctx, threads,
                  std::string("Sensor ablation, noisy sensors: ") + ToString(s));
     });
   }
@@ -344,7 +579,9 @@ int RunReproduce(const Context& ctx, const ReproduceOptions& options) {
     std::vector<std::string> figures;
     for (const std::string& f : kStudyFigures) figures.push_back("study/" + f);
     figures.push_back("ablation/ablation.png");
-    figure_error = TryPlotStudy(*folder, {folder->Path("study"), "--ablation", folder->Path("ablation")}, figures);
+    if (options.plot) {
+      figure_error = TryPlotStudy(*folder, {folder->Path("study"), "--ablation", folder->Path("ablation")}, figures);
+    }
     folder->Commit();
   });
   if (!ctx.processes.root()) return kExitOk;

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <optional>
@@ -90,6 +91,31 @@ inline std::optional<RangedNoise> SpatialSensorNoise(const SpatialSensors& senso
 
 inline bool HasSpatialSensor(const SpatialRobot& robot, SpatialSensor s) {
   return SpatialSensorNoise(robot.sensors, s).has_value();
+}
+
+// The readings a robot with these sensors takes: "encoder", then each sensor it has in
+// SpatialSensor order (the tracker is a prior on the exit points, not a reading).
+inline std::vector<std::string> SpatialSensorNames(const SpatialSensors& sensors) {
+  std::vector<std::string> names = {"encoder"};
+  for (const SpatialSensor s : kSpatialSensors) {
+    if (SpatialSensorNoise(sensors, s)) names.push_back(ToString(s));
+  }
+  return names;
+}
+
+// The sensors with only the named ones of kSpatialSensors kept (by their robot-file names), the
+// encoders and the tracker's prior as they are: how a study calibrates with a subset of what a
+// robot file carries. A named sensor the file lacks stays absent.
+inline SpatialSensors KeepSpatialSensors(const SpatialSensors& sensors, const std::vector<std::string>& keep) {
+  const auto kept = [&keep](SpatialSensor s) { return std::find(keep.begin(), keep.end(), ToString(s)) != keep.end(); };
+  SpatialSensors out = sensors;
+  if (!kept(SpatialSensor::kInclinometer)) out.inclinometer_rad.reset();
+  if (!kept(SpatialSensor::kLaser)) out.laser_m.reset();
+  if (!kept(SpatialSensor::kPosition)) out.position.reset();
+  if (!kept(SpatialSensor::kSwivel)) out.swivel_rad.reset();
+  if (!kept(SpatialSensor::kHeading)) out.heading_rad.reset();
+  if (!kept(SpatialSensor::kLoadCell)) out.load_cell_N.reset();
+  return out;
 }
 
 // An angle wrapped into (-pi, pi], through atan2 so that Jets carry its derivative (1).

@@ -217,5 +217,13 @@ std::string ErrorsCsv(const MonteCarloResult& r);    // n,design,trial,parameter
 std::string SummaryCsv(const MonteCarloResult& r);   // n,design,parameter,mean,std,rms,max_abs,share_within_5mm,failures
 std::string FailuresCsv(const MonteCarloResult& r);  // n,design,trial,cause,reason: one row per failed trial
 std::string SummaryMarkdown(const MonteCarloResult& r, const std::string& title);
+// How the cells of `design` compare with every other design's cell at the same n (a markdown
+// table, one row per pair): of the geometric parameters the gauge leaves free, how many have a
+// smaller sigma under `design`, the median and the largest ratio sigma(design) / sigma(other)
+// (naming its parameter), the failed trials of both, and whether `design` holds there: every
+// sigma smaller and at most kComparisonFailureSlack of the trials more failed. A pair with a
+// cell of fewer than two successful trials is n/a.
+constexpr double kComparisonFailureSlack = 0.02;
+std::string DesignComparisonMarkdown(const MonteCarloResult& r, PoseSetDesign design);
 
 }  // namespace cablecal

@@ -230,4 +230,50 @@ std::vector<std::string> CellsThatAddLittle(const MonteCarloResult& r, bool wors
   return out;
 }
 
+std::string DesignComparisonMarkdown(const MonteCarloResult& r, PoseSetDesign design) {
+  std::vector<std::string> free;
+  for (const std::string& g : r.geometry_names) {
+    if (std::find(r.held_names.begin(), r.held_names.end(), g) == r.held_names.end()) free.push_back(g);
+  }
+  const auto successful = [](const MonteCarloCell& c) { return static_cast<int>(c.trials.size()) - c.failures(); };
+  std::ostringstream o;
+  o << "| n | " << ToString(design) << " against | smaller sigma | median ratio | largest ratio | failed ("
+    << ToString(design) << " / other) | holds |\n|---|---|---|---|---|---|---|\n";
+  char buf[160];
+  for (const MonteCarloCell& mine : r.cells) {
+    if (mine.design != design) continue;
+    for (const MonteCarloCell& other : r.cells) {
+      if (other.n != mine.n || other.design == design) continue;
+      o << "| " << mine.n << " | " << ToString(other.design) << " | ";
+      const std::string failed = std::to_string(mine.failures()) + " / " + std::to_string(other.failures());
+      if (successful(mine) < 2 || successful(other) < 2 || free.empty()) {
+        o << "n/a | n/a | n/a | " << failed << " | n/a |\n";
+        continue;
+      }
+      std::vector<double> ratios;
+      int smaller = 0;
+      std::string worst;
+      double worst_ratio = -1.0;
+      for (const std::string& p : free) {
+        const double ratio = Summarise(mine, r.geometry_names, p).std / Summarise(other, r.geometry_names, p).std;
+        ratios.push_back(ratio);
+        smaller += ratio < 1.0;
+        if (ratio > worst_ratio) {
+          worst_ratio = ratio;
+          worst = p;
+        }
+      }
+      std::sort(ratios.begin(), ratios.end());
+      const std::size_t k = ratios.size();
+      const double median = k % 2 ? ratios[k / 2] : 0.5 * (ratios[k / 2 - 1] + ratios[k / 2]);
+      const double slack = kComparisonFailureSlack * static_cast<double>(mine.trials.size());
+      const bool holds = smaller == static_cast<int>(k) && mine.failures() <= other.failures() + slack;
+      std::snprintf(buf, sizeof(buf), "%d of %zu | %.3f | %.3f (%s) | %s | %s |\n", smaller, k, median, worst_ratio,
+                    worst.c_str(), failed.c_str(), holds ? "yes" : "no");
+      o << buf;
+    }
+  }
+  return o.str();
+}
+
 }  // namespace cablecal

@@ -42,17 +42,44 @@ struct SpatialMonteCarloOptions {
   // of the statistics), TrialOutcome::skipped_poses counts them. Off: such a trial fails
   // (cause "simulation"), as planar.
   bool skip_infeasible = false;
+  // The lab plans every pose set (random, designed, grid) inside the file's limits narrowed by
+  // these margins: tension bounds [tension.min + margin, tension.max - margin], the frame margin
+  // plus plan_margin_m, the tilt limit less plan_tilt_margin_rad; and commands those plans'
+  // lengths, so that where the true robot settles (its tensions, its pose) keeps room for what
+  // the unknown true geometry changes (a stiff redundant robot's tensions move by EA/L times the
+  // length errors; a designed pose sits on the limits). The true robot's limits stay the file's.
+  // 0: plans on the file's limits. PlanningRobot says what the lab plans with.
+  double plan_tension_margin_N = 0.0;
+  double plan_margin_m = 0.0;
+  double plan_tilt_margin_rad = 0.0;
+  // 0: every trial's random set is a fresh sample. P > 0: P feasible poses are sampled once per
+  // study (its own seed stream) and each trial's random set is n of them drawn without
+  // replacement (its own stream): for robots whose sampler is slow (underactuated equilibria).
+  int random_pool = 0;
+  // Ipopt's iteration cap per start of the criterion designs (SpatialDesignOptions::max_iterations).
+  int design_max_iterations = 500;
 };
 
+// The robot the lab plans and commands with (and identifies against): the nominal one with its
+// limits narrowed by the options' plan margins. The true robot of every trial is drawn around
+// `nominal` itself (its limits). When the identification leaves the statics out (options.statics
+// false: cables taken as inextensible), the criterion designs are made on that model (the
+// planning robot without stiffness) and each pose is then planned on the planning robot, whose
+// commands include the stretch the lab expects.
+// InputError naming the flag (--tension-margin, --frame-margin, --tilt-margin-deg) of a negative
+// margin or one that leaves no limits.
+SpatialRobot PlanningRobot(const SpatialRobot& nominal, const SpatialMonteCarloOptions& options);
+
 // The InputErrors of RunSpatialMonteCarlo: the study's own (ValidateStudyOptions), a
-// planar-only option, a grid with a pose count other than its side^3, and pose counts the
-// robot's sensors cannot identify the geometry from (naming what is missing).
+// planar-only option, a grid with a pose count other than its side^3, a tension margin that
+// leaves no bounds, a pool smaller than the largest pose count, and pose counts the robot's
+// sensors cannot identify the geometry from (naming what is missing).
 void ValidateSpatialMonteCarloOptions(const SpatialRobot& nominal, const SpatialMonteCarloOptions& options);
 
 // One designed set of the study: a grid (GridSpatialPoses) or a criterion's design
 // (design/spatial_design.h: the study's design_starts, its own seed stream, no robustness yet);
-// empty, said on stderr, when none can be made.
-std::vector<SpatialPlanPose> MakeSpatialDesignedSet(const SpatialRobot& nominal, const SpatialMonteCarloOptions& options,
+// empty, said on stderr, when none can be made. `planning`: PlanningRobot's.
+std::vector<SpatialPlanPose> MakeSpatialDesignedSet(const SpatialRobot& planning, const SpatialMonteCarloOptions& options,
                                                     const DesignedSetKey& key);
 
 // The study (montecarlo.h's cells, files and statistics). Each trial's errors: the identified

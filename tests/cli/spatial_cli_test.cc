@@ -296,9 +296,68 @@ TEST_F(SpatialCli, MonteCarloWritesTheStudyAndRefusesPlanarOnlyFlags) {
   for (const auto& [flags, named] : std::vector<std::pair<std::string, std::string>>{
            {"--poses 8 --estimator paper", "--estimator"},
            {"--poses 8 --equilibrium on", "--equilibrium"},
-           {"--designs grid:3x3x3 --poses 8", "run it with --poses 27"}}) {
+           {"--designs grid:3x3x3 --poses 8", "run it with --poses 27"},
+           {"--poses 8 --tension-margin 1e9", "--tension-margin: must be at least 0 and leave room"},
+           {"--poses 8 --tilt-margin-deg -1", "--tilt-margin-deg"},
+           {"--poses 8 --frame-margin 100", "--frame-margin"},
+           {"--poses 8 --random-pool 4", "--random-pool: a pool of 4 poses cannot give 8"}}) {
     const RunResult bad = RunCablecal("montecarlo --robot " + robot + " --trials 2 " + flags +
                                       " --no-plot --out " + Path("bad"));
+    EXPECT_EQ(bad.exit_code, 2) << flags << ": " << bad.output;
+    EXPECT_NE(bad.output.find(named), std::string::npos) << flags << ": " << bad.output;
+    EXPECT_FALSE(fs::exists(Path("bad"))) << flags;
+  }
+  const RunResult planar = RunCablecal("montecarlo --poses 6 --trials 2 --tension-margin 10 --no-plot --out " + Path("bad"));
+  EXPECT_EQ(planar.exit_code, 2) << planar.output;
+  EXPECT_NE(planar.output.find("--tension-margin: serves spatial robots only"), std::string::npos) << planar.output;
+  // Random sets drawn from a pool, with plan margins: recorded in run.yaml.
+  const RunResult pooled = RunCablecal("montecarlo --robot " + robot + " --poses 8 --trials 3 --designs random "
+                                       "--random-pool 16 --tension-margin 1 --frame-margin 0.001 --tilt-margin-deg 0.1 "
+                                       "--geometry-sigma 0.0002 --no-plot --out " + Path("pool"));
+  ASSERT_EQ(pooled.exit_code, 0) << pooled.output;
+  const std::string run = Read("pool/run.yaml");
+  EXPECT_NE(run.find("random_pool: 16"), std::string::npos) << run;
+  EXPECT_NE(run.find("plan_margins: {tension_N: 1, frame_m: 0.001, tilt_deg: 0.1}"), std::string::npos) << run;
+}
+
+// reproduce --study spatial on a reduced configuration (each configuration's fewest poses, 2
+// trials, random sets, no figures): the files of every configuration, the readings, statics and
+// plan margins each records, the comparison file, the same bytes for 1 and 2 threads, and
+// hostile flags refused with nothing written.
+TEST_F(SpatialCli, ReproduceSpatialWritesEveryConfigurationTheSameForOneAndTwoThreads) {
+  const std::string reduced = "reproduce --study spatial --trials 2 --pose-counts 1 --designs random --no-plot";
+  for (const int threads : {1, 2}) {
+    const std::string out = Path("t" + std::to_string(threads));
+    const RunResult r = RunCablecal(reduced + " --threads " + std::to_string(threads) + " --out " + out);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+  }
+  for (const std::string c : {"cogiro_inclinometer_laser", "cogiro_encoders"}) {
+    for (const std::string f : {"summary.csv", "errors.csv", "failures.csv", "summary.md"}) {
+      const std::string one = Read("t1/spatial/" + c + "/" + f), two = Read("t2/spatial/" + c + "/" + f);
+      EXPECT_FALSE(one.empty()) << c << "/" << f;
+      EXPECT_EQ(one, two) << c << "/" << f << " differs between 1 and 2 threads";
+    }
+    const std::string summary = Read("t1/spatial/" + c + "/summary.csv");
+    EXPECT_NE(summary.find(",random,a2x,"), std::string::npos) << c << "\n" << summary;
+    EXPECT_FALSE(fs::exists(Path("t1/spatial/" + c + "/sigma_vs_n.png"))) << c;  // --no-plot
+  }
+  EXPECT_EQ(Read("t1/spatial/comparison.md"), Read("t2/spatial/comparison.md"));
+  EXPECT_NE(Read("t1/spatial/comparison.md").find("## cogiro: encoders alone"), std::string::npos);
+  const std::string laser = Read("t1/spatial/cogiro_inclinometer_laser/run.yaml");
+  EXPECT_NE(laser.find("poses: \"11\""), std::string::npos) << laser;
+  EXPECT_NE(laser.find("readings: [encoder, inclinometer, laser]"), std::string::npos) << laser;
+  EXPECT_NE(laser.find("plan_margins: {tension_N: 150, frame_m: 0.005, tilt_deg: 0.5}"), std::string::npos) << laser;
+  EXPECT_NE(laser.find("statics: on"), std::string::npos) << laser;
+  EXPECT_NE(laser.find("geometry_sigma_m: 5.0e-04"), std::string::npos) << laser;
+  const std::string encoders = Read("t1/spatial/cogiro_encoders/run.yaml");
+  EXPECT_NE(encoders.find("readings: [encoder]"), std::string::npos) << encoders;
+  EXPECT_NE(encoders.find("statics: off"), std::string::npos) << encoders;
+  for (const auto& [flags, named] : std::vector<std::pair<std::string, std::string>>{
+           {"--study spatial --robot " + Builtin("cogiro"), "--robot: the spatial study runs on the built-in"},
+           {"--study planar", "--study"},
+           {"--study spatial --designs random,d", "--designs"},
+           {"--pose-counts 1", "--pose-counts: applies to --study spatial only"}}) {
+    const RunResult bad = RunCablecal("reproduce --trials 2 " + flags + " --out " + Path("bad"));
     EXPECT_EQ(bad.exit_code, 2) << flags << ": " << bad.output;
     EXPECT_NE(bad.output.find(named), std::string::npos) << flags << ": " << bad.output;
     EXPECT_FALSE(fs::exists(Path("bad"))) << flags;
