@@ -1026,16 +1026,19 @@ MatrixXd Rows(const MatrixXd& V, const std::vector<int>& rows) {
 
 // The rigid motions on the holdable coordinates (Layout::holdable's rows): of the frame on the
 // exit points (translations along x, y, z and rotations about the axes through the exits'
-// centroid, per radian), then, when the anchors are free, of the anchors in P (the same about
-// the anchors' centroid).
+// centroid, per radian), then, when the anchors are free, of the anchors in P (translations
+// along P's axes, rotations about P's axes through its origin: the point the poses locate, so
+// that a rotation of the platform frame about its origin reads as one generator).
 MatrixXd RigidGenerators(const VectorXd& g, const Layout& L) {
   const int groups = L.anchors ? 2 : 1;
   MatrixXd G = MatrixXd::Zero(L.exit_coordinates() + L.anchor_coordinates(), 6 * groups);
   for (int group = 0; group < groups; ++group) {
     const auto point = [&](int i) { return group == 0 ? L.exit(i) : L.anchor(i); };
     Vector3d centroid = Vector3d::Zero();
-    for (int i = 0; i < L.m; ++i) centroid += g.segment<3>(point(i));
-    centroid /= L.m;
+    if (group == 0) {
+      for (int i = 0; i < L.m; ++i) centroid += g.segment<3>(point(i));
+      centroid /= L.m;
+    }
     for (int i = 0; i < L.m; ++i) {
       const Vector3d d = g.segment<3>(point(i)) - centroid;
       const int row = 3 * L.m * group + 3 * i;
