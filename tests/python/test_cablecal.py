@@ -997,6 +997,37 @@ def test_spatial_identify_equals_cli_and_takes_arrays(tmp_path):
     assert "## Validation on held-out poses" in (tmp_path / "report" / "report.md").read_text()
 
 
+def test_spatial_identify_anchors_equals_cli(tmp_path):
+    # cogiro with an inclinometer beside its tracker (the anchors seen) and load cells (its
+    # stretching cables' tensions read).
+    text = open(robot_file("cogiro")).read().replace("  encoder: {sigma: 0.00005}", "  encoder: {sigma: 0.00005}\n"
+                                                     "  inclinometer: {accuracy_deg: 0.1, repeatability_deg: 0.05}\n"
+                                                     "  load_cell: {accuracy: 3.0, repeatability: 1.0}")
+    path = str(tmp_path / "cogiro_sensors.yaml")
+    open(path, "w").write(text)
+    robot = cablecal.Robot.load(path)
+    plan = cablecal.sample(robot, 16, seed=2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        run = cablecal.simulate(robot, plan, geometry_sigma=0.002, seed=2, skip_infeasible=True)
+    csv = tmp_path / "m.csv"
+    csv.write_text(run.measurements.to_csv())
+    result = cablecal.identify(robot, run.measurements, identify="anchors")
+    doc = json.loads(cli("identify", "--robot", path, "--measurements", str(csv), "--identify", "anchors", "--json"))
+    assert doc["identify"] == "anchors" and json.loads(result.to_json())["identify"] == "anchors"
+    assert result.names[32:56] == ["b%d%s" % (i, a) for i in range(1, 9) for a in "xyz"]
+    assert list(doc["parameters"]) == result.names and result.held == doc["held"]
+    np.testing.assert_allclose([doc["parameters"][n]["value"] for n in result.names], result.values, rtol=1e-12)
+    np.testing.assert_allclose([doc["parameters"][n]["std"] for n in result.names], result.sigma, rtol=1e-6)
+    anchors = cablecal.calibrated_robot(robot, result).to_dict()["platform"]["anchors"]
+    np.testing.assert_array_equal(anchors, result.values[32:56].reshape(8, 3))
+    with pytest.raises(cablecal.InputError, match="--identify: foo: expected exits"):
+        cablecal.identify(robot, run.measurements, identify="foo")
+    planar = cablecal.Robot.builtin()
+    with pytest.raises(cablecal.InputError, match="serves spatial robots only"):
+        cablecal.identify(planar, cablecal.Measurements(planar, np.zeros((6, 2))), identify="anchors")
+
+
 def test_spatial_identify_refuses_what_it_cannot_do():
     robot = cablecal.SpatialRobot.builtin("cogiro")
     run = cablecal.simulate(robot, cablecal.sample(robot, 12, seed=1), seed=1, skip_infeasible=True)
