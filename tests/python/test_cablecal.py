@@ -948,8 +948,9 @@ def test_spatial_arguments_are_checked():
     np.testing.assert_array_equal(run.measurements.dl, plan.length_changes)
 
 
-def test_spatial_identify_equals_cli_and_takes_arrays(tmp_path):
-    path = robot_file("cogiro")
+def simulated_spatial(tmp_path, path):
+    """The robot file at path, 16 poses sampled and simulated with a 2 mm geometry error, and
+    the measurement CSV written to tmp_path: (robot, run, csv)."""
     robot = cablecal.Robot.load(path)
     plan = cablecal.sample(robot, 16, seed=2)
     with warnings.catch_warnings():
@@ -957,6 +958,12 @@ def test_spatial_identify_equals_cli_and_takes_arrays(tmp_path):
         run = cablecal.simulate(robot, plan, geometry_sigma=0.002, seed=2, skip_infeasible=True)
     csv = tmp_path / "m.csv"
     csv.write_text(run.measurements.to_csv())
+    return robot, run, csv
+
+
+def test_spatial_identify_equals_cli_and_takes_arrays(tmp_path):
+    path = robot_file("cogiro")
+    robot, run, csv = simulated_spatial(tmp_path, path)
     result = cablecal.identify(robot, run.measurements)
     assert isinstance(result, cablecal.SpatialIdentifyResult) and result.status == "converged"
     out = tmp_path / "r.yaml"
@@ -1005,13 +1012,7 @@ def test_spatial_identify_anchors_equals_cli(tmp_path):
                                                      "  load_cell: {accuracy: 3.0, repeatability: 1.0}")
     path = str(tmp_path / "cogiro_sensors.yaml")
     open(path, "w").write(text)
-    robot = cablecal.Robot.load(path)
-    plan = cablecal.sample(robot, 16, seed=2)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        run = cablecal.simulate(robot, plan, geometry_sigma=0.002, seed=2, skip_infeasible=True)
-    csv = tmp_path / "m.csv"
-    csv.write_text(run.measurements.to_csv())
+    robot, run, csv = simulated_spatial(tmp_path, path)
     result = cablecal.identify(robot, run.measurements, identify="anchors")
     doc = json.loads(cli("identify", "--robot", path, "--measurements", str(csv), "--identify", "anchors", "--json"))
     assert doc["identify"] == "anchors" and json.loads(result.to_json())["identify"] == "anchors"
