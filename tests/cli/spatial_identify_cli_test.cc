@@ -299,6 +299,7 @@ TEST_F(SpatialIdentifyCli, HostileInputsExitTwoWithOneMessageAndWriteNothing) {
   Simulate(robot, 12, "0", 5, "m");
   KeepColumns("m.csv", "tilt.csv", {"pose", "dl", "roll", "pitch", "z", "f"});
   KeepColumns("m.csv", "pos.csv", {"pose", "dl", "px", "py", "pz"});  // the anchors' rotations unseen
+  KeepColumns("m.csv", "enc.csv", {"pose", "dl"});  // stretching cables, their tensions unread: too few values
   std::string other = Read("m.csv");
   other.replace(other.find("\npose,dl1"), 9, "\npose,dx1");
   std::ofstream(Path("misspelt.csv")) << other;
@@ -310,6 +311,7 @@ TEST_F(SpatialIdentifyCli, HostileInputsExitTwoWithOneMessageAndWriteNothing) {
       {"--measurements " + Path("misspelt.csv"), "dx1"},
       {"--measurements " + Path("m.csv") + " --gauge hold:a8x", "'a8x' is not an exit coordinate of this 7-cable robot"},
       {"--measurements " + Path("tilt.csv") + " --gauge hold:a1x", "does not fix the gauge: no reading fixes"},
+      {"--measurements " + Path("enc.csv"), "too few to determine the geometry; measure more poses or add a sensor"},
       {"--measurements " + Path("m.csv") + " --estimator paper", "--estimator paper: serves planar robots only"},
       {"--measurements " + Path("m.csv") + " --geometry-prior 0.001", "--geometry-prior: serves planar robots only"},
       {"--measurements " + Path("m.csv") + " --gauge bogus", "--gauge: bogus not in"},
@@ -350,7 +352,6 @@ TEST_F(SpatialIdentifyCli, HostileInputsExitTwoWithOneMessageAndWriteNothing) {
                             "/robots/wang2022.yaml --measurements " + Path("m.csv") + " --out " + Path("v.csv"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("--nominal: "), std::string::npos) << r.output;
-  KeepColumns("m.csv", "enc.csv", {"pose", "dl"});
   r = RunCablecal("validate --robot " + robot + " --measurements " + Path("enc.csv") + " --out " + Path("v.csv"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("nothing to compare the predictions with"), std::string::npos) << r.output;

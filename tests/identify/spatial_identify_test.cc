@@ -464,6 +464,40 @@ TEST(SpatialIdentify, SubsetsThatCannotDetermineTheGeometryAreRefused) {
   EXPECT_NE(InputErrorOf([] { ParseSpatialGauge("hold:"); }).find("names no coordinate"), std::string::npos);
 }
 
+// A lab's own choice (issue 27, "Must show"): its frame measured, every exit coordinate held at
+// the surveyed values, so that only the initial lengths and the poses are identified: the
+// "initial-pose self-calibration" of an underactuated robot (irma4u and a random 4-cable
+// robot, encoders + inclinometer, the equilibrium deciding the rest), recovered to 1e-7 m.
+TEST(SpatialIdentify, HoldingEveryExitCalibratesTheInitialLengthsOfAnUnderactuatedRobot) {
+  Rng rng(1515);
+  Rng draw(1516);
+  for (const SpatialRobot& robot : {WithSensors(Builtin("irma4u"), kInc),
+                                    WithSensors(RandomInextensible(draw, "random4", 4), kInc)}) {
+    SCOPED_TRACE(robot.name);
+    const SpatialRobot truth = PerturbedExits(robot, rng, 0.01);
+    const Experiment e = MakeExperiment(robot, truth, 20, kInc, rng);
+    SpatialRobot surveyed = robot;  // the frame as the lab measured it: the true exits
+    std::string hold = "hold:";
+    for (int i = 0; i < 4; ++i) {
+      surveyed.cables[i].p_F_exit_m = truth.cables[i].p_F_exit_m;
+      for (const char* a : {"x", "y", "z"}) hold += (i > 0 || *a != 'x' ? "," : "") + ("a" + std::to_string(i + 1)) + a;
+    }
+    SpatialIdentifyOptions options;
+    options.gauge = ParseSpatialGauge(hold);
+    const SpatialIdentifyResult r = IdentifySpatial(surveyed, e.readings, options);
+    ASSERT_TRUE(r.converged()) << r.message;
+    EXPECT_EQ(r.held.size(), 12u);
+    for (int i = 0; i < 4; ++i) {
+      EXPECT_NEAR(r.geometry(12 + i), e.l0_m(i), kRecoveryTol_m) << r.names[12 + i];
+      EXPECT_GT(r.sigma(12 + i), 0.0) << r.names[12 + i];
+      for (int a = 0; a < 3; ++a) EXPECT_EQ(r.sigma(3 * i + a), 0.0) << r.names[3 * i + a];
+    }
+    for (std::size_t j = 0; j < e.poses.size(); ++j) {
+      EXPECT_LT((r.poses[j] - e.poses[j]).cwiseAbs().maxCoeff(), kRecoveryTol_m) << "pose " << j;
+    }
+  }
+}
+
 // With the prior every null direction is fixed by the tracker's survey; nothing is held.
 TEST(SpatialIdentify, PriorGaugeHoldsNothing) {
   Rng rng(909);
