@@ -106,13 +106,13 @@ BENCHMARK(BM_IdentifyFullMlCables)->Arg(3)->Arg(4)->Unit(benchmark::kMicrosecond
 
 // Spatial identification (identify/spatial_identify.h) of bench/spatial_experiment.h's problem
 // (cogiro, encoders + inclinometer + laser, noisy readings): the whole call, default gauge
-// (gauge analysis, starting poses, Ceres DENSE_SCHUR, covariance).
-void BM_SpatialIdentifyCogiroEncodersInclinometerLaser(benchmark::State& state) {
+// (gauge analysis, starting poses, the block-arrow Levenberg-Marquardt, covariance).
+void SpatialIdentifyBench(benchmark::State& state, const SpatialIdentifyOptions& options) {
   const SpatialRobot nominal = bench::SpatialBenchRobot(CABLECAL_SOURCE_DIR);
   const std::vector<SpatialMeasurement> readings = bench::SpatialBenchReadings(nominal, static_cast<int>(state.range(0)));
   int iterations = 0;
   for (auto _ : state) {
-    const SpatialIdentifyResult result = IdentifySpatial(nominal, readings, {});
+    const SpatialIdentifyResult result = IdentifySpatial(nominal, readings, options);
     if (!result.converged()) state.SkipWithError(result.message.c_str());
     iterations = result.iterations;
     benchmark::DoNotOptimize(result.geometry.data());
@@ -121,7 +121,15 @@ void BM_SpatialIdentifyCogiroEncodersInclinometerLaser(benchmark::State& state) 
   state.counters["us_per_pose"] = benchmark::Counter(static_cast<double>(state.range(0)) * state.iterations(),
                                                      benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
+void BM_SpatialIdentifyCogiroEncodersInclinometerLaser(benchmark::State& state) { SpatialIdentifyBench(state, {}); }
 BENCHMARK(BM_SpatialIdentifyCogiroEncodersInclinometerLaser)
     ->Arg(30)->Arg(100)->Arg(300)->Arg(1000)->Arg(3000)->Unit(benchmark::kMillisecond);
+// The same with the platform anchors free (--identify anchors): 24 more unknowns.
+void BM_SpatialIdentifyCogiroFreeAnchors(benchmark::State& state) {
+  SpatialIdentifyOptions options;
+  options.anchors = true;
+  SpatialIdentifyBench(state, options);
+}
+BENCHMARK(BM_SpatialIdentifyCogiroFreeAnchors)->Arg(30)->Arg(300)->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();

@@ -391,6 +391,7 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   RefuseHoldoutThatIsTheMeasurements(options.holdout_path, options.measurements_path);
   if (IsSpatialRobotFile(options.robot_path)) return RunSpatialIdentify(ctx, options);
   RefuseSpatialOnlyFlag(options.gauge == "auto" || options.gauge.rfind("hold:", 0) == 0, "--gauge " + options.gauge);
+  RefuseSpatialOnlyFlag(!options.identify.empty(), "--identify " + options.identify);
   // The report's folder is checked before any work, and no other file may be one it writes.
   std::unique_ptr<OutputFolder> report;
   if (!options.report_dir.empty()) {

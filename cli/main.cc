@@ -172,6 +172,9 @@ int main(int argc, char** argv) {
                          "Levenberg-Marquardt iteration limit (spatial robots: default 200)")
       ->capture_default_str()
       ->check(WholeNumberIn(1, cablecal::kMaxIdentifyIterations));
+  id_cmd->add_option("--identify", ident.identify,
+                     "spatial robots: exits (default: the exit points and initial lengths) or anchors (the platform "
+                     "anchors b1x .. bmz too)");
   id_cmd->add_option("--out", ident.out_path, "result YAML (required unless --json)");
   id_cmd->add_flag("--json", ident.json, "print the result (the YAML's content) as JSON on stdout");
   id_cmd->add_option("--delimiter", ident.delimiter, "the measurement CSV's separator: ',', ';' or tab")

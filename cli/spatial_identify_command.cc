@@ -75,6 +75,7 @@ int RunSpatialIdentify(const Context& ctx, const IdentifyCommandOptions& options
   if (options.max_iterations_given) id.max_iterations = options.max_iterations;
   // The statics (tensions, load cells, equilibrium, stretch) are on unless --equilibrium off.
   id.statics = !options.equilibrium_given || options.equilibrium == "on";
+  id.anchors = !options.identify.empty() && ParseSpatialIdentify(options.identify);
   const std::vector<SpatialMeasurement> readings =
       ReadSpatialMeasurementsCsv(options.measurements_path, nominal.num_cables(), ParseDelimiter(options.delimiter));
   // Read before the solve: a bad held-out file is refused before any work.
@@ -102,8 +103,10 @@ int RunSpatialIdentify(const Context& ctx, const IdentifyCommandOptions& options
   if (!options.calibrated_robot_path.empty()) {
     output.WriteText(options.calibrated_robot_path,
                      ProvenanceComment(ctx.command_line) +
-                         "# calibrated: exit points and initial lengths identified (ml, gauge " + ToString(id.gauge) +
-                         ")\n" + SpatialRobotToYaml(CalibratedSpatialRobot(nominal, result)));
+                         "# calibrated: " +
+                         (id.anchors ? "exit points, initial lengths and platform anchors" : "exit points and initial lengths") +
+                         " identified (ml, gauge " + ToString(id.gauge) + ")\n" +
+                         SpatialRobotToYaml(CalibratedSpatialRobot(nominal, result)));
   }
   std::string figure_error;
   if (report) {
@@ -132,6 +135,7 @@ int RunSpatialIdentify(const Context& ctx, const IdentifyCommandOptions& options
   std::printf("identified %s from %zu poses", PrintableText(nominal.name).c_str(), result.poses.size());
   if (result.poses.size() != readings.size()) std::printf(" (%zu readings)", readings.size());
   std::string settings = id.loss.kind == LossKind::kNone ? "" : ", loss " + ToString(id.loss);
+  if (id.anchors) settings += ", anchors";
   if (!result.tensions_N.empty()) settings += ", statics";
   std::printf(" (ml, gauge %s%s): %d iterations, residual rms", ToString(id.gauge).c_str(), settings.c_str(),
               result.iterations);

@@ -21,7 +21,7 @@ constexpr std::size_t kListed = 5;
 
 Eigen::VectorXd NominalOf(const SpatialRobot& nominal, const SpatialIdentifyResult& r) {
   const auto has = [&r](const char* name) { return std::find(r.names.begin(), r.names.end(), name) != r.names.end(); };
-  return NominalSpatialGeometry(nominal, has("sw10"), has("yaw0"));
+  return NominalSpatialGeometry(nominal, has("sw10"), has("yaw0"), has("b1x"));
 }
 
 bool Held(const SpatialIdentifyResult& r, const std::string& name) {
@@ -155,7 +155,8 @@ std::string Markdown(const SpatialRobot& nominal, const SpatialIdentifyOptions& 
                      const std::string& figure_error) {
   std::ostringstream o;
   o << "# Calibration report: " << MarkdownEscaped(nominal.name) << "\n\n";
-  o << "The exit points and initial lengths of " << MarkdownEscaped(nominal.name) << " (spatial robot, "
+  o << (options.anchors ? "The exit points, initial lengths and platform anchors of " : "The exit points and initial lengths of ")
+    << MarkdownEscaped(nominal.name) << " (spatial robot, "
     << nominal.num_cables() << " cables; nominal robot: " << MarkdownCode(nominal.source) << ") identified from "
     << r.poses.size() << " poses";
   if (r.fits.size() != r.poses.size()) o << " (" << r.fits.size() << " readings)";

@@ -34,12 +34,22 @@ struct Layout {
   int m = 0;
   bool swivel = false;
   bool heading = false;
+  bool anchors = false;
   int exit(int i) const { return 3 * i; }
   int length(int i) const { return 3 * m + i; }
-  int swivel_offset(int i) const { return 4 * m + i; }
-  int yaw0() const { return 4 * m + (swivel ? m : 0); }
-  int size() const { return 4 * m + (swivel ? m : 0) + (heading ? 1 : 0); }
+  int anchor(int i) const { return 4 * m + 3 * i; }
+  int swivel_offset(int i) const { return 4 * m + anchor_coordinates() + i; }
+  int yaw0() const { return 4 * m + anchor_coordinates() + (swivel ? m : 0); }
+  int size() const { return yaw0() + (heading ? 1 : 0); }
   int exit_coordinates() const { return 3 * m; }
+  int anchor_coordinates() const { return anchors ? 3 * m : 0; }
+  // The coordinates a gauge may hold, exits first: a1x .. amz, then b1x .. bmz when free.
+  std::vector<int> holdable() const {
+    std::vector<int> out;
+    for (int k = 0; k < exit_coordinates(); ++k) out.push_back(k);
+    for (int k = 0; k < anchor_coordinates(); ++k) out.push_back(anchor(0) + k);
+    return out;
+  }
 };
 
 // ---- Residuals: each the model of model/swivel.h or model/spatial_sensor_model.h minus the
@@ -50,17 +60,22 @@ SpatialPose<T> PoseOf(const T* q) {
   return Eigen::Map<const SpatialPose<T>>(q);
 }
 
-// The cable from the exit block's D through its fixed swivel axis to the anchor at pose q.
+// The cable from the exit block's D through its fixed swivel axis to the anchor at pose q: the
+// anchor block's b when the anchors are unknowns (b != nullptr), else the robot file's.
 struct CableData {
   Vector3d k_F_swivel_axis;
   double pulley_radius_m;
   Vector3d p_P_anchor_m;
   template <typename T>
-  SwivelCableState<T> At(const T* q, const T* d) const {
+  Vec3<T> Anchor(const T* b) const {
+    return b ? Vec3<T>(Eigen::Map<const Vec3<T>>(b)) : Vec3<T>(p_P_anchor_m.cast<T>());
+  }
+  template <typename T>
+  SwivelCableState<T> At(const T* q, const T* d, const T* b) const {
     const SpatialPose<T> pose = PoseOf(q);
     const Eigen::Matrix<T, 3, 3> R = Rotation<T>(pose);
     return SwivelCable<T>(Eigen::Map<const Vec3<T>>(d), k_F_swivel_axis.cast<T>(), T(pulley_radius_m),
-                          AnchorInF<T>(pose, R, p_P_anchor_m.cast<T>()));
+                          AnchorInF<T>(pose, R, Anchor(b)));
   }
 };
 
@@ -69,22 +84,25 @@ struct CableData {
 // depends on B - D only (SwivelCable reads rho = B - D), so dl/dB = e_F_free and dl/dD =
 // -e_F_free; dB/dq is the identity on x, y, z and d(R b)/d(roll, pitch, yaw) from Jets on the
 // three angles. An AutoDiff of the whole construction on the 10 components of (q, D, l0) cost
-// ten times as much (bench/README.md, "Spatial identification").
+// ten times as much (bench/README.md, "Spatial identification"). With a free anchor b (b !=
+// nullptr), d length / d b = R^T e_F_free (1 x 3): B = p + R b.
 struct CableWithGradient {
   SwivelCableState<double> state;
   double d_pose[6];
   double d_exit[3];
+  double d_anchor[3];
 };
-CableWithGradient CableAndGradient(const CableData& cable, const double* q, const double* d, bool gradient) {
+CableWithGradient CableAndGradient(const CableData& cable, const double* q, const double* d, const double* b,
+                                   bool gradient) {
   using J3 = ceres::Jet<double, 3>;
   const SpatialPose<double> pose = PoseOf(q);
   CableWithGradient out;
   if (!gradient) {
-    out.state = cable.At(q, d);
+    out.state = cable.At(q, d, b);
     return out;
   }
   const Eigen::Matrix<J3, 3, 3> R = Rotation<J3>(J3(pose(3), 0), J3(pose(4), 1), J3(pose(5), 2));
-  const Vec3<J3> r_F_anchor = R * cable.p_P_anchor_m.cast<J3>();
+  const Vec3<J3> r_F_anchor = R * cable.Anchor(b).cast<J3>();
   Vector3d p_F_anchor_m;
   for (int a = 0; a < 3; ++a) p_F_anchor_m(a) = pose(a) + r_F_anchor(a).a;
   out.state = SwivelCable<double>(Eigen::Map<const Vector3d>(d), cable.k_F_swivel_axis, cable.pulley_radius_m,
@@ -95,22 +113,45 @@ CableWithGradient CableAndGradient(const CableData& cable, const double* q, cons
     out.d_exit[a] = -e(a);
     out.d_pose[3 + a] = e(0) * r_F_anchor(0).v(a) + e(1) * r_F_anchor(1).v(a) + e(2) * r_F_anchor(2).v(a);
   }
+  if (b) {
+    for (int k = 0; k < 3; ++k) out.d_anchor[k] = e(0) * R(0, k).a + e(1) * R(1, k).a + e(2) * R(2, k).a;
+  }
   return out;
 }
 
-// Encoder: dl = l(q, D) - l0 for an inextensible cable. Parameters: q (6), D (3), l0 (1).
-class EncoderCost final : public ceres::SizedCostFunction<1, 6, 3, 1> {
+// A cost's parameter blocks: `sizes`, then the anchor's 3 when it is free.
+class CableCost : public ceres::CostFunction {
+ protected:
+  CableCost(std::initializer_list<int> sizes, bool free_anchor) : free_anchor_(free_anchor) {
+    set_num_residuals(1);
+    for (int s : sizes) mutable_parameter_block_sizes()->push_back(s);
+    if (free_anchor) mutable_parameter_block_sizes()->push_back(3);
+  }
+  // The anchor block (the last one) when free, else nullptr; and its Jacobian's.
+  const double* AnchorBlock(double const* const* p) const { return free_anchor_ ? p[LastBlock()] : nullptr; }
+  double* AnchorJacobian(double** J) const { return free_anchor_ && J ? J[LastBlock()] : nullptr; }
+
+ private:
+  int LastBlock() const { return static_cast<int>(parameter_block_sizes().size()) - 1; }
+  bool free_anchor_;
+};
+
+// Encoder: dl = l(q, D) - l0 for an inextensible cable. Parameters: q (6), D (3), l0 (1), and
+// b (3) when free.
+class EncoderCost final : public CableCost {
  public:
-  EncoderCost(const CableData& cable, double dl_m, double inv_sigma)
-      : cable_(cable), dl_m_(dl_m), inv_sigma_(inv_sigma) {}
+  EncoderCost(const CableData& cable, double dl_m, double inv_sigma, bool free_anchor)
+      : CableCost({6, 3, 1}, free_anchor), cable_(cable), dl_m_(dl_m), inv_sigma_(inv_sigma) {}
   bool Evaluate(double const* const* p, double* r, double** J) const override {
-    const bool gradient = J != nullptr && (J[0] != nullptr || J[1] != nullptr);
-    const CableWithGradient c = CableAndGradient(cable_, p[0], p[1], gradient);
+    double* j_anchor = AnchorJacobian(J);
+    const bool gradient = J != nullptr && (J[0] != nullptr || J[1] != nullptr || j_anchor != nullptr);
+    const CableWithGradient c = CableAndGradient(cable_, p[0], p[1], AnchorBlock(p), gradient);
     r[0] = (c.state.length_m - p[2][0] - dl_m_) * inv_sigma_;
     if (J == nullptr) return true;
     if (J[0]) for (int a = 0; a < 6; ++a) J[0][a] = c.d_pose[a] * inv_sigma_;
     if (J[1]) for (int a = 0; a < 3; ++a) J[1][a] = c.d_exit[a] * inv_sigma_;
     if (J[2]) J[2][0] = -inv_sigma_;
+    if (j_anchor) for (int a = 0; a < 3; ++a) j_anchor[a] = c.d_anchor[a] * inv_sigma_;
     return true;
   }
 
@@ -122,15 +163,18 @@ class EncoderCost final : public ceres::SizedCostFunction<1, 6, 3, 1> {
 // Encoder of an elastic cable: the paid-out (unstretched) length at the pose's tension t of the
 // cable, model/robot.h's elastic law (UnstretchedLength), less its value at home l0; its
 // derivatives in the length and the tension from Jets on those two, the length's as above.
-// Parameters: q (6), t (1), D (3), l0 (1).
-class ElasticEncoderCost final : public ceres::SizedCostFunction<1, 6, 1, 3, 1> {
+// Parameters: q (6), t (1), D (3), l0 (1), and b (3) when free.
+class ElasticEncoderCost final : public CableCost {
  public:
-  ElasticEncoderCost(const CableData& cable, std::optional<double> stiffness_N, double dl_m, double inv_sigma)
-      : cable_(cable), stiffness_N_(stiffness_N), dl_m_(dl_m), inv_sigma_(inv_sigma) {}
+  ElasticEncoderCost(const CableData& cable, std::optional<double> stiffness_N, double dl_m, double inv_sigma,
+                     bool free_anchor)
+      : CableCost({6, 1, 3, 1}, free_anchor), cable_(cable), stiffness_N_(stiffness_N), dl_m_(dl_m),
+        inv_sigma_(inv_sigma) {}
   bool Evaluate(double const* const* p, double* r, double** J) const override {
     using J2 = ceres::Jet<double, 2>;
-    const bool gradient = J != nullptr && (J[0] != nullptr || J[2] != nullptr);
-    const CableWithGradient c = CableAndGradient(cable_, p[0], p[2], gradient);
+    double* j_anchor = AnchorJacobian(J);
+    const bool gradient = J != nullptr && (J[0] != nullptr || J[2] != nullptr || j_anchor != nullptr);
+    const CableWithGradient c = CableAndGradient(cable_, p[0], p[2], AnchorBlock(p), gradient);
     const J2 paid_out = UnstretchedLength<J2>(stiffness_N_, J2(c.state.length_m, 0), J2(p[1][0], 1));
     r[0] = (paid_out.a - p[3][0] - dl_m_) * inv_sigma_;
     if (J == nullptr) return true;
@@ -139,6 +183,7 @@ class ElasticEncoderCost final : public ceres::SizedCostFunction<1, 6, 1, 3, 1> 
     if (J[1]) J[1][0] = paid_out.v(1) * inv_sigma_;
     if (J[2]) for (int a = 0; a < 3; ++a) J[2][a] = c.d_exit[a] * dl;
     if (J[3]) J[3][0] = -inv_sigma_;
+    if (j_anchor) for (int a = 0; a < 3; ++a) j_anchor[a] = c.d_anchor[a] * dl;
     return true;
   }
 
@@ -161,26 +206,32 @@ struct LoadCellCost {
 // The pose's equilibrium W(q, D) t + w_g(q) (model/swivel.h's EquilibriumResidual, its columns
 // WrenchColumn of each cable through the exit block's D rather than the file's), force rows
 // over kEquilibriumWeightRelativeSigma m g, moment rows over m g kDefaultComSigma_m (the header).
-// Parameters: the pose, the m tensions (1 each), the m exit points (3 each).
-// Cable i's share t_i W_i of the equilibrium's wrench at pose q (R its rotation), exit d.
+// Parameters: the pose, the m tensions (1 each), the m exit points (3 each), and the m anchors
+// (3 each) when free.
+// Cable i's share t_i W_i of the equilibrium's wrench at pose q (R its rotation), exit d, anchor
+// b (nullptr: the robot file's).
 template <typename T>
 Eigen::Matrix<T, 6, 1> CableWrench(const CableData& cable, const Eigen::Matrix<T, 3, 3>& R, const T* q, const T& t,
-                                   const T* d) {
-  const Vec3<T> r_F_anchor = R * cable.p_P_anchor_m.cast<T>();
-  return t * WrenchColumn<T>(r_F_anchor, cable.At(q, d));
+                                   const T* d, const T* b) {
+  const Vec3<T> r_F_anchor = R * cable.Anchor(b);
+  return t * WrenchColumn<T>(r_F_anchor, cable.At(q, d, b));
 }
 
 struct EquilibriumCost {
   std::shared_ptr<const SpatialRobot> robot;
   std::vector<CableData> cables;
   double inv_force, inv_moment;
+  bool free_anchors;
   template <typename T>
   bool operator()(T const* const* p, T* r) const {
     const int m = static_cast<int>(cables.size());
     const SpatialPose<T> pose = PoseOf(p[0]);
     const Eigen::Matrix<T, 3, 3> R = Rotation<T>(pose);
     Eigen::Matrix<T, 6, 1> w = GravityWrench<T>(*robot, pose);
-    for (int i = 0; i < m; ++i) w += CableWrench<T>(cables[i], R, p[0], p[1 + i][0], p[1 + m + i]);
+    for (int i = 0; i < m; ++i) {
+      const T* b = free_anchors ? p[1 + 2 * m + i] : nullptr;
+      w += CableWrench<T>(cables[i], R, p[0], p[1 + i][0], p[1 + m + i], b);
+    }
     for (int a = 0; a < 3; ++a) {
       r[a] = w(a) * T(inv_force);
       r[3 + a] = w(3 + a) * T(inv_moment);
@@ -216,7 +267,8 @@ class EquilibriumCostFunction : public ceres::CostFunction {
     for (int i = 0; i < m; ++i) {
       std::array<J, 3> d;
       for (int a = 0; a < 3; ++a) d[a] = J(p[1 + m + i][a], 7 + a);
-      const Eigen::Matrix<J, 6, 1> term = CableWrench<J>(f_.cables[i], R, q.data(), J(p[1 + i][0], 6), d.data());
+      const Eigen::Matrix<J, 6, 1> term =
+          CableWrench<J>(f_.cables[i], R, q.data(), J(p[1 + i][0], 6), d.data(), static_cast<const J*>(nullptr));
       for (int a = 0; a < 6; ++a) {
         w(a).a += term(a).a;
         w(a).v.head<6>() += term(a).v.head<6>();
@@ -241,14 +293,23 @@ class EquilibriumCostFunction : public ceres::CostFunction {
 
 // Swivel encoder: the pulley's angle about k from the reference direction u_ref (the nominal
 // home's), less the encoder's zero offset sw0; the difference from the reading wrapped so that
-// a reading near +-pi does not jump.
+// a reading near +-pi does not jump. Parameters: q, D, sw0, and b when free (the second call).
 struct SwivelCost {
   CableData cable;
   Vector3d u_F_reference;
   double reading_rad, inv_sigma;
   template <typename T>
   bool operator()(const T* q, const T* d, const T* sw0, T* r) const {
-    const T model = SwivelReading<T>(cable.At(q, d), cable.k_F_swivel_axis.cast<T>(), u_F_reference.cast<T>()) - sw0[0];
+    return Residual(q, d, sw0, static_cast<const T*>(nullptr), r);
+  }
+  template <typename T>
+  bool operator()(const T* q, const T* d, const T* sw0, const T* b, T* r) const {
+    return Residual(q, d, sw0, b, r);
+  }
+  template <typename T>
+  bool Residual(const T* q, const T* d, const T* sw0, const T* b, T* r) const {
+    const T model =
+        SwivelReading<T>(cable.At(q, d, b), cable.k_F_swivel_axis.cast<T>(), u_F_reference.cast<T>()) - sw0[0];
     r[0] = WrappedAngle<T>(model - T(reading_rad)) * T(inv_sigma);
     return true;
   }
@@ -389,12 +450,21 @@ double SigmaOf(const SpatialRobot& robot, SpatialSensor s, const std::string& wh
 }
 
 Model BuildModel(const SpatialRobot& robot, const std::vector<SpatialMeasurement>& readings, bool prior,
-                 bool statics) {
+                 bool statics, bool anchors) {
   Model model;
   const int m = robot.num_cables();
   if (readings.empty()) throw InputError("readings", "", "no readings: nothing to identify");
   Layout& L = model.layout;
   L.m = m;
+  L.anchors = anchors;
+  // A cable term's geometry blocks: `blocks` (offset, size), then its anchor when free.
+  const auto cable_blocks = [&L](int i, std::vector<int> offset, std::vector<int> size) {
+    if (L.anchors) {
+      offset.push_back(L.anchor(i));
+      size.push_back(3);
+    }
+    return std::make_pair(offset, size);
+  };
   bool load_cells = false;
   for (const SpatialMeasurement& r : readings) {
     L.swivel = L.swivel || r.has(SpatialSensor::kSwivel);
@@ -477,19 +547,34 @@ Model BuildModel(const SpatialRobot& robot, const std::vector<SpatialMeasurement
         size.push_back(3);
         tension_cables.push_back(i);
       }
-      add(std::make_unique<EquilibriumCostFunction>(EquilibriumCost{
-              shared_robot, cables, 1.0 / (kEquilibriumWeightRelativeSigma * weight_N),
-              1.0 / (kDefaultComSigma_m * weight_N)}),
-          offset, size, kEquilibriumTerm, 0, tension_cables);
+      for (int i = 0; i < m && L.anchors; ++i) {
+        offset.push_back(L.anchor(i));
+        size.push_back(3);
+      }
+      const EquilibriumCost f{shared_robot, cables, 1.0 / (kEquilibriumWeightRelativeSigma * weight_N),
+                              1.0 / (kDefaultComSigma_m * weight_N), L.anchors};
+      if (!L.anchors) {
+        add(std::make_unique<EquilibriumCostFunction>(f), offset, size, kEquilibriumTerm, 0, tension_cables);
+      } else {
+        // Free anchors: Ceres' dynamic autodiff over every block (EquilibriumCostFunction's
+        // cable-by-cable Jet covers the pose, tension and exit blocks only).
+        auto* cost = new ceres::DynamicAutoDiffCostFunction<EquilibriumCost, 4>(new EquilibriumCost(f));
+        cost->AddParameterBlock(6);
+        for (int i = 0; i < m; ++i) cost->AddParameterBlock(1);
+        for (std::size_t b = 0; b < offset.size(); ++b) cost->AddParameterBlock(3);
+        cost->SetNumResiduals(6);
+        add(std::unique_ptr<ceres::CostFunction>(cost), offset, size, kEquilibriumTerm, 0, tension_cables);
+      }
     }
     for (int i = 0; i < m; ++i) {
       const SpatialCable& c = robot.cables[i];
       const CableData cable{c.k_F_swivel_axis, c.pulley_radius_m, c.p_P_anchor_m};
+      const auto [offset, size] = cable_blocks(i, {L.exit(i), L.length(i)}, {3, 1});
       if (model.nt > 0 && c.stiffness_N) {
-        add(std::make_unique<ElasticEncoderCost>(cable, c.stiffness_N, r.dl_m(i), inv_encoder),
-            {L.exit(i), L.length(i)}, {3, 1}, -1, i, {i});
+        add(std::make_unique<ElasticEncoderCost>(cable, c.stiffness_N, r.dl_m(i), inv_encoder, L.anchors), offset,
+            size, -1, i, {i});
       } else {
-        add(std::make_unique<EncoderCost>(cable, r.dl_m(i), inv_encoder), {L.exit(i), L.length(i)}, {3, 1}, -1, i);
+        add(std::make_unique<EncoderCost>(cable, r.dl_m(i), inv_encoder, L.anchors), offset, size, -1, i);
       }
     }
     for (const SpatialSensor s : kSpatialSensors) {
@@ -523,8 +608,10 @@ Model BuildModel(const SpatialRobot& robot, const std::vector<SpatialMeasurement
           for (int i = 0; i < m; ++i) {
             const SpatialCable& c = robot.cables[i];
             const CableData cable{c.k_F_swivel_axis, c.pulley_radius_m, c.p_P_anchor_m};
-            add(Cost<SwivelCost, 1, 6, 3, 1>(SwivelCost{cable, reference.u_F[i], v(i), inv}),
-                {L.exit(i), L.swivel_offset(i)}, {3, 1}, sensor, i);
+            const SwivelCost f{cable, reference.u_F[i], v(i), inv};
+            const auto [offset, size] = cable_blocks(i, {L.exit(i), L.swivel_offset(i)}, {3, 1});
+            add(L.anchors ? Cost<SwivelCost, 1, 6, 3, 1, 3>(f) : Cost<SwivelCost, 1, 6, 3, 1>(f), offset, size,
+                sensor, i);
           }
           break;
         case SpatialSensor::kHeading:
@@ -997,18 +1084,35 @@ BlockArrowSummary SolveBlockArrow(const Model& model, VectorXd& g, Locals& local
 const char* kGeneratorNames[6] = {"a translation along x", "a translation along y", "a translation along z",
                                   "a rotation about x",    "a rotation about y",    "a rotation about z"};
 
-// The rigid motions of the frame on the exit coordinates: translations along x, y, z and
-// rotations about the axes through the exits' centroid (per radian).
+// The rows of `rows` of V.
+MatrixXd Rows(const MatrixXd& V, const std::vector<int>& rows) {
+  MatrixXd out(rows.size(), V.cols());
+  for (std::size_t r = 0; r < rows.size(); ++r) out.row(r) = V.row(rows[r]);
+  return out;
+}
+
+// The rigid motions on the holdable coordinates (Layout::holdable's rows): of the frame on the
+// exit points (translations along x, y, z and rotations about the axes through the exits'
+// centroid, per radian), then, when the anchors are free, of the anchors in P (translations
+// along P's axes, rotations about P's axes through its origin: the point the poses locate, so
+// that a rotation of the platform frame about its origin reads as one generator).
 MatrixXd RigidGenerators(const VectorXd& g, const Layout& L) {
-  MatrixXd G = MatrixXd::Zero(L.exit_coordinates(), 6);
-  Vector3d centroid = Vector3d::Zero();
-  for (int i = 0; i < L.m; ++i) centroid += g.segment<3>(L.exit(i));
-  centroid /= L.m;
-  for (int i = 0; i < L.m; ++i) {
-    const Vector3d d = g.segment<3>(L.exit(i)) - centroid;
-    for (int a = 0; a < 3; ++a) {
-      G(L.exit(i) + a, a) = 1.0;
-      G.block<3, 1>(L.exit(i), 3 + a) = Vector3d::Unit(a).cross(d);
+  const int groups = L.anchors ? 2 : 1;
+  MatrixXd G = MatrixXd::Zero(L.exit_coordinates() + L.anchor_coordinates(), 6 * groups);
+  for (int group = 0; group < groups; ++group) {
+    const auto point = [&](int i) { return group == 0 ? L.exit(i) : L.anchor(i); };
+    Vector3d centroid = Vector3d::Zero();
+    if (group == 0) {
+      for (int i = 0; i < L.m; ++i) centroid += g.segment<3>(point(i));
+      centroid /= L.m;
+    }
+    for (int i = 0; i < L.m; ++i) {
+      const Vector3d d = g.segment<3>(point(i)) - centroid;
+      const int row = 3 * L.m * group + 3 * i;
+      for (int a = 0; a < 3; ++a) {
+        G(row + a, 6 * group + a) = 1.0;
+        G.block<3, 1>(row, 6 * group + 3 + a) = Vector3d::Unit(a).cross(d);
+      }
     }
   }
   return G;
@@ -1026,34 +1130,50 @@ std::string LargestComponents(const VectorXd& v, const std::vector<std::string>&
   return out;
 }
 
-// Describes the span of the columns of V (p x k, orthonormal-ish): when their exit parts are
-// rigid motions of the frame, a basis in reduced row-echelon form over the generators
-// (translations x, y, z, rotations x, y, z) so that "a translation along x" comes out as
-// such; otherwise each column by the unknowns it moves most.
+// Describes the span of the columns of V (p x k, orthonormal-ish): when their holdable parts
+// are rigid motions (of the frame, and of the anchors in P when free), a basis in reduced
+// row-echelon form over the generators (translations x, y, z, rotations x, y, z) so that "a
+// translation along x of the frame" comes out as such; otherwise each column by the unknowns
+// it moves most.
 std::vector<SpatialDirection> Describe(const MatrixXd& V, const VectorXd& g, const Layout& L,
                                        const std::vector<std::string>& names) {
   const int k = V.cols();
   std::vector<SpatialDirection> out;
   if (k == 0) return out;
+  const std::vector<int> holdable = L.holdable();
+  std::vector<int> rest;
+  std::vector<std::string> rest_names;
+  for (int c = 0; c < V.rows(); ++c) {
+    if (std::find(holdable.begin(), holdable.end(), c) != holdable.end()) continue;
+    rest.push_back(c);
+    rest_names.push_back(names[c]);
+  }
   const MatrixXd G = RigidGenerators(g, L);
-  const MatrixXd E = V.topRows(L.exit_coordinates());
-  const MatrixXd C = G.colPivHouseholderQr().solve(E);  // 6 x k
+  const int generators = G.cols();
+  const MatrixXd E = Rows(V, holdable);
+  const MatrixXd C = G.colPivHouseholderQr().solve(E);  // generators x k
   bool rigid = true;
   for (int c = 0; c < k; ++c) {
     const double e = E.col(c).norm();
     rigid = rigid && e > 1e-3 * V.col(c).norm() && (G * C.col(c) - E.col(c)).norm() <= 1e-6 * e;
   }
+  // Without free anchors every generator is the frame's, said once at the end; with them each
+  // says whose it is.
+  const auto generator_name = [&](int a) {
+    if (!L.anchors) return std::string(kGeneratorNames[a]);
+    return std::string(kGeneratorNames[a % 6]) + (a < 6 ? " of the frame" : " of the anchors in P");
+  };
   if (rigid) {
     // RREF of [C^T | I]: the rows' right halves say which combination of V each row is.
-    MatrixXd M(k, 6 + k);
+    MatrixXd M(k, generators + k);
     M << C.transpose(), MatrixXd::Identity(k, k);
     int row = 0;
-    for (int col = 0; col < 6 && row < k; ++col) {
+    for (int col = 0; col < generators && row < k; ++col) {
       int best = row;
       for (int r = row; r < k; ++r) {
         if (std::abs(M(r, col)) > std::abs(M(best, col))) best = r;
       }
-      if (std::abs(M(best, col)) < 1e-6 * M.leftCols(6).cwiseAbs().maxCoeff()) continue;
+      if (std::abs(M(best, col)) < 1e-6 * M.leftCols(generators).cwiseAbs().maxCoeff()) continue;
       M.row(row).swap(M.row(best));
       M.row(row) /= M(row, col);
       for (int r = 0; r < k; ++r) {
@@ -1066,23 +1186,18 @@ std::vector<SpatialDirection> Describe(const MatrixXd& V, const VectorXd& g, con
       d.geometry = (V * M.row(r).rightCols(k).transpose()).normalized();
       std::string words;
       int terms = 0;
-      for (int a = 0; a < 6; ++a) {
+      for (int a = 0; a < generators; ++a) {
         if (std::abs(M(r, a)) > 1e-6) {
           char buf[96];
-          std::snprintf(buf, sizeof(buf), "%s%s (%.3g%s)", terms ? " with " : "", kGeneratorNames[a], M(r, a),
-                        a < 3 ? " m" : " rad");
-          words += terms ? std::string(buf) : std::string(kGeneratorNames[a]);
+          std::snprintf(buf, sizeof(buf), " (%.3g%s)", M(r, a), a % 6 < 3 ? " m" : " rad");
+          words += terms ? " with " + generator_name(a) + buf : generator_name(a);
           ++terms;
         }
       }
       if (terms > 1) words = "a combination: " + words;
-      const VectorXd rest = d.geometry.bottomRows(d.geometry.size() - L.exit_coordinates());
-      if (rest.norm() > 1e-6) {
-        std::vector<std::string> rest_names(names.begin() + L.exit_coordinates(), names.end());
-        words += " of the frame, with " + LargestComponents(rest, rest_names);
-      } else {
-        words += " of the frame";
-      }
+      const VectorXd others = Rows(d.geometry, rest);
+      const std::string frame = L.anchors ? "" : " of the frame";
+      words += others.norm() > 1e-6 ? frame + ", with " + LargestComponents(others, rest_names) : frame;
       d.description = words;
       out.push_back(d);
     }
@@ -1091,8 +1206,10 @@ std::vector<SpatialDirection> Describe(const MatrixXd& V, const VectorXd& g, con
   for (int c = 0; c < k; ++c) {
     SpatialDirection d;
     d.geometry = V.col(c).normalized();
-    const double e = d.geometry.topRows(L.exit_coordinates()).norm();
-    d.description = (e < 1e-3 ? "a direction that moves no exit point, of " : "a direction of ") +
+    const double e = Rows(d.geometry, holdable).norm();
+    d.description = (e < 1e-3 ? (L.anchors ? "a direction that moves no exit point or anchor, of "
+                                           : "a direction that moves no exit point, of ")
+                              : "a direction of ") +
                     LargestComponents(d.geometry, names);
     out.push_back(d);
   }
@@ -1111,19 +1228,39 @@ std::string DescribeAll(const std::vector<SpatialDirection>& d) {
   return Join(w, "; ");
 }
 
-// The column-pivoted QR of E^T (E: the null basis's exit rows, 3m x k) by modified
-// Gram-Schmidt: k times, the exit coordinate whose row has the largest norm left after
-// removing the rows already chosen. Row norms and projections do not depend on which
-// orthonormal basis of the null space the SVD returned, so neither does the choice; near-ties
-// (within 1e-6 relative, e.g. the symmetric exits of a built-in robot) go to the lowest index,
-// so that noise in the readings never changes the held set.
-std::vector<int> PivotedExitCoordinates(const MatrixXd& E) {
+// The directions of span(N) (N: p x k, orthonormal columns) that move none of the coordinates
+// `rows` (p x r): those holding them leaves unfixed.
+MatrixXd DirectionsNotMoving(const MatrixXd& N, const std::vector<int>& rows) {
+  const int k = N.cols();
+  if (rows.empty() || k == 0) return N;
+  Eigen::JacobiSVD<MatrixXd> svd(Rows(N, rows), Eigen::ComputeFullV);
+  std::vector<int> left;
+  for (int c = 0; c < k; ++c) {
+    const double sv = c < svd.singularValues().size() ? svd.singularValues()(c) : 0.0;
+    if (!(sv > 1e-6)) left.push_back(c);
+  }
+  MatrixXd U(N.rows(), left.size());
+  for (std::size_t c = 0; c < left.size(); ++c) U.col(c) = N * svd.matrixV().col(left[c]);
+  return U;
+}
+
+// The column-pivoted QR of E^T (E: the null basis's holdable rows, exits then anchors, k
+// columns) by modified Gram-Schmidt: k times, the coordinate whose row has the largest norm
+// left after removing the rows already chosen, among the exit rows (the first `exit_rows`)
+// while any of them has more than 1e-6 left (the threshold of DirectionsNotMoving), else among
+// the anchor rows. Row norms and projections do not depend on which orthonormal basis of the
+// null space the SVD returned, so neither does the choice; near-ties (within 1e-6 relative,
+// e.g. the symmetric exits of a built-in robot) go to the lowest index, so that noise in the
+// readings never changes the held set. Indices into E's rows, sorted.
+std::vector<int> PivotedHoldCoordinates(const MatrixXd& E, int exit_rows) {
   MatrixXd rows = E;
   std::vector<int> held;
   for (int c = 0; c < E.cols(); ++c) {
     const VectorXd norms = rows.rowwise().norm();
-    const double largest = norms.maxCoeff();
-    int best = 0;
+    const bool exits = exit_rows == E.rows() || norms.head(exit_rows).maxCoeff() > 1e-6;
+    const int first = exits ? 0 : exit_rows;
+    const double largest = exits ? norms.head(exit_rows).maxCoeff() : norms.tail(E.rows() - exit_rows).maxCoeff();
+    int best = first;
     while (norms(best) < (1.0 - 1e-6) * largest) ++best;
     held.push_back(best);
     const VectorXd q = rows.row(best).transpose() / norms(best);
@@ -1175,10 +1312,11 @@ struct Analysis {
 Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasurement>& readings,
                  const SpatialIdentifyOptions& options) {
   Analysis a;
-  a.model = BuildModel(nominal, readings, options.gauge.kind == SpatialGaugeKind::kPrior, options.statics);
+  a.model = BuildModel(nominal, readings, options.gauge.kind == SpatialGaugeKind::kPrior, options.statics,
+                       options.anchors);
   const Layout& L = a.model.layout;
-  a.g0 = NominalSpatialGeometry(nominal, L.swivel, L.heading);
-  a.gauge.names = SpatialGeometryNames(L.m, L.swivel, L.heading);
+  a.g0 = NominalSpatialGeometry(nominal, L.swivel, L.heading, L.anchors);
+  a.gauge.names = SpatialGeometryNames(L.m, L.swivel, L.heading, L.anchors);
   const int p = L.size();
   const int n = static_cast<int>(a.model.pose_ids.size());
   const int local = a.model.local();
@@ -1236,78 +1374,80 @@ Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasureme
   // A lab's hold: list is checked and held even when the readings see everything (holding every
   // exit coordinate identifies the lengths, offsets and poses alone).
   if (k == 0 && options.gauge.kind != SpatialGaugeKind::kHold) return a;
-  // A null direction with no exit coordinate cannot be held by any exit: refused whatever the gauge.
-  const MatrixXd E = N.topRows(L.exit_coordinates());
-  if (k > 0) {
-    Eigen::JacobiSVD<MatrixXd> exit_svd(E, Eigen::ComputeFullV);
-    std::vector<int> unheldable;
-    for (int c = 0; c < k; ++c) {
-      if (!(exit_svd.singularValues()(c) > 1e-6)) unheldable.push_back(c);
-    }
-    if (!unheldable.empty()) {
-      MatrixXd U(p, unheldable.size());
-      for (std::size_t c = 0; c < unheldable.size(); ++c) U.col(c) = N * exit_svd.matrixV().col(unheldable[c]);
-      throw InputError("readings", "",
-                       "no reading fixes " + DescribeAll(Describe(U, a.g0, L, a.gauge.names)) +
-                           ", and holding exit coordinates cannot fix it: add a sensor that sees it (swivel "
-                           "offsets need swivel readings at several poses, yaw0 heading readings)");
-    }
+  // A null direction that moves no holdable coordinate cannot be held: refused whatever the gauge.
+  const std::vector<int> holdable = L.holdable();
+  const std::string holdable_words = L.anchors ? "exit or anchor coordinates" : "exit coordinates";
+  const MatrixXd unheldable = DirectionsNotMoving(N, holdable);
+  if (k > 0 && unheldable.cols() > 0) {
+    throw InputError("readings", "",
+                     "no reading fixes " + DescribeAll(Describe(unheldable, a.g0, L, a.gauge.names)) + ", and holding " +
+                         holdable_words +
+                         " cannot fix it: add a sensor that sees it (swivel offsets need swivel readings at several "
+                         "poses, yaw0 heading readings)");
   }
+  const std::vector<std::string>& names = a.gauge.names;
   switch (options.gauge.kind) {
     case SpatialGaugeKind::kAuto: {
-      a.gauge.held = PivotedExitCoordinates(E);
+      for (int h : PivotedHoldCoordinates(Rows(N, holdable), L.exit_coordinates())) a.gauge.held.push_back(holdable[h]);
       break;
     }
     case SpatialGaugeKind::kHold: {
-      const std::vector<std::string>& names = a.gauge.names;
+      const std::string flag = "hold:" + Join(options.gauge.held, ",");
+      const std::string m = std::to_string(L.m);
       for (const std::string& h : options.gauge.held) {
-        const auto it = std::find(names.begin(), names.begin() + L.exit_coordinates(), h);
-        if (it == names.begin() + L.exit_coordinates()) {
-          throw InputError("--gauge", "hold:" + Join(options.gauge.held, ","),
-                           "'" + h + "' is not an exit coordinate of this " + std::to_string(L.m) +
-                               "-cable robot (a1x .. a" + std::to_string(L.m) + "z)");
+        const auto it = std::find_if(holdable.begin(), holdable.end(), [&](int c) { return names[c] == h; });
+        if (it == holdable.end()) {
+          const std::vector<std::string> with_anchors = SpatialGeometryNames(L.m, false, false, true);
+          const bool anchor = !L.anchors && h[0] == 'b' &&
+                              std::find(with_anchors.begin(), with_anchors.end(), h) != with_anchors.end();
+          throw InputError("--gauge", flag,
+                           anchor ? "'" + h + "' is a platform anchor coordinate: an unknown, that a gauge may hold, "
+                                                "only with --identify anchors"
+                                  : "'" + h + "' is not an " + (L.anchors ? "exit or anchor" : "exit") +
+                                        " coordinate of this " + m + "-cable robot (a1x .. a" + m + "z" +
+                                        (L.anchors ? ", b1x .. b" + m + "z)" : ")"));
         }
-        const int index = static_cast<int>(it - names.begin());
-        if (std::find(a.gauge.held.begin(), a.gauge.held.end(), index) != a.gauge.held.end()) {
-          throw InputError("--gauge", "hold:" + Join(options.gauge.held, ","), "'" + h + "' is named twice");
+        if (std::find(a.gauge.held.begin(), a.gauge.held.end(), *it) != a.gauge.held.end()) {
+          throw InputError("--gauge", flag, "'" + h + "' is named twice");
         }
-        a.gauge.held.push_back(index);
+        a.gauge.held.push_back(*it);
       }
       std::sort(a.gauge.held.begin(), a.gauge.held.end());
-      if (k == 0) break;
-      MatrixXd H(a.gauge.held.size(), k);
-      for (std::size_t r = 0; r < a.gauge.held.size(); ++r) H.row(r) = N.row(a.gauge.held[r]);
-      Eigen::JacobiSVD<MatrixXd> hold_svd(H, Eigen::ComputeFullV);
-      std::vector<int> left;
-      for (int c = 0; c < k; ++c) {
-        const double sv = c < hold_svd.singularValues().size() ? hold_svd.singularValues()(c) : 0.0;
-        if (!(sv > 1e-6)) left.push_back(c);
-      }
-      if (!left.empty()) {
-        MatrixXd U(p, left.size());
-        for (std::size_t c = 0; c < left.size(); ++c) U.col(c) = N * hold_svd.matrixV().col(left[c]);
-        // The exit coordinate the first remaining direction moves most: holding it too helps.
-        VectorXd moved = U.col(0).topRows(L.exit_coordinates()).cwiseAbs();
-        int best = 0;
-        moved.maxCoeff(&best);
-        throw InputError("--gauge", "hold:" + Join(options.gauge.held, ","),
-                         "does not fix the gauge: no reading fixes " +
-                             DescribeAll(Describe(U, a.g0, L, a.gauge.names)) + " (" + std::to_string(left.size()) +
-                             " of the " + std::to_string(k) + " null directions left); hold " + names[best] +
-                             " too, or add a sensor that sees it");
+      const MatrixXd left = DirectionsNotMoving(N, a.gauge.held);
+      if (k == 0 || left.cols() == 0) break;
+      // The holdable coordinate the first remaining direction moves most: holding it too helps.
+      int best = 0;
+      Rows(left.col(0), holdable).col(0).cwiseAbs().maxCoeff(&best);
+      throw InputError("--gauge", flag,
+                       "does not fix the gauge: no reading fixes " + DescribeAll(Describe(left, a.g0, L, names)) +
+                           " (" + std::to_string(left.cols()) + " of the " + std::to_string(k) +
+                           " null directions left); hold " + names[holdable[best]] +
+                           " too, or add a sensor that sees it");
+    }
+    case SpatialGaugeKind::kPrior: {
+      // The tracker's survey is of the exit points: a direction of the anchors alone stays unseen.
+      std::vector<int> exits(holdable.begin(), holdable.begin() + L.exit_coordinates());
+      const MatrixXd left = DirectionsNotMoving(N, exits);
+      if (left.cols() > 0) {
+        throw InputError("--gauge", "prior",
+                         "the tracker's prior is on the exit points, and no reading fixes " +
+                             DescribeAll(Describe(left, a.g0, L, names)) +
+                             ": use --gauge auto or hold: anchor coordinates, or add a sensor that sees it");
       }
       break;
     }
-    case SpatialGaugeKind::kNone:
-    case SpatialGaugeKind::kPrior: break;
+    case SpatialGaugeKind::kNone: break;
   }
   return a;
 }
 
 }  // namespace
 
-std::vector<std::string> SpatialGeometryNames(int num_cables, bool swivel, bool heading) {
+std::vector<std::string> SpatialGeometryNames(int num_cables, bool swivel, bool heading, bool anchors) {
   std::vector<std::string> names = SpatialLayout(num_cables).names();
+  for (int i = 1; i <= num_cables && anchors; ++i) {
+    for (const char axis : {'x', 'y', 'z'}) names.push_back("b" + std::to_string(i) + axis);
+  }
   if (swivel) {
     for (int i = 1; i <= num_cables; ++i) names.push_back("sw" + std::to_string(i) + "0");
   }
@@ -1315,13 +1455,14 @@ std::vector<std::string> SpatialGeometryNames(int num_cables, bool swivel, bool 
   return names;
 }
 
-Eigen::VectorXd NominalSpatialGeometry(const SpatialRobot& nominal, bool swivel, bool heading) {
-  Layout L{nominal.num_cables(), swivel, heading};
+Eigen::VectorXd NominalSpatialGeometry(const SpatialRobot& nominal, bool swivel, bool heading, bool anchors) {
+  Layout L{nominal.num_cables(), swivel, heading, anchors};
   VectorXd g = VectorXd::Zero(L.size());
   const VectorXd home_lengths = CableLengths<double>(nominal, nominal.home_pose());
   for (int i = 0; i < L.m; ++i) {
     g.segment<3>(L.exit(i)) = nominal.cables[i].p_F_exit_m;
     g(L.length(i)) = nominal.cables[i].initial_length_m.value_or(home_lengths(i));
+    if (anchors) g.segment<3>(L.anchor(i)) = nominal.cables[i].p_P_anchor_m;
   }
   if (heading) g(L.yaw0()) = nominal.home_rpy_rad.z();
   return g;
@@ -1361,6 +1502,16 @@ std::string ToString(const SpatialGauge& gauge) {
   }
   return "?";
 }
+
+bool ParseSpatialIdentify(const std::string& text) {
+  if (text == "exits") return false;
+  if (text == "anchors") return true;
+  throw InputError("--identify", text,
+                   "expected exits (the exit points and initial lengths: the default) or anchors (the platform "
+                   "anchors too)");
+}
+
+const char* SpatialIdentifyName(bool anchors) { return anchors ? "anchors" : "exits"; }
 
 const char* ToString(SpatialIdentifyStatus s) {
   switch (s) {
@@ -1427,6 +1578,10 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
     problem.AddParameterBlock(g.data() + L.length(i), 1);
     ordering->AddElementToGroup(g.data() + L.exit(i), 1);
     ordering->AddElementToGroup(g.data() + L.length(i), 1);
+    if (L.anchors) {
+      problem.AddParameterBlock(g.data() + L.anchor(i), 3);
+      ordering->AddElementToGroup(g.data() + L.anchor(i), 1);
+    }
     if (L.swivel) {
       problem.AddParameterBlock(g.data() + L.swivel_offset(i), 1);
       ordering->AddElementToGroup(g.data() + L.swivel_offset(i), 1);
@@ -1452,15 +1607,17 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
     }
     problem.AddResidualBlock(cost, loss, params);
   }
-  for (int i = 0; i < L.m; ++i) {
+  // The held coordinates: of the exit points' blocks, then the free anchors'.
+  for (int point = 0; point < (L.exit_coordinates() + L.anchor_coordinates()) / 3; ++point) {
+    const int offset = point < L.m ? L.exit(point) : L.anchor(point - L.m);
     std::vector<int> axes;
     for (int axis = 0; axis < 3; ++axis) {
-      if (std::count(a.gauge.held.begin(), a.gauge.held.end(), L.exit(i) + axis)) axes.push_back(axis);
+      if (std::count(a.gauge.held.begin(), a.gauge.held.end(), offset + axis)) axes.push_back(axis);
     }
     if (axes.size() == 3) {
-      problem.SetParameterBlockConstant(g.data() + L.exit(i));
+      problem.SetParameterBlockConstant(g.data() + offset);
     } else if (!axes.empty()) {
-      problem.SetManifold(g.data() + L.exit(i), new ceres::SubsetManifold(3, axes));
+      problem.SetManifold(g.data() + offset, new ceres::SubsetManifold(3, axes));
     }
   }
   ceres::Solver::Options solver;

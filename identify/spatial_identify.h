@@ -5,7 +5,9 @@
 //
 // Unknowns, in the order of SpatialIdentifyResult::names: a1x a1y a1z ... amx amy amz (exit
 // points, m), l10 ... lm0 (each cable's length at home, m: an inextensible cable's encoder
-// reads dl_ij = l_i(q_j) - l_i0), then sw10 ... swm0 when swivel readings are present (the
+// reads dl_ij = l_i(q_j) - l_i0), then b1x b1y b1z ... bmx bmy bmz with options.anchors (the
+// platform anchors b_i in the platform frame P, m; otherwise the robot file's, taken as exact),
+// then sw10 ... swm0 when swivel readings are present (the
 // angle about k_i, from the nominal home's pulley direction, at which encoder i reads zero,
 // rad), then yaw0 when heading readings are present (the yaw at which the IMU reads zero,
 // rad); and each measured pose's (x, y, z, roll, pitch, yaw). Repeated pose ids are repeated
@@ -35,16 +37,30 @@
 // no longer self-calibrate an elastic robot (refused, too few values); load cells, an
 // inclinometer or a laser restore it. options.statics = false leaves the statics out (cables
 // taken as inextensible, load cells unused): the first layer's model, for comparison.
-// Not modelled yet: free platform anchors.
+//
+// Free anchors (options.anchors, `--identify anchors`): every residual that reads an anchor
+// (encoders, swivel encoders, the equilibrium's moment arms) takes it from the geometry vector
+// instead of the robot file, through the same model functions. The anchors add null
+// directions: a rigid motion of the anchors in P, undone by every pose, changes no length (6
+// more: 3 translations, 3 rotations). A position tracker sees the anchors' translation (its
+// target is a point of P, not an anchor), an inclinometer their rotations about P's x and y
+// and, through the platform's tilt at the poses, about P's z; the equilibrium (centre of mass
+// from the robot file) their horizontal offset from it. The platform's position along its own
+// z is seen by the laser only through the tilt (second order): weakly.
 //
 // Gauge (SpatialGaugeAnalysis): the Jacobian of every whitened residual at the nominal
 // geometry and the starting poses, each pose's columns eliminated by an orthogonal projection
 // (so that nothing is squared), then an SVD of the reduced geometry Jacobian: singular values
 // below kSpatialNullThreshold of the largest are null directions (no reading sees them),
 // those below kSpatialWeakThreshold weakly observable. The default gauge holds, at their
-// nominal values, the exit coordinates chosen by a column-pivoted QR of the transposed null
-// basis restricted to the exit-coordinate rows (the first k pivots for k null directions: the
-// coordinates the null directions move most independently).
+// nominal values, the coordinates chosen by a column-pivoted QR of the transposed null basis
+// restricted to the holdable rows (the first k pivots for k null directions: the coordinates
+// the null directions move most independently), exit coordinates first: each pivot is the
+// exit coordinate the remaining null directions move most, and an anchor coordinate (with
+// options.anchors) only when they move no exit coordinate any more (the remaining directions
+// are motions of the anchors in P alone). So a frame is defined by its exits, as without free
+// anchors, and the platform frame by the fewest anchor coordinates that pin what no reading
+// sees of it.
 // Solver: Levenberg-Marquardt with the poses eliminated (our block-arrow iterations without a robust
 // loss, Ceres DENSE_SCHUR with one), from each pose's own start at the nominal geometry.
 // Depends on model/ (header-only parts and the robot), Ceres and experiment/spatial_measurements.h.
@@ -82,14 +98,14 @@ constexpr double kEquilibriumWeightRelativeSigma = 0.01;
 constexpr double kPlausibleExitOutsideFrame_m = 0.5;
 
 enum class SpatialGaugeKind {
-  kAuto,   // hold the exit coordinates the pivoted QR picks (the default)
-  kHold,   // hold the user's exit coordinates; refused when they leave a null direction
+  kAuto,   // hold the exit (then anchor) coordinates the pivoted QR picks (the default)
+  kHold,   // hold the user's exit (and anchor) coordinates; refused when they leave a null direction
   kNone,   // hold nothing: covariance by the pseudo-inverse, the null directions reported
   kPrior,  // the robot file's tracker sigma on every exit coordinate, about its nominal value
 };
 struct SpatialGauge {
   SpatialGaugeKind kind = SpatialGaugeKind::kAuto;
-  std::vector<std::string> held;  // kHold: exit-coordinate names, a1x ...
+  std::vector<std::string> held;  // kHold: exit-coordinate names, a1x ..., and anchor ones, b1x ...
 };
 // "auto", "none", "prior", "hold:a1x,a2y,...". InputError naming --gauge.
 SpatialGauge ParseSpatialGauge(const std::string& text);
@@ -100,7 +116,13 @@ struct SpatialIdentifyOptions {
   RobustLoss loss;  // on each whitened sensor value (an encoder, roll, px, ...) on its own
   int max_iterations = 200;
   bool statics = true;  // the tensions, load cells, equilibrium and stretch (file comment)
+  bool anchors = false;  // --identify anchors: every platform anchor b_i an unknown too (file comment)
 };
+
+// `--identify`: "exits" (the exit points and initial lengths: the default) or "anchors" (the
+// platform anchors too). InputError naming --identify otherwise.
+bool ParseSpatialIdentify(const std::string& text);
+const char* SpatialIdentifyName(bool anchors);
 
 // One direction of the geometry the readings do not see (or see weakly): unit vector over
 // the geometry unknowns (names order), the relative singular value, and in words.
@@ -140,7 +162,7 @@ struct SpatialIdentifyResult {
   double final_cost = 0.0;  // 1/2 sum of squared whitened residuals (before the loss)
   int iterations = 0;
   std::vector<SpatialReadingFit> fits;  // one per reading
-  std::vector<std::string> held;        // the held exit coordinates
+  std::vector<std::string> held;        // the held exit (and anchor) coordinates
   std::vector<SpatialDirection> null_directions;  // before holding anything
   std::vector<SpatialDirection> weak_directions;
   // Covariance of the geometry (names order) with the gauge held: held rows and columns zero;
@@ -177,8 +199,10 @@ SpatialGaugeAnalysis AnalyzeSpatialGauge(const SpatialRobot& nominal, const std:
 // what is missing, when: no readings; a reading's cable count differs from the robot's; a
 // reading has a sensor the robot file lacks (no sigma); the readings have fewer values than
 // the unknowns; a pose is not determined by its own readings; a null direction moves no exit
-// coordinate (holding exits cannot fix it); `hold:` names something other than an exit
-// coordinate or leaves a null direction (named in words); `prior` without a tracker sigma;
+// (or, with free anchors, anchor) coordinate (holding them cannot fix it); `hold:` names
+// something other than an exit or free anchor coordinate or leaves a null direction (named in
+// words); `prior` without a tracker sigma, or with free anchors that a null direction moves
+// alone (the prior is on the exits only);
 // load cells on more than 6 inextensible cables (sensors.load_cell), stiffness on some cables
 // with more than 6 without (cables[i].stiffness), the statics on a weightless platform.
 // A solver that did not converge is a status, never a result.
@@ -192,9 +216,9 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
 std::vector<std::string> SpatialPlausibilityWarnings(const SpatialRobot& nominal, const Eigen::VectorXd& geometry);
 
 // The nominal geometry vector (names order): exits, lengths at the nominal home (a cable's
-// initial_length where the file gives one), zero swivel
+// initial_length where the file gives one), the file's anchors (when anchors), zero swivel
 // offsets (when swivel), the home yaw (when heading).
-Eigen::VectorXd NominalSpatialGeometry(const SpatialRobot& nominal, bool swivel, bool heading);
-std::vector<std::string> SpatialGeometryNames(int num_cables, bool swivel, bool heading);
+Eigen::VectorXd NominalSpatialGeometry(const SpatialRobot& nominal, bool swivel, bool heading, bool anchors = false);
+std::vector<std::string> SpatialGeometryNames(int num_cables, bool swivel, bool heading, bool anchors = false);
 
 }  // namespace cablecal

@@ -52,7 +52,10 @@ std::string GaugeNote(const SpatialIdentifyOptions& options, const SpatialIdenti
       return r.null_directions.empty()
                  ? "the readings see every direction of the geometry: nothing held"
                  : "held at their nominal values: " + held +
-                       " (the exit coordinates a column-pivoted QR of the null directions picks, one per direction)";
+                       (options.anchors ? " (the exit coordinates, then the anchor coordinates, a column-pivoted QR of "
+                                          "the null directions picks, one per direction)"
+                                        : " (the exit coordinates a column-pivoted QR of the null directions picks, one "
+                                          "per direction)");
     case SpatialGaugeKind::kHold: return "held at their nominal values, the lab's choice: " + held;
     case SpatialGaugeKind::kNone:
       return "no gauge: the null directions below are unobservable; standard deviations are from the "
@@ -95,6 +98,9 @@ ResultParts Parts(const SpatialRobot& nominal, const SpatialIdentifyOptions& opt
   o << Key << "status" << Value << ToString(r.status);
   if (!r.message.empty()) o << Key << "message" << Value << YamlString{r.message};
   o << Key << "estimator" << Value << "ml";
+  o << Key << "identify" << Value << SpatialIdentifyName(options.anchors)
+    << YAML::Comment(options.anchors ? "exit points, initial lengths and platform anchors"
+                                     : "exit points and initial lengths; the anchors the robot file's");
   o << Key << "gauge" << Value << YamlString{ToString(options.gauge)};
   o << Key << "gauge_note" << Value << YamlString{GaugeNote(options, r)};
   o << Key << "held" << Value << Flow << BeginSeq;
@@ -259,9 +265,12 @@ SpatialRobot CalibratedSpatialRobot(const SpatialRobot& nominal, const SpatialId
   CABLECAL_CHECK(static_cast<int>(result.names.size()) >= 4 * m && result.names[4 * m - 1] == "l" + std::to_string(m) + "0",
                  "a spatial result of another robot");
   SpatialRobot calibrated = nominal;
+  // The anchors when identified: b1x .. bmz right after the lengths (the names' order).
+  const bool anchors = static_cast<int>(result.names.size()) >= 7 * m && result.names[4 * m] == "b1x";
   for (int i = 0; i < m; ++i) {
     calibrated.cables[i].p_F_exit_m = result.geometry.segment<3>(3 * i);
     calibrated.cables[i].initial_length_m = result.geometry(3 * m + i);
+    if (anchors) calibrated.cables[i].p_P_anchor_m = result.geometry.segment<3>(4 * m + 3 * i);
   }
   return calibrated;
 }

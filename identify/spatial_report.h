@@ -35,9 +35,9 @@ std::string SpatialIdentifyResultYaml(const SpatialRobot& nominal, const Spatial
 std::string SpatialIdentifyResultJson(const SpatialRobot& nominal, const SpatialIdentifyOptions& options,
                                       const SpatialIdentifyResult& result, const std::string& command_line);
 
-// The nominal robot with the identified exit points and, as each cable's initial_length, the
-// identified l_i0 (the cable paid out at home, where its encoder reads zero); every other value
-// the nominal robot's. The identified swivel offsets and yaw0 are not robot-file keys: the
+// The nominal robot with the identified exit points, the identified anchors (when they were
+// unknowns: --identify anchors) and, as each cable's initial_length, the identified l_i0 (the
+// cable paid out at home, where its encoder reads zero); every other value the nominal robot's. The identified swivel offsets and yaw0 are not robot-file keys: the
 // relative sensors are zeroed at home (README). CABLECAL_CHECK on a result of another robot.
 SpatialRobot CalibratedSpatialRobot(const SpatialRobot& nominal, const SpatialIdentifyResult& result);
 

@@ -61,7 +61,7 @@ py::object SpatialSimulate(const SpatialRobot& robot, py::handle plan, py::handl
 void BindSpatialIdentify(py::module_& m);  // SpatialIdentifyResult, SpatialValidation
 py::object SpatialIdentify(const SpatialRobot& robot, py::handle measurements, py::handle estimator, py::handle gauge,
                            py::handle max_iterations, py::handle loss, py::handle geometry_prior,
-                           py::handle equilibrium);
+                           py::handle equilibrium, py::handle identify);
 py::object SpatialCalibratedRobot(const SpatialRobot& nominal, py::handle result);
 py::object SpatialValidatePy(const SpatialRobot& robot, py::handle measurements, py::handle nominal,
                              bool skip_infeasible);

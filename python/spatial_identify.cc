@@ -90,7 +90,7 @@ PySpatialMeasurements MakeSpatialMeasurements(const SpatialRobot& robot, py::han
 
 py::object SpatialIdentify(const SpatialRobot& robot, py::handle measurements_arg, py::handle estimator,
                            py::handle gauge, py::handle max_iterations, py::handle loss, py::handle geometry_prior,
-                           py::handle equilibrium) {
+                           py::handle equilibrium, py::handle identify) {
   const PySpatialMeasurements& measurements =
       AsObject<PySpatialMeasurements>(measurements_arg, "measurements", "SpatialMeasurements");
   if (measurements.num_cables != robot.num_cables()) Bad("measurements", "read for a robot with another number of cables");
@@ -109,6 +109,7 @@ py::object SpatialIdentify(const SpatialRobot& robot, py::handle measurements_ar
     out.options.max_iterations = static_cast<int>(AsInteger(max_iterations, "max_iterations", 1, kMaxIdentifyIterations));
   }
   out.options.statics = equilibrium.is_none() || OnOff(equilibrium, "equilibrium");
+  out.options.anchors = !identify.is_none() && ParseSpatialIdentify(AsText(identify, "identify"));
   {
     py::gil_scoped_release release;
     out.result = IdentifySpatial(robot, measurements.readings, out.options);
@@ -181,14 +182,15 @@ void BindSpatialIdentify(py::module_& m) {
       .def_property_readonly("iterations", [](const PySpatialIdentifyResult& r) { return r.result.iterations; })
       .def_property_readonly("final_cost", [](const PySpatialIdentifyResult& r) { return r.result.final_cost; })
       .def_property_readonly("names", [](const PySpatialIdentifyResult& r) { return r.result.names; },
-                             "a1x a1y a1z .. amz l10 .. lm0, then sw10 .. swm0 and yaw0 when read")
+                             "a1x a1y a1z .. amz l10 .. lm0, then b1x .. bmz with identify='anchors', then sw10 .. swm0 "
+                             "and yaw0 when read")
       .def_property_readonly("values", [](const PySpatialIdentifyResult& r) { return Vector(r.result.geometry); },
                              "by names: m, rad")
       .def_property_readonly("sigma", [](const PySpatialIdentifyResult& r) { return Vector(r.result.sigma); },
                              "by names; 0 where held")
       .def_property_readonly("covariance", [](const PySpatialIdentifyResult& r) { return Array(r.result.covariance); })
       .def_property_readonly("held", [](const PySpatialIdentifyResult& r) { return r.result.held; },
-                             "the exit coordinates the gauge held at their nominal values")
+                             "the exit (and anchor) coordinates the gauge held at their nominal values")
       .def_property_readonly("null_directions",
                              [](const PySpatialIdentifyResult& r) { return Directions(r.result.null_directions); },
                              "what no reading sees: description, relative_singular_value, vector (by names)")

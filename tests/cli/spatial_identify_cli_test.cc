@@ -258,10 +258,48 @@ TEST_F(SpatialIdentifyCli, TheTruthPredictsItsOwnNoiseFreeReadings) {
   EXPECT_EQ(v["rows"].size(), v["readings"].as<std::size_t>());
 }
 
+// --identify anchors on the random robot with every sensor (the tracker and the inclinometer
+// see the anchors): b1x .. b7z in result.yaml and --json, within 4.5 sigma of the truth (the
+// simulation's anchors are the nominal file's), and the calibrated robot file carries them.
+TEST_F(SpatialIdentifyCli, IdentifyAnchorsEndToEnd) {
+  const std::string robot = RandomRobotFile();
+  Simulate(robot, 60, "0.00002", 4, "m");  // 43 poses the true robot holds
+  const RunResult id = RunCablecal("identify --robot " + robot + " --measurements " + Path("m.csv") +
+                                   " --identify anchors --out " + Path("r.yaml") + " --calibrated-robot " +
+                                   Path("cal.yaml"));
+  ASSERT_EQ(id.exit_code, 0) << id.output;
+  EXPECT_NE(id.output.find("(ml, gauge auto, anchors, statics)"), std::string::npos) << id.output;
+  EXPECT_NE(id.output.find("  b7z = "), std::string::npos) << id.output;
+  const YAML::Node r = YAML::LoadFile(Path("r.yaml"));
+  EXPECT_EQ(r["identify"].as<std::string>(), "anchors");
+  EXPECT_EQ(r["held"].size(), 0u);
+  const cablecal::SpatialRobot nominal = cablecal::LoadSpatialRobotFile(robot);
+  const cablecal::SpatialRobot calibrated = cablecal::LoadSpatialRobotFile(Path("cal.yaml"));
+  for (int i = 0; i < 7; ++i) {
+    for (int c = 0; c < 3; ++c) {
+      const YAML::Node b = r["parameters"]["b" + std::to_string(i + 1) + "xyz"[c]];
+      ASSERT_TRUE(b.IsMap()) << i << c;
+      const double value = b["value"].as<double>(), std = b["std"].as<double>();
+      EXPECT_GT(std, 0.0);
+      EXPECT_LT(std::abs(value - nominal.cables[i].p_P_anchor_m(c)), 4.5 * std) << "b" << i + 1 << "xyz"[c];
+      EXPECT_NEAR(calibrated.cables[i].p_P_anchor_m(c), value, 1e-12 * (1.0 + std::abs(value)));
+    }
+  }
+  EXPECT_NE(Read("cal.yaml").find("platform anchors identified"), std::string::npos);
+  const RunResult json = RunCablecal("identify --robot " + robot + " --measurements " + Path("m.csv") +
+                                     " --identify anchors --json");
+  ASSERT_EQ(json.exit_code, 0) << json.output;
+  const YAML::Node j = YAML::Load(json.output);
+  EXPECT_EQ(j["parameters"].size(), r["parameters"].size());
+  EXPECT_NEAR(j["parameters"]["b3y"]["value"].as<double>(), r["parameters"]["b3y"]["value"].as<double>(), 1e-9);
+}
+
 TEST_F(SpatialIdentifyCli, HostileInputsExitTwoWithOneMessageAndWriteNothing) {
   const std::string robot = RandomRobotFile();
   Simulate(robot, 12, "0", 5, "m");
   KeepColumns("m.csv", "tilt.csv", {"pose", "dl", "roll", "pitch", "z", "f"});
+  KeepColumns("m.csv", "pos.csv", {"pose", "dl", "px", "py", "pz"});  // the anchors' rotations unseen
+  KeepColumns("m.csv", "enc.csv", {"pose", "dl"});  // stretching cables, their tensions unread: too few values
   std::string other = Read("m.csv");
   other.replace(other.find("\npose,dl1"), 9, "\npose,dx1");
   std::ofstream(Path("misspelt.csv")) << other;
@@ -273,9 +311,14 @@ TEST_F(SpatialIdentifyCli, HostileInputsExitTwoWithOneMessageAndWriteNothing) {
       {"--measurements " + Path("misspelt.csv"), "dx1"},
       {"--measurements " + Path("m.csv") + " --gauge hold:a8x", "'a8x' is not an exit coordinate of this 7-cable robot"},
       {"--measurements " + Path("tilt.csv") + " --gauge hold:a1x", "does not fix the gauge: no reading fixes"},
+      {"--measurements " + Path("enc.csv"), "too few to determine the geometry; measure more poses or add a sensor"},
       {"--measurements " + Path("m.csv") + " --estimator paper", "--estimator paper: serves planar robots only"},
       {"--measurements " + Path("m.csv") + " --geometry-prior 0.001", "--geometry-prior: serves planar robots only"},
       {"--measurements " + Path("m.csv") + " --gauge bogus", "--gauge: bogus not in"},
+      {"--measurements " + Path("m.csv") + " --identify foo", "--identify: foo: expected exits"},
+      {"--measurements " + Path("m.csv") + " --gauge hold:b1x", "'b1x' is a platform anchor coordinate"},
+      {"--measurements " + Path("pos.csv") + " --identify anchors --gauge prior --equilibrium off",
+       "the tracker's prior is on the exit points"},
       {"--measurements " + Builtin("cogiro"), "column"},
   };
   for (const Case& c : cases) {
@@ -300,12 +343,15 @@ TEST_F(SpatialIdentifyCli, HostileInputsExitTwoWithOneMessageAndWriteNothing) {
   const RunResult planar = RunCablecal("identify --measurements " + Path("m.csv") + " --gauge auto" + out);
   EXPECT_EQ(planar.exit_code, 2) << planar.output;
   EXPECT_NE(planar.output.find("--gauge auto: serves spatial robots only"), std::string::npos) << planar.output;
+  const RunResult planar_anchors = RunCablecal("identify --measurements " + Path("m.csv") + " --identify anchors" + out);
+  EXPECT_EQ(planar_anchors.exit_code, 2) << planar_anchors.output;
+  EXPECT_NE(planar_anchors.output.find("--identify anchors: serves spatial robots only"), std::string::npos)
+      << planar_anchors.output;
   // validate: another robot's readings, a planar nominal.
   RunResult r = RunCablecal("validate --robot " + robot + " --nominal " + std::string(CABLECAL_SOURCE_DIR) +
                             "/robots/wang2022.yaml --measurements " + Path("m.csv") + " --out " + Path("v.csv"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("--nominal: "), std::string::npos) << r.output;
-  KeepColumns("m.csv", "enc.csv", {"pose", "dl"});
   r = RunCablecal("validate --robot " + robot + " --measurements " + Path("enc.csv") + " --out " + Path("v.csv"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("nothing to compare the predictions with"), std::string::npos) << r.output;

@@ -66,6 +66,14 @@ SpatialRobot PerturbedExits(const SpatialRobot& nominal, Rng& rng, double sigma_
   }
   return truth;
 }
+// The exits and the platform anchors off by sigma_m each coordinate.
+SpatialRobot PerturbedExitsAndAnchors(const SpatialRobot& nominal, Rng& rng, double sigma_m) {
+  SpatialRobot truth = PerturbedExits(nominal, rng, sigma_m);
+  for (SpatialCable& c : truth.cables) {
+    for (int a = 0; a < 3; ++a) c.p_P_anchor_m(a) += rng.Normal(0.0, sigma_m);
+  }
+  return truth;
+}
 
 // The pulley plane's direction off the axis, independently: the anchor's offset from the axis.
 Vector3d PulleyDirection(const SpatialCable& c, const SpatialPose<double>& q) {
@@ -207,28 +215,39 @@ std::string Descriptions(const std::vector<SpatialDirection>& d) {
 }
 
 // The default gauge's null count and held coordinates, then the identification with those
-// coordinates held at the truth's values: everything recovered.
+// coordinates held at the truth's values: everything recovered (with base.anchors the anchors
+// too; the gauge may then hold anchor coordinates).
 void ExpectRecovered(const SpatialRobot& nominal, const Experiment& e, int bits, int expected_null,
-                     const std::string& what) {
+                     const std::string& what, const SpatialIdentifyOptions& base = {}) {
   SCOPED_TRACE(what);
-  const SpatialGaugeAnalysis gauge = AnalyzeSpatialGauge(nominal, e.readings, {});
+  const int m = nominal.num_cables();
+  const SpatialGaugeAnalysis gauge = AnalyzeSpatialGauge(nominal, e.readings, base);
   EXPECT_EQ(static_cast<int>(gauge.null_directions.size()), expected_null) << Descriptions(gauge.null_directions);
   ASSERT_EQ(gauge.held.size(), gauge.null_directions.size());
   SpatialRobot at_truth = nominal;
-  SpatialIdentifyOptions options;
+  SpatialIdentifyOptions options = base;
   options.gauge.kind = SpatialGaugeKind::kHold;
   for (int h : gauge.held) {
-    ASSERT_LT(h, 3 * nominal.num_cables()) << "the default gauge holds only exit coordinates";
-    at_truth.cables[h / 3].p_F_exit_m(h % 3) = e.truth.cables[h / 3].p_F_exit_m(h % 3);
+    if (h < 3 * m) {
+      at_truth.cables[h / 3].p_F_exit_m(h % 3) = e.truth.cables[h / 3].p_F_exit_m(h % 3);
+    } else {
+      const int b = h - 4 * m;  // the anchors follow the lengths
+      ASSERT_TRUE(base.anchors && b >= 0 && b < 3 * m) << "the default gauge holds exit or free anchor coordinates";
+      at_truth.cables[b / 3].p_P_anchor_m(b % 3) = e.truth.cables[b / 3].p_P_anchor_m(b % 3);
+    }
     options.gauge.held.push_back(gauge.names[h]);
   }
   const SpatialIdentifyResult r = IdentifySpatial(at_truth, e.readings, options);
   ASSERT_TRUE(r.converged()) << r.message;
   EXPECT_EQ(r.held, options.gauge.held);
-  const int m = nominal.num_cables();
+  const int swivel = base.anchors ? 7 * m : 4 * m;  // sw10's index
   for (int i = 0; i < m; ++i) {
     for (int a = 0; a < 3; ++a) {
       EXPECT_NEAR(r.geometry(3 * i + a), e.truth.cables[i].p_F_exit_m(a), kRecoveryTol_m) << r.names[3 * i + a];
+      if (!base.anchors) continue;
+      const int k = 4 * m + 3 * i + a;
+      EXPECT_EQ(r.names[k], "b" + std::to_string(i + 1) + "xyz"[a]);
+      EXPECT_NEAR(r.geometry(k), e.truth.cables[i].p_P_anchor_m(a), kRecoveryTol_m) << r.names[k];
     }
     EXPECT_NEAR(r.geometry(3 * m + i), e.l0_m(i), kRecoveryTol_m) << r.names[3 * m + i];
     if (bits & kSwivel) {
@@ -236,7 +255,7 @@ void ExpectRecovered(const SpatialRobot& nominal, const Experiment& e, int bits,
       // home on the robot it was given) to where the encoder was zeroed.
       const double sw0 = AngleAbout(e.truth.cables[i].k_F_swivel_axis,
                                     PulleyDirection(at_truth.cables[i], nominal.home_pose()), e.u_F_zero[i]);
-      EXPECT_NEAR(Wrapped(r.geometry(4 * m + i) - sw0), 0.0, kRecoveryTol_rad) << r.names[4 * m + i];
+      EXPECT_NEAR(Wrapped(r.geometry(swivel + i) - sw0), 0.0, kRecoveryTol_rad) << r.names[swivel + i];
     }
   }
   if (bits & kHeading) {
@@ -443,6 +462,40 @@ TEST(SpatialIdentify, SubsetsThatCannotDetermineTheGeometryAreRefused) {
             std::string::npos);
   EXPECT_NE(InputErrorOf([] { ParseSpatialGauge("hold"); }).find("--gauge"), std::string::npos);
   EXPECT_NE(InputErrorOf([] { ParseSpatialGauge("hold:"); }).find("names no coordinate"), std::string::npos);
+}
+
+// A lab's own choice (issue 27, "Must show"): its frame measured, every exit coordinate held at
+// the surveyed values, so that only the initial lengths and the poses are identified: the
+// "initial-pose self-calibration" of an underactuated robot (irma4u and a random 4-cable
+// robot, encoders + inclinometer, the equilibrium deciding the rest), recovered to 1e-7 m.
+TEST(SpatialIdentify, HoldingEveryExitCalibratesTheInitialLengthsOfAnUnderactuatedRobot) {
+  Rng rng(1515);
+  Rng draw(1516);
+  for (const SpatialRobot& robot : {WithSensors(Builtin("irma4u"), kInc),
+                                    WithSensors(RandomInextensible(draw, "random4", 4), kInc)}) {
+    SCOPED_TRACE(robot.name);
+    const SpatialRobot truth = PerturbedExits(robot, rng, 0.01);
+    const Experiment e = MakeExperiment(robot, truth, 20, kInc, rng);
+    SpatialRobot surveyed = robot;  // the frame as the lab measured it: the true exits
+    std::string hold = "hold:";
+    for (int i = 0; i < 4; ++i) {
+      surveyed.cables[i].p_F_exit_m = truth.cables[i].p_F_exit_m;
+      for (const char* a : {"x", "y", "z"}) hold += (i > 0 || *a != 'x' ? "," : "") + ("a" + std::to_string(i + 1)) + a;
+    }
+    SpatialIdentifyOptions options;
+    options.gauge = ParseSpatialGauge(hold);
+    const SpatialIdentifyResult r = IdentifySpatial(surveyed, e.readings, options);
+    ASSERT_TRUE(r.converged()) << r.message;
+    EXPECT_EQ(r.held.size(), 12u);
+    for (int i = 0; i < 4; ++i) {
+      EXPECT_NEAR(r.geometry(12 + i), e.l0_m(i), kRecoveryTol_m) << r.names[12 + i];
+      EXPECT_GT(r.sigma(12 + i), 0.0) << r.names[12 + i];
+      for (int a = 0; a < 3; ++a) EXPECT_EQ(r.sigma(3 * i + a), 0.0) << r.names[3 * i + a];
+    }
+    for (std::size_t j = 0; j < e.poses.size(); ++j) {
+      EXPECT_LT((r.poses[j] - e.poses[j]).cwiseAbs().maxCoeff(), kRecoveryTol_m) << "pose " << j;
+    }
+  }
 }
 
 // With the prior every null direction is fixed by the tracker's survey; nothing is held.
@@ -835,6 +888,158 @@ TEST(SpatialIdentify, ElasticEncodersAloneAreRefusedSayingWhy) {
   }
   const std::string message = InputErrorOf([&] { IdentifySpatial(nominal, encoders, {}); });
   EXPECT_NE(message.find("tensions per pose"), std::string::npos) << message;
+}
+
+}  // namespace
+}  // namespace cablecal
+
+namespace cablecal {
+namespace {
+
+// ---- Free platform anchors (--identify anchors) ---------------------------------------------
+//
+// Theory. With the anchors b_i unknowns, a rigid motion of the anchors in P undone by every
+// pose (b_i -> Q b_i + c, R_j -> R_j Q^T, p_j -> p_j - R_j Q^T c) leaves every B_i, so every
+// length, unchanged: 6 more null directions for the encoders. A position tracker reads the
+// point p + R t of P (t: its target, from the robot file, not an anchor): it sees the
+// translation c, not a rotation about t (3 remain). An inclinometer reads gravity in P, R^T z:
+// it sees a rotation about P's x and y, and one about P's z through the platform's tilt at the
+// poses (Q R^T z differs from R^T z when R^T z is not along z). A laser reads p_z: it sees c
+// through the tilt too (first order in x and y, second in z: weakly).
+
+SpatialIdentifyOptions FreeAnchors() {
+  SpatialIdentifyOptions o;
+  o.anchors = true;
+  return o;
+}
+
+TEST(SpatialIdentifyAnchors, RecoveredWithEncodersPositionAndInclinometer) {
+  Rng rng(2701);
+  const int bits = kPos | kInc;
+  // Random robots (tilted swivel axes, offset centre of mass) of 6 and 8 cables, and cogiro.
+  for (const int m : {6, 8}) {
+    const SpatialRobot nominal = WithSensors(RandomInextensible(rng, "random" + std::to_string(m), m), bits);
+    const Experiment e = MakeExperiment(nominal, PerturbedExitsAndAnchors(nominal, rng, 0.01), 30, bits, rng);
+    ExpectRecovered(nominal, e, bits, 0, nominal.name, FreeAnchors());
+  }
+  const SpatialRobot cogiro = WithSensors(Builtin("cogiro"), bits);
+  ExpectRecovered(cogiro, MakeExperiment(cogiro, PerturbedExitsAndAnchors(cogiro, rng, 0.01), 30, bits, rng), bits, 0,
+                  "cogiro", FreeAnchors());
+}
+
+// The subsets that leave null directions: held, exits first, then anchor coordinates.
+TEST(SpatialIdentifyAnchors, OtherSubsetsHoldExitsThenAnchors) {
+  Rng rng(2702);
+  const SpatialRobot random = RandomInextensible(rng, "random8", 8);
+  const SpatialRobot truth = PerturbedExitsAndAnchors(random, rng, 0.01);
+  // The tracker alone: the anchors' 3 rotations about its target, held by 3 anchor coordinates;
+  // and through Ceres (a robust loss), the held anchor coordinates a subset of their block.
+  const SpatialRobot pos = WithSensors(random, kPos);
+  const Experiment tracked = MakeExperiment(pos, truth, 30, kPos, rng);
+  ExpectRecovered(pos, tracked, kPos, 3, "random8, position", FreeAnchors());
+  SpatialIdentifyOptions huber = FreeAnchors();
+  huber.loss.kind = LossKind::kHuber;
+  huber.loss.scale_sigmas = kDefaultHuberScaleSigmas;
+  ExpectRecovered(pos, tracked, kPos, 3, "random8, position, huber", huber);
+  for (int h : AnalyzeSpatialGauge(pos, tracked.readings, FreeAnchors()).held) EXPECT_GE(h, 4 * 8) << "an exit held";
+  // The encoders alone: the frame's 3 translations and the anchors' 6 motions.
+  ExpectRecovered(random, MakeExperiment(random, truth, 60, 0, rng), 0, 9, "random8, encoders", FreeAnchors());
+  // Inclinometer and laser: the frame's translations x and y.
+  const SpatialRobot il = WithSensors(random, kInc | kLaser);
+  ExpectRecovered(il, MakeExperiment(il, truth, 40, kInc | kLaser, rng), kInc | kLaser, 2, "random8, inc + laser",
+                  FreeAnchors());
+  // Four cables, the equilibrium among the residuals.
+  const SpatialRobot four = WithSensors(RandomInextensible(rng, "random4", 4), kSwivel | kInc);
+  ExpectRecovered(four, MakeExperiment(four, PerturbedExitsAndAnchors(four, rng, 0.01), 40, kSwivel | kInc, rng),
+                  kSwivel | kInc, 3, "random4, swivel + inc", FreeAnchors());
+}
+
+TEST(SpatialIdentifyAnchors, NullDirectionCountsOnCogiro) {
+  Rng rng(2703);
+  const SpatialRobot nominal = WithSensors(Builtin("cogiro"), kInc | kLaser | kPos);
+  const SpatialRobot truth = PerturbedExitsAndAnchors(nominal, rng, 0.01);
+  const struct {
+    int bits;
+    int nulls;
+  } cases[] = {{0, 10}, {kInc, 7}, {kLaser, 6}, {kInc | kLaser, 3}, {kPos, 3}, {kPos | kInc, 0}};
+  const std::string frame = "\n  a translation along x of the frame\n  a translation along y of the frame";
+  const std::string rotations = "\n  a rotation about x of the anchors in P\n  a rotation about y of the anchors in "
+                                "P\n  a rotation about z of the anchors in P";
+  for (const auto& c : cases) {
+    const Experiment e = MakeExperiment(nominal, truth, 40, c.bits, rng);
+    const SpatialGaugeAnalysis g = AnalyzeSpatialGauge(nominal, e.readings, FreeAnchors());
+    const std::string words = Descriptions(g.null_directions);
+    EXPECT_EQ(static_cast<int>(g.null_directions.size()), c.nulls) << "sensors " << c.bits << words;
+    ASSERT_EQ(g.held.size(), g.null_directions.size());
+    int anchors_held = 0;
+    for (int h : g.held) anchors_held += g.names[h][0] == 'b' ? 1 : 0;
+    if (c.bits == 0) {  // every rigid motion of the anchors, and the frame's that keep the axes (+-z)
+      EXPECT_EQ(words, frame + "\n  a translation along z of the frame\n  a rotation about z of the frame"
+                               "\n  a translation along x of the anchors in P\n  a translation along y of the "
+                               "anchors in P\n  a translation along z of the anchors in P" + rotations);
+      EXPECT_EQ(anchors_held, 6);
+    }
+    if (c.bits == kLaser) {  // the laser sees p_z: the anchors' translation, not their rotation about P's origin
+      EXPECT_EQ(words, frame + "\n  a rotation about z of the frame" + rotations);
+      EXPECT_EQ(anchors_held, 3);
+    }
+    if (c.bits == (kInc | kLaser)) EXPECT_EQ(anchors_held, 0) << "held an anchor where exits suffice";
+  }
+}
+
+// What cannot fix the anchors' null directions is refused, naming them; anchor names only with
+// the anchors free; --identify's values.
+TEST(SpatialIdentifyAnchors, UnfixedAnchorDirectionsAreRefusedNamingThem) {
+  Rng rng(2704);
+  const SpatialRobot nominal = WithSensors(RandomInextensible(rng, "random7", 7), kPos);
+  const Experiment e = MakeExperiment(nominal, PerturbedExitsAndAnchors(nominal, rng, 0.01), 30, kPos, rng);
+  SpatialIdentifyOptions options = FreeAnchors();
+  // Exits held, the anchors' rotations about the tracker's target left.
+  options.gauge = ParseSpatialGauge("hold:a1x,a1y,a1z");
+  const std::string exits = InputErrorOf([&] { IdentifySpatial(nominal, e.readings, options); });
+  EXPECT_NE(exits.find("does not fix the gauge"), std::string::npos) << exits;
+  EXPECT_NE(exits.find("of the anchors in P"), std::string::npos) << exits;
+  EXPECT_NE(exits.find("(3 of the 3 null directions left); hold b"), std::string::npos) << exits;
+  // The tracker's prior is on the exits only.
+  options.gauge.kind = SpatialGaugeKind::kPrior;
+  const std::string prior = InputErrorOf([&] { IdentifySpatial(nominal, e.readings, options); });
+  EXPECT_NE(prior.find("--gauge: prior: the tracker's prior is on the exit points"), std::string::npos) << prior;
+  EXPECT_NE(prior.find("anchors in P"), std::string::npos) << prior;
+  // A lab's hold of anchor coordinates that fixes them is accepted.
+  options.gauge = ParseSpatialGauge("hold:b1x,b1y,b2z");
+  EXPECT_TRUE(IdentifySpatial(nominal, e.readings, options).converged());
+  options.gauge = ParseSpatialGauge("hold:b8x");
+  EXPECT_NE(InputErrorOf([&] { IdentifySpatial(nominal, e.readings, options); })
+                .find("'b8x' is not an exit or anchor coordinate of this 7-cable robot (a1x .. a7z, b1x .. b7z)"),
+            std::string::npos);
+  // Anchor names without free anchors.
+  SpatialIdentifyOptions fixed;
+  fixed.gauge = ParseSpatialGauge("hold:b1x");
+  EXPECT_NE(InputErrorOf([&] { IdentifySpatial(nominal, e.readings, fixed); })
+                .find("'b1x' is a platform anchor coordinate: an unknown, that a gauge may hold, only with "
+                      "--identify anchors"),
+            std::string::npos);
+  EXPECT_FALSE(ParseSpatialIdentify("exits"));
+  EXPECT_TRUE(ParseSpatialIdentify("anchors"));
+  EXPECT_NE(InputErrorOf([] { ParseSpatialIdentify("foo"); }).find("--identify: foo: expected exits"),
+            std::string::npos);
+}
+
+// With the anchors free and everything seen, the covariance has the anchors' sigmas: finite,
+// and larger than with the anchors taken as exact for the exits they trade off with.
+TEST(SpatialIdentifyAnchors, CovarianceCarriesTheAnchors) {
+  Rng rng(2705);
+  const SpatialRobot nominal = WithSensors(RandomInextensible(rng, "random7", 7), kPos | kInc);
+  const Experiment e = MakeExperiment(nominal, nominal, 30, kPos | kInc, rng);
+  const SpatialIdentifyResult fixed = IdentifySpatial(nominal, e.readings, {});
+  const SpatialIdentifyResult free = IdentifySpatial(nominal, e.readings, FreeAnchors());
+  ASSERT_TRUE(fixed.converged() && free.converged()) << fixed.message << free.message;
+  ASSERT_EQ(free.sigma.size(), fixed.sigma.size() + 21);
+  for (int k = 28; k < 49; ++k) {
+    EXPECT_GT(free.sigma(k), 0.0) << free.names[k];
+    EXPECT_LT(free.sigma(k), 0.01) << free.names[k];  // sigmas of 0.3 mm and 3 mrad: well below a centimetre
+  }
+  for (int k = 0; k < 28; ++k) EXPECT_GE(free.sigma(k), fixed.sigma(k) * (1.0 - 1e-9)) << free.names[k];
 }
 
 }  // namespace

@@ -948,8 +948,9 @@ def test_spatial_arguments_are_checked():
     np.testing.assert_array_equal(run.measurements.dl, plan.length_changes)
 
 
-def test_spatial_identify_equals_cli_and_takes_arrays(tmp_path):
-    path = robot_file("cogiro")
+def simulated_spatial(tmp_path, path):
+    """The robot file at path, 16 poses sampled and simulated with a 2 mm geometry error, and
+    the measurement CSV written to tmp_path: (robot, run, csv)."""
     robot = cablecal.Robot.load(path)
     plan = cablecal.sample(robot, 16, seed=2)
     with warnings.catch_warnings():
@@ -957,6 +958,12 @@ def test_spatial_identify_equals_cli_and_takes_arrays(tmp_path):
         run = cablecal.simulate(robot, plan, geometry_sigma=0.002, seed=2, skip_infeasible=True)
     csv = tmp_path / "m.csv"
     csv.write_text(run.measurements.to_csv())
+    return robot, run, csv
+
+
+def test_spatial_identify_equals_cli_and_takes_arrays(tmp_path):
+    path = robot_file("cogiro")
+    robot, run, csv = simulated_spatial(tmp_path, path)
     result = cablecal.identify(robot, run.measurements)
     assert isinstance(result, cablecal.SpatialIdentifyResult) and result.status == "converged"
     out = tmp_path / "r.yaml"
@@ -995,6 +1002,31 @@ def test_spatial_identify_equals_cli_and_takes_arrays(tmp_path):
                  "residuals.png"):
         assert (tmp_path / "report" / name).exists(), name
     assert "## Validation on held-out poses" in (tmp_path / "report" / "report.md").read_text()
+
+
+def test_spatial_identify_anchors_equals_cli(tmp_path):
+    # cogiro with an inclinometer beside its tracker (the anchors seen) and load cells (its
+    # stretching cables' tensions read).
+    text = open(robot_file("cogiro")).read().replace("  encoder: {sigma: 0.00005}", "  encoder: {sigma: 0.00005}\n"
+                                                     "  inclinometer: {accuracy_deg: 0.1, repeatability_deg: 0.05}\n"
+                                                     "  load_cell: {accuracy: 3.0, repeatability: 1.0}")
+    path = str(tmp_path / "cogiro_sensors.yaml")
+    open(path, "w").write(text)
+    robot, run, csv = simulated_spatial(tmp_path, path)
+    result = cablecal.identify(robot, run.measurements, identify="anchors")
+    doc = json.loads(cli("identify", "--robot", path, "--measurements", str(csv), "--identify", "anchors", "--json"))
+    assert doc["identify"] == "anchors" and json.loads(result.to_json())["identify"] == "anchors"
+    assert result.names[32:56] == ["b%d%s" % (i, a) for i in range(1, 9) for a in "xyz"]
+    assert list(doc["parameters"]) == result.names and result.held == doc["held"]
+    np.testing.assert_allclose([doc["parameters"][n]["value"] for n in result.names], result.values, rtol=1e-12)
+    np.testing.assert_allclose([doc["parameters"][n]["std"] for n in result.names], result.sigma, rtol=1e-6)
+    anchors = cablecal.calibrated_robot(robot, result).to_dict()["platform"]["anchors"]
+    np.testing.assert_array_equal(anchors, result.values[32:56].reshape(8, 3))
+    with pytest.raises(cablecal.InputError, match="--identify: foo: expected exits"):
+        cablecal.identify(robot, run.measurements, identify="foo")
+    planar = cablecal.Robot.builtin()
+    with pytest.raises(cablecal.InputError, match="serves spatial robots only"):
+        cablecal.identify(planar, cablecal.Measurements(planar, np.zeros((6, 2))), identify="anchors")
 
 
 def test_spatial_identify_refuses_what_it_cannot_do():
