@@ -336,7 +336,7 @@ int main(int argc, char** argv) {
       "reproduce", "run the paper's study on the built-in robot into results/ (--study spatial: the spatial study into "
                    "results/spatial/)");
   AddRobotOption(rep_cmd, &rep.robot_path);
-  rep_cmd->add_option("--study", rep.study, "paper (the planar study) or spatial (cogiro and irma4u)")
+  rep_cmd->add_option("--study", rep.study, "paper (the planar study) or spatial (the built-in cogiro)")
       ->capture_default_str()
       ->check(CLI::IsMember({"paper", "spatial"}));
   // A testing aid of the spatial study (README, "The spatial study"): hidden from --help.

@@ -370,7 +370,7 @@ SpatialRobot StudyRobot(const SpatialStudyConfiguration& c) {
 // between MPI ranks).
 int RunSpatialReproduce(const Context& ctx, const ReproduceOptions& options) {
   if (!options.robot_path.empty()) {
-    throw InputError("--robot", "", "the spatial study runs on the built-in cogiro and irma4u; give no --robot");
+    throw InputError("--robot", "", "the spatial study runs on the built-in cogiro; give no --robot");
   }
   if (ctx.processes.count > 1) {
     throw InputError("reproduce", "", "the spatial study runs on one process for now (got " +
