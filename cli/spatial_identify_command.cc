@@ -84,8 +84,9 @@ int RunSpatialIdentify(const Context& ctx, const IdentifyCommandOptions& options
           ? std::vector<SpatialMeasurement>()
           : ReadSpatialMeasurementsCsv(options.holdout_path, nominal.num_cables(), ParseDelimiter(options.delimiter));
   const SpatialIdentifyResult result = IdentifySpatial(nominal, readings, id);
-  if (result.status == SpatialIdentifyStatus::kRankDeficient) {
-    throw InputError(options.measurements_path, "", result.message);  // the data cannot calibrate it, as planar
+  if (result.status == SpatialIdentifyStatus::kRankDeficient || result.status == SpatialIdentifyStatus::kPoorFit) {
+    // The data cannot calibrate it, or do not fit it (poor_fit): bad input, as planar.
+    throw InputError(options.measurements_path, "", result.message);
   }
   if (!result.converged()) throw SolverFailure(options.measurements_path + ": " + result.message);
   const std::string result_yaml = options.out_path.empty() && options.report_dir.empty()

@@ -1584,6 +1584,7 @@ const char* ToString(SpatialIdentifyStatus s) {
     case SpatialIdentifyStatus::kConverged: return "converged";
     case SpatialIdentifyStatus::kNotConverged: return "not_converged";
     case SpatialIdentifyStatus::kRankDeficient: return "rank_deficient";
+    case SpatialIdentifyStatus::kPoorFit: return "poor_fit";
   }
   return "?";
 }
@@ -1726,11 +1727,23 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
     }
   }
   double cost = 0.0;
+  double reading_squares = 0.0;
+  int reading_values = 0, sensor_values = 0, tripped = 0;
   for (const Term& t : model.terms) {
     VectorXd r(t.size());
     EvaluateTerm(t, g, locals, r.data(), nullptr, nullptr);
     cost += 0.5 * r.squaredNorm();
     if (t.reading < 0) continue;
+    if (t.sensor != kEquilibriumTerm) {
+      for (int v = 0; v < t.size(); ++v) {
+        const bool beyond = !(std::abs(r(v)) <= kOutlierSigmas);
+        tripped += beyond;
+        ++sensor_values;
+        if (options.loss.kind != LossKind::kNone && beyond) continue;
+        reading_squares += r(v) * r(v);
+        ++reading_values;
+      }
+    }
     SpatialReadingFit& fit = result.fits[t.reading];
     VectorXd& out = t.sensor == kEquilibriumTerm ? fit.equilibrium : t.sensor < 0 ? fit.encoders : fit.sensors[t.sensor];
     if (t.sensor == kEquilibriumTerm) out.resize(6);
@@ -1752,6 +1765,8 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
     }
   }
   result.final_cost = cost;
+  result.whitened_rms = reading_values > 0 ? std::sqrt(reading_squares / reading_values)
+                                           : std::numeric_limits<double>::infinity();
   result.warnings = SpatialPlausibilityWarnings(nominal, g);
   if (std::abs(result.worst_residual) > kOutlierSigmas) {
     char buf[64];
@@ -1809,6 +1824,52 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
     result.message = std::to_string(unseen - expected_unseen) +
                      " direction(s) of the geometry beyond the gauge are unseen at the estimate (the readings "
                      "saw them at the start only): not a result";
+    return result;
+  }
+  // The verdicts of a converged fit (the planar identification's): readings far from it are
+  // not noise, and a geometry off the frame is no robot's. Either is a status, never a result.
+  if (!(result.whitened_rms <= kSpatialPoorFitFactor)) {
+    char buf[200];
+    std::snprintf(buf, sizeof(buf),
+                  "the readings' whitened residuals have an RMS of %.3g times the sensors' noise (more than %g; "
+                  "the worst, %s of pose %d, %.3g sigma)",
+                  result.whitened_rms, kSpatialPoorFitFactor, result.worst_sensor.c_str(), result.worst_pose_id,
+                  result.worst_residual);
+    result.status = SpatialIdentifyStatus::kPoorFit;
+    result.message = std::string(buf) +
+                     ": the measurements do not fit this robot (are dl1..dl" + std::to_string(L.m) +
+                     " in the order of the robot file's cables, the readings of this robot, in m and rad, and the "
+                     "sensors' sigmas the robot file's?), or the solver stopped in a wrong minimum; not a result";
+    return result;
+  }
+  // Readings beyond kOutlierSigmas: without a robust loss any one refuses the fit (for clean
+  // data each value is at most N(0, 1), so 400 values trip it with probability 0.3 %); with one,
+  // a few are what it down-weights, and more than kFewOutliers or 5 % of the values point to
+  // wrong units or another robot, which no loss mends.
+  const int few = std::max(static_cast<int>(kFewOutliers), sensor_values / 20);
+  const bool robust = options.loss.kind != LossKind::kNone;
+  if (tripped > 0 && (!robust || tripped > few)) {
+    char buf[200];
+    std::snprintf(buf, sizeof(buf), "%d reading value%s beyond %g sigma, the worst %s of pose %d at %.3g sigma", tripped,
+                  tripped == 1 ? "" : "s", kOutlierSigmas, result.worst_sensor.c_str(), result.worst_pose_id,
+                  result.worst_residual);
+    result.status = SpatialIdentifyStatus::kPoorFit;
+    result.message = "readings that do not fit this robot: " + std::string(buf) +
+                     (result.worst_where.empty() ? "" : " (" + result.worst_where + ")") +
+                     (robust ? ": too many for a robust loss to be trusted: are the readings in the file's units (m, "
+                               "rad), and of this robot?"
+                             : ": check that reading, drop its pose, or identify with --loss cauchy, which "
+                               "down-weights it") +
+                     "; not a result";
+    return result;
+  }
+  if (options.check_plausible_geometry && !result.warnings.empty() &&
+      !SpatialPlausibilityWarnings(nominal, g).empty()) {
+    result.status = SpatialIdentifyStatus::kPoorFit;
+    result.message = "the identified geometry is no robot's of this file: " +
+                     Join(SpatialPlausibilityWarnings(nominal, g), "; ") +
+                     "; few or bunched poses may not determine the geometry either (plan them with cablecal "
+                     "design); not a result";
     return result;
   }
   result.status = SpatialIdentifyStatus::kConverged;

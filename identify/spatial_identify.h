@@ -117,7 +117,18 @@ struct SpatialIdentifyOptions {
   int max_iterations = 200;
   bool statics = true;  // the tensions, load cells, equilibrium and stretch (file comment)
   bool anchors = false;  // --identify anchors: every platform anchor b_i an unknown too (file comment)
+  // Refuse an estimate no robot of this file can have (SpatialPlausibilityWarnings: an exit
+  // point off the frame box, an initial length off by more than its diagonal) as poor_fit, as
+  // the planar identification does. Off in the Monte Carlo: there a wild estimate from a poor
+  // pose set is a result to count, not a sign of wrong data.
+  bool check_plausible_geometry = true;
 };
+
+// A converged fit whose readings' whitened residuals have an RMS above this (over the sensors'
+// values, not the equilibrium's rows; with a robust loss, over the values within
+// kOutlierSigmas) is poor_fit: that is not noise, but readings of another robot, in other
+// units, or a wrong minimum (the planar identification's factor).
+constexpr double kSpatialPoorFitFactor = 10.0;
 
 // `--identify`: "exits" (the exit points and initial lengths: the default) or "anchors" (the
 // platform anchors too). InputError naming --identify otherwise.
@@ -147,6 +158,8 @@ enum class SpatialIdentifyStatus {
   kConverged,
   kNotConverged,   // the solver stopped without meeting its tolerances: not a result
   kRankDeficient,  // at the estimate a direction beyond the gauge is unseen: not a result
+  kPoorFit,        // converged, but the readings do not fit (kSpatialPoorFitFactor) or the
+                   // geometry is implausible (check_plausible_geometry): not a result
 };
 const char* ToString(SpatialIdentifyStatus s);
 
@@ -180,6 +193,8 @@ struct SpatialIdentifyResult {
   // the frame box, an initial length off its nominal by more than the frame's diagonal, the
   // worst reading beyond kOutlierSigmas.
   std::vector<std::string> warnings;
+  // The RMS of the readings' whitened residuals (kSpatialPoorFitFactor's), 0 until computed.
+  double whitened_rms = 0.0;
   bool converged() const { return status == SpatialIdentifyStatus::kConverged; }
 };
 

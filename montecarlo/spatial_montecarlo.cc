@@ -40,6 +40,8 @@ SpatialIdentifyOptions TrialIdentifyOptions(const SpatialMonteCarloOptions& o, c
   // the wide spread it leaves rather than count the trials as failed (a new user's robot: 4 of 4
   // trials not converged at 200, all converged at 2000, sigmas of decimetres).
   id.max_iterations = kSpatialTrialMaxIterations;
+  // A wild estimate from a poor pose set is a result to count (the planar Monte Carlo's rule).
+  id.check_plausible_geometry = false;
   id.gauge.kind = SpatialGaugeKind::kHold;
   id.gauge.held = held;
   return id;

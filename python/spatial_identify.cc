@@ -115,7 +115,9 @@ py::object SpatialIdentify(const SpatialRobot& robot, py::handle measurements_ar
     out.result = IdentifySpatial(robot, measurements.readings, out.options);
   }
   // As the CLI: a result that is not one is an error, never returned.
-  if (out.result.status == SpatialIdentifyStatus::kRankDeficient) throw InputError("measurements", "", out.result.message);
+  if (out.result.status == SpatialIdentifyStatus::kRankDeficient || out.result.status == SpatialIdentifyStatus::kPoorFit) {
+    throw InputError("measurements", "", out.result.message);
+  }
   if (!out.result.converged()) throw SolverFailure("measurements: " + out.result.message);
   for (const std::string& w : out.result.warnings) {
     if (PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 1) < 0) throw py::error_already_set();

@@ -425,11 +425,13 @@ TEST(SpatialIdentify, HoldThatLeavesANullDirectionIsRefusedNamingIt) {
   options.gauge = ParseSpatialGauge("hold:a1x,a1y");
   const std::string rotation = InputErrorOf([&] { IdentifySpatial(ipanema, f.readings, options); });
   EXPECT_NE(rotation.find("rotation about z"), std::string::npos) << rotation;
-  // Holding every exit coordinate is a lab's own choice: accepted.
+  // Holding every exit coordinate is a lab's own choice: accepted (on readings of exits as
+  // filed: held 1 cm off they would not fit, and the fit would be refused as poor_fit).
   std::string all = "hold:";
   for (int i = 1; i <= 8; ++i) all += std::string(i > 1 ? "," : "") + "a" + std::to_string(i) + "x,a" + std::to_string(i) + "y,a" + std::to_string(i) + "z";
   options.gauge = ParseSpatialGauge(all);
-  const SpatialIdentifyResult r = IdentifySpatial(ipanema, f.readings, options);
+  const Experiment as_filed = MakeExperiment(ipanema, ipanema, 30, kLaser, rng);
+  const SpatialIdentifyResult r = IdentifySpatial(ipanema, as_filed.readings, options);
   EXPECT_TRUE(r.converged()) << r.message;
   EXPECT_EQ(r.held.size(), 24u);
 }
@@ -767,7 +769,14 @@ TEST(SpatialIdentify, ImplausibleGeometryAndTheWorstReadingAreNamed) {
   SpatialRobot small = nominal;
   small.p_F_frame_max_m.x() = nominal.cables[0].p_F_exit_m.x() - 0.6;
   small.p_F_frame_min_m.x() = std::min(small.p_F_frame_min_m.x(), small.p_F_frame_max_m.x() - 1.0);
-  const SpatialIdentifyResult off = IdentifySpatial(small, e.readings, {});
+  // Refused (poor_fit, the planar rule) unless the check is off, as in the Monte Carlo; the
+  // warnings name the exit either way.
+  const SpatialIdentifyResult refused = IdentifySpatial(small, e.readings, {});
+  EXPECT_EQ(refused.status, SpatialIdentifyStatus::kPoorFit);
+  EXPECT_NE(refused.message.find("exit point 1 is 0."), std::string::npos) << refused.message;
+  SpatialIdentifyOptions unchecked;
+  unchecked.check_plausible_geometry = false;
+  const SpatialIdentifyResult off = IdentifySpatial(small, e.readings, unchecked);
   ASSERT_TRUE(off.converged()) << off.message;
   bool named = false;
   // About 0.6 m: the truth's exit is the nominal one moved by ~1 cm.
@@ -811,6 +820,48 @@ TEST(SpatialIdentify, ImplausibleGeometryAndTheWorstReadingAreNamed) {
   named = false;
   for (const std::string& w : bad.warnings) named = named || w.find("position py of pose 7") != std::string::npos;
   EXPECT_TRUE(named) << (bad.warnings.empty() ? "no warning" : bad.warnings.front());
+  // And refused (poor_fit), naming it, unless a robust loss down-weights it.
+  EXPECT_EQ(bad.status, SpatialIdentifyStatus::kPoorFit);
+  EXPECT_NE(bad.message.find("beyond 4.5 sigma, the worst position py of pose 7"), std::string::npos)
+      << bad.message;
+  SpatialIdentifyOptions cauchy;
+  cauchy.loss = RobustLoss{LossKind::kCauchy, kDefaultCauchyScaleSigmas};
+  const SpatialIdentifyResult robust = IdentifySpatial(nominal, outlier, cauchy);
+  EXPECT_TRUE(robust.converged()) << robust.message;
+}
+
+// Readings whose noise is 30 times the robot file's sigmas: converged, but refused as poor_fit
+// by the RMS of the whitened residuals (readings in other units, of another robot, or a
+// wrong minimum look so), the RMS said; with the file's own sigmas, accepted.
+TEST(SpatialIdentify, ResidualsFarAboveTheNoiseAreAPoorFit) {
+  Rng rng(1818);
+  // Redundant robots of inextensible cables. Where each pose's readings are hardly more values
+  // than its unknowns, the residuals stay small whatever the sigmas and this verdict cannot
+  // see: irma4u (4 cables, its tensions), and the stretching robots without load cells (each
+  // cable's tension takes its encoder: cogiro as filed gives an RMS of 0.08 here).
+  for (const auto& [name, reach] : {std::pair<const char*, double>{"cogiro", 6.0}, {"ipanema1", 2.0}}) {
+    SCOPED_TRACE(name);
+    const SpatialRobot noisy_lab = WithSensors(Builtin(name), kInc | kLaser);
+    const Experiment clean =
+        MakeExperiment(noisy_lab, PerturbedExits(noisy_lab, rng, 0.01), 20, kInc | kLaser, rng, reach);
+    VectorXd z(NoiseDraws(clean.readings));
+    for (int k = 0; k < z.size(); ++k) z(k) = rng.Normal(0.0, 1.0);
+    const std::vector<SpatialMeasurement> readings = WithSensorNoise(noisy_lab, clean.readings, z);
+    const SpatialIdentifyResult fits = IdentifySpatial(noisy_lab, readings, {});
+    ASSERT_TRUE(fits.converged()) << fits.message;
+    EXPECT_LT(fits.whitened_rms, 1.5);
+    SpatialRobot optimistic = noisy_lab;
+    SpatialSensors& s = optimistic.sensors;
+    s.encoder_sigma_m /= 30.0;
+    for (std::optional<RangedNoise>* n : {&s.inclinometer_rad, &s.laser_m, &s.swivel_rad, &s.heading_rad, &s.load_cell_N}) {
+      if (*n) *n = RangedNoise{(*n)->accuracy / 30.0, (*n)->repeatability / 30.0};
+    }
+    if (s.position) s.position->noise_m = RangedNoise{s.position->noise_m.accuracy / 30.0, s.position->noise_m.repeatability / 30.0};
+    const SpatialIdentifyResult poor = IdentifySpatial(optimistic, readings, {});
+    EXPECT_EQ(poor.status, SpatialIdentifyStatus::kPoorFit) << ToString(poor.status) << ": " << poor.message;
+    EXPECT_GT(poor.whitened_rms, kSpatialPoorFitFactor);
+    EXPECT_NE(poor.message.find("whitened residuals have an RMS of"), std::string::npos) << poor.message;
+  }
 }
 
 // ---- Cables that stretch --------------------------------------------------------------------
@@ -819,14 +870,15 @@ TEST(SpatialIdentify, ImplausibleGeometryAndTheWorstReadingAreNamed) {
 // inclinometer + laser, readings from the spatial simulation (the true robot settles with the
 // commanded paid-out lengths, model/forward_statics.h). The truth's l_i0 is the cable paid out
 // at home. Ignoring the stretch (statics off: the encoder read as the geometric length)
-// biases every l_i0 by millimetres; modelling it, the mean error over the experiments is
+// misfits the encoders (RMS about 27 sigma) and is refused as poor_fit; modelling it, the mean
+// error over the experiments is
 // within 3 standard errors of 0. With load cells (sigma 3 N); without them only the stretch
 // sees each pose's internal tensions, and the modelled mean errors stay within 3 standard
 // errors all the same (30 experiments: |mean| <= 1.8 mm against standard errors of 0.8 to
 // 2.2 mm; before the staged starts of StretchingRedundantRobots... above, l_i0 came out 1.6 m
 // off). Experiments: CABLECAL_ELASTIC_EXPERIMENTS (default 100; bench/README.md gives 200);
 // CABLECAL_ELASTIC_NO_LOAD_CELLS leaves the load cells out.
-TEST(SpatialIdentify, ElasticStretchBiasesTheLengthsUnlessModelled) {
+TEST(SpatialIdentify, ElasticStretchUnmodelledIsRefusedModelledIsUnbiased) {
   int experiments = 100;
   if (const char* env = std::getenv("CABLECAL_ELASTIC_EXPERIMENTS")) experiments = std::atoi(env);
   ASSERT_GE(experiments, 5);
@@ -843,6 +895,7 @@ TEST(SpatialIdentify, ElasticStretchBiasesTheLengthsUnlessModelled) {
   const VectorXd l0_true = SpatialHome(nominal).paid_out_m;
   const int m = nominal.num_cables();
   VectorXd sum[2] = {VectorXd::Zero(m), VectorXd::Zero(m)}, sum2[2] = {VectorXd::Zero(m), VectorXd::Zero(m)};
+  int refused = 0;  // unmodelled fits refused as poor_fit
   for (int x = 0; x < experiments; ++x) {
     SpatialSimulationOptions lab;
     lab.skip_infeasible = true;  // a pose with a cable near slack is not one a lab would read
@@ -851,25 +904,27 @@ TEST(SpatialIdentify, ElasticStretchBiasesTheLengthsUnlessModelled) {
       SpatialIdentifyOptions options;
       options.statics = modelled == 1;
       const SpatialIdentifyResult r = IdentifySpatial(nominal, sim.measurements, options);
-      ASSERT_TRUE(r.converged()) << r.message;
+      if (!modelled && r.status == SpatialIdentifyStatus::kPoorFit) {
+        ++refused;
+        continue;
+      }
+      ASSERT_TRUE(r.converged()) << modelled << " " << r.message;
       const VectorXd error = r.geometry.segment(3 * m, m) - l0_true;
       sum[modelled] += error;
       sum2[modelled] += error.cwiseAbs2();
     }
   }
-  for (int modelled = 0; modelled < 2; ++modelled) {
+  // Ignoring the stretch (1.3 mm against the encoders' 0.05 mm) misfits them by tens of sigma:
+  // every such fit is refused (poor_fit), none returned with its biased lengths.
+  EXPECT_EQ(refused, experiments);
+  for (int modelled = 1; modelled < 2; ++modelled) {
     const VectorXd mean = sum[modelled] / experiments;
     const VectorXd sd = ((sum2[modelled] - experiments * mean.cwiseAbs2()) / (experiments - 1)).cwiseMax(0.0).cwiseSqrt();
     const VectorXd se = sd / std::sqrt(double(experiments));
     for (int i = 0; i < m; ++i) {
       std::printf("%s l%d0: mean error %+.4f mm, standard error %.4f mm\n", modelled ? "modelled" : "ignored ", i + 1,
                   1e3 * mean(i), 1e3 * se(i));
-      if (modelled) {
-        EXPECT_LT(std::abs(mean(i)), 3.0 * se(i)) << "l" << i + 1 << "0";
-      } else {
-        EXPECT_GT(std::abs(mean(i)), 3.0 * se(i)) << "l" << i + 1 << "0";
-        EXPECT_GT(std::abs(mean(i)), 0.3e-3) << "l" << i + 1 << "0: the stretch's bias, millimetres";
-      }
+      EXPECT_LT(std::abs(mean(i)), 3.0 * se(i)) << "l" << i + 1 << "0";
     }
   }
 }
