@@ -158,19 +158,18 @@ int main(int argc, char** argv) {
   CLI::Option* gauge_option =
       id_cmd
           ->add_option("--gauge", ident.gauge,
-                       "a1x (hold a1x), prior (tracker prior on exits) or none; spatial robots: auto (default: hold the "
-                       "exit coordinates the readings leave unseen), none, prior or hold:a1x,a1y,...")
-          ->capture_default_str()
+                       "planar robots: a1x (the default: hold a1x), prior (tracker prior on exits) or none; spatial "
+                       "robots: auto (the default: hold the exit coordinates the readings leave unseen), none, prior or "
+                       "hold:a1x,a1y,...")
           ->check(CLI::Validator(
               [planar_gauge](std::string& text) {
                 if (text == "auto" || text.rfind("hold:", 0) == 0) return std::string();
                 return planar_gauge(text);
               },
-              planar_gauge.get_description()));
+              "a1x|prior|none (planar), auto|none|prior|hold:... (spatial)"));
   CLI::Option* max_iterations_option =
       id_cmd->add_option("--max-iterations", ident.max_iterations,
-                         "Levenberg-Marquardt iteration limit (spatial robots: default 200)")
-      ->capture_default_str()
+                         "Levenberg-Marquardt iteration limit (default: 100 for planar robots, 200 for spatial ones)")
       ->check(WholeNumberIn(1, cablecal::kMaxIdentifyIterations));
   id_cmd->add_option("--identify", ident.identify,
                      "spatial robots: exits (default: the exit points and initial lengths) or anchors (the platform "

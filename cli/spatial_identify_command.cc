@@ -83,6 +83,8 @@ int RunSpatialIdentify(const Context& ctx, const IdentifyCommandOptions& options
       options.holdout_path.empty()
           ? std::vector<SpatialMeasurement>()
           : ReadSpatialMeasurementsCsv(options.holdout_path, nominal.num_cables(), ParseDelimiter(options.delimiter));
+  CheckSpatialReadingsPlausible(nominal, readings, options.measurements_path);
+  CheckSpatialReadingsPlausible(nominal, holdout, options.holdout_path);
   const SpatialIdentifyResult result = IdentifySpatial(nominal, readings, id);
   if (result.status == SpatialIdentifyStatus::kRankDeficient || result.status == SpatialIdentifyStatus::kPoorFit) {
     // The data cannot calibrate it, or do not fit it (poor_fit): bad input, as planar.
@@ -190,6 +192,7 @@ int RunSpatialValidate(const Context& ctx, const ValidateCommandOptions& options
   }
   const std::vector<SpatialMeasurement> readings =
       ReadSpatialMeasurementsCsv(options.measurements_path, calibrated.num_cables(), ParseDelimiter(options.delimiter));
+  CheckSpatialReadingsPlausible(calibrated, readings, options.measurements_path);
   const SpatialValidationResult result =
       ValidateSpatial(calibrated, nominal, readings, options.measurements_path, options.skip_infeasible);
   const std::string summary_yaml = SpatialValidationSummaryYaml(result, ctx.command_line);

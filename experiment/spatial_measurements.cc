@@ -1,6 +1,8 @@
 #include "experiment/spatial_measurements.h"
 
+#include <cmath>
 #include <fstream>
+#include <optional>
 
 #include "common/csv.h"
 #include "common/error.h"
@@ -85,6 +87,67 @@ std::vector<SpatialMeasurement> ReadSpatialMeasurementsCsv(std::istream& in, con
     out.push_back(std::move(m));
   });
   return out;
+}
+
+void CheckSpatialReadingsPlausible(const SpatialRobot& robot, const std::vector<SpatialMeasurement>& readings,
+                                   const std::string& source) {
+  constexpr double kNoiseSigmas = 5.0;
+  const Eigen::Vector3d lo = robot.p_F_frame_min_m, hi = robot.p_F_frame_max_m;
+  const double diagonal_m = (hi - lo).norm();
+  const auto slack = [&robot](SpatialSensor s) {
+    const std::optional<RangedNoise> noise = SpatialSensorNoise(robot.sensors, s);
+    return noise ? kNoiseSigmas * noise->sigma() : 0.0;
+  };
+  for (const SpatialMeasurement& r : readings) {
+    const std::string where = r.where.empty() ? source + ": pose " + std::to_string(r.pose_id) : r.where;
+    const auto refuse = [&where](const std::string& column, const std::string& why) {
+      throw InputError(where, "column '" + column + "'", why);
+    };
+    for (int i = 0; i < r.dl_m.size(); ++i) {
+      if (!(std::abs(r.dl_m(i)) <= diagonal_m + kNoiseSigmas * robot.sensors.encoder_sigma_m)) {
+        refuse("dl" + std::to_string(i + 1), FormatDouble(r.dl_m(i)) + " m is more than the frame box's diagonal (" +
+                                                 FormatDouble(diagonal_m) + " m): no cable of " + robot.name +
+                                                 " changes its length that much (millimetres? lengths are in m)");
+      }
+    }
+    if (r.has(SpatialSensor::kLaser)) {
+      const double z = r.values(SpatialSensor::kLaser)(0), s = slack(SpatialSensor::kLaser);
+      const double height_m = hi.z() - lo.z();
+      if (!(z >= -s && z <= height_m + s)) {
+        refuse("z", FormatDouble(z) + " m is outside the frame box's height [0, " + FormatDouble(height_m) + "] m (" +
+                        FormatDouble(s) + " m of slack: 5 sigma of the laser's noise)" +
+                        (std::abs(z) > 10.0 * height_m ? " (millimetres? z is in m)" : ""));
+      }
+    }
+    if (r.has(SpatialSensor::kInclinometer)) {
+      const double bound = M_PI / 2.0 + slack(SpatialSensor::kInclinometer);
+      for (int a = 0; a < 2; ++a) {
+        const double v = r.values(SpatialSensor::kInclinometer)(a);
+        if (!(std::abs(v) <= bound)) {
+          refuse(a == 0 ? "roll" : "pitch",
+                 FormatDouble(v) + " rad is more than a quarter turn: no platform of " + robot.name +
+                     " tilts so far (degrees? angles are in radians)");
+        }
+      }
+    }
+    if (r.has(SpatialSensor::kPosition)) {
+      const double s = slack(SpatialSensor::kPosition);
+      for (int a = 0; a < 3; ++a) {
+        const double v = r.values(SpatialSensor::kPosition)(a);
+        if (!(v >= lo(a) - diagonal_m - s && v <= hi(a) + diagonal_m + s)) {
+          refuse(std::string("p") + "xyz"[a],
+                 FormatDouble(v) + " m is further from the frame box than its diagonal (" + FormatDouble(diagonal_m) +
+                     " m): no point of the platform is there (millimetres? positions are in m)");
+        }
+      }
+    }
+    if (r.has(SpatialSensor::kHeading)) {
+      const double v = r.values(SpatialSensor::kHeading)(0);
+      if (!(std::abs(v) <= 2.0 * M_PI + slack(SpatialSensor::kHeading))) {
+        refuse("yaw", FormatDouble(v) + " rad is more than a turn (degrees? angles are in radians)");
+      }
+    }
+  }
 }
 
 }  // namespace cablecal

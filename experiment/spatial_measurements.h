@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "model/spatial_robot.h"
 #include "model/spatial_sensor_model.h"
 
 namespace cablecal {
@@ -39,5 +40,14 @@ std::vector<SpatialMeasurement> ReadSpatialMeasurementsCsv(const std::string& pa
                                                            char delimiter = ',');
 std::vector<SpatialMeasurement> ReadSpatialMeasurementsCsv(std::istream& in, const std::string& name, int num_cables,
                                                            char delimiter = ',');
+
+// Readings no sensor of `robot` can give, refused before any fit (the planar readings' check,
+// CheckReadingsPlausible): a length change beyond the frame box's diagonal, a laser height
+// outside the box's, an inclinometer angle beyond a quarter turn, a tracker point further
+// from the box than its diagonal, a heading beyond a turn; each allowed 5 sigma of its
+// sensor's noise past the bound. InputError naming the reading (file:line, or source and
+// pose), the column, and the likely unit mistake (millimetres? degrees?).
+void CheckSpatialReadingsPlausible(const SpatialRobot& robot, const std::vector<SpatialMeasurement>& readings,
+                                   const std::string& source);
 
 }  // namespace cablecal

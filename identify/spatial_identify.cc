@@ -1783,6 +1783,19 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
     // so that a cap of --max-iterations N reads "after N".
     result.message = "the solver stopped after " + std::to_string(std::max(0, result.iterations - 1)) +
                      " iterations without converging: " + message;
+    // Where it stopped: readings that do not fit this robot (wrong units, another robot, a
+    // gross reading) mostly end here, and the last iterate's misfit points at them.
+    char buf[240];
+    std::snprintf(buf, sizeof(buf),
+                  " (at the last iterate the readings' whitened RMS is %.3g; the worst, %s of pose %d, %.3g sigma%s)",
+                  result.whitened_rms, result.worst_sensor.c_str(), result.worst_pose_id, result.worst_residual,
+                  result.worst_where.empty() ? "" : (", " + result.worst_where).c_str());
+    result.message += buf;
+    if (result.whitened_rms > kSpatialPoorFitFactor) {
+      result.message += ": readings far from any fit; are they in the file's units (m, rad), of this robot, in the "
+                        "order of its cables? Else raise --max-iterations, or try --loss cauchy against a gross "
+                        "reading";
+    }
     return result;
   }
   // Covariance at the estimate with the gauge held.
@@ -1854,12 +1867,16 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
                   tripped == 1 ? "" : "s", kOutlierSigmas, result.worst_sensor.c_str(), result.worst_pose_id,
                   result.worst_residual);
     result.status = SpatialIdentifyStatus::kPoorFit;
+    // A few such values are outliers to name; more are a model or file that does not fit.
+    const std::string too_many =
+        ": too many to be outliers: are the readings in the file's units (m, rad), of this robot, in the order of "
+        "its cables, and the model its cables' (stretching cables identified as inextensible, the statics off, "
+        "misfit by their stretch)?";
     result.message = "readings that do not fit this robot: " + std::string(buf) +
                      (result.worst_where.empty() ? "" : " (" + result.worst_where + ")") +
-                     (robust ? ": too many for a robust loss to be trusted: are the readings in the file's units (m, "
-                               "rad), and of this robot?"
-                             : ": check that reading, drop its pose, or identify with --loss cauchy, which "
-                               "down-weights it") +
+                     (tripped > few ? too_many
+                                    : ": check that reading, drop its pose, or identify with --loss cauchy, which "
+                                      "down-weights it") +
                      "; not a result";
     return result;
   }

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "common/error.h"
 #include "common/format.h"
@@ -56,6 +57,20 @@ std::vector<std::string> StudyGauge(const SpatialRobot& nominal, const SpatialRo
   try {
     readings = NominalReadings(nominal, planning, o, fewest);
   } catch (const SolverFailure& e) {
+    // With plan margins, they are the likelier cause: name them, and the flag to reduce.
+    std::vector<std::string> margins;
+    if (o.plan_tension_margin_N > 0.0) margins.push_back("--tension-margin " + FormatDouble(o.plan_tension_margin_N) + " N");
+    if (o.plan_margin_m > 0.0) margins.push_back("--frame-margin " + FormatDouble(o.plan_margin_m) + " m");
+    if (o.plan_tilt_margin_rad > 0.0) {
+      margins.push_back("--tilt-margin-deg " + FormatDouble(o.plan_tilt_margin_rad * 180.0 / M_PI));
+    }
+    if (!margins.empty()) {
+      std::string list;
+      for (std::size_t k = 0; k < margins.size(); ++k) list += (k ? ", " : "") + margins[k];
+      throw InputError(margins.size() == 1 ? margins[0].substr(0, margins[0].find(' ')) : "--poses", "",
+                       "no " + std::to_string(fewest) + " feasible poses to study within the plan margins (" + list +
+                           "): " + e.what() + "; reduce the margins");
+    }
     throw InputError("--poses", "", "no " + std::to_string(fewest) + " feasible poses to study: " + e.what());
   }
   SpatialIdentifyOptions id;
@@ -196,7 +211,18 @@ std::vector<SpatialPlanPose> MakeSpatialDesignedSet(const SpatialRobot& planning
     opt.max_iterations = o.design_max_iterations;
     opt.interrupted = o.study.interrupted;
     opt.solve_in_child_processes = o.study.design_in_child_processes;
-    if (o.statics) return DesignSpatialPoses(planning, opt).poses;
+    // No start converged within Ipopt's iteration limit: add starts, as the planar study does
+    // (the first ones are the same streams, so this only extends the search).
+    const auto design = [&](const SpatialRobot& robot) {
+      try {
+        return DesignSpatialPoses(robot, opt);
+      } catch (const SolverFailure&) {
+        SpatialDesignOptions more = opt;
+        more.starts = 4 * opt.starts;
+        return DesignSpatialPoses(robot, more);
+      }
+    };
+    if (o.statics) return design(planning).poses;
     // Without the statics the identification takes the cables as inextensible: the design's
     // information is that model's, and each designed pose is then planned on the planning robot
     // (its tensions, and its commands with the stretch the lab expects).
@@ -204,7 +230,7 @@ std::vector<SpatialPlanPose> MakeSpatialDesignedSet(const SpatialRobot& planning
     for (SpatialCable& c : rigid.cables) c.stiffness_N.reset();
     const SpatialHomeReference home = SpatialHome(planning);
     std::vector<SpatialPlanPose> poses;
-    for (const SpatialPlanPose& p : DesignSpatialPoses(rigid, opt).poses) {
+    for (const SpatialPlanPose& p : design(rigid).poses) {
       const SpatialPoseEvaluation e = EvaluateSpatialPose(planning, p.q);
       if (!e.feasible()) throw SolverFailure("a designed pose is not feasible with the stretching cables");
       poses.push_back(MakeSpatialPlanPose(planning, e.equilibrium, home));

@@ -13,6 +13,7 @@
 #include "identify/spatial_identify.h"
 #include "identify/spatial_report.h"
 #include "identify/spatial_validate.h"
+#include "experiment/spatial_measurements.h"
 #include "model/spatial_robot.h"
 #include "python/bindings.h"
 #include "python/converters.h"
@@ -110,6 +111,7 @@ py::object SpatialIdentify(const SpatialRobot& robot, py::handle measurements_ar
   }
   out.options.statics = equilibrium.is_none() || OnOff(equilibrium, "equilibrium");
   out.options.anchors = !identify.is_none() && ParseSpatialIdentify(AsText(identify, "identify"));
+  CheckSpatialReadingsPlausible(robot, measurements.readings, "measurements");
   {
     py::gil_scoped_release release;
     out.result = IdentifySpatial(robot, measurements.readings, out.options);

@@ -307,6 +307,15 @@ TEST_F(SpatialCli, MonteCarloWritesTheStudyAndRefusesPlanarOnlyFlags) {
     EXPECT_NE(bad.output.find(named), std::string::npos) << flags << ": " << bad.output;
     EXPECT_FALSE(fs::exists(Path("bad"))) << flags;
   }
+  // A margin that leaves room in the limits but no pose inside them: blamed on the margin, not
+  // on --poses (cogiro's tensions [100, 5000] N less 2400 N each side).
+  const RunResult empty = RunCablecal("montecarlo --robot " + std::string(CABLECAL_SOURCE_DIR) +
+                                      "/robots/cogiro.yaml --trials 2 --poses 30 --designs random "
+                                      "--tension-margin 2400 --no-plot --out " + Path("bad"));
+  EXPECT_EQ(empty.exit_code, 2) << empty.output;
+  EXPECT_NE(empty.output.find("--tension-margin: no 30 feasible poses to study within the plan margins "
+                              "(--tension-margin 2400 N)"), std::string::npos) << empty.output;
+  EXPECT_FALSE(fs::exists(Path("bad")));
   const RunResult planar = RunCablecal("montecarlo --poses 6 --trials 2 --tension-margin 10 --no-plot --out " + Path("bad"));
   EXPECT_EQ(planar.exit_code, 2) << planar.output;
   EXPECT_NE(planar.output.find("--tension-margin: serves spatial robots only"), std::string::npos) << planar.output;

@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <functional>
 #include <sstream>
 #include <string>
 
@@ -462,6 +463,45 @@ TEST(SpatialSimulation, NoiseIsReproducibleAndTheStreamIgnoresWhichSensorsAreNoi
   const std::string truth = SpatialTruthYaml(a.truth, a.experiment);
   EXPECT_NE(truth.find("true_poses:"), std::string::npos);
   EXPECT_EQ(SpatialRobotToYaml(LoadSpatialRobotFromString(truth, "truth.yaml")), SpatialRobotToYaml(a.truth));
+}
+
+// Readings in the wrong unit are refused before any fit, naming the reading, the column and the
+// likely mistake; readings the robot's sensors give (simulated with noise) pass.
+TEST(SpatialMeasurementsCheck, ReadingsNoSensorCanGiveAreRefusedNamingTheUnit) {
+  const SpatialRobot robot = RobotWithEverySensor(14, 7);
+  const std::vector<SpatialPlanPose> plan = SampleSpatialPoses(robot, 6, 3);
+  SpatialSimulationOptions lab;
+  lab.skip_infeasible = true;
+  const SpatialPlanSimulation sim = SimulateSpatialPlan(robot, std::nullopt, 0.0, plan, lab, 5, "plan");
+  const std::vector<SpatialMeasurement>& clean = sim.experiment.measurements;
+  ASSERT_FALSE(clean.empty());
+  EXPECT_NO_THROW(CheckSpatialReadingsPlausible(robot, clean, "meas.csv"));
+  const auto message = [&](const std::function<void(SpatialMeasurement&)>& spoil) {
+    std::vector<SpatialMeasurement> bad = clean;
+    spoil(bad.back());
+    try {
+      CheckSpatialReadingsPlausible(robot, bad, "meas.csv");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  const std::string pose = "meas.csv: pose " + std::to_string(clean.back().pose_id);
+  const std::vector<std::pair<std::function<void(SpatialMeasurement&)>, std::string>> cases = {
+      {[](SpatialMeasurement& r) { r.dl_m *= 1000.0; }, "column 'dl"},
+      {[](SpatialMeasurement& r) { r.values(SpatialSensor::kLaser) *= 1000.0; }, "column 'z'"},
+      {[](SpatialMeasurement& r) { r.values(SpatialSensor::kInclinometer)(1) = 20.0; }, "column 'pitch'"},
+      {[](SpatialMeasurement& r) { r.values(SpatialSensor::kPosition)(2) *= 1000.0; }, "column 'pz'"},
+      {[](SpatialMeasurement& r) { r.values(SpatialSensor::kHeading)(0) = 90.0; }, "column 'yaw'"}};
+  for (const auto& [spoil, column] : cases) {
+    const std::string m = message(spoil);
+    EXPECT_NE(m.find(pose), std::string::npos) << m;
+    EXPECT_NE(m.find(column), std::string::npos) << m;
+    EXPECT_TRUE(m.find("millimetres?") != std::string::npos || m.find("degrees?") != std::string::npos) << m;
+  }
+  // A dl just inside the frame box's diagonal passes: the bound is the box's, not tighter.
+  const double diagonal_m = (robot.p_F_frame_max_m - robot.p_F_frame_min_m).norm();
+  EXPECT_EQ(message([&](SpatialMeasurement& r) { r.dl_m(0) = 0.99 * diagonal_m; }), "accepted");
 }
 
 }  // namespace

@@ -793,6 +793,9 @@ TEST(SpatialIdentify, ImplausibleGeometryAndTheWorstReadingAreNamed) {
   const SpatialIdentifyResult longer = IdentifySpatial(nominal, shifted, {});
   EXPECT_FALSE(longer.converged());
   EXPECT_FALSE(longer.warnings.empty());
+  // Where it stopped, said: the last iterate's misfit and its worst reading.
+  EXPECT_NE(longer.message.find("at the last iterate the readings' whitened RMS is"), std::string::npos)
+      << longer.message;
   // The length rule on a geometry vector: l20 off by the diagonal plus a centimetre, and not
   // by the diagonal less one.
   VectorXd g = NominalSpatialGeometry(nominal, false, false);
