@@ -232,6 +232,7 @@ int RunSpatialDesign(const Context& ctx, const DesignCommandOptions& options) {
   std::printf(", %.1f s\n", result.wall_time_s);
   std::string held;
   for (int h : result.layout.held) held += (held.empty() ? "" : " ") + result.layout.names[h];
+  if (held.empty()) held = "nothing (the robot file's sensors see every direction of the geometry)";
   std::printf("  the gauge holds %s; the poses hold on the nominal geometry (robustness to the true geometry is not "
               "modelled for spatial robots yet)\n", held.c_str());
   return kExitOk;
