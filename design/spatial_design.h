@@ -41,7 +41,7 @@ struct SpatialDesignOptions {
   std::uint64_t seed = 1;
   double min_spacing_m = 0.0;  // 0: off
   int random_sets = 100;       // the median of random feasible sets for comparison (0: none)
-  int max_iterations = 500;    // Ipopt, per start
+  int max_iterations = 3000;   // Ipopt, per start
   // Each start's Ipopt solve in a child process of its own, so that starts solve at once on
   // several cores (DesignOptions::solve_in_child_processes: the outcome is the same bit for
   // bit). Off: the solves take turns in this process (Python; montecarlo's

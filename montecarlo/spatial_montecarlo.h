@@ -57,7 +57,7 @@ struct SpatialMonteCarloOptions {
   // replacement (its own stream): for robots whose sampler is slow (underactuated equilibria).
   int random_pool = 0;
   // Ipopt's iteration cap per start of the criterion designs (SpatialDesignOptions::max_iterations).
-  int design_max_iterations = 500;
+  int design_max_iterations = 3000;
 };
 
 // The robot the lab plans and commands with (and identifies against): the nominal one with its

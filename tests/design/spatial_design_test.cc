@@ -204,10 +204,11 @@ TEST(SpatialDesign, CogiroHoldsAndBeatsRandom) { ExpectDesignHolds(BuiltinSpatia
 
 TEST(SpatialDesign, Irma4uHoldsAndBeatsRandom) { ExpectDesignHolds(BuiltinSpatialRobot("irma4u"), 2, Criterion::kA); }
 
-// An open defect: ipanema1's encoders, inclinometer and laser see a2y only weakly (cond(S) ~
-// 1e12 at 14 random poses; at its fewest poses S is singular in doubles), and with 10 poses
-// more both starts end at Ipopt's iteration cap (Maximum_Iterations_Exceeded, 200 s).
-TEST(SpatialDesign, DISABLED_Ipanema1HoldsAndBeatsRandom) {
+// ipanema1: its encoders, inclinometer and laser leave the turn about the vertical unseen (its
+// swivel axes are all vertical). Until the identification's gauge analysis balanced each
+// start's tensions, a misfit start made that turn look weakly seen (cond(S) ~ 1e12, a2y "seen"
+// to about 11 m), and both starts ended at Ipopt's iteration cap; now it designs in seconds.
+TEST(SpatialDesign, Ipanema1HoldsAndBeatsRandom) {
   ExpectDesignHolds(BuiltinSpatialRobot("ipanema1"), 10, Criterion::kA);
 }
 
