@@ -1224,6 +1224,22 @@ std::vector<SpatialDirection> Describe(const MatrixXd& V, const VectorXd& g, con
                                            : "a direction that moves no exit point, of ")
                               : "a direction of ") +
                     LargestComponents(d.geometry, names);
+    // A weakly seen direction whose exit part is within kNearlyRigid of a rigid motion (a turn
+    // about z that one tilted swivel axis barely sees): named so, its components after.
+    constexpr double kNearlyRigid = 0.05;
+    const double e_c = E.col(c).norm();
+    const double off = (G * C.col(c) - E.col(c)).norm();
+    if (e >= 1e-3 && e_c > 0.0 && off <= kNearlyRigid * e_c) {
+      std::string words;
+      const double largest = C.col(c).cwiseAbs().maxCoeff();
+      for (int a = 0; a < generators; ++a) {
+        if (std::abs(C(a, c)) < 0.1 * largest) continue;
+        words += (words.empty() ? "" : " with ") + generator_name(a);
+      }
+      char buf[64];
+      std::snprintf(buf, sizeof(buf), " (to %.2g %%)", 100.0 * off / e_c);
+      d.description = "nearly " + words + (L.anchors ? "" : " of the frame") + buf + ": " + d.description;
+    }
     out.push_back(d);
   }
   return out;

@@ -833,6 +833,29 @@ TEST(SpatialIdentify, ImplausibleGeometryAndTheWorstReadingAreNamed) {
   EXPECT_TRUE(robust.converged()) << robust.message;
 }
 
+// One tilted swivel axis among vertical ones: the turn about z is no longer unseen but barely
+// seen, and the weak direction is named as nearly that turn (a lab then knows to hold a third
+// coordinate, or to add a sensor that sees it), its components after.
+TEST(SpatialIdentify, ANearlyRigidWeakDirectionIsNamedSo) {
+  Rng rng(1919);
+  SpatialRobot nominal = WithSensors(Builtin("ipanema1"), kInc | kLaser);
+  nominal.cables[2].k_F_swivel_axis = Vector3d(0.2, 0.1, 1.0).normalized();
+  const Experiment e = MakeExperiment(nominal, PerturbedExits(nominal, rng, 0.01), 30, kInc | kLaser, rng, 2.0);
+  const SpatialGaugeAnalysis gauge = AnalyzeSpatialGauge(nominal, e.readings, {});
+  EXPECT_EQ(gauge.null_directions.size(), 2u) << Descriptions(gauge.null_directions);
+  bool named = false;
+  for (const SpatialDirection& d : gauge.weak_directions) {
+    named = named || d.description.rfind("nearly a rotation about z of the frame (to ", 0) == 0;
+  }
+  EXPECT_TRUE(named) << Descriptions(gauge.weak_directions);
+  // With every axis vertical it is unseen, and named exactly.
+  const SpatialRobot vertical = WithSensors(Builtin("ipanema1"), kInc | kLaser);
+  const Experiment f = MakeExperiment(vertical, PerturbedExits(vertical, rng, 0.01), 30, kInc | kLaser, rng, 2.0);
+  const std::string words = Descriptions(AnalyzeSpatialGauge(vertical, f.readings, {}).null_directions);
+  EXPECT_NE(words.find("a rotation about z of the frame"), std::string::npos) << words;
+  EXPECT_EQ(words.find("nearly"), std::string::npos) << words;
+}
+
 // Readings whose noise is 30 times the robot file's sigmas: converged, but refused as poor_fit
 // by the RMS of the whitened residuals (readings in other units, of another robot, or a
 // wrong minimum look so), the RMS said; with the file's own sigmas, accepted.
