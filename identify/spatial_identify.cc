@@ -720,6 +720,16 @@ void EvaluateTerm(const Term& t, const VectorXd& g, const Locals& locals, double
                d_geometry);
 }
 
+// The tensions nearest t_N that hold the nominal platform at pose q in exact equilibrium:
+// t + W^+ (-w_g - W t), least squares through the complete orthogonal decomposition; from
+// t = 0, the least-norm ones.
+VectorXd BalancedTensions(const SpatialRobot& nominal, const SpatialPose<double>& q, const VectorXd& t_N) {
+  const Eigen::Matrix<double, 6, Eigen::Dynamic> W = WrenchMatrix<double>(nominal, q);
+  const Eigen::Matrix<double, 6, 1> w_g = GravityWrench<double>(nominal, q);
+  const VectorXd misfit = -w_g - W * t_N;
+  return t_N + MatrixXd(W).completeOrthogonalDecomposition().solve(misfit);
+}
+
 // The starting local unknowns of pose j: Levenberg-Marquardt on its own readings (and its
 // equilibrium) alone, from `start`, with the geometry g (nominal: exits as in the file, l_i0
 // the nominal home's lengths). The first `fixed` unknowns stay as `start` has them (the pose,
@@ -1366,9 +1376,7 @@ Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasureme
   VectorXd start0(local);
   start0.head<6>() = nominal.home_pose();
   if (a.model.nt > 0) {
-    const Eigen::Matrix<double, 6, Eigen::Dynamic> W = WrenchMatrix<double>(nominal, nominal.home_pose());
-    const Eigen::Matrix<double, 6, 1> w_g = GravityWrench<double>(nominal, nominal.home_pose());
-    start0.tail(a.model.nt) = MatrixXd(W).completeOrthogonalDecomposition().solve(VectorXd(-w_g));
+    start0.tail(a.model.nt) = BalancedTensions(nominal, nominal.home_pose(), VectorXd::Zero(a.model.nt));
   }
   // With the statics, a pose's tensions are a second unknown of its start: from home with the
   // home tensions, a pose a metre away can end in a wrong basin (measured on ipanema1, 8 stiff
@@ -1401,9 +1409,7 @@ Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasureme
     VectorXd staged = s;
     staged.head<6>() = StartingLocal(*rigid, j, a.g0, start0.head<6>());
     if (!load_cells) {
-      const Eigen::Matrix<double, 6, Eigen::Dynamic> W = WrenchMatrix<double>(nominal, staged.head<6>());
-      const Eigen::Matrix<double, 6, 1> w_g = GravityWrench<double>(nominal, staged.head<6>());
-      staged.tail(a.model.nt) = MatrixXd(W).completeOrthogonalDecomposition().solve(VectorXd(-w_g));
+      staged.tail(a.model.nt) = BalancedTensions(nominal, staged.head<6>(), VectorXd::Zero(a.model.nt));
     }
     staged = StartingLocal(a.model, j, a.g0, StartingLocal(a.model, j, a.g0, staged, 6));
     const double staged_cost = pose_cost(j, staged);
@@ -1422,12 +1428,7 @@ Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasureme
   // (ipanema1: the turn read as weakly seen at the start, then unseen at the estimate).
   Locals balanced = a.start;
   if (a.model.nt > 0) {
-    for (VectorXd& x : balanced) {
-      const Eigen::Matrix<double, 6, Eigen::Dynamic> W = WrenchMatrix<double>(nominal, x.head<6>());
-      const Eigen::Matrix<double, 6, 1> w_g = GravityWrench<double>(nominal, x.head<6>());
-      const VectorXd misfit = -w_g - W * x.tail(a.model.nt);
-      x.tail(a.model.nt) += MatrixXd(W).completeOrthogonalDecomposition().solve(misfit);
-    }
+    for (VectorXd& x : balanced) x.tail(a.model.nt) = BalancedTensions(nominal, x.head<6>(), x.tail(a.model.nt));
   }
   const MatrixXd A = ReducedJacobian(a.model, a.g0, balanced, true, false);
   const Eigen::BDCSVD<MatrixXd> svd = SmallSvd(A);
@@ -1783,7 +1784,8 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
   result.final_cost = cost;
   result.whitened_rms = reading_values > 0 ? std::sqrt(reading_squares / reading_values)
                                            : std::numeric_limits<double>::infinity();
-  result.warnings = SpatialPlausibilityWarnings(nominal, g);
+  const std::vector<std::string> implausible = SpatialPlausibilityWarnings(nominal, g);
+  result.warnings = implausible;
   if (std::abs(result.worst_residual) > kOutlierSigmas) {
     char buf[64];
     std::snprintf(buf, sizeof(buf), "%.3g", result.worst_residual);
@@ -1896,11 +1898,9 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
                      "; not a result";
     return result;
   }
-  if (options.check_plausible_geometry && !result.warnings.empty() &&
-      !SpatialPlausibilityWarnings(nominal, g).empty()) {
+  if (options.check_plausible_geometry && !implausible.empty()) {
     result.status = SpatialIdentifyStatus::kPoorFit;
-    result.message = "the identified geometry is no robot's of this file: " +
-                     Join(SpatialPlausibilityWarnings(nominal, g), "; ") +
+    result.message = "the identified geometry is no robot's of this file: " + Join(implausible, "; ") +
                      "; few or bunched poses may not determine the geometry either (plan them with cablecal "
                      "design); not a result";
     return result;

@@ -57,17 +57,19 @@ std::vector<std::string> StudyGauge(const SpatialRobot& nominal, const SpatialRo
   try {
     readings = NominalReadings(nominal, planning, o, fewest);
   } catch (const SolverFailure& e) {
-    // With plan margins, they are the likelier cause: name them, and the flag to reduce.
-    std::vector<std::string> margins;
-    if (o.plan_tension_margin_N > 0.0) margins.push_back("--tension-margin " + FormatDouble(o.plan_tension_margin_N) + " N");
-    if (o.plan_margin_m > 0.0) margins.push_back("--frame-margin " + FormatDouble(o.plan_margin_m) + " m");
-    if (o.plan_tilt_margin_rad > 0.0) {
-      margins.push_back("--tilt-margin-deg " + FormatDouble(o.plan_tilt_margin_rad * 180.0 / M_PI));
-    }
-    if (!margins.empty()) {
-      std::string list;
-      for (std::size_t k = 0; k < margins.size(); ++k) list += (k ? ", " : "") + margins[k];
-      throw InputError(margins.size() == 1 ? margins[0].substr(0, margins[0].find(' ')) : "--poses", "",
+    // With plan margins, they are the likelier cause: name them (the flag itself when one is given).
+    std::string flag, list;
+    int given = 0;
+    const auto margin = [&](double value, const char* name, const std::string& shown) {
+      if (!(value > 0.0)) return;
+      flag = name;
+      list += (given++ ? ", " : "") + std::string(name) + " " + shown;
+    };
+    margin(o.plan_tension_margin_N, "--tension-margin", FormatDouble(o.plan_tension_margin_N) + " N");
+    margin(o.plan_margin_m, "--frame-margin", FormatDouble(o.plan_margin_m) + " m");
+    margin(o.plan_tilt_margin_rad, "--tilt-margin-deg", FormatDouble(o.plan_tilt_margin_rad * 180.0 / M_PI));
+    if (given > 0) {
+      throw InputError(given == 1 ? flag : "--poses", "",
                        "no " + std::to_string(fewest) + " feasible poses to study within the plan margins (" + list +
                            "): " + e.what() + "; reduce the margins");
     }
