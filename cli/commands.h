@@ -120,7 +120,7 @@ struct DesignCommandOptions {
   unsigned long long seed = 1;
   double min_spacing_m = 0.0;
   double geometry_sigma_m = 0.01, robust_sigmas = 3.0;
-  bool geometry_sigma_given = false, robust_sigmas_given = false;  // typed (a spatial robot refuses them)
+  bool geometry_sigma_given = false, robust_sigmas_given = false;  // typed (spatial: unset takes the file's tracker sigma)
   std::string prior_path;
   bool json = false;  // the summary and the poses on stdout as JSON (then --out is optional)
 };

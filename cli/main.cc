@@ -258,11 +258,11 @@ int main(int argc, char** argv) {
       ->check(WholeNumberIn(0, 100000));
   des_cmd->add_option("--geometry-sigma", des.geometry_sigma_m,
                       "uncertainty of the true exit points and initial lengths the plan must survive, m (0: off; "
-                      "planar robots only)")
+                      "spatial robots: the exit points, default the robot file's tracker sigma if it has one)")
       ->capture_default_str()
       ->each([&des](const std::string&) { des.geometry_sigma_given = true; });
   des_cmd->add_option("--robust-sigmas", des.robust_sigmas,
-                      "k: poses hold for geometry errors up to k sigma (planar robots only)")
+                      "k: poses hold for geometry errors up to k sigma")
       ->capture_default_str()
       ->each([&des](const std::string&) { des.robust_sigmas_given = true; });
   des_cmd->add_option("--prior", des.prior_path,

@@ -172,18 +172,11 @@ int RunSpatialSimulate(const Context& ctx, const SimulateOptions& options) {
   return kExitOk;
 }
 
-// The planar design's robustness search and sequential design are not served for spatial
-// robots yet: their flags are refused (typed), never silently ignored.
+// Sequential design (--prior) and the workspace figure are not served for spatial robots yet:
+// their flags are refused, never silently ignored. --geometry-sigma not given: the robot file's
+// tracker sigma (its exits' survey), else the planar default (SpatialDesignOptions).
 int RunSpatialDesign(const Context& ctx, const DesignCommandOptions& options) {
   const std::string not_yet = "is not yet served for spatial robots";
-  if (options.geometry_sigma_given) {
-    throw InputError("--geometry-sigma", "", "robustness to the true geometry " + not_yet +
-                                                 ": the designed poses hold on the robot file's nominal geometry");
-  }
-  if (options.robust_sigmas_given) {
-    throw InputError("--robust-sigmas", "", "robustness to the true geometry " + not_yet +
-                                                ": the designed poses hold on the robot file's nominal geometry");
-  }
   if (!options.prior_path.empty()) {
     throw InputError("--prior", "", "sequential design (planning around an earlier identification) " + not_yet);
   }
@@ -198,6 +191,8 @@ int RunSpatialDesign(const Context& ctx, const DesignCommandOptions& options) {
   design.seed = options.seed;
   design.min_spacing_m = options.min_spacing_m;
   design.random_sets = options.random_sets;
+  if (options.geometry_sigma_given) design.geometry_sigma_m = options.geometry_sigma_m;
+  design.robust_sigmas = options.robust_sigmas;
   const SigintScope sigint;  // Ctrl-C: Ipopt stops at its next iteration, exit 130, nothing written
   design.interrupted = &SigintFlag();
   if (!ctx.quiet) design.progress = ProgressBar("design", "starts");
@@ -233,8 +228,11 @@ int RunSpatialDesign(const Context& ctx, const DesignCommandOptions& options) {
   std::string held;
   for (int h : result.layout.held) held += (held.empty() ? "" : " ") + result.layout.names[h];
   if (held.empty()) held = "nothing (the robot file's sensors see every direction of the geometry)";
-  std::printf("  the gauge holds %s; the poses hold on the nominal geometry (robustness to the true geometry is not "
-              "modelled for spatial robots yet)\n", held.c_str());
+  std::printf("  the gauge holds %s; %s%s\n", held.c_str(), SpatialRobustnessText(robot, result).c_str(),
+              options.geometry_sigma_given || !robot.sensors.tracker_sigma_m ? "" : " (sigma: the robot file's tracker)");
+  if (result.robustness_lowered() && !ctx.quiet) {
+    std::fprintf(stderr, "cablecal: warning: robustness lowered: %s\n", result.robustness_note.c_str());
+  }
   return kExitOk;
 }
 

@@ -21,7 +21,9 @@
 #include "common/random.h"
 #include "common/version.h"
 #include "common/yaml_writer.h"
+#include "design/robustness_search.h"
 #include "design/solve_process.h"
+#include "model/forward_statics.h"
 #include "model/spatial_statics.h"
 #include "model/swivel.h"
 
@@ -92,12 +94,81 @@ bool PoseRows(const SpatialRobot& robot, const T* y, T* out) {
   return true;
 }
 
+// The names of a pose's bounded quantities, in the order of its variables (q, t) and its rows
+// (PoseRows; the 6 equilibrium rows are not bounds and have no name).
+struct PoseQuantityNames {
+  std::vector<std::string> x, g;
+};
+PoseQuantityNames QuantityNames(int m) {
+  PoseQuantityNames n;
+  n.x = {"x", "y", "z", "roll", "pitch", "yaw"};
+  for (int i = 0; i < m; ++i) n.x.push_back("t" + std::to_string(i + 1));
+  n.g.assign(6, "");
+  n.g.push_back("tilt");
+  const char* axes[3] = {" x", " y", " z"};
+  for (int a = 0; a < 3; ++a) n.g.push_back(std::string("centre of mass") + axes[a]);
+  for (int i = 0; i < m; ++i) {
+    for (int a = 0; a < 3; ++a) n.g.push_back("anchor " + std::to_string(i + 1) + axes[a]);
+  }
+  for (int i = 0; i < m; ++i) n.g.push_back("clearance " + std::to_string(i + 1));
+  return n;
+}
+
+// The bounds a pose's variables (q, t) and rows (PoseRows) keep on the robot file's limits.
+struct PoseBounds {
+  VectorXd x_lo, x_hi, g_lo, g_hi;
+};
+PoseBounds ExactPoseBounds(const SpatialRobot& robot) {
+  const int m = robot.num_cables();
+  const double inf = std::numeric_limits<double>::infinity();
+  PoseBounds b;
+  b.x_lo = VectorXd::Constant(6 + m, -inf);
+  b.x_hi = VectorXd::Constant(6 + m, inf);
+  b.g_lo = VectorXd::Constant(PoseRowCount(m), -inf);
+  b.g_hi = VectorXd::Constant(PoseRowCount(m), inf);
+  const Eigen::Vector3d lo = robot.p_F_frame_min_m.array() + robot.margin_m;
+  const Eigen::Vector3d hi = robot.p_F_frame_max_m.array() - robot.margin_m;
+  b.x_lo.head<3>() = lo;
+  b.x_hi.head<3>() = hi;
+  b.x_lo.segment<2>(3).setConstant(-robot.tilt_max_rad);
+  b.x_hi.segment<2>(3).setConstant(robot.tilt_max_rad);
+  b.x_lo(5) = robot.home_rpy_rad.z() - kDefaultSampleYawRange_rad;
+  b.x_hi(5) = robot.home_rpy_rad.z() + kDefaultSampleYawRange_rad;
+  b.x_lo.tail(m).setConstant(robot.tension_min_N);
+  b.x_hi.tail(m).setConstant(robot.tension_max_N);
+  b.g_lo.head<6>().setZero();
+  b.g_hi.head<6>().setZero();
+  b.g_lo(6) = std::cos(robot.tilt_max_rad);
+  for (int k = 0; k < m + 1; ++k) {
+    b.g_lo.segment<3>(7 + 3 * k) = lo;
+    b.g_hi.segment<3>(7 + 3 * k) = hi;
+  }
+  b.g_lo.tail(m).setConstant(robot.margin_m);
+  return b;
+}
+
+// How far each of a pose's bounds is drawn in for robustness (units of the quantity).
+struct PoseTightening {
+  VectorXd x, g;
+};
+
+// Bounds drawn in by t; bounds that would cross meet in the middle (the NLP is then infeasible
+// there, which the robustness search reads as no design at this robustness).
+void DrawIn(double t, double* lo, double* hi) {
+  constexpr double kInfinite = 1e19;
+  const bool lo_finite = *lo > -kInfinite, hi_finite = *hi < kInfinite;
+  if (lo_finite) *lo += t;
+  if (hi_finite) *hi -= t;
+  if (lo_finite && hi_finite && *lo > *hi) *lo = *hi = 0.5 * (*lo + *hi);
+}
+
 class SpatialDesignNlp : public Ipopt::TNLP {
  public:
   SpatialDesignNlp(const SpatialRobot& robot, const SpatialInformationLayout& layout,
-                   const SpatialDesignOptions& options, const std::vector<SpatialPlanPose>& start)
-      : robot_(robot), layout_(layout), options_(options), start_(start), n_(static_cast<int>(start.size())),
-        m_(robot.num_cables()), V(6 + m_), C(PoseRowCount(m_)) {}
+                   const SpatialDesignOptions& options, const std::vector<SpatialPlanPose>& start,
+                   const std::vector<PoseTightening>* tightening)
+      : robot_(robot), layout_(layout), options_(options), start_(start), tightening_(tightening),
+        n_(static_cast<int>(start.size())), m_(robot.num_cables()), V(6 + m_), C(PoseRowCount(m_)) {}
 
   int NumPairs() const { return options_.min_spacing_m > 0.0 ? n_ * (n_ - 1) / 2 : 0; }
 
@@ -147,6 +218,10 @@ class SpatialDesignNlp : public Ipopt::TNLP {
         gl[7 + 3 * (m_ + 1) + i] = robot_.margin_m + kMargin_m;
         gu[7 + 3 * (m_ + 1) + i] = kInf;
       }
+      if (tightening_ == nullptr) continue;
+      const PoseTightening& t = (*tightening_)[j];
+      for (int c = 0; c < V; ++c) DrawIn(t.x(c), xl + c, xu + c);
+      for (int r = 6; r < C; ++r) DrawIn(t.g(r), gl + r, gu + r);
     }
     const double d = options_.min_spacing_m + kMargin_m;
     for (int k = 0; k < NumPairs(); ++k) {
@@ -285,6 +360,7 @@ class SpatialDesignNlp : public Ipopt::TNLP {
   const SpatialInformationLayout& layout_;
   const SpatialDesignOptions& options_;
   const std::vector<SpatialPlanPose>& start_;
+  const std::vector<PoseTightening>* tightening_;  // nullptr: none
   const int n_, m_, V, C;
   std::vector<SpatialPlanPose> final_;
 };
@@ -313,8 +389,8 @@ const char* StatusName(Ipopt::ApplicationReturnStatus s) {
 }
 
 Outcome SolveNlp(const SpatialRobot& robot, const SpatialInformationLayout& layout, const SpatialDesignOptions& options,
-                 const std::vector<SpatialPlanPose>& start) {
-  Ipopt::SmartPtr<SpatialDesignNlp> nlp = new SpatialDesignNlp(robot, layout, options, start);
+                 const std::vector<SpatialPlanPose>& start, const std::vector<PoseTightening>* tightening) {
+  Ipopt::SmartPtr<SpatialDesignNlp> nlp = new SpatialDesignNlp(robot, layout, options, start, tightening);
   Ipopt::SmartPtr<Ipopt::IpoptApplication> app = IpoptApplicationFactory();
   // The planar design's settings (design/ipopt_nlp.cc says why each).
   app->Options()->SetStringValue("hessian_approximation", "limited-memory");
@@ -334,6 +410,13 @@ Outcome SolveNlp(const SpatialRobot& robot, const SpatialInformationLayout& layo
   app->Options()->SetStringValue("nlp_scaling_method", "user-scaling");
   app->Options()->SetStringValue("sb", "yes");
   app->Options()->SetIntegerValue("print_level", 0);
+  if (tightening != nullptr) {
+    // A re-solve starts from verified poses near the optimum: a small barrier parameter and
+    // bound push keep Ipopt from first pushing them far into the interior.
+    app->Options()->SetNumericValue("mu_init", 1e-4);
+    app->Options()->SetNumericValue("bound_push", 1e-6);
+    app->Options()->SetNumericValue("bound_frac", 1e-6);
+  }
   Outcome out;
   if (app->Initialize() != Ipopt::Solve_Succeeded) {
     out.status = "Invalid_Option";
@@ -381,10 +464,11 @@ Outcome Decode(const std::string& bytes) {
 // at once, the outcome the same bit for bit), else in this process, one solve at a time
 // (Debian's MUMPS is not thread-safe; the planar design's solves take the same turns).
 Outcome SolveNlpSomewhere(const SpatialRobot& robot, const SpatialInformationLayout& layout,
-                          const SpatialDesignOptions& options, const std::vector<SpatialPlanPose>& start) {
+                          const SpatialDesignOptions& options, const std::vector<SpatialPlanPose>& start,
+                          const std::vector<PoseTightening>* tightening = nullptr) {
   if (options.solve_in_child_processes) {
-    const std::optional<std::string> bytes =
-        internal::RunInChildProcess([&] { return Encode(SolveNlp(robot, layout, options, start)); }, options.interrupted);
+    const std::optional<std::string> bytes = internal::RunInChildProcess(
+        [&] { return Encode(SolveNlp(robot, layout, options, start, tightening)); }, options.interrupted);
     if (bytes) return Decode(*bytes);
   }
   Outcome outcome;
@@ -392,7 +476,7 @@ Outcome SolveNlpSomewhere(const SpatialRobot& robot, const SpatialInformationLay
 #pragma omp critical(cablecal_ipopt)
   {
     try {
-      outcome = SolveNlp(robot, layout, options, start);
+      outcome = SolveNlp(robot, layout, options, start, tightening);
     } catch (...) {
       solve_error = std::current_exception();
     }
@@ -452,13 +536,248 @@ std::string Verify(const SpatialRobot& robot, const SpatialInformationLayout& la
   return "";
 }
 
+// A settled state's bounded quantities: its variables (q, t) and its rows (PoseRows). False
+// where the cable geometry is invalid.
+bool StateQuantities(const SpatialRobot& robot, const SpatialPose<double>& q, const VectorXd& t, VectorXd* x,
+                     VectorXd* g) {
+  const int m = robot.num_cables();
+  x->resize(6 + m);
+  *x << q, t;
+  g->resize(PoseRowCount(m));
+  return PoseRows<double>(robot, x->data(), g->data());
+}
+
+// The file comment's scenario check of verified poses at half-width k_sigma (m).
+struct ScenarioCheck {
+  std::string failure;        // the first failure, "" when every pose holds on every scenario robot
+  std::vector<bool> failing;  // per pose
+  int robots = 0;             // scenario robots checked
+  // Per pose: sqrt(sum over exit coordinates ((c+ - c-) / 2)^2), k sigma |dc/dg|_2 to first order.
+  std::vector<PoseTightening> spread;
+};
+
+bool Stretches(const SpatialRobot& robot) {
+  return std::any_of(robot.cables.begin(), robot.cables.end(),
+                     [](const SpatialCable& c) { return c.stiffness_N.has_value(); });
+}
+
+ScenarioCheck CheckScenarios(const SpatialRobot& robot, const std::vector<SpatialPlanPose>& plan, double k_sigma,
+                             double robust_sigmas, const SpatialHomeReference& home) {
+  const int m = robot.num_cables(), n = static_cast<int>(plan.size());
+  const int V = 6 + m, C = PoseRowCount(m);
+  const char* axes[3] = {"x", "y", "z"};
+  ScenarioCheck out;
+  out.failing.assign(n, false);
+  out.spread.assign(n, PoseTightening{VectorXd::Zero(V), VectorXd::Zero(C)});
+  // (parameter, sign): -1 the nominal robot (only when a cable stretches: an inextensible robot
+  // holds its verified equilibria by construction).
+  struct Scenario {
+    int parameter;
+    double sign;
+  };
+  std::vector<Scenario> scenarios;
+  if (Stretches(robot)) scenarios.push_back({-1, 0.0});
+  if (k_sigma > 0.0) {
+    for (int p = 0; p < 3 * m; ++p) {
+      scenarios.push_back({p, -1.0});
+      scenarios.push_back({p, 1.0});
+    }
+  }
+  out.robots = static_cast<int>(scenarios.size());
+  // Each pose's quantities on the minus robot of the current parameter, for the difference.
+  std::vector<VectorXd> minus_x(n), minus_g(n);
+  std::vector<bool> have_minus(n, false);
+  for (const Scenario& sc : scenarios) {
+    SpatialRobot truth = robot;
+    std::string name = "the nominal robot (its cables stretched)";
+    if (sc.parameter >= 0) {
+      truth.cables[sc.parameter / 3].p_F_exit_m(sc.parameter % 3) += sc.sign * k_sigma;
+      name = "a true robot with a" + std::to_string(sc.parameter / 3 + 1) + axes[sc.parameter % 3] +
+             (sc.sign > 0 ? " +" : " -") + FormatDouble(robust_sigmas) + " sigma";
+    }
+    for (int j = 0; j < n; ++j) {
+      const SpatialPlanPose& p = plan[j];
+      const SpatialForwardResult f = SolveForwardStatics(truth, home.paid_out_m + p.length_change_m, &p.q);
+      std::string why;
+      VectorXd x, g;
+      if (f.status != ForwardStatus::kConverged) {
+        why = ToString(f.status);
+      } else if ((f.equilibrium.q.head<3>() - p.q.head<3>()).norm() > 10.0 * k_sigma + 0.05) {
+        why = "settles far from the commanded pose";
+      } else {
+        int cable = -1;
+        const VectorXd t = SnapTensionsToBounds(f.equilibrium.tensions_N, truth.tension_min_N, truth.tension_max_N);
+        const Feasibility feas = CheckSpatialFeasibility(truth, f.equilibrium.q, t, &cable);
+        if (feas != Feasibility::kFeasible) {
+          why = std::string(ToString(feas)) + (cable >= 0 ? " (cable " + std::to_string(cable + 1) + ")" : "");
+        }
+        if (!StateQuantities(truth, f.equilibrium.q, t, &x, &g) && why.empty()) why = "invalid cable geometry";
+      }
+      const bool settled = f.status == ForwardStatus::kConverged && x.size() == V;
+      if (!why.empty()) {
+        if (out.failure.empty()) out.failure = "pose " + std::to_string(j + 1) + " on " + name + ": " + why;
+        out.failing[j] = true;
+      }
+      if (sc.parameter < 0) continue;
+      if (sc.sign < 0) {
+        have_minus[j] = settled;
+        if (settled) {
+          minus_x[j] = x;
+          minus_g[j] = g;
+        }
+        continue;
+      }
+      if (!settled || !have_minus[j]) continue;  // failing already: its spread is widened instead
+      out.spread[j].x += (0.5 * (x - minus_x[j])).cwiseAbs2();
+      out.spread[j].g += (0.5 * (g - minus_g[j])).cwiseAbs2();
+    }
+  }
+  for (PoseTightening& s : out.spread) {
+    s.x = s.x.cwiseSqrt();
+    s.g = s.g.cwiseSqrt();
+    s.g.head<6>().setZero();  // the equilibrium rows are equalities, not bounds
+  }
+  return out;
+}
+
+// Whether every verified pose keeps every bound with its spread (the linearised worst case over
+// the ellipsoid); "" if so, else the first quantity that does not.
+std::string LinearisedRobustnessFailure(const SpatialRobot& robot, const std::vector<SpatialPlanPose>& plan,
+                                        const std::vector<PoseTightening>& spread) {
+  const PoseBounds b = ExactPoseBounds(robot);
+  const PoseQuantityNames names = QuantityNames(robot.num_cables());
+  const auto beyond = [](double c, double s, double lo, double hi) {
+    const double slack = 1e-9 * (1.0 + std::abs(c));
+    return c - s < lo - slack || c + s > hi + slack;
+  };
+  for (std::size_t j = 0; j < plan.size(); ++j) {
+    VectorXd x, g;
+    if (!StateQuantities(robot, plan[j].q, plan[j].tensions_N, &x, &g)) return "pose " + std::to_string(j + 1) + ": invalid cable geometry";
+    const std::string pose = "pose " + std::to_string(j + 1) + ": ";
+    for (Eigen::Index c = 0; c < x.size(); ++c) {
+      if (beyond(x(c), spread[j].x(c), b.x_lo(c), b.x_hi(c))) return pose + names.x[c] + " reaches its bound to first order";
+    }
+    for (Eigen::Index r = 6; r < g.size(); ++r) {
+      if (beyond(g(r), spread[j].g(r), b.g_lo(r), b.g_hi(r))) return pose + names.g[r] + " reaches its bound to first order";
+    }
+  }
+  return "";
+}
+
 double Median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const std::size_t n = v.size();
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
+// One start: solved, verified, then (with robustness, or cables that stretch) checked on the
+// scenario robots and re-solved with the bounds drawn in until it holds (the file comment).
+struct StartOutcome {
+  Outcome outcome;
+  std::vector<SpatialPlanPose> verified;
+  std::string failure;  // "" when `verified` holds
+  int robust_rounds = 0;
+};
+
+// A re-solve draws each pose's bounds in by this much more than its own spread (the poses move,
+// and their spreads with them), a pose that failed a scenario by kRobustWidening^round times
+// that. After kRobustOwnSpreadRounds re-solves every pose takes the largest spread of any pose
+// instead: more conservative (cogiro, 14 poses: a criterion 1.5 times worse), but a pose moved
+// along a bound then meets a spread it was already drawn in for, so the rounds end.
+constexpr double kRobustHeadroom = 1.5, kRobustWidening = 1.3;
+constexpr int kRobustOwnSpreadRounds = 2;
+
+// The first solve of a start, without robustness: the same at every k, so the robustness
+// search solves it once.
+StartOutcome FirstSolve(const SpatialRobot& robot, const SpatialInformationLayout& layout,
+                        const SpatialDesignOptions& options, const std::vector<SpatialPlanPose>& start,
+                        const SpatialHomeReference& home) {
+  StartOutcome s;
+  s.outcome = SolveNlpSomewhere(robot, layout, options, start);
+  if (s.outcome.converged) s.failure = Verify(robot, layout, options, s.outcome.poses, home, &s.verified);
+  return s;
+}
+
+// From a start's first solve, the robust rounds at half-width k_sigma.
+StartOutcome MakeRobust(const SpatialRobot& robot, const SpatialInformationLayout& layout,
+                        const SpatialDesignOptions& options, StartOutcome s, const SpatialHomeReference& home,
+                        double k_sigma, double robust_sigmas) {
+  if (!s.outcome.converged || !s.failure.empty() || (k_sigma == 0.0 && !Stretches(robot))) return s;
+  const int m = robot.num_cables();
+  std::vector<PoseTightening> tight(s.verified.size(), PoseTightening{VectorXd::Zero(6 + m), VectorXd::Zero(PoseRowCount(m))});
+  for (int round = 1;; ++round) {
+    const ScenarioCheck check = CheckScenarios(robot, s.verified, k_sigma, robust_sigmas, home);
+    const std::string linear = LinearisedRobustnessFailure(robot, s.verified, check.spread);
+    if (check.failure.empty() && linear.empty()) return s;
+    s.failure = check.failure.empty() ? linear : check.failure;
+    if (round > kSpatialRobustRounds || (options.interrupted && options.interrupted->load())) return s;
+    PoseTightening largest = check.spread.front();
+    for (const PoseTightening& p : check.spread) {
+      largest.x = largest.x.cwiseMax(p.x);
+      largest.g = largest.g.cwiseMax(p.g);
+    }
+    const bool uniform = round > kRobustOwnSpreadRounds;
+    for (std::size_t j = 0; j < tight.size(); ++j) {
+      const double widen = check.failing[j] ? std::pow(kRobustWidening, round) : 1.0;
+      tight[j].x = (widen * tight[j].x).cwiseMax(widen * kRobustHeadroom * (uniform ? largest.x : check.spread[j].x));
+      tight[j].g = (widen * tight[j].g).cwiseMax(widen * kRobustHeadroom * (uniform ? largest.g : check.spread[j].g));
+    }
+    // Bounds that would cross leave the NLP no pose: said at once, not found by Ipopt's search.
+    const PoseBounds b = ExactPoseBounds(robot);
+    const PoseQuantityNames names = QuantityNames(m);
+    const auto crossing = [&](const VectorXd& t, const VectorXd& lo, const VectorXd& hi,
+                              const std::vector<std::string>& name) -> std::string {
+      for (Eigen::Index c = 0; c < t.size(); ++c) {
+        if (std::isfinite(lo(c)) && std::isfinite(hi(c)) && lo(c) < hi(c) && lo(c) + t(c) > hi(c) - t(c)) {
+          char drawn[32];
+          std::snprintf(drawn, sizeof(drawn), "%.4g", t(c));
+          return name[c] + "'s bounds [" + FormatDouble(lo(c)) + ", " + FormatDouble(hi(c)) + "] drawn in by " + drawn +
+                 " each (its spread for true exit points within " + FormatDouble(robust_sigmas) +
+                 " sigma, with headroom) leave no room";
+        }
+      }
+      return "";
+    };
+    for (std::size_t j = 0; j < tight.size(); ++j) {
+      std::string why = crossing(tight[j].x, b.x_lo, b.x_hi, names.x);
+      if (why.empty()) why = crossing(tight[j].g, b.g_lo, b.g_hi, names.g);
+      if (!why.empty()) {
+        s.failure = "pose " + std::to_string(j + 1) + ": " + why + " (before it: " + s.failure + ")";
+        return s;
+      }
+    }
+    ++s.robust_rounds;
+    const Outcome again = SolveNlpSomewhere(robot, layout, options, s.verified, &tight);
+    s.outcome.iterations += again.iterations;
+    s.outcome.status = again.status;
+    if (!again.converged) {
+      s.failure = "Ipopt " + again.status + " with the bounds drawn in for robustness (round " +
+                  std::to_string(round) + "; before it: " + s.failure + ")";
+      return s;
+    }
+    s.failure = Verify(robot, layout, options, again.poses, home, &s.verified);
+    if (!s.failure.empty()) return s;
+  }
+}
+
 }  // namespace
+
+double DefaultSpatialGeometrySigma(const SpatialRobot& robot) {
+  return robot.sensors.tracker_sigma_m.value_or(kDefaultSpatialGeometrySigma_m);
+}
+
+std::string SpatialRobustnessText(const SpatialRobot& robot, const SpatialDesignResult& r) {
+  const bool stretches = Stretches(robot);
+  const double k = r.robust_sigmas_achieved;
+  if (!(k * r.geometry_sigma_m > 0.0)) {
+    return std::string("each pose holds on the nominal geometry only (no robustness to the true geometry)") +
+           (stretches ? ", checked with the elastic forward model" : "");
+  }
+  const int scenarios = 6 * robot.num_cables() + (stretches ? 1 : 0);
+  return "each pose holds on true robots with exit points within " + FormatDouble(k) + " x " +
+         FormatDouble(r.geometry_sigma_m) + " m of nominal: to first order, and on " + std::to_string(scenarios) +
+         " scenario robots with the " + (stretches ? "elastic " : "") + "forward model";
+}
 
 int MinSpatialDesignPoses(const SpatialRobot& robot, const SpatialInformationLayout& layout) {
   const int net = SpatialValuesPerPose(robot, layout) - layout.local();
@@ -476,6 +795,14 @@ SpatialDesignResult DesignSpatialPoses(const SpatialRobot& robot, const SpatialD
   if (options.random_sets < 0) throw InputError("--random-sets", "", "must not be negative");
   if (!(options.min_spacing_m >= 0.0) || !std::isfinite(options.min_spacing_m)) {
     throw InputError("--min-spacing", "", "must be a non-negative number of metres");
+  }
+  const double sigma_m = options.geometry_sigma_m.value_or(DefaultSpatialGeometrySigma(robot));
+  if (!(sigma_m >= 0.0 && sigma_m <= kMaxGeometrySigma_m)) {
+    throw InputError("--geometry-sigma", "", "must be between 0 and " + FormatDouble(kMaxGeometrySigma_m) + " m (got " +
+                                                 FormatDouble(sigma_m) + ")");
+  }
+  if (!(options.robust_sigmas >= 0.0 && options.robust_sigmas <= 10.0)) {
+    throw InputError("--robust-sigmas", "", "must be between 0 and 10 (got " + FormatDouble(options.robust_sigmas) + ")");
   }
   // The gauge from a reference set large enough for any sensor set (every geometry unknown
   // counted, before any is held): its own stream of the seed.
@@ -503,56 +830,79 @@ SpatialDesignResult DesignSpatialPoses(const SpatialRobot& robot, const SpatialD
   ParallelFor(K, 1, [&](long k) {
     starts[k] = SampleSpatialPoses(robot, n, StreamSeed(options.seed, {kStartStream, static_cast<std::uint64_t>(k)}));
   });
-  std::vector<Outcome> outcomes(K);
-  std::vector<std::vector<SpatialPlanPose>> verified(K);
-  std::vector<std::string> failures(K);
-  // Each start in a child process of its own (SolveNlpSomewhere): as many at once as threads.
-  std::atomic<long> starts_done{0};
-  ParallelFor(K, 1, [&](long k) {
-    if (options.interrupted && options.interrupted->load()) return;
-    outcomes[k] = SolveNlpSomewhere(robot, layout, options, starts[k]);
-    if (outcomes[k].converged) failures[k] = Verify(robot, layout, options, outcomes[k].poses, home, &verified[k]);
-    const long done = ++starts_done;
-    if (options.progress) {
+  // The design at robustness k: every start solved (in a child process of its own, as many at
+  // once as threads) and checked; the best verified one, or SolverFailure. The first solves are
+  // made once, at the first k tried.
+  std::vector<StartOutcome> first(K);
+  bool first_solved = false;
+  const auto design_at = [&](double k) {
+    const double k_sigma = k * sigma_m;
+    std::vector<StartOutcome> outcomes(K);
+    std::atomic<long> starts_done{0};
+    ParallelFor(K, 1, [&](long s) {
+      if (options.interrupted && options.interrupted->load()) return;
+      if (!first_solved) first[s] = FirstSolve(robot, layout, options, starts[s], home);
+      outcomes[s] = MakeRobust(robot, layout, options, first[s], home, k_sigma, k);
+      const long done = ++starts_done;
+      if (options.progress && !first_solved) {
 #pragma omp critical(cablecal_design_progress)
-      options.progress(done, K);
-    }
-  });
-  if (options.interrupted && options.interrupted->load()) throw Interrupted();
-
-  SpatialDesignResult result;
-  result.layout = layout;
-  double best = std::numeric_limits<double>::infinity();
-  for (int k = 0; k < K; ++k) {
-    SpatialStartReport report;
-    report.start = k;
-    report.ipopt_status = outcomes[k].status;
-    report.iterations = outcomes[k].iterations;
-    report.converged = outcomes[k].converged;
-    report.objective = std::numeric_limits<double>::infinity();
-    if (report.converged) {
-      ++result.converged_starts;
-      report.verification_failure = failures[k];
-      report.verified = failures[k].empty();
-      if (report.verified) {
-        report.objective = SpatialDesignObjective(robot, layout, options.criterion, verified[k], nullptr, 0.0);
-        if (report.objective < best) {
-          best = report.objective;
-          result.best_start = k;
+        options.progress(done, K);
+      }
+    });
+    if (!(options.interrupted && options.interrupted->load())) first_solved = true;
+    if (options.interrupted && options.interrupted->load()) throw Interrupted();
+    SpatialDesignResult r;
+    double best = std::numeric_limits<double>::infinity();
+    for (int s = 0; s < K; ++s) {
+      SpatialStartReport report;
+      report.start = s;
+      report.ipopt_status = outcomes[s].outcome.status;
+      report.iterations = outcomes[s].outcome.iterations;
+      report.converged = outcomes[s].outcome.converged;
+      report.robust_rounds = outcomes[s].robust_rounds;
+      report.objective = std::numeric_limits<double>::infinity();
+      if (report.converged) {
+        ++r.converged_starts;
+        report.verification_failure = outcomes[s].failure;
+        report.verified = outcomes[s].failure.empty();
+        if (report.verified) {
+          report.objective = SpatialDesignObjective(robot, layout, options.criterion, outcomes[s].verified, nullptr, 0.0);
+          if (report.objective < best) {
+            best = report.objective;
+            r.best_start = s;
+          }
         }
       }
+      r.starts.push_back(report);
     }
-    result.starts.push_back(report);
-  }
-  if (result.best_start < 0) {
-    std::string statuses;
-    for (const SpatialStartReport& r : result.starts) {
-      statuses += (statuses.empty() ? "" : ", ") + r.ipopt_status +
-                  (r.converged && !r.verified ? " (re-verification failed: " + r.verification_failure + ")" : "");
+    if (r.best_start < 0) {
+      std::string statuses;
+      for (const SpatialStartReport& st : r.starts) {
+        statuses += (statuses.empty() ? "" : ", ") + st.ipopt_status +
+                    (st.converged && !st.verified ? " (re-verification failed: " + st.verification_failure + ")" : "");
+      }
+      throw SolverFailure("none of the " + std::to_string(K) + " starts gave verified poses" +
+                          (k_sigma > 0.0 ? " holding for true exit points within " + FormatDouble(k) + " x " +
+                                               FormatDouble(sigma_m) + " m of nominal"
+                                         : std::string()) +
+                          ": " + statuses);
     }
-    throw SolverFailure("none of the " + std::to_string(K) + " starts gave verified poses: " + statuses);
+    r.poses = outcomes[r.best_start].verified;
+    return r;
+  };
+  SpatialDesignResult result;
+  RobustnessSearch search;
+  if (options.lower_robustness && options.robust_sigmas * sigma_m > 0.0) {
+    result = DesignAtLargestRobustness(options.robust_sigmas, design_at, &search);
+  } else {
+    result = design_at(options.robust_sigmas);
+    search.requested_k = search.achieved_k = options.robust_sigmas;
   }
-  result.poses = verified[result.best_start];
+  result.layout = layout;
+  result.geometry_sigma_m = sigma_m;
+  result.robust_sigmas_requested = search.requested_k;
+  result.robust_sigmas_achieved = search.achieved_k;
+  if (search.lowered()) result.robustness_note = LoweredRobustnessText(search, sigma_m);
   result.criteria = SpatialCriteria(SpatialInformation(robot, layout, result.poses));
   const int R = options.random_sets;
   if (R > 0) {
@@ -635,11 +985,21 @@ std::string SpatialDesignSummaryYaml(const SpatialRobot& robot, const SpatialDes
     o << Flow << BeginMap << Key << "start" << Value << st.start << Key << "ipopt_status" << Value << st.ipopt_status
       << Key << "iterations" << Value << st.iterations << Key << "verified" << Value << st.verified;
     if (st.verified) o << Key << "objective" << Value << YamlNumber{st.objective};
+    if (st.robust_rounds > 0) o << Key << "robust_rounds" << Value << st.robust_rounds;
     if (st.converged && !st.verified) o << Key << "verification_failure" << Value << YamlString{st.verification_failure};
     o << EndMap;
   }
   o << YAML::EndSeq;
-  o << Key << "robustness" << Value << YamlString{"not modelled yet for spatial robots: the poses hold on the nominal geometry"};
+  // robust_sigmas: the k the plan holds for; the keys below it only when that is less than asked.
+  o << Key << "robustness" << Value << BeginMap << Key << "geometry_sigma_m" << Value << YamlNumber{r.geometry_sigma_m}
+    << Key << "robust_sigmas" << Value << YamlNumber{r.robust_sigmas_achieved} << Key << "holds" << Value
+    << YamlString{SpatialRobustnessText(robot, r)};
+  if (r.robustness_lowered()) {
+    o << Key << "robustness_requested_k" << Value << YamlNumber{r.robust_sigmas_requested};
+    o << Key << "robustness_achieved_k" << Value << YamlNumber{r.robust_sigmas_achieved};
+    o << Key << "robustness_lowered" << Value << YamlString{r.robustness_note};
+  }
+  o << EndMap;
   o << Key << "wall_time_s" << Value << YamlNumber{std::round(r.wall_time_s * 1000.0) / 1000.0};
   o << EndMap;
   return YamlText(o);

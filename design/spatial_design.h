@@ -18,12 +18,25 @@
 // SolveSpatialEquilibrium finds from Ipopt's pose must be that pose; m >= 6: the tensions
 // projected exactly onto the equilibrium, or for an identification that does not model the
 // tensions the model's own distribution), then CheckSpatialFeasibility.
-// Not yet: robustness to the unknown true geometry (the planar --geometry-sigma), --prior.
+// Robustness to the unknown true geometry (README, "Spatial robots", "Robust spatial design"):
+// the plan is run open loop, so each pose must hold on every true robot whose exit points are
+// within k sigma of nominal. Checked with the full forward model (model/forward_statics.h, the
+// elastic one for cables with stiffness) on 6m scenario robots, each exit coordinate moved by
+// +-k sigma alone, and on the nominal robot itself when a cable stretches: each pose's commanded
+// lengths must settle the platform near the pose, feasible on that robot. The same settled
+// states give each bounded quantity c its linearised worst case over the ellipsoid
+// |dg / sigma| <= k, k sigma |dc/dg|_2 = sqrt(sum over coordinates ((c+ - c-) / 2)^2), and the
+// NLP is re-solved from its poses with every bound drawn in by that much (widened for poses
+// that failed a scenario), until the poses keep every bound to first order and on every scenario
+// robot, or kSpatialRobustRounds re-solves. Where no start holds at the requested k, the design
+// runs at the largest k that does (design/robustness_search.h) and says so.
+// Not yet: --prior (sequential design).
 #pragma once
 
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -42,6 +55,13 @@ struct SpatialDesignOptions {
   double min_spacing_m = 0.0;  // 0: off
   int random_sets = 100;       // the median of random feasible sets for comparison (0: none)
   int max_iterations = 3000;   // Ipopt, per start
+  // The true exit points' uncertainty the plan must survive, per coordinate (m); unset: the
+  // robot file's tracker sigma (its exits' survey) if it has one, else kDefaultSpatialGeometrySigma_m.
+  // 0: no robustness (the poses hold on the nominal geometry; a stretching robot's still checked
+  // with the elastic forward model).
+  std::optional<double> geometry_sigma_m;
+  double robust_sigmas = 3.0;    // k (as planar)
+  bool lower_robustness = true;  // none holds at k: design at the largest k that does, and say so
   // Each start's Ipopt solve in a child process of its own, so that starts solve at once on
   // several cores (DesignOptions::solve_in_child_processes: the outcome is the same bit for
   // bit). Off: the solves take turns in this process (Python; montecarlo's
@@ -63,6 +83,7 @@ struct SpatialStartReport {
   bool verified = false;
   std::string verification_failure;
   double objective = 0.0;  // the exact criterion of the verified poses
+  int robust_rounds = 0;   // NLP re-solves with the bounds drawn in for robustness
 };
 
 struct SpatialDesignResult {
@@ -73,8 +94,23 @@ struct SpatialDesignResult {
   int best_start = -1;
   int converged_starts = 0;
   std::vector<SpatialStartReport> starts;
+  double geometry_sigma_m = 0.0;  // as resolved (options' or the robot file's)
+  double robust_sigmas_requested = 0.0;
+  double robust_sigmas_achieved = 0.0;  // the k the plan holds for
+  std::string robustness_note;          // LoweredRobustnessText when lowered, else ""
+  bool robustness_lowered() const { return robust_sigmas_achieved < robust_sigmas_requested; }
   double wall_time_s = 0.0;
 };
+
+// Without a --geometry-sigma and without a tracker survey in the robot file: the planar default.
+constexpr double kDefaultSpatialGeometrySigma_m = 0.01;
+constexpr int kSpatialRobustRounds = 4;
+double DefaultSpatialGeometrySigma(const SpatialRobot& robot);
+
+// What the summary, the console and Python say of the robustness: "each pose holds on the true
+// robots with exit points within 3 x 0.0005 m of nominal (to first order, and on the 48 scenario
+// robots with the elastic forward model)".
+std::string SpatialRobustnessText(const SpatialRobot& robot, const SpatialDesignResult& result);
 
 // InputError for bad options (too few poses, ...); SolverFailure when no start converges to
 // verified poses; Interrupted when options.interrupted was set.

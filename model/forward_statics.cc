@@ -108,8 +108,17 @@ struct SpatialAdapter {
     return (q.head<3>() - guess.head<3>()).norm() <= kOtherAssemblyDistance_m &&
            Eigen::AngleAxisd(relative).angle() <= kOtherAssemblyAngle_rad;
   }
+  // Angles wrapped to (-pi, pi], and the one orientation written with |pitch| <= pi / 2: Newton
+  // may end on the other roll-pitch-yaw triple of the same rotation, (roll + pi, pi - pitch,
+  // yaw + pi), and an inclinometer reads roll and pitch of the usual one (seen on ipanema1 at
+  // a pitch of 0.3 rad: roll 2.98, pitch 2.87).
   static void Normalise(PoseD& q) {
     for (int k = 3; k < 6; ++k) q(k) = std::remainder(q(k), 2.0 * M_PI);
+    if (std::abs(q(4)) > 0.5 * M_PI) {
+      q(3) = std::remainder(q(3) + M_PI, 2.0 * M_PI);
+      q(4) = std::remainder(M_PI - q(4), 2.0 * M_PI);
+      q(5) = std::remainder(q(5) + M_PI, 2.0 * M_PI);
+    }
   }
 };
 

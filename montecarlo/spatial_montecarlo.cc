@@ -213,15 +213,27 @@ std::vector<SpatialPlanPose> MakeSpatialDesignedSet(const SpatialRobot& planning
     opt.max_iterations = o.design_max_iterations;
     opt.interrupted = o.study.interrupted;
     opt.solve_in_child_processes = o.study.design_in_child_processes;
-    // No start converged within Ipopt's iteration limit: add starts, as the planar study does
-    // (the first ones are the same streams, so this only extends the search).
+    // The plan must survive the same true robots. Not when the identification leaves the statics
+    // out: the design is then made on the cables taken as inextensible (below), a model the
+    // forward statics cannot settle with more than 6 cables, so its plans are not robust.
+    opt.geometry_sigma_m = o.statics ? o.study.geometry_sigma_m : 0.0;
+    opt.lower_robustness = false;                     // more starts first, at the full robustness
+    // No start gave verified poses: add starts, as the planar study does (the first ones are the
+    // same streams, so this only extends the search), and if those find none at the full
+    // robustness, take the largest k that gives a set, and say so.
     const auto design = [&](const SpatialRobot& robot) {
       try {
         return DesignSpatialPoses(robot, opt);
       } catch (const SolverFailure&) {
         SpatialDesignOptions more = opt;
         more.starts = 4 * opt.starts;
-        return DesignSpatialPoses(robot, more);
+        more.lower_robustness = true;
+        SpatialDesignResult r = DesignSpatialPoses(robot, more);
+        if (r.robustness_lowered()) {
+          std::fprintf(stderr, "cablecal: montecarlo: the designed set for n=%d, %s: robustness lowered: %s\n", key.n,
+                       ToString(key.design), r.robustness_note.c_str());
+        }
+        return r;
       }
     };
     if (o.statics) return design(planning).poses;

@@ -77,8 +77,9 @@ SpatialRobot PlanningRobot(const SpatialRobot& nominal, const SpatialMonteCarloO
 void ValidateSpatialMonteCarloOptions(const SpatialRobot& nominal, const SpatialMonteCarloOptions& options);
 
 // One designed set of the study: a grid (GridSpatialPoses) or a criterion's design
-// (design/spatial_design.h: the study's design_starts, 4 times as many if none converges, its own
-// seed stream, no robustness yet);
+// (design/spatial_design.h: the study's design_starts, its own seed stream, robust for true
+// exits within 3 x the study's geometry_sigma_m (not with statics off); if no start holds, 4 times as many starts, and
+// then the largest robustness that gives a set, said on stderr);
 // empty, said on stderr, when none can be made. `planning`: PlanningRobot's.
 std::vector<SpatialPlanPose> MakeSpatialDesignedSet(const SpatialRobot& planning, const SpatialMonteCarloOptions& options,
                                                     const DesignedSetKey& key);

@@ -61,6 +61,19 @@ void BindSpatialDesignResult(py::module_& m) {
       .def_property_readonly("best_start", [](const PySpatialDesign& d) { return d.result.best_start; })
       .def_property_readonly("converged_starts", [](const PySpatialDesign& d) { return d.result.converged_starts; })
       .def_property_readonly("wall_time_s", [](const PySpatialDesign& d) { return d.result.wall_time_s; })
+      .def_property_readonly("geometry_sigma_m", [](const PySpatialDesign& d) { return d.result.geometry_sigma_m; },
+                             "The exit points' uncertainty the plan was made robust to (m).")
+      .def_property_readonly("robustness_requested_k", [](const PySpatialDesign& d) { return d.result.robust_sigmas_requested; },
+                             "The robust_sigmas asked for.")
+      .def_property_readonly("robustness_achieved_k", [](const PySpatialDesign& d) { return d.result.robust_sigmas_achieved; },
+                             "The k the plan holds for (true exit points within k x geometry_sigma_m of nominal): the "
+                             "requested one, or the largest below it with verified poses.")
+      .def_property_readonly("robustness", [](const PySpatialDesign& d) { return SpatialRobustnessText(d.robot, d.result); },
+                             "What the plan holds for, in words (summary.yaml's robustness.holds).")
+      .def_property_readonly("robustness_note", [](const PySpatialDesign& d) -> py::object {
+        if (!d.result.robustness_lowered()) return py::none();
+        return py::str(d.result.robustness_note);
+      }, "The sentence saying the robustness was lowered and to what; None when the requested one holds.")
       .def_property_readonly("starts", [](const PySpatialDesign& d) {
         py::list l;
         for (const SpatialStartReport& s : d.result.starts) {
@@ -72,25 +85,22 @@ void BindSpatialDesignResult(py::module_& m) {
           e["verified"] = s.verified;
           e["verification_failure"] = s.verification_failure;
           e["objective"] = s.objective;
+          e["robust_rounds"] = s.robust_rounds;
           l.append(e);
         }
         return l;
-      }, "Per Ipopt start: status, iterations, converged, verified, objective.")
+      }, "Per Ipopt start: status, iterations, converged, verified, objective, robust re-solves.")
       .def("to_yaml", [](const PySpatialDesign& d) {
         return SpatialDesignSummaryYaml(d.robot, d.result, d.options, CallText("design"));
       }, "The CLI's summary.yaml.");
 }
 
-// The spatial design takes the planar one's arguments but robustness and a prior, which it does
-// not serve yet: given, they are refused (never silently ignored).
+// The spatial design takes the planar one's arguments but a prior, which it does not serve yet:
+// given, it is refused (never silently ignored). geometry_sigma None: the robot file's tracker
+// sigma, else the planar default (SpatialDesignOptions).
 py::object SpatialDesign(const SpatialRobot& robot, py::handle n, py::handle criterion, py::handle starts,
                          py::handle seed, py::handle min_spacing, py::handle random_sets, py::handle geometry_sigma,
                          py::handle robust_sigmas, py::handle prior) {
-  const std::string robustness =
-      "robustness to the true geometry is not yet served for spatial robots: the designed poses hold on the robot "
-      "file's nominal geometry";
-  if (!geometry_sigma.is_none()) Bad("geometry_sigma", robustness);
-  if (!robust_sigmas.is_none()) Bad("robust_sigmas", robustness);
   if (!prior.is_none()) {
     Bad("prior", "sequential design (planning around an earlier identification) is not yet served for spatial robots");
   }
@@ -102,10 +112,28 @@ py::object SpatialDesign(const SpatialRobot& robot, py::handle n, py::handle cri
   o.seed = AsSeed(seed);
   o.min_spacing_m = AsNumber(min_spacing, "min_spacing");
   o.random_sets = static_cast<int>(AsInteger(random_sets, "random_sets", 0, 100000));
+  if (!geometry_sigma.is_none()) {
+    o.geometry_sigma_m = AsNumber(geometry_sigma, "geometry_sigma");
+    if (!(*o.geometry_sigma_m >= 0.0 && *o.geometry_sigma_m <= kMaxGeometrySigma_m)) {
+      Bad("geometry_sigma", "must be between 0 and " + FormatDouble(kMaxGeometrySigma_m) + " m (got " +
+                                FormatDouble(*o.geometry_sigma_m) + ")");
+    }
+  }
+  if (!robust_sigmas.is_none()) {
+    o.robust_sigmas = AsNumber(robust_sigmas, "robust_sigmas");
+    if (!(o.robust_sigmas >= 0.0 && o.robust_sigmas <= 10.0)) {
+      Bad("robust_sigmas", "must be between 0 and 10 (got " + FormatDouble(o.robust_sigmas) + ")");
+    }
+  }
   std::atomic<bool> stop{false};
   o.interrupted = &stop;
   PySpatialDesign d{robot, Interruptible(stop, [&] { return DesignSpatialPoses(robot, o); }), o};
   d.options.interrupted = nullptr;
+  if (d.result.robustness_lowered()) {
+    // The CLI's "robustness lowered" line: a plan, but for less than asked.
+    const std::string note = "robustness lowered: " + d.result.robustness_note;
+    if (PyErr_WarnEx(PyExc_UserWarning, note.c_str(), 1) < 0) throw py::error_already_set();
+  }
   if (o.random_sets > 0 && !(Improvement(o.criterion, d.result.criteria, d.result.random_median) > 1.0)) {
     // The CLI's warning: a result, but not a good plan.
     const int warned = PyErr_WarnEx(PyExc_UserWarning,
@@ -155,7 +183,7 @@ void BindDesign(py::module_& m) {
           l.append(e);
         }
         return l;
-      }, "Per Ipopt start: status, iterations, converged, verified, objective.")
+      }, "Per Ipopt start: status, iterations, converged, verified, objective, robust re-solves.")
       .def("to_yaml", [](const PyDesign& d) { return DesignSummaryYaml(d.result, d.options, CallText("design")); },
            "The CLI's summary.yaml.");
   m.def(

@@ -123,6 +123,16 @@ TEST_F(SpatialDesignCli, PlanReadsBackAndSimulatesOnIrma4uAndARandomRobot) {
       EXPECT_NE(summary.find(key), std::string::npos) << key << "\n" << summary;
     }
 
+    // The robustness it holds for, said; irma4u (no tracker survey: the default 0.01 m) holds no
+    // plan for true robots within 3 cm (a cable goes slack), so it designs at the largest k that
+    // does and warns.
+    EXPECT_NE(summary.find("robustness:\n  geometry_sigma_m: "), std::string::npos) << summary;
+    EXPECT_NE(summary.find("  holds: \"each pose holds on "), std::string::npos) << summary;
+    if (extra == 0) {
+      EXPECT_NE(r.output.find("cablecal: warning: robustness lowered: the plan holds for "), std::string::npos) << r.output;
+      EXPECT_NE(summary.find("robustness_lowered: "), std::string::npos) << summary;
+    }
+
     // --json: the summary and the plan on stdout, the same poses, no file needed.
     if (extra == 0) continue;
     const RunResult json = RunCablecal(args + " --json");
@@ -145,8 +155,8 @@ TEST_F(SpatialDesignCli, HostileInputsExitTwoOrThreeWithOneMessageAndNothingWrit
   const std::string outputs = " --out " + Path("out.csv") + " --summary " + Path("out.yaml");
   const std::vector<Case> cases = {
       {"--poses 1", "--poses: at least 2 poses are needed", 2},
-      {"--poses 3 --geometry-sigma 0.01", "--geometry-sigma: robustness to the true geometry is not yet served for spatial robots", 2},
-      {"--poses 3 --robust-sigmas 1", "--robust-sigmas: robustness to the true geometry is not yet served", 2},
+      {"--poses 3 --geometry-sigma 0.6", "--geometry-sigma: must be between 0 and 0.5 m (got 0.6)", 2},
+      {"--poses 3 --robust-sigmas 11", "--robust-sigmas: must be between 0 and 10 (got 11)", 2},
       {"--poses 3 --prior " + Path("prior.yaml"), "--prior: sequential design", 2},
       {"--poses 3 --plot " + Path("out.png"), "--plot: a figure of a spatial plan is not yet served", 2},
       {"--poses 501", "--poses: at most 500 poses", 2},

@@ -271,6 +271,33 @@ TEST(ForwardStatics, ElasticSpatialIsStationary) {
   }
 }
 
+// A rotation has two roll-pitch-yaw triples, (r, p, y) and (r + pi, pi - p, y + pi); Newton
+// started on the second ends there. The inclinometer reads roll and pitch of the first (|pitch|
+// <= pi/2), so the solver must return that one, the same rotation (before the fix, a robust
+// design's scenario robot on ipanema1 came back with roll 2.98, pitch 2.87).
+TEST(ForwardStatics, SpatialPoseComesBackWithTheUsualRollPitchYaw) {
+  Rng rng(StreamSeed(15, {}));
+  const SpatialRobot cogiro = WithStiffness(LoadRepoSpatialRobot("cogiro"), 1e6);
+  const SpatialRobot irma4u = WithStiffness(LoadRepoSpatialRobot("irma4u"), 1e5);
+  const SpatialRobot random6 = testing::RandomSpatialRobot(rng, "random6", 6);
+  for (const SpatialRobot* r : {&cogiro, &irma4u, &random6}) {
+    SCOPED_TRACE(r->name);
+    const SpatialPose<double> q0 = r->home_pose();
+    const Eigen::VectorXd L = CableLengths<double>(*r, q0);
+    const SpatialForwardResult usual = SolveForwardStatics(*r, L, &q0);
+    ASSERT_EQ(usual.status, ForwardStatus::kConverged);
+    SpatialPose<double> other = usual.equilibrium.q;
+    other(3) += M_PI;
+    other(4) = M_PI - other(4);
+    other(5) += M_PI;
+    ASSERT_LT((Rotation<double>(other) - Rotation<double>(usual.equilibrium.q)).norm(), 1e-12);
+    const SpatialForwardResult f = SolveForwardStatics(*r, L, &other);
+    ASSERT_EQ(f.status, ForwardStatus::kConverged);
+    EXPECT_LE(std::abs(f.equilibrium.q(4)), 0.5 * M_PI);
+    EXPECT_LT((f.equilibrium.q - usual.equilibrium.q).cwiseAbs().maxCoeff(), 1e-8) << f.equilibrium.q.transpose();
+  }
+}
+
 // (c) Slack: a cable commanded much longer carries nothing (elastic) or is reported (inextensible).
 TEST(ForwardStatics, LongCableGoesSlack) {
   Rng rng(StreamSeed(17, {}));

@@ -1062,9 +1062,18 @@ def test_spatial_design_equals_cli_and_refuses_what_it_does_not_serve(tmp_path):
     # The plan is the robot's: simulate takes it as the CLI's simulate takes the file.
     run = cablecal.simulate(robot, design.plan, sensors="none", encoder_noise=False)
     np.testing.assert_array_equal(run.measurements.dl, design.plan.length_changes)
-    for kwargs, named in [({"geometry_sigma": 0.01}, "geometry_sigma"), ({"robust_sigmas": 2}, "robust_sigmas"),
-                          ({"prior": str(summary)}, "prior")]:
-        with pytest.raises(cablecal.InputError, match=named + ".*not yet served for spatial robots"):
-            cablecal.design(robot, 2, **kwargs)
+    with pytest.raises(cablecal.InputError, match="prior.*not yet served for spatial robots"):
+        cablecal.design(robot, 2, prior=str(summary))
+    # irma4u has no tracker survey: the default 0.01 m, at which no plan holds (a cable goes
+    # slack), so the robustness is lowered, warned and said.
+    assert design.geometry_sigma_m == 0.01 and design.robustness_requested_k == 3
+    assert design.robustness_achieved_k < 3 and "not the requested 3 x 0.01 m" in design.robustness_note
+    assert design.robustness.startswith("each pose holds on ")
+    with pytest.warns(UserWarning, match="robustness lowered"):
+        cablecal.design(robot, 2, starts=1, random_sets=0, seed=5)
+    small = cablecal.design(robot, 3, starts=1, random_sets=0, seed=5, geometry_sigma=0.0001, robust_sigmas=1)
+    assert small.geometry_sigma_m == 0.0001 and small.robustness_requested_k == 1 and small.robustness_note is None
+    with pytest.raises(cablecal.InputError, match="robust_sigmas.*between 0 and 10"):
+        cablecal.design(robot, 2, robust_sigmas=11)
     with pytest.raises(cablecal.InputError, match="at least 2 poses"):
         cablecal.design(robot, 1)
