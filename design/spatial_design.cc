@@ -881,6 +881,13 @@ SpatialDesignResult DesignSpatialPoses(const SpatialRobot& robot, const SpatialD
         statuses += (statuses.empty() ? "" : ", ") + st.ipopt_status +
                     (st.converged && !st.verified ? " (re-verification failed: " + st.verification_failure + ")" : "");
       }
+      const bool all_capped = std::all_of(r.starts.begin(), r.starts.end(), [](const SpatialStartReport& st) {
+        return st.ipopt_status == "Maximum_Iterations_Exceeded";
+      });
+      if (all_capped) {
+        statuses += " (every start reached Ipopt's cap of " + std::to_string(options.max_iterations) +
+                    " iterations: more --starts, another --seed or fewer --poses may converge)";
+      }
       throw SolverFailure("none of the " + std::to_string(K) + " starts gave verified poses" +
                           (k_sigma > 0.0 ? " holding for true exit points within " + FormatDouble(k) + " x " +
                                                FormatDouble(sigma_m) + " m of nominal"
@@ -992,6 +999,9 @@ std::string SpatialDesignSummaryYaml(const SpatialRobot& robot, const SpatialDes
   o << YAML::EndSeq;
   // robust_sigmas: the k the plan holds for; the keys below it only when that is less than asked.
   o << Key << "robustness" << Value << BeginMap << Key << "geometry_sigma_m" << Value << YamlNumber{r.geometry_sigma_m}
+    << Key << "geometry_sigma_from" << Value
+    << (options.geometry_sigma_m ? "given (--geometry-sigma)"
+                                 : robot.sensors.tracker_sigma_m ? "the robot file's tracker sigma" : "the default")
     << Key << "robust_sigmas" << Value << YamlNumber{r.robust_sigmas_achieved} << Key << "holds" << Value
     << YamlString{SpatialRobustnessText(robot, r)};
   if (r.robustness_lowered()) {

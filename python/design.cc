@@ -241,8 +241,8 @@ void BindDesign(py::module_& m) {
       "poses (robustness_achieved_k, with a UserWarning when lower); SolverError if none does, not even without "
       "robustness. prior: the path of an earlier "
       "identification's result.yaml (design --prior). geometry_sigma and robust_sigmas: None is 0.01 m and 3. "
-      "For a SpatialRobot: a SpatialDesignResult; geometry_sigma, robust_sigmas and prior are not served yet "
-      "(InputError when given).");
+      "For a SpatialRobot: a SpatialDesignResult, robust to the exit points (geometry_sigma None: the robot "
+      "file's tracker sigma, else 0.01 m); prior is not served yet (InputError when given).");
 }
 
 }  // namespace cablecal::python
