@@ -127,6 +127,13 @@ std::function<void(long, long)> ProgressBar(const std::string& label, const std:
   };
 }
 
+std::function<void(double)> TryingRobustnessNotice(double requested_k) {
+  return [requested_k](double k) {
+    std::fprintf(stderr, "cablecal: design: no verified poses at --robust-sigmas %s; searching for the largest k "
+                 "below it that has some: trying %s\n", FormatDouble(requested_k).c_str(), FormatDouble(k).c_str());
+  };
+}
+
 // The figures are PNG: a --plot named otherwise would get PNG bytes under a misleading name.
 void CheckPngPath(const std::string& flag, const std::string& path) {
   if (path.empty()) return;
@@ -708,12 +715,7 @@ int RunDesign(const Context& ctx, const DesignCommandOptions& options) {
   design.interrupted = &SigintFlag();
   if (!ctx.quiet) {
     design.progress = ProgressBar("design", "starts");
-    const double requested_k = design.robust_sigmas;
-    design.trying_robustness = [requested_k](double k) {
-      std::fprintf(stderr, "cablecal: design: no verified poses at --robust-sigmas %s; searching for the largest k "
-                   "below it that has some: trying %s\n", FormatDouble(requested_k).c_str(),
-                   FormatDouble(k).c_str());
-    };
+    design.trying_robustness = TryingRobustnessNotice(design.robust_sigmas);
   }
   const DesignResult result = DesignPoses(robot, design);
   // The plan holds for the achieved k: the warnings below speak of it.

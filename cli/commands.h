@@ -24,6 +24,8 @@ struct Context {
 // A progress bar on stderr, with the rate and the time left, when stderr is a terminal;
 // nullptr (nothing) otherwise. `unit` names what is counted ("trials", "starts").
 std::function<void(long, long)> ProgressBar(const std::string& label, const std::string& unit);
+// design's line when the requested robustness gave no plan and the search tries k (either kind).
+std::function<void(double)> TryingRobustnessNotice(double requested_k);
 
 // The name in `names` closest to `typed` by edit distance, if within 2 edits (or a third of
 // its length); empty otherwise. For "did you mean".

@@ -836,6 +836,7 @@ SpatialDesignResult DesignSpatialPoses(const SpatialRobot& robot, const SpatialD
   std::vector<StartOutcome> first(K);
   bool first_solved = false;
   const auto design_at = [&](double k) {
+    if (k != options.robust_sigmas && options.trying_robustness) options.trying_robustness(k);
     const double k_sigma = k * sigma_m;
     std::vector<StartOutcome> outcomes(K);
     std::atomic<long> starts_done{0};
@@ -844,7 +845,7 @@ SpatialDesignResult DesignSpatialPoses(const SpatialRobot& robot, const SpatialD
       if (!first_solved) first[s] = FirstSolve(robot, layout, options, starts[s], home);
       outcomes[s] = MakeRobust(robot, layout, options, first[s], home, k_sigma, k);
       const long done = ++starts_done;
-      if (options.progress && !first_solved) {
+      if (options.progress) {
 #pragma omp critical(cablecal_design_progress)
         options.progress(done, K);
       }

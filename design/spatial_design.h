@@ -68,7 +68,8 @@ struct SpatialDesignOptions {
   // design_in_child_processes).
   bool solve_in_child_processes = true;
   const std::atomic<bool>* interrupted = nullptr;
-  std::function<void(long, long)> progress;  // (starts done, starts)
+  std::function<void(long, long)> progress;  // (starts done, starts), at every k the robustness search tries
+  std::function<void(double)> trying_robustness;  // the search is about to design at this k (below the requested)
 };
 
 // The fewest poses whose readings can determine the gauge-fixed geometry: each pose adds its
