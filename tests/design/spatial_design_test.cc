@@ -300,7 +300,7 @@ TEST(SpatialDesign, RobustnessIsLoweredWhereNoPlanHoldsAndSaid) {
   const SpatialRobot robot = BuiltinSpatialRobot("ipanema1");
   SpatialDesignOptions options;
   options.poses = 14;
-  options.starts = 2;
+  options.starts = 1;
   options.random_sets = 0;
   const SpatialDesignResult r = DesignSpatialPoses(robot, options);
   EXPECT_EQ(r.robust_sigmas_requested, 3.0);
