@@ -340,7 +340,7 @@ TEST_F(SpatialCli, ReproduceSpatialWritesEveryConfigurationTheSameForOneAndTwoTh
     const RunResult r = RunCablecal(reduced + " --threads " + std::to_string(threads) + " --out " + out);
     ASSERT_EQ(r.exit_code, 0) << r.output;
   }
-  for (const std::string c : {"cogiro_inclinometer_laser", "cogiro_encoders"}) {
+  for (const std::string c : {"cogiro_inclinometer_laser", "cogiro_encoders", "irma4u_swivel_inclinometer"}) {
     for (const std::string f : {"summary.csv", "errors.csv", "failures.csv", "summary.md"}) {
       const std::string one = Read("t1/spatial/" + c + "/" + f), two = Read("t2/spatial/" + c + "/" + f);
       EXPECT_FALSE(one.empty()) << c << "/" << f;
@@ -361,6 +361,11 @@ TEST_F(SpatialCli, ReproduceSpatialWritesEveryConfigurationTheSameForOneAndTwoTh
   const std::string encoders = Read("t1/spatial/cogiro_encoders/run.yaml");
   EXPECT_NE(encoders.find("readings: [encoder]"), std::string::npos) << encoders;
   EXPECT_NE(encoders.find("statics: off"), std::string::npos) << encoders;
+  // irma4u with the study's stated choices: its cables given a stiffness, swivel and inclinometer.
+  const std::string irma4u = Read("t1/spatial/irma4u_swivel_inclinometer/run.yaml");
+  EXPECT_NE(irma4u.find("readings: [encoder, inclinometer, swivel]"), std::string::npos) << irma4u;
+  EXPECT_NE(irma4u.find("plan_margins: {tension_N: 20, frame_m: 0.005, tilt_deg: 0.5}"), std::string::npos) << irma4u;
+  EXPECT_NE(Read("t1/spatial/comparison.md").find("## irma4u: encoders, swivel and inclinometer"), std::string::npos);
   for (const auto& [flags, named] : std::vector<std::pair<std::string, std::string>>{
            {"--study spatial --robot " + Builtin("cogiro"), "--robot: the spatial study runs on the built-in"},
            {"--study planar", "--study"},
