@@ -195,10 +195,8 @@ int RunSpatialDesign(const Context& ctx, const DesignCommandOptions& options) {
   design.robust_sigmas = options.robust_sigmas;
   const SigintScope sigint;  // Ctrl-C: Ipopt stops at its next iteration, exit 130, nothing written
   design.interrupted = &SigintFlag();
-  if (!ctx.quiet) {
-    design.progress = ProgressBar("design", "starts");
-    design.trying_robustness = TryingRobustnessNotice(design.robust_sigmas);
-  }
+  if (!ctx.quiet) design.progress = ProgressBar("design", "starts");
+  if (!ctx.quiet && !options.json) design.trying_robustness = TryingRobustnessNotice(design.robust_sigmas);
   const SpatialDesignResult result = DesignSpatialPoses(robot, design);
   const std::string summary = SpatialDesignSummaryYaml(robot, result, design, ctx.command_line);
   AtomicOutput output;

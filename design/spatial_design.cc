@@ -551,7 +551,6 @@ bool StateQuantities(const SpatialRobot& robot, const SpatialPose<double>& q, co
 struct ScenarioCheck {
   std::string failure;        // the first failure, "" when every pose holds on every scenario robot
   std::vector<bool> failing;  // per pose
-  int robots = 0;             // scenario robots checked
   // Per pose: sqrt(sum over exit coordinates ((c+ - c-) / 2)^2), k sigma |dc/dg|_2 to first order.
   std::vector<PoseTightening> spread;
 };
@@ -583,7 +582,6 @@ ScenarioCheck CheckScenarios(const SpatialRobot& robot, const std::vector<Spatia
       scenarios.push_back({p, 1.0});
     }
   }
-  out.robots = static_cast<int>(scenarios.size());
   // Each pose's quantities on the minus robot of the current parameter, for the difference.
   std::vector<VectorXd> minus_x(n), minus_g(n);
   std::vector<bool> have_minus(n, false);
@@ -835,7 +833,9 @@ SpatialDesignResult DesignSpatialPoses(const SpatialRobot& robot, const SpatialD
   // made once, at the first k tried.
   std::vector<StartOutcome> first(K);
   bool first_solved = false;
+  std::string without_robustness;  // when no first solve gave verified poses: why (no k can help)
   const auto design_at = [&](double k) {
+    if (!without_robustness.empty()) throw SolverFailure(without_robustness);
     if (k != options.robust_sigmas && options.trying_robustness) options.trying_robustness(k);
     const double k_sigma = k * sigma_m;
     std::vector<StartOutcome> outcomes(K);
@@ -888,6 +888,10 @@ SpatialDesignResult DesignSpatialPoses(const SpatialRobot& robot, const SpatialD
       if (all_capped) {
         statuses += " (every start reached Ipopt's cap of " + std::to_string(options.max_iterations) +
                     " iterations: more --starts, another --seed or fewer --poses may converge)";
+      }
+      if (std::none_of(first.begin(), first.end(),
+                       [](const StartOutcome& f) { return f.outcome.converged && f.failure.empty(); })) {
+        without_robustness = "none of the " + std::to_string(K) + " starts gave verified poses: " + statuses;
       }
       throw SolverFailure("none of the " + std::to_string(K) + " starts gave verified poses" +
                           (k_sigma > 0.0 ? " holding for true exit points within " + FormatDouble(k) + " x " +
