@@ -358,7 +358,7 @@ std::vector<SpatialStudyConfiguration> SpatialStudyConfigurations() {
                                      {}, false, false, 0.0005, 150.0, 0.005, 0.5, 0, {16, 27, 40}};
   SpatialStudyConfiguration irma4u{"irma4u_swivel_inclinometer", "irma4u",
                                    "irma4u: encoders, swivel and inclinometer (cables given E*A 1e5 N)",
-                                   {"swivel", "inclinometer"}, false, true, 0.0005, 20.0, 0.005, 0.5, 3, {4, 10, 20, 40},
+                                   {"swivel", "inclinometer"}, false, true, 0.0005, 20.0, 0.005, 0.5, 3, {4, 8, 27, 40},
                                    1e5};
   return {laser, encoders, irma4u};
 }
