@@ -181,43 +181,32 @@ class SpatialDesignNlp : public Ipopt::TNLP {
     return true;
   }
 
+  // The robot file's limits (ExactPoseBounds) drawn in by the NLP's own margins, then by the
+  // robustness tightening if any.
   bool get_bounds_info(Index, Number* x_l, Number* x_u, Index, Number* g_l, Number* g_u) override {
     constexpr double kInf = 2e19;
-    const Eigen::Vector3d lo = robot_.p_F_frame_min_m.array() + robot_.margin_m;
-    const Eigen::Vector3d hi = robot_.p_F_frame_max_m.array() - robot_.margin_m;
-    const double yaw = robot_.home_rpy_rad.z();
+    const PoseBounds exact = ExactPoseBounds(robot_);
+    VectorXd x_margin(V), g_margin = VectorXd::Constant(C, kMargin_m);
+    x_margin << Eigen::Vector3d::Constant(kMargin_m), Eigen::Vector3d::Constant(kMargin_rad),
+        VectorXd::Constant(m_, TensionMargin(robot_));
+    g_margin.head<6>().setZero();
+    const auto bound = [](double exact_bound, double finite_value, double infinite_value) {
+      return std::isfinite(exact_bound) ? finite_value : infinite_value;
+    };
     for (int j = 0; j < n_; ++j) {
       Number* xl = x_l + V * j;
       Number* xu = x_u + V * j;
-      for (int a = 0; a < 3; ++a) {
-        xl[a] = lo(a) + kMargin_m;
-        xu[a] = hi(a) - kMargin_m;
-      }
-      for (int a = 3; a < 5; ++a) {
-        xl[a] = -robot_.tilt_max_rad + kMargin_rad;
-        xu[a] = robot_.tilt_max_rad - kMargin_rad;
-      }
-      xl[5] = yaw - kDefaultSampleYawRange_rad + kMargin_rad;
-      xu[5] = yaw + kDefaultSampleYawRange_rad - kMargin_rad;
-      for (int i = 0; i < m_; ++i) {
-        xl[6 + i] = robot_.tension_min_N + TensionMargin(robot_);
-        xu[6 + i] = robot_.tension_max_N - TensionMargin(robot_);
+      for (int c = 0; c < V; ++c) {
+        xl[c] = bound(exact.x_lo(c), exact.x_lo(c) + x_margin(c), -kInf);
+        xu[c] = bound(exact.x_hi(c), exact.x_hi(c) - x_margin(c), kInf);
       }
       Number* gl = g_l + C * j;
       Number* gu = g_u + C * j;
-      for (int r = 0; r < 6; ++r) gl[r] = gu[r] = 0.0;
-      gl[6] = std::cos(robot_.tilt_max_rad - kMargin_rad);
-      gu[6] = kInf;
-      for (int k = 0; k < m_ + 1; ++k) {
-        for (int a = 0; a < 3; ++a) {
-          gl[7 + 3 * k + a] = lo(a) + kMargin_m;
-          gu[7 + 3 * k + a] = hi(a) - kMargin_m;
-        }
+      for (int r = 0; r < C; ++r) {
+        gl[r] = bound(exact.g_lo(r), exact.g_lo(r) + g_margin(r), -kInf);
+        gu[r] = bound(exact.g_hi(r), exact.g_hi(r) - g_margin(r), kInf);
       }
-      for (int i = 0; i < m_; ++i) {
-        gl[7 + 3 * (m_ + 1) + i] = robot_.margin_m + kMargin_m;
-        gu[7 + 3 * (m_ + 1) + i] = kInf;
-      }
+      gl[6] = std::cos(robot_.tilt_max_rad - kMargin_rad);  // the tilt's margin is on its angle
       if (tightening_ == nullptr) continue;
       const PoseTightening& t = (*tightening_)[j];
       for (int c = 0; c < V; ++c) DrawIn(t.x(c), xl + c, xu + c);
@@ -703,6 +692,8 @@ StartOutcome MakeRobust(const SpatialRobot& robot, const SpatialInformationLayou
   if (!s.outcome.converged || !s.failure.empty() || (k_sigma == 0.0 && !Stretches(robot))) return s;
   const int m = robot.num_cables();
   std::vector<PoseTightening> tight(s.verified.size(), PoseTightening{VectorXd::Zero(6 + m), VectorXd::Zero(PoseRowCount(m))});
+  const PoseBounds b = ExactPoseBounds(robot);
+  const PoseQuantityNames names = QuantityNames(m);
   for (int round = 1;; ++round) {
     const ScenarioCheck check = CheckScenarios(robot, s.verified, k_sigma, robust_sigmas, home);
     const std::string linear = LinearisedRobustnessFailure(robot, s.verified, check.spread);
@@ -721,8 +712,6 @@ StartOutcome MakeRobust(const SpatialRobot& robot, const SpatialInformationLayou
       tight[j].g = (widen * tight[j].g).cwiseMax(widen * kRobustHeadroom * (uniform ? largest.g : check.spread[j].g));
     }
     // Bounds that would cross leave the NLP no pose: said at once, not found by Ipopt's search.
-    const PoseBounds b = ExactPoseBounds(robot);
-    const PoseQuantityNames names = QuantityNames(m);
     const auto crossing = [&](const VectorXd& t, const VectorXd& lo, const VectorXd& hi,
                               const std::vector<std::string>& name) -> std::string {
       for (Eigen::Index c = 0; c < t.size(); ++c) {
@@ -850,8 +839,8 @@ SpatialDesignResult DesignSpatialPoses(const SpatialRobot& robot, const SpatialD
         options.progress(done, K);
       }
     });
-    if (!(options.interrupted && options.interrupted->load())) first_solved = true;
     if (options.interrupted && options.interrupted->load()) throw Interrupted();
+    first_solved = true;
     SpatialDesignResult r;
     double best = std::numeric_limits<double>::infinity();
     for (int s = 0; s < K; ++s) {
