@@ -3,6 +3,7 @@
 # Nothing else is downloaded: every dependency is a Debian package (see README, "Dependencies").
 #   scripts/setup.sh          what the default build needs (scripts/run.sh)
 #   scripts/setup.sh --tests  and what the whole test suite needs (scripts/test.sh)
+#   scripts/setup.sh --sanitize  and clang for the instrumented stage (scripts/test.sh --sanitize)
 #   scripts/setup.sh --bench  and what bench/'s scipy baseline needs (bench/identify_vs_scipy.sh)
 set -euo pipefail
 
@@ -27,15 +28,19 @@ case "${1:-}" in
     PACKAGES+=(
       python3-scipy               # bench/scipy_identify.py, the independent baseline
     ) ;;
-  --tests)
+  --tests|--sanitize)
     PACKAGES+=(
-      clang libclang-rt-dev       # the sanitizer build and the libFuzzer targets of tests/fuzz
-      libomp-dev                  # OpenMP for clang
       libopenmpi-dev openmpi-bin  # the CABLECAL_MPI build and its mpirun tests
       locales-all                 # a decimal-comma locale: number parsing must not depend on it
       python3-pytest              # the Python module's tests (tests/python)
-    ) ;;
-  *) echo "cablecal setup: unknown option '$1' (use --tests, --bench or nothing)" >&2; exit 2 ;;
+    )
+    if [ "$1" = --sanitize ]; then
+      PACKAGES+=(
+        clang libclang-rt-dev     # the sanitizer build and the libFuzzer targets of tests/fuzz
+        libomp-dev                # OpenMP for clang
+      )
+    fi ;;
+  *) echo "cablecal setup: unknown option '$1' (use --tests, --sanitize, --bench or nothing)" >&2; exit 2 ;;
 esac
 
 missing=()

@@ -1,16 +1,27 @@
 #!/usr/bin/env bash
-# Quick start, command 2: install what is missing, build, and run every test:
-#   1. the Release build, with MPI (CABLECAL_MPI), and its whole test suite (ctest),
-#      including the mpirun tests (label "mpi");
-#   2. the same suite built with clang, AddressSanitizer and UndefinedBehaviorSanitizer
-#      (build-sanitize/), and from the same build the libFuzzer targets, each for
-#      CABLECAL_FUZZ_SECONDS (default 30).
-# Set CABLECAL_QUICK=1 to run step 1 only.
+# Quick start, command 2: install what is missing, build, and run every test. What CI runs
+# (.ci/run):
+#   the Release build, with MPI (CABLECAL_MPI), and its whole test suite (ctest), including
+#   the mpirun tests (label "mpi") and a replay of the fuzzers' corpus (label "fuzz").
+# scripts/test.sh --sanitize (or CABLECAL_SANITIZE_STAGE=1) adds a second stage: the same suite
+# built with clang, AddressSanitizer and UndefinedBehaviorSanitizer (build-sanitize/), and from
+# the same build the libFuzzer targets, each exploring for CABLECAL_FUZZ_SECONDS (default 30).
+# That stage is a second whole build and about 35 minutes on 2 cores (bench/README.md, "Build
+# and CI time"): run it before merging a change to memory handling, the loaders or the
+# identification; CI's 15-minute budget has no room for it.
 # CABLECAL_CI_BUILD_ONLY=release|sanitize builds that stage alone, into $CABLECAL_CI_BUILD_DIR,
 # and runs no test (bench/compile_times.sh times the builds so).
 set -euo pipefail
+sanitize="${CABLECAL_SANITIZE_STAGE:-0}"
+for arg in "$@"; do
+  case "$arg" in
+    --sanitize) sanitize=1 ;;
+    -h|--help) sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    *) echo "cablecal test: unknown argument '$arg' (--sanitize adds the instrumented stage)" >&2; exit 2 ;;
+  esac
+done
 root="$(cd "$(dirname "$0")/.." && pwd)"
-"$root/scripts/setup.sh" --tests
+if [ "$sanitize" = "1" ] || [ "${CABLECAL_CI_BUILD_ONLY:-}" = sanitize ]; then "$root/scripts/setup.sh" --sanitize; else "$root/scripts/setup.sh" --tests; fi
 jobs="$(nproc)"
 only="${CABLECAL_CI_BUILD_ONLY:-}"
 # For the instrumented builds, whose test executables also run while building (the tests'
@@ -43,7 +54,7 @@ echo "== Release build (with MPI) and tests"
 build_release
 (cd "${CABLECAL_BUILD_DIR:-$root/build}" && ctest --output-on-failure --parallel "$jobs" --timeout 900)
 
-if [ "${CABLECAL_QUICK:-0}" = "1" ]; then exit 0; fi
+if [ "$sanitize" != "1" ]; then exit 0; fi
 
 # The sanitizer build is the default one, without MPI: both configurations get tested.
 echo "== Sanitizer build (clang, ASan + UBSan, without MPI): the tests and the fuzzers"
