@@ -22,8 +22,13 @@ PACKAGES=(
   python3-yaml           # bench/rounds.py reads result YAML
   pybind11-dev python3-dev python3-numpy  # the Python module (python/)
 )
+if [ "$#" -gt 1 ]; then
+  echo "cablecal setup: one option at most (got $#: $*); use --tests, --sanitize, --bench or nothing" >&2
+  exit 2
+fi
 case "${1:-}" in
   "") ;;
+  -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0 ;;
   --bench)
     PACKAGES+=(
       python3-scipy               # bench/scipy_identify.py, the independent baseline

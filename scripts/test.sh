@@ -1,14 +1,18 @@
 #!/usr/bin/env bash
-# Quick start, command 2: install what is missing, build, and run every test. What CI runs
-# (.ci/run):
-#   the Release build, with MPI (CABLECAL_MPI), and its whole test suite (ctest), including
-#   the mpirun tests (label "mpi") and a replay of the fuzzers' corpus (label "fuzz").
-# scripts/test.sh --sanitize (or CABLECAL_SANITIZE_STAGE=1) adds a second stage: the same suite
-# built with clang, AddressSanitizer and UndefinedBehaviorSanitizer (build-sanitize/), and from
-# the same build the libFuzzer targets, each exploring for CABLECAL_FUZZ_SECONDS (default 30).
-# That stage is a second whole build and about 35 minutes on 2 cores (bench/README.md, "Build
-# and CI time"): run it before merging a change to memory handling, the loaders or the
-# identification; CI's 15-minute budget has no room for it.
+# Usage: scripts/test.sh [--sanitize]
+# Installs what is missing, builds, and runs every test (README, "Quick start", command 2).
+# Without arguments, what CI runs (.ci/run): the Release build, with MPI (CABLECAL_MPI), and its
+# whole test suite (ctest), including the mpirun tests (label "mpi") and a replay of the
+# fuzzers' corpus (label "fuzz").
+# --sanitize (or CABLECAL_SANITIZE_STAGE=1) adds a second stage: the same suite built with clang,
+# AddressSanitizer and UndefinedBehaviorSanitizer and without MPI (build-sanitize/; the tests
+# that only repeat instrumented code for a statistical or determinism property are left to the
+# first stage, listed below), and from the same build the libFuzzer targets, each exploring for
+# CABLECAL_FUZZ_SECONDS (default 30). It is a second whole build, about 35 minutes on 2 cores
+# (bench/README.md, "Build and CI time"): run it before merging a change to memory handling, the
+# loaders or the identification; CI's 15-minute budget has no room for it.
+# Exit status: 0 when every test passed; 2 for an unknown argument; otherwise that of the step
+# that failed (scripts/setup.sh, the build, or ctest when a test failed).
 # CABLECAL_CI_BUILD_ONLY=release|sanitize builds that stage alone, into $CABLECAL_CI_BUILD_DIR,
 # and runs no test (bench/compile_times.sh times the builds so).
 set -euo pipefail
@@ -16,8 +20,8 @@ sanitize="${CABLECAL_SANITIZE_STAGE:-0}"
 for arg in "$@"; do
   case "$arg" in
     --sanitize) sanitize=1 ;;
-    -h|--help) sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
-    *) echo "cablecal test: unknown argument '$arg' (--sanitize adds the instrumented stage)" >&2; exit 2 ;;
+    -h|--help) awk 'NR > 1 && /^#/ { sub(/^# ?/, ""); print; next } NR > 1 { exit }' "$0"; exit 0 ;;
+    *) echo "cablecal test: unknown argument '$arg' (--sanitize adds the instrumented stage; --help says more)" >&2; exit 2 ;;
   esac
 done
 root="$(cd "$(dirname "$0")/.." && pwd)"
