@@ -280,7 +280,7 @@ int main(int argc, char** argv) {
   AddRobotOption(mc_cmd, &mc.robot_path);
   mc_cmd->add_option("--poses", mc.poses, "pose counts first:last[:step], e.g. 6:50 or 6:50:4")->required();
   mc_cmd->add_option("--trials", mc.trials, "trials per cell")->required()->check(WholeNumberIn(1, 100000000));
-  mc_cmd->add_option("--designs", mc.designs, "comma list of random, optimized (= a), condition, d, a, e")->capture_default_str();
+  mc_cmd->add_option("--designs", mc.designs, "comma list of random, optimized (= a), condition, d, a, e; for spatial robots also grid:2x2x2, grid:3x3x3")->capture_default_str();
   mc_cmd->add_option("--estimator", mc.estimator, "ml|paper")->capture_default_str()->check(CLI::IsMember({"ml", "paper"}));
   mc_cmd->add_option("--gauge", mc.gauge, "a1x|prior|none")->capture_default_str()->check(CLI::IsMember({"a1x", "prior", "none"}));
   mc_cmd->add_option("--sensors", mc.sensors, "noisy sensors: both|laser|inclinometer|none")
@@ -335,12 +335,14 @@ int main(int argc, char** argv) {
       "reproduce", "run the paper's study on the built-in robot into results/ (--study spatial: the spatial study into "
                    "results/spatial/)");
   AddRobotOption(rep_cmd, &rep.robot_path);
-  rep_cmd->add_option("--study", rep.study, "paper (the planar study) or spatial (the built-in cogiro)")
+  rep_cmd->add_option("--study", rep.study, "paper (the planar study) or spatial (the built-in cogiro and irma4u)")
       ->capture_default_str()
       ->check(CLI::IsMember({"paper", "spatial"}));
   // A testing aid of the spatial study (README, "The spatial study"): hidden from --help.
-  rep_cmd->add_option("--pose-counts", rep.pose_counts, "spatial study: the first K pose counts of each configuration")
-      ->check(WholeNumberIn(1, 100))
+  // Read as text and checked after parsing: CLI11 names a hidden option's errors with an empty
+  // name (": must be ...").
+  std::string pose_counts_text;
+  rep_cmd->add_option("--pose-counts", pose_counts_text, "spatial study: the first K pose counts of each configuration")
       ->group("");
   rep_cmd->add_option("--designs", rep.designs,
                       "spatial study: the designs run, of random,optimized,grid:2x2x2,grid:3x3x3 (default: all four)");
@@ -425,7 +427,15 @@ int main(int argc, char** argv) {
     if (des_cmd->parsed()) return cablecal::cli::RunDesign(ctx, des);
     if (sfit_cmd->parsed()) return cablecal::cli::RunSensorsFit(ctx, sfit);
     if (mc_cmd->parsed()) return cablecal::cli::RunMonteCarloCommand(ctx, mc);
-    if (rep_cmd->parsed()) return cablecal::cli::RunReproduce(ctx, rep);
+    if (rep_cmd->parsed()) {
+      if (!pose_counts_text.empty() || rep_cmd->count("--pose-counts") > 0) {
+        std::string text = pose_counts_text;
+        const std::string wrong = WholeNumberIn(1, 100)(text);
+        if (!wrong.empty()) throw cablecal::InputError("--pose-counts", "", wrong);
+        rep.pose_counts = std::stoi(text);
+      }
+      return cablecal::cli::RunReproduce(ctx, rep);
+    }
   } catch (const cablecal::AlreadyReported& e) {
     return e.exit_code();  // every process knows; the message is out
   } catch (...) {

@@ -876,7 +876,8 @@ SpatialDesignResult DesignSpatialPoses(const SpatialRobot& robot, const SpatialD
       });
       if (all_capped) {
         statuses += " (every start reached Ipopt's cap of " + std::to_string(options.max_iterations) +
-                    " iterations: more --starts, another --seed or fewer --poses may converge)";
+                    " iterations: more starts, another seed or fewer poses may converge: design's --starts, --seed, --poses; "
+                    "montecarlo's --design-starts)";
       }
       if (std::none_of(first.begin(), first.end(),
                        [](const StartOutcome& f) { return f.outcome.converged && f.failure.empty(); })) {

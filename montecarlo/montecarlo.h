@@ -111,6 +111,7 @@ struct MonteCarloResult {
   double wall_time_s = 0.0;
   double geometry_sigma_m = 0.0;  // what the lab knew before measuring (the options')
   bool geometry_prior = false;    // the trials were identified with it as a prior
+  bool geometry_prior_served = true;  // --geometry-prior exists for this kind (not yet spatial)
 };
 
 // The cells whose calibration knows a geometric parameter hardly better than the lab did before

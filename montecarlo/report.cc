@@ -196,9 +196,16 @@ std::string SummaryMarkdown(const MonteCarloResult& r, const std::string& title)
       for (const std::string& c : little) o << "- " << c << "\n";
       o << "\n";
     }
-    o << (r.geometry_prior ? "The trials were identified with that knowledge as a prior (--geometry-prior).\n"
-                           : "Identify with that knowledge as a prior (--geometry-prior) so that a calibration never "
-                             "knows less than the lab did.\n");
+    if (r.geometry_prior) {
+      o << "The trials were identified with that knowledge as a prior (--geometry-prior).\n";
+    } else if (r.geometry_prior_served) {
+      o << "Identify with that knowledge as a prior (--geometry-prior) so that a calibration never knows less than "
+           "the lab did.\n";
+    } else {
+      o << "A calibration that must never know less than the lab did takes that knowledge as a prior (identify "
+           "--gauge prior, with the robot file's tracker sigma); the Monte Carlo does not yet simulate it for "
+           "spatial robots.\n";
+    }
   }
   return o.str();
 }

@@ -351,6 +351,7 @@ MonteCarloResult RunSpatialMonteCarlo(const SpatialRobot& nominal, const Spatial
     return result;
   }
   result = AssembleShares(o.study, std::move(shares), StudyNames{names, held_names});
+  result.geometry_prior_served = false;
   result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;
 }
