@@ -428,7 +428,7 @@ int main(int argc, char** argv) {
     if (sfit_cmd->parsed()) return cablecal::cli::RunSensorsFit(ctx, sfit);
     if (mc_cmd->parsed()) return cablecal::cli::RunMonteCarloCommand(ctx, mc);
     if (rep_cmd->parsed()) {
-      if (!pose_counts_text.empty() || rep_cmd->count("--pose-counts") > 0) {
+      if (rep_cmd->count("--pose-counts") > 0) {
         std::string text = pose_counts_text;
         const std::string wrong = WholeNumberIn(1, 100)(text);
         if (!wrong.empty()) throw cablecal::InputError("--pose-counts", "", wrong);

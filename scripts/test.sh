@@ -25,9 +25,9 @@ for arg in "$@"; do
   esac
 done
 root="$(cd "$(dirname "$0")/.." && pwd)"
-if [ "$sanitize" = "1" ] || [ "${CABLECAL_CI_BUILD_ONLY:-}" = sanitize ]; then "$root/scripts/setup.sh" --sanitize; else "$root/scripts/setup.sh" --tests; fi
-jobs="$(nproc)"
 only="${CABLECAL_CI_BUILD_ONLY:-}"
+if [ "$sanitize" = "1" ] || [ "$only" = sanitize ]; then "$root/scripts/setup.sh" --sanitize; else "$root/scripts/setup.sh" --tests; fi
+jobs="$(nproc)"
 # For the instrumented builds, whose test executables also run while building (the tests'
 # discovery) and under the fuzzers; nothing else reads them.
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1"
