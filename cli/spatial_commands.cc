@@ -229,6 +229,9 @@ int RunSpatialDesign(const Context& ctx, const DesignCommandOptions& options) {
   std::string held;
   for (int h : result.layout.held) held += (held.empty() ? "" : " ") + result.layout.names[h];
   if (held.empty()) held = "nothing (the robot file's sensors see every direction of the geometry)";
+  for (const std::string& d : result.layout.weakly_seen_held) {
+    held += " (with the weakly seen direction " + d.substr(0, d.find(':')) + ", as identify's default gauge)";
+  }
   std::printf("  the gauge holds %s; %s%s\n", held.c_str(), SpatialRobustnessText(robot, result).c_str(),
               options.geometry_sigma_given || !robot.sensors.tracker_sigma_m ? "" : " (sigma: the robot file's tracker)");
   if (result.robustness_lowered() && !ctx.quiet) {

@@ -156,7 +156,11 @@ int RunSpatialIdentify(const Context& ctx, const IdentifyCommandOptions& options
   if (!result.held.empty()) {
     std::string held;
     for (const std::string& h : result.held) held += (held.empty() ? "" : ", ") + h;
-    std::printf("  held at nominal (the gauge): %s\n", held.c_str());
+    const bool weak_held = id.gauge.kind == SpatialGaugeKind::kAuto &&
+                           std::any_of(result.weak_directions.begin(), result.weak_directions.end(),
+                                       [](const SpatialDirection& d) { return d.nearly_rigid; });
+    std::printf("  held at nominal (the gauge): %s%s\n", held.c_str(),
+                weak_held ? " (with the weakly seen direction nearly a rigid motion below)" : "");
   }
   if (!result.weak_directions.empty()) {
     std::printf("  weakly seen (%zu): %s\n", result.weak_directions.size(), Directions(result.weak_directions).c_str());

@@ -961,6 +961,13 @@ std::string SpatialDesignSummaryYaml(const SpatialRobot& robot, const SpatialDes
   o << Key << "held" << Value << Flow << YAML::BeginSeq;
   for (int h : r.layout.held) o << r.layout.names[h];
   o << YAML::EndSeq;
+  if (!r.layout.weakly_seen_held.empty()) {
+    o << Key << "weakly_seen_held" << Value
+      << YAML::Comment("held besides the null directions: seen by no pose set much (README, \"Spatial robots\")")
+      << YAML::BeginSeq;
+    for (const std::string& d : r.layout.weakly_seen_held) o << YamlString{d};
+    o << YAML::EndSeq;
+  }
   o << Key << "free" << Value << YamlString{free_names};
   o << EndMap;
   o << Key << "criteria" << Value;

@@ -343,6 +343,9 @@ SpatialInformationLayout SpatialDesignLayout(const SpatialRobot& robot, const st
   const SimulatedSpatialExperiment readings = SimulateSpatialExperiment(robot, robot, reference, quiet, rng);
   const SpatialGaugeAnalysis gauge = AnalyzeSpatialGauge(robot, readings.measurements, SpatialIdentifyOptions{});
   L.held = gauge.held;
+  for (const SpatialDirection& d : gauge.weak_directions) {
+    if (d.nearly_rigid) L.weakly_seen_held.push_back(d.description);
+  }
   for (int c = 0; c < L.geometry_size(); ++c) {
     if (!std::count(L.held.begin(), L.held.end(), c)) L.free.push_back(c);
   }

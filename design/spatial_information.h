@@ -41,6 +41,10 @@ struct SpatialInformationLayout {
   std::vector<std::string> names;  // the geometry unknowns (SpatialGeometryNames)
   std::vector<int> held;           // the default gauge: indices into names
   std::vector<int> free;           // the others, in names order: S's rows and columns
+  // The weakly seen directions nearly a rigid motion of the frame that `held` holds besides the
+  // null directions (SpatialDirection::nearly_rigid), in words: none of the sensors see them
+  // much at any pose, and the identification's default gauge holds them too.
+  std::vector<std::string> weakly_seen_held;
   int local() const { return 6 + (tensions ? num_cables : 0); }
   int geometry_size() const { return static_cast<int>(names.size()); }
 };
@@ -53,7 +57,8 @@ int SpatialValuesPerPose(const SpatialRobot& robot, const SpatialInformationLayo
 // The layout for the robot file's sensors, the gauge that AnalyzeSpatialGauge chooses from
 // noise-free readings at `reference` (simulated on the nominal robot). The null directions of
 // these sensors are rigid motions of the frame, the same whatever the poses, so that a
-// reference set of random feasible poses gives the gauge of any set. InputError as the
+// reference set of random feasible poses gives the gauge of any set (the weakly seen ones it
+// holds are seen only through the pulley radii and the axes' tilts, at any poses). InputError as the
 // identification's (a sensor set that cannot calibrate, too few values for the unknowns).
 SpatialInformationLayout SpatialDesignLayout(const SpatialRobot& robot, const std::vector<SpatialPlanPose>& reference);
 

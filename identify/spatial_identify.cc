@@ -1234,12 +1234,12 @@ std::vector<SpatialDirection> Describe(const MatrixXd& V, const VectorXd& g, con
                                            : "a direction that moves no exit point, of ")
                               : "a direction of ") +
                     LargestComponents(d.geometry, names);
-    // A weakly seen direction whose exit part is within kNearlyRigid of a rigid motion (a turn
-    // about z that one tilted swivel axis barely sees): named so, its components after.
-    constexpr double kNearlyRigid = 0.05;
+    // A weakly seen direction whose exit part is within kSpatialNearlyRigid of a rigid motion (a
+    // turn about z that one tilted swivel axis barely sees): named so, its components after.
     const double e_c = E.col(c).norm();
     const double off = (G * C.col(c) - E.col(c)).norm();
-    if (e >= 1e-3 && e_c > 0.0 && off <= kNearlyRigid * e_c) {
+    if (e >= 1e-3 && e_c > 0.0 && off <= kSpatialNearlyRigid * e_c) {
+      d.nearly_rigid = true;
       std::string words;
       const double largest = C.col(c).cwiseAbs().maxCoeff();
       for (int a = 0; a < generators; ++a) {
@@ -1454,9 +1454,15 @@ Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasureme
   for (std::size_t c = 0; c < weak_cols.size(); ++c) {
     a.gauge.weak_directions[c].relative_singular_value = s(weak_cols[c]) / largest;
   }
+  // The default gauge holds the nearly rigid weak directions too (file comment).
+  std::vector<int> nearly_rigid_cols;
+  for (std::size_t c = 0; c < weak_cols.size(); ++c) {
+    if (a.gauge.weak_directions[c].nearly_rigid) nearly_rigid_cols.push_back(weak_cols[c]);
+  }
+  const bool hold_weak = options.gauge.kind == SpatialGaugeKind::kAuto && !nearly_rigid_cols.empty();
   // A lab's hold: list is checked and held even when the readings see everything (holding every
   // exit coordinate identifies the lengths, offsets and poses alone).
-  if (k == 0 && options.gauge.kind != SpatialGaugeKind::kHold) return a;
+  if (k == 0 && options.gauge.kind != SpatialGaugeKind::kHold && !hold_weak) return a;
   // A null direction that moves no holdable coordinate cannot be held: refused whatever the gauge.
   const std::vector<int> holdable = L.holdable();
   const std::string holdable_words = L.anchors ? "exit or anchor coordinates" : "exit coordinates";
@@ -1471,7 +1477,11 @@ Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasureme
   const std::vector<std::string>& names = a.gauge.names;
   switch (options.gauge.kind) {
     case SpatialGaugeKind::kAuto: {
-      for (int h : PivotedHoldCoordinates(Rows(N, holdable), L.exit_coordinates())) a.gauge.held.push_back(holdable[h]);
+      MatrixXd gauge(p, k + nearly_rigid_cols.size());
+      gauge << N, columns(nearly_rigid_cols);
+      for (int h : PivotedHoldCoordinates(Rows(gauge, holdable), L.exit_coordinates())) {
+        a.gauge.held.push_back(holdable[h]);
+      }
       break;
     }
     case SpatialGaugeKind::kHold: {

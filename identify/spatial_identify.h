@@ -61,6 +61,13 @@
 // are motions of the anchors in P alone). So a frame is defined by its exits, as without free
 // anchors, and the platform frame by the fewest anchor coordinates that pin what no reading
 // sees of it.
+// A weakly seen direction that is nearly a rigid motion of the frame (SpatialDirection::
+// nearly_rigid) is held by the default gauge too, one more pivot each: no pose set sees it much
+// better (only the pulley radii and the swivel axes' tilts do), and estimating it leaves
+// Levenberg-Marquardt crawling along it (cogiro with one swivel axis tilted 1 to 70 degrees,
+// encoders, inclinometer and laser: not converged in 3000 iterations, 5 with it held). Its
+// hold is a choice of frame as the null directions' are: the fit is the same to its tiny
+// singular value. --gauge hold: without it estimates it.
 // Solver: Levenberg-Marquardt with the poses eliminated (our block-arrow iterations without a robust
 // loss, Ceres DENSE_SCHUR with one), from each pose's own start at the nominal geometry.
 // Depends on model/ (header-only parts and the robot), Ceres and experiment/spatial_measurements.h.
@@ -86,6 +93,9 @@ constexpr double kSpatialNullThreshold = 1e-9;
 // Below this fraction (and above the null threshold) a direction is reported as weakly
 // observable: its sigma is 1e4 times that of the best-seen direction or more.
 constexpr double kSpatialWeakThreshold = 1e-4;
+// A weakly seen direction whose exit part is within this fraction (of its norm) of a rigid
+// motion of the frame's exits is "nearly" that motion (SpatialDirection::nearly_rigid).
+constexpr double kSpatialNearlyRigid = 0.05;
 
 // The equilibrium rows' sigma: the force rows this fraction of the platform's weight (a
 // platform weighed, its cables and fittings estimated: 1 %); the moment rows the weight times
@@ -141,6 +151,9 @@ struct SpatialDirection {
   Eigen::VectorXd geometry;
   double relative_singular_value = 0.0;
   std::string description;  // "a translation along x", "a rotation about z", ...
+  // A weakly seen direction whose exit part is within kNearlyRigid of a rigid motion of the
+  // frame (a turn about z that one tilted swivel axis barely sees): the default gauge holds it.
+  bool nearly_rigid = false;
 };
 
 // How one reading fits at the estimate: each value's whitened residual (model - reading) / sigma.

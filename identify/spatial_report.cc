@@ -48,14 +48,23 @@ bool IsHeldName(const SpatialIdentifyResult& r, const std::string& name) {
 std::string GaugeNote(const SpatialIdentifyOptions& options, const SpatialIdentifyResult& r) {
   const std::string held = r.held.empty() ? std::string("nothing") : JoinNames(r.held);
   switch (options.gauge.kind) {
-    case SpatialGaugeKind::kAuto:
-      return r.null_directions.empty()
-                 ? "the readings see every direction of the geometry: nothing held"
-                 : "held at their nominal values: " + held +
-                       (options.anchors ? " (the exit coordinates, then the anchor coordinates, a column-pivoted QR of "
-                                          "the null directions picks, one per direction)"
-                                        : " (the exit coordinates a column-pivoted QR of the null directions picks, one "
-                                          "per direction)");
+    case SpatialGaugeKind::kAuto: {
+      if (r.held.empty()) return "the readings see every direction of the geometry: nothing held";
+      const auto nearly_rigid = std::count_if(r.weak_directions.begin(), r.weak_directions.end(),
+                                              [](const SpatialDirection& d) { return d.nearly_rigid; });
+      const std::size_t null = r.null_directions.size();
+      std::string directions;
+      if (null > 0) directions = "the " + std::to_string(null) + " null direction" + (null > 1 ? "s" : "");
+      if (nearly_rigid > 0) {
+        directions += std::string(null > 0 ? " and " : "") + "the " + std::to_string(nearly_rigid) +
+                      " weakly seen direction" + (nearly_rigid > 1 ? "s" : "") +
+                      " nearly a rigid motion of the frame, which --gauge hold: without " +
+                      (nearly_rigid > 1 ? "them" : "it") + " would estimate";
+      }
+      return "held at their nominal values: " + held + " (the " +
+             (options.anchors ? "exit coordinates, then the anchor coordinates," : "exit coordinates") +
+             " a column-pivoted QR picks, one per direction, of " + directions + ")";
+    }
     case SpatialGaugeKind::kHold: return "held at their nominal values, the lab's choice: " + held;
     case SpatialGaugeKind::kNone:
       return "no gauge: the null directions below are unobservable; standard deviations are from the "

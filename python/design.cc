@@ -56,6 +56,9 @@ void BindSpatialDesignResult(py::module_& m) {
       }, "\"3.2 x better than the median of 100 random sets\" (or worse) on the criterion; None without random sets")
       .def_property_readonly("held", [](const PySpatialDesign& d) { return LayoutNames(d.result.layout, d.result.layout.held); },
                              "The exit coordinates the gauge holds (a1x, ...).")
+      .def_property_readonly("weakly_seen_held", [](const PySpatialDesign& d) { return d.result.layout.weakly_seen_held; },
+                             "The weakly seen directions nearly a rigid motion of the frame that the gauge holds too, "
+                             "in words (empty for most robots).")
       .def_property_readonly("free", [](const PySpatialDesign& d) { return LayoutNames(d.result.layout, d.result.layout.free); },
                              "The gauge-fixed geometric unknowns the criteria are about.")
       .def_property_readonly("best_start", [](const PySpatialDesign& d) { return d.result.best_start; })
