@@ -487,6 +487,7 @@ int RunSpatialReproduce(const Context& ctx, const ReproduceOptions& options) {
     described.study.designs.clear();
     for (std::size_t k = 0; k < p.runs.size(); ++k) {
       SpatialMonteCarloOptions o = p.runs[k];
+      if (k > 0) o.held = all.held_names;  // one gauge for the configuration (SpatialMonteCarloOptions::held)
       o.study.interrupted = &SigintFlag();
       if (!ctx.quiet) o.study.progress = ProgressBar(p.c.folder + (k == 0 ? "" : ", grid"), "trials");
       MonteCarloResult r = RunSpatialMonteCarlo(p.robot, o);
@@ -494,7 +495,7 @@ int RunSpatialReproduce(const Context& ctx, const ReproduceOptions& options) {
       if (k == 0) {
         all = std::move(r);
       } else {
-        // Every run chooses its gauge the same way; errors of different gauges would not compare.
+        // Errors of different gauges would not compare.
         CABLECAL_CHECK(r.held_names == all.held_names, "one gauge for every run of a configuration");
         all.cells.insert(all.cells.end(), r.cells.begin(), r.cells.end());
         all.wall_time_s += r.wall_time_s;

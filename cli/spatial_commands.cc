@@ -172,19 +172,21 @@ int RunSpatialSimulate(const Context& ctx, const SimulateOptions& options) {
   return kExitOk;
 }
 
-// Sequential design (--prior) and the workspace figure are not served for spatial robots yet:
-// their flags are refused, never silently ignored. --geometry-sigma not given: the robot file's
-// tracker sigma (its exits' survey), else the planar default (SpatialDesignOptions).
+// The workspace figure is not served for spatial robots yet: its flag is refused, never
+// silently ignored. --geometry-sigma not given: the robot file's tracker sigma (its exits'
+// survey), else the planar default (SpatialDesignOptions). --prior: the next round is planned
+// around the earlier estimate, counting the information gathered (as planar).
 int RunSpatialDesign(const Context& ctx, const DesignCommandOptions& options) {
   const std::string not_yet = "is not yet served for spatial robots";
-  if (!options.prior_path.empty()) {
-    throw InputError("--prior", "", "sequential design (planning around an earlier identification) " + not_yet);
-  }
   if (!options.plot_path.empty()) {
     throw InputError("--plot", "", "a figure of a spatial plan " + not_yet + " (the plan CSV has every pose's x, y, z)");
   }
-  const SpatialRobot robot = LoadSpatialRobotFile(options.robot_path);
+  SpatialRobot robot = LoadSpatialRobotFile(options.robot_path);
   SpatialDesignOptions design;
+  if (!options.prior_path.empty()) {
+    design.prior = ReadSpatialIdentifiedGeometry(robot, options.prior_path);
+    robot = CalibratedSpatialRobot(robot, *design.prior);
+  }
   design.poses = options.poses;
   design.criterion = ParseCriterion(options.criterion);
   design.starts = options.starts;

@@ -802,8 +802,13 @@ SpatialDesignResult DesignSpatialPoses(const SpatialRobot& robot, const SpatialD
                          " unknowns of its own: these sensors cannot calibrate the geometry at any number of poses");
   }
   const int reference_size = (probe.geometry_size() + net - 1) / net + 2;
-  const SpatialInformationLayout layout = SpatialDesignLayout(
+  SpatialInformationLayout layout = SpatialDesignLayout(
       robot, SampleSpatialPoses(robot, reference_size, StreamSeed(options.seed, {kGaugeStream})));
+  if (options.prior) {
+    const SpatialIdentifiedGeometry& prior = *options.prior;
+    HoldAsThePrior(&layout, prior.held, prior.source);
+    layout.prior_information = SpatialPriorInformation(layout, prior.names, prior.held, prior.covariance, prior.source);
+  }
   const int n_min = MinSpatialDesignPoses(robot, layout);
   if (n < n_min) {
     throw InputError("--poses", "", "at least " + std::to_string(n_min) + " poses are needed to identify the " +
@@ -969,6 +974,10 @@ std::string SpatialDesignSummaryYaml(const SpatialRobot& robot, const SpatialDes
     o << YAML::EndSeq;
   }
   o << Key << "free" << Value << YamlString{free_names};
+  if (options.prior) {
+    o << Key << "prior" << Value << YamlString{options.prior->source}
+      << YAML::Comment("an earlier identification: the robot is its estimate, S counts its information");
+  }
   o << EndMap;
   o << Key << "criteria" << Value;
   criteria(r.criteria);

@@ -30,7 +30,8 @@
 // that failed a scenario), until the poses keep every bound to first order and on every scenario
 // robot, or kSpatialRobustRounds re-solves. Where no start holds at the requested k, the design
 // runs at the largest k that does (design/robustness_search.h) and says so.
-// Not yet: --prior (sequential design).
+// Calibrating in rounds (--prior): the robot is the earlier identification's estimate, and its
+// information (SpatialPriorInformation) adds to every S, of the design and of the random sets.
 #pragma once
 
 #include <atomic>
@@ -43,6 +44,7 @@
 #include "design/design.h"
 #include "design/spatial_information.h"
 #include "experiment/spatial_plan.h"
+#include "identify/spatial_report.h"  // SpatialIdentifiedGeometry
 #include "model/spatial_robot.h"
 
 namespace cablecal {
@@ -62,6 +64,10 @@ struct SpatialDesignOptions {
   std::optional<double> geometry_sigma_m;
   double robust_sigmas = 3.0;    // k (as planar)
   bool lower_robustness = true;  // none holds at k: design at the largest k that does, and say so
+  // An earlier identification (design --prior; ReadSpatialIdentifiedGeometry), whose
+  // information the criteria count; the robot designed for is then its estimate
+  // (CalibratedSpatialRobot), which the caller passes.
+  std::optional<SpatialIdentifiedGeometry> prior;
   // Each start's Ipopt solve in a child process of its own, so that starts solve at once on
   // several cores (DesignOptions::solve_in_child_processes: the outcome is the same bit for
   // bit). Off: the solves take turns in this process (Python; montecarlo's

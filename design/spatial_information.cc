@@ -343,13 +343,120 @@ SpatialInformationLayout SpatialDesignLayout(const SpatialRobot& robot, const st
   const SimulatedSpatialExperiment readings = SimulateSpatialExperiment(robot, robot, reference, quiet, rng);
   const SpatialGaugeAnalysis gauge = AnalyzeSpatialGauge(robot, readings.measurements, SpatialIdentifyOptions{});
   L.held = gauge.held;
+  std::vector<const SpatialDirection*> fixed;
+  for (const SpatialDirection& d : gauge.null_directions) fixed.push_back(&d);
   for (const SpatialDirection& d : gauge.weak_directions) {
-    if (d.nearly_rigid) L.weakly_seen_held.push_back(d.description);
+    if (!d.nearly_rigid) continue;
+    L.weakly_seen_held.push_back(d.description);
+    fixed.push_back(&d);
   }
+  L.null_directions = static_cast<int>(gauge.null_directions.size());
+  L.gauge_directions.resize(L.geometry_size(), fixed.size());
+  for (std::size_t c = 0; c < fixed.size(); ++c) L.gauge_directions.col(c) = fixed[c]->geometry;
   for (int c = 0; c < L.geometry_size(); ++c) {
     if (!std::count(L.held.begin(), L.held.end(), c)) L.free.push_back(c);
   }
   return L;
+}
+
+namespace {
+
+// How many of `directions`' independent combinations the coordinates `rows` pin (the rank of
+// those rows, relative to 1e-6 as the identification's DirectionsNotMoving).
+int Pinned(const MatrixXd& directions, const std::vector<int>& rows) {
+  if (directions.cols() == 0 || rows.empty()) return 0;
+  MatrixXd R(rows.size(), directions.cols());
+  for (std::size_t r = 0; r < rows.size(); ++r) R.row(r) = directions.row(rows[r]);
+  const Eigen::JacobiSVD<MatrixXd> svd(R);
+  int rank = 0;
+  for (Eigen::Index k = 0; k < svd.singularValues().size(); ++k) rank += svd.singularValues()(k) > 1e-6 ? 1 : 0;
+  return rank;
+}
+
+}  // namespace
+
+void HoldAsThePrior(SpatialInformationLayout* layout, const std::vector<std::string>& held, const std::string& path) {
+  if (held.empty()) return;
+  SpatialInformationLayout& L = *layout;
+  std::vector<int> rows;
+  std::string list;
+  for (const std::string& h : held) {
+    const auto it = std::find(L.names.begin(), L.names.end(), h);
+    if (it == L.names.end()) throw InputError(path, "held", "'" + h + "' is not an unknown of this design");
+    rows.push_back(static_cast<int>(it - L.names.begin()));
+    list += (list.empty() ? "" : ",") + h;
+  }
+  std::sort(rows.begin(), rows.end());
+  const MatrixXd null = L.gauge_directions.leftCols(L.null_directions);
+  const int pinned = Pinned(null, rows);
+  if (pinned < L.null_directions) {
+    throw InputError(path, "held",
+                     "holds " + list + ", which leaves " + std::to_string(L.null_directions - pinned) + " of the " +
+                         std::to_string(L.null_directions) +
+                         " directions no reading of this robot file's sensors sees free: identify with the robot "
+                         "file's sensors and --gauge auto (or a hold: that fixes them)");
+  }
+  if (Pinned(L.gauge_directions, rows) < L.gauge_directions.cols()) L.weakly_seen_held.clear();
+  L.held = rows;
+  L.free.clear();
+  for (int c = 0; c < L.geometry_size(); ++c) {
+    if (!std::binary_search(rows.begin(), rows.end(), c)) L.free.push_back(c);
+  }
+}
+
+Eigen::MatrixXd SpatialPriorInformation(const SpatialInformationLayout& layout, const std::vector<std::string>& names,
+                                        const std::vector<std::string>& held, const Eigen::MatrixXd& covariance,
+                                        const std::string& path) {
+  const auto list = [](const std::vector<std::string>& v) {
+    std::string out;
+    for (const std::string& x : v) out += (out.empty() ? "" : ",") + x;
+    return out;
+  };
+  if (names != layout.names) {
+    throw InputError(path, "parameters",
+                     "estimates " + list(names) + ", but a design for this robot file's sensors estimates " +
+                         list(layout.names) +
+                         ": identify from readings of every sensor the robot file has (swivel offsets come with swivel "
+                         "readings, yaw0 with heading readings) and the exits, not --identify anchors");
+  }
+  std::vector<std::string> design_held;
+  for (const int h : layout.held) design_held.push_back(layout.names[h]);
+  for (const std::string& h : held) {
+    if (std::find(design_held.begin(), design_held.end(), h) == design_held.end()) {
+      throw InputError(path, "held",
+                       "holds " + h + ", which this design estimates (its gauge holds " +
+                           (design_held.empty() ? std::string("nothing") : list(design_held)) +
+                           "): identify the same readings with --gauge " +
+                           (design_held.empty() ? std::string("prior") : "hold:" + list(design_held)));
+    }
+  }
+  const int p = static_cast<int>(names.size());
+  CABLECAL_CHECK(covariance.rows() == p && covariance.cols() == p, "a covariance by the result's names");
+  std::vector<int> estimated;  // the result's free unknowns
+  for (int c = 0; c < p; ++c) {
+    if (std::find(held.begin(), held.end(), names[c]) == held.end()) estimated.push_back(c);
+  }
+  const int e = static_cast<int>(estimated.size());
+  MatrixXd cov(e, e);
+  for (int a = 0; a < e; ++a) {
+    for (int b = 0; b < e; ++b) cov(a, b) = 0.5 * (covariance(estimated[a], estimated[b]) + covariance(estimated[b], estimated[a]));
+  }
+  const Eigen::SelfAdjointEigenSolver<MatrixXd> eig(cov);
+  if (!cov.allFinite() || !(eig.eigenvalues()(0) > 0.0)) {
+    throw InputError(path, "covariance", "the covariance of the unknowns it did not hold is not positive definite");
+  }
+  const MatrixXd information =
+      eig.eigenvectors() * eig.eigenvalues().cwiseInverse().asDiagonal() * eig.eigenvectors().transpose();
+  const int f = static_cast<int>(layout.free.size());
+  MatrixXd out(f, f);
+  for (int a = 0; a < f; ++a) {
+    const int ia = static_cast<int>(std::find(estimated.begin(), estimated.end(), layout.free[a]) - estimated.begin());
+    for (int b = 0; b < f; ++b) {
+      const int ib = static_cast<int>(std::find(estimated.begin(), estimated.end(), layout.free[b]) - estimated.begin());
+      out(a, b) = information(ia, ib);
+    }
+  }
+  return out;
 }
 
 Eigen::MatrixXd SpatialPoseJacobian(const SpatialRobot& robot, const SpatialInformationLayout& layout,
@@ -364,7 +471,7 @@ Eigen::MatrixXd SpatialPoseJacobian(const SpatialRobot& robot, const SpatialInfo
 Eigen::MatrixXd SpatialInformation(const SpatialRobot& robot, const SpatialInformationLayout& layout,
                                    const std::vector<SpatialPlanPose>& poses) {
   const int f = static_cast<int>(layout.free.size());
-  MatrixXd S = MatrixXd::Zero(f, f);
+  MatrixXd S = layout.prior_information.size() > 0 ? layout.prior_information : MatrixXd::Zero(f, f);
   for (const SpatialPlanPose& p : poses) {
     const PoseShare share = ShareOf(layout, SpatialPoseJacobian(robot, layout, p.q, p.tensions_N));
     S.noalias() += share.projected.transpose() * share.projected;
@@ -396,7 +503,7 @@ double SpatialDesignObjective(const SpatialRobot& robot, const SpatialInformatio
   std::vector<MatrixXd> J(n);
   std::vector<std::vector<MatrixXd>> dJ(n);
   std::vector<PoseShare> share(n);
-  MatrixXd S = MatrixXd::Zero(f, f);
+  MatrixXd S = layout.prior_information.size() > 0 ? layout.prior_information : MatrixXd::Zero(f, f);
   for (int j = 0; j < n; ++j) {
     if (!PoseJacobian(robot, layout, poses[j].q, poses[j].tensions_N, &J[j], gradient ? &dJ[j] : nullptr)) return inf;
     share[j] = ShareOf(layout, J[j]);

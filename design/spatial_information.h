@@ -45,6 +45,13 @@ struct SpatialInformationLayout {
   // null directions (SpatialDirection::nearly_rigid), in words: none of the sensors see them
   // much at any pose, and the identification's default gauge holds them too.
   std::vector<std::string> weakly_seen_held;
+  // The directions the gauge fixes (geometry_size x k, columns unit vectors over `names`): the
+  // null directions, then the weakly seen ones above.
+  Eigen::MatrixXd gauge_directions;
+  int null_directions = 0;  // the first columns of gauge_directions
+  // Information an earlier identification gathered (design --prior), free x free in `free`'s
+  // order, added to every S (SpatialInformation, SpatialDesignObjective); empty: none.
+  Eigen::MatrixXd prior_information;
   int local() const { return 6 + (tensions ? num_cables : 0); }
   int geometry_size() const { return static_cast<int>(names.size()); }
 };
@@ -62,12 +69,30 @@ int SpatialValuesPerPose(const SpatialRobot& robot, const SpatialInformationLayo
 // identification's (a sensor set that cannot calibrate, too few values for the unknowns).
 SpatialInformationLayout SpatialDesignLayout(const SpatialRobot& robot, const std::vector<SpatialPlanPose>& reference);
 
+// Calibrating in rounds with a result that held coordinates: the design holds the same ones (its
+// information is then of the same unknowns), which must fix the layout's null directions
+// (InputError naming `path`, key held, and what they leave free otherwise). The weakly seen
+// directions stay in weakly_seen_held only where the result's coordinates fix them too.
+void HoldAsThePrior(SpatialInformationLayout* layout, const std::vector<std::string>& held, const std::string& path);
+
+// Calibrating in rounds (design --prior): the information an earlier identification's result
+// (ReadSpatialIdentifiedGeometry) gives about `layout`'s free unknowns, given its held ones: the
+// inverse of the result's covariance over the coordinates it did not hold, restricted to
+// layout.free (the information of the free unknowns with the held ones known). InputError
+// naming `path` and the key when the result estimates other unknowns (another sensor set) or
+// holds a coordinate the design estimates (another gauge: the message names the design's), or
+// its covariance is not positive definite.
+Eigen::MatrixXd SpatialPriorInformation(const SpatialInformationLayout& layout, const std::vector<std::string>& names,
+                                        const std::vector<std::string>& held, const Eigen::MatrixXd& covariance,
+                                        const std::string& path);
+
 // The whitened Jacobian of one pose's noise-free readings, rows as the file comment, columns
 // local() then the geometry.
 Eigen::MatrixXd SpatialPoseJacobian(const SpatialRobot& robot, const SpatialInformationLayout& layout,
                                     const SpatialPose<double>& q, const Eigen::VectorXd& tensions_N);
 
-// S (free x free, in 1/unit^2 of each unknown: m for exits and lengths, rad for offsets).
+// S (free x free, in 1/unit^2 of each unknown: m for exits and lengths, rad for offsets), the
+// layout's prior information included.
 Eigen::MatrixXd SpatialInformation(const SpatialRobot& robot, const SpatialInformationLayout& layout,
                                    const std::vector<SpatialPlanPose>& poses);
 
@@ -78,7 +103,7 @@ CriteriaValues SpatialCriteria(const Eigen::MatrixXd& information);
 
 // What the design minimises: log kappa (condition), -log det S (d), log trace S^-1 (a),
 // -log lambda_min (e); for condition and e a smooth surrogate of sharpness `power` (> 0), the
-// exact value for power 0. +inf where S is singular. `gradient`, if given, receives the
+// exact value for power 0 (S with the layout's prior information). +inf where S is singular. `gradient`, if given, receives the
 // derivative with respect to every pose's (x, y, z, roll, pitch, yaw, t1..tm), 6 + m per pose.
 double SpatialDesignObjective(const SpatialRobot& robot, const SpatialInformationLayout& layout, Criterion criterion,
                               const std::vector<SpatialPlanPose>& poses, Eigen::VectorXd* gradient,

@@ -146,14 +146,20 @@ PlanarPose StartingPose(const Robot& robot, const GeometryVector& geometry, cons
 
 void RequireResultOfRobot(const std::string& result_source, const std::string& result_robot_name,
                           int result_cables, const Robot& robot) {
+  RequireResultOfRobot(result_source, result_robot_name, result_cables, robot.source, robot.name, robot.num_cables());
+}
+
+void RequireResultOfRobot(const std::string& result_source, const std::string& result_robot_name,
+                          int result_cables, const std::string& robot_source, const std::string& robot_name,
+                          int robot_cables) {
   const std::string result_robot = result_robot_name.empty() ? "a robot" : "robot '" + PrintableText(result_robot_name) + "'";
-  const std::string against = PrintableText(robot.source) + " is robot '" + PrintableText(robot.name) + "' with " +
-                              std::to_string(robot.num_cables()) + " cables";
-  if (result_cables != robot.num_cables()) {
+  const std::string against = PrintableText(robot_source) + " is robot '" + PrintableText(robot_name) + "' with " +
+                              std::to_string(robot_cables) + " cables";
+  if (result_cables != robot_cables) {
     throw InputError(result_source, "", "identified for " + result_robot + " with " + std::to_string(result_cables) +
                                             " cables, but " + against + ": a result of another robot");
   }
-  if (!result_robot_name.empty() && result_robot_name != robot.name) {
+  if (!result_robot_name.empty() && result_robot_name != robot_name) {
     throw InputError(result_source, "", "identified for " + result_robot + ", but " + against +
                                             ": a result of another robot (its changes from nominal would be the "
                                             "difference between two robots)");

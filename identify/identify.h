@@ -259,6 +259,10 @@ void EmitSensorCorrection(YAML::Emitter& out, const SystematicSensorErrors& erro
 // result.yaml of an older version, which did not record it).
 void RequireResultOfRobot(const std::string& result_source, const std::string& result_robot_name,
                           int result_cables, const Robot& robot);
+// The same for any kind of robot: its file (source), name and cable count.
+void RequireResultOfRobot(const std::string& result_source, const std::string& result_robot_name,
+                          int result_cables, const std::string& robot_source, const std::string& robot_name,
+                          int robot_cables);
 
 // Whether geometric parameter k was held rather than estimated (held_geometry): its std
 // is then 0 by construction, and what a person reads says "held", not "std 0".

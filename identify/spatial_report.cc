@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <yaml-cpp/yaml.h>
 
 #include "common/error.h"
 #include "common/format.h"
@@ -74,15 +75,19 @@ std::string GaugeNote(const SpatialIdentifyOptions& options, const SpatialIdenti
   return "";
 }
 
+// `weak`: each direction also says whether it is nearly a rigid motion of the frame (which the
+// default gauge holds).
 void EmitDirections(YAML::Emitter& o, const char* key, const std::vector<SpatialDirection>& directions,
-                    const std::string& comment) {
+                    const std::string& comment, bool weak = false) {
   o << Key << key << Value;
   if (!comment.empty()) o << YAML::Comment(comment);
   if (directions.empty()) o << Flow;
   o << BeginSeq;
   for (const SpatialDirection& d : directions) {
     o << BeginMap << Key << "description" << Value << YamlString{d.description} << Key << "relative_singular_value"
-      << Value << YamlNumber{d.relative_singular_value} << Key << "vector" << Value << Flow << BeginSeq;
+      << Value << YamlNumber{d.relative_singular_value};
+    if (weak) o << Key << "nearly_rigid" << Value << d.nearly_rigid;
+    o << Key << "vector" << Value << Flow << BeginSeq;
     for (int k = 0; k < d.geometry.size(); ++k) o << YamlNumber{d.geometry(k)};
     o << EndSeq << EndMap;
   }
@@ -119,7 +124,10 @@ ResultParts Parts(const SpatialRobot& nominal, const SpatialIdentifyOptions& opt
                  "what no reading sees (at the nominal geometry, before holding anything); vector: over the "
                  "parameters, in their order");
   EmitDirections(o, "weak_directions", r.weak_directions,
-                 "seen, but below " + FormatDouble(kSpatialWeakThreshold) + " of the best-seen direction");
+                 "seen, but below " + FormatDouble(kSpatialWeakThreshold) +
+                     " of the best-seen direction; nearly_rigid: within 5 % of a rigid motion of the frame, "
+                     "which the default gauge holds",
+                 true);
   o << Key << "iterations" << Value << r.iterations;
   o << Key << "final_cost" << Value << YamlNumber{r.final_cost}
     << YAML::Comment("half the sum of squared whitened residuals");
@@ -282,6 +290,81 @@ SpatialRobot CalibratedSpatialRobot(const SpatialRobot& nominal, const SpatialId
     if (anchors) calibrated.cables[i].p_P_anchor_m = result.geometry.segment<3>(4 * m + 3 * i);
   }
   return calibrated;
+}
+
+SpatialIdentifiedGeometry ReadSpatialIdentifiedGeometry(const SpatialRobot& nominal, const std::string& path) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw InputError(path, "", "cannot open the file");
+  } catch (const YAML::Exception& e) {
+    throw InputError(path, "", std::string("not valid YAML: ") + e.what());
+  }
+  if (!root.IsMap() || !root["status"] || !root["parameters"]) {
+    throw InputError(path, "", "not an identification result (cablecal identify --out): no status or parameters");
+  }
+  const YAML::Node of = root["robot"];
+  if (!of.IsMap() || of["kind"].as<std::string>("") != "spatial") {
+    throw InputError(path, "robot", "not the result of a spatial robot's identification");
+  }
+  RequireResultOfRobot(path, of["name"].as<std::string>(""), of["cables"].as<int>(0), nominal.source, nominal.name,
+                       nominal.num_cables());
+  if (root["status"].as<std::string>("") != "converged") {
+    throw InputError(path, "status", "the identification did not converge: it cannot be a prior");
+  }
+  if (root["gauge"].as<std::string>("") == "none") {
+    throw InputError(path, "gauge", "a result identified with --gauge none cannot be a prior (its sigmas leave out the "
+                                    "directions it does not fix): identify the same data with --gauge auto or prior");
+  }
+  SpatialIdentifiedGeometry known;
+  known.source = path;
+  const YAML::Node held = root["held"];
+  if (held && !held.IsSequence()) throw InputError(path, "held", "must be a list of coordinate names");
+  for (const YAML::Node& h : held) known.held.push_back(h.as<std::string>(""));
+  const YAML::Node parameters = root["parameters"];
+  if (!parameters.IsMap()) throw InputError(path, "parameters", "must be a map of the unknowns");
+  for (const auto& entry : parameters) {
+    const std::string name = entry.first.as<std::string>("");
+    const std::string key = "parameters." + name;
+    const YAML::Node value = entry.second["value"];
+    if (!value) throw InputError(path, key + ".value", "missing");
+    known.names.push_back(name);
+    const double v = value.as<double>(NAN);
+    if (!std::isfinite(v)) throw InputError(path, key + ".value", "must be a finite number");
+    known.geometry.conservativeResize(known.geometry.size() + 1);
+    known.geometry(known.geometry.size() - 1) = v;
+  }
+  const int p = static_cast<int>(known.names.size());
+  const int m = nominal.num_cables();
+  const std::vector<std::string> exits_and_lengths = SpatialGeometryNames(m, false, false);
+  if (p < 4 * m || !std::equal(exits_and_lengths.begin(), exits_and_lengths.end(), known.names.begin())) {
+    throw InputError(path, "parameters", "needs " + nominal.name + "'s exit coordinates and initial lengths (a1x .. l" +
+                                             std::to_string(m) + "0) first: a result for another robot?");
+  }
+  const std::string matrix = "needs the " + std::to_string(p) + " x " + std::to_string(p) + " matrix of the parameters";
+  const YAML::Node cov = root["covariance"];
+  if (!cov || !cov.IsSequence() || static_cast<int>(cov.size()) != p) {
+    throw InputError(path, "covariance", matrix + " (identify writes it when it computes standard deviations)");
+  }
+  known.covariance.resize(p, p);
+  for (int a = 0; a < p; ++a) {
+    if (!cov[a].IsSequence() || static_cast<int>(cov[a].size()) != p) throw InputError(path, "covariance", matrix);
+    for (int b = 0; b < p; ++b) {
+      known.covariance(a, b) = cov[a][b].as<double>(NAN);
+      if (!std::isfinite(known.covariance(a, b))) {
+        throw InputError(path, "covariance", "row " + std::to_string(a + 1) + ": must be finite numbers");
+      }
+    }
+  }
+  return known;
+}
+
+SpatialRobot CalibratedSpatialRobot(const SpatialRobot& nominal, const SpatialIdentifiedGeometry& known) {
+  SpatialIdentifyResult result;
+  result.names = known.names;
+  result.geometry = known.geometry;
+  return CalibratedSpatialRobot(nominal, result);
 }
 
 }  // namespace cablecal

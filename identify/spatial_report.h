@@ -41,4 +41,21 @@ std::string SpatialIdentifyResultJson(const SpatialRobot& nominal, const Spatial
 // relative sensors are zeroed at home (README). CABLECAL_CHECK on a result of another robot.
 SpatialRobot CalibratedSpatialRobot(const SpatialRobot& nominal, const SpatialIdentifyResult& result);
 
+// What a spatial result.yaml knows of the geometry, read back beside its writer, for
+// calibrating in rounds (design --prior): the unknowns' names and estimates, the coordinates its
+// gauge held, and the covariance (names order; held rows and columns zero). Only a converged
+// result of `nominal`'s robot (name, cable count, kind spatial), with standard deviations, in a
+// gauge that fixes the frame (not --gauge none) knows it: InputError naming the file and key.
+struct SpatialIdentifiedGeometry {
+  std::string source;  // the file
+  std::vector<std::string> names;
+  Eigen::VectorXd geometry;
+  std::vector<std::string> held;
+  Eigen::MatrixXd covariance;
+};
+SpatialIdentifiedGeometry ReadSpatialIdentifiedGeometry(const SpatialRobot& nominal, const std::string& result_yaml_path);
+// The nominal robot with the read exits and initial lengths (and anchors, when identified), as
+// CalibratedSpatialRobot.
+SpatialRobot CalibratedSpatialRobot(const SpatialRobot& nominal, const SpatialIdentifiedGeometry& known);
+
 }  // namespace cablecal

@@ -301,7 +301,9 @@ MonteCarloResult RunSpatialMonteCarlo(const SpatialRobot& nominal, const Spatial
   const auto t0 = std::chrono::steady_clock::now();
   ValidateSpatialMonteCarloOptions(nominal, o);
   const SpatialRobot planning = PlanningRobot(nominal, o);
-  const std::vector<std::string> held_names = StudyGauge(nominal, planning, o);
+  // The fewest poses are checked to identify the geometry whoever chooses the gauge.
+  std::vector<std::string> held_names = StudyGauge(nominal, planning, o);
+  if (!o.held.empty()) held_names = o.held;
   const std::vector<std::string> names = SpatialGeometryNames(nominal.num_cables(), false, false);
   std::vector<int> held;
   for (const std::string& h : held_names) held.push_back(static_cast<int>(std::find(names.begin(), names.end(), h) - names.begin()));

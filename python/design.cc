@@ -98,16 +98,18 @@ void BindSpatialDesignResult(py::module_& m) {
       }, "The CLI's summary.yaml.");
 }
 
-// The spatial design takes the planar one's arguments but a prior, which it does not serve yet:
-// given, it is refused (never silently ignored). geometry_sigma None: the robot file's tracker
-// sigma, else the planar default (SpatialDesignOptions).
-py::object SpatialDesign(const SpatialRobot& robot, py::handle n, py::handle criterion, py::handle starts,
+// The spatial design takes the planar one's arguments. geometry_sigma None: the robot file's
+// tracker sigma, else the planar default (SpatialDesignOptions). prior: the path of an earlier
+// identification's result.yaml, whose estimate is the robot designed for (design --prior).
+py::object SpatialDesign(const SpatialRobot& nominal, py::handle n, py::handle criterion, py::handle starts,
                          py::handle seed, py::handle min_spacing, py::handle random_sets, py::handle geometry_sigma,
                          py::handle robust_sigmas, py::handle prior) {
-  if (!prior.is_none()) {
-    Bad("prior", "sequential design (planning around an earlier identification) is not yet served for spatial robots");
-  }
   SpatialDesignOptions o;
+  SpatialRobot robot = nominal;
+  if (!prior.is_none()) {
+    o.prior = ReadSpatialIdentifiedGeometry(nominal, AsPath(prior, "prior"));
+    robot = CalibratedSpatialRobot(nominal, *o.prior);
+  }
   o.poses = static_cast<int>(AsInteger(n, "n", 1, kMaxPlanPoses));
   o.criterion = ParseCriterion(AsText(criterion, "criterion"));
   o.starts = static_cast<int>(AsInteger(starts, "starts", 1, 1000));
@@ -245,7 +247,7 @@ void BindDesign(py::module_& m) {
       "robustness. prior: the path of an earlier "
       "identification's result.yaml (design --prior). geometry_sigma and robust_sigmas: None is 0.01 m and 3. "
       "For a SpatialRobot: a SpatialDesignResult, robust to the exit points (geometry_sigma None: the robot "
-      "file's tracker sigma, else 0.01 m); prior is not served yet (InputError when given).");
+      "file's tracker sigma, else 0.01 m); prior as planar (its result.yaml of the same robot).");
 }
 
 }  // namespace cablecal::python

@@ -28,12 +28,13 @@ struct PySpatialIdentifyResult {
   SpatialIdentifyResult result;
 };
 
-py::list Directions(const std::vector<SpatialDirection>& directions) {
+py::list Directions(const std::vector<SpatialDirection>& directions, bool weak = false) {
   py::list out;
   for (const SpatialDirection& d : directions) {
     py::dict e;
     e["description"] = d.description;
     e["relative_singular_value"] = d.relative_singular_value;
+    if (weak) e["nearly_rigid"] = d.nearly_rigid;
     e["vector"] = Vector(d.geometry);
     out.append(e);
   }
@@ -199,7 +200,9 @@ void BindSpatialIdentify(py::module_& m) {
                              [](const PySpatialIdentifyResult& r) { return Directions(r.result.null_directions); },
                              "what no reading sees: description, relative_singular_value, vector (by names)")
       .def_property_readonly("weak_directions",
-                             [](const PySpatialIdentifyResult& r) { return Directions(r.result.weak_directions); })
+                             [](const PySpatialIdentifyResult& r) { return Directions(r.result.weak_directions, true); },
+                             "seen weakly: as null_directions, and nearly_rigid (within 5 % of a rigid motion of the "
+                             "frame: the default gauge holds it)")
       .def_property_readonly("pose_ids", [](const PySpatialIdentifyResult& r) { return r.result.pose_ids; })
       .def_property_readonly("poses", [](const PySpatialIdentifyResult& r) { return Array(Poses(r.result.poses)); },
                              "(n, 6): x, y, z, roll, pitch, yaw identified")

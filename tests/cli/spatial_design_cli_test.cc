@@ -115,6 +115,17 @@ TEST_F(SpatialDesignCli, PlanReadsBackAndSimulatesOnIrma4uAndARandomRobot) {
     EXPECT_NE(sim.output.find("simulated " + std::to_string(n) + " poses of " + model.name), std::string::npos)
         << sim.output;
 
+    // The next round (--prior): the identification of those readings, planned around.
+    if (extra > 0) {
+      const RunResult id = RunCablecal("identify --robot " + robot + " --measurements " + Path("m.csv") + " --out " +
+                                       Path("r.yaml"));
+      ASSERT_EQ(id.exit_code, 0) << id.output;
+      const RunResult next = RunCablecal(args + " --prior " + Path("r.yaml") + " --out " + Path("next.csv") +
+                                         " --summary " + Path("next.yaml"));
+      ASSERT_EQ(next.exit_code, 0) << next.output;
+      EXPECT_NE(Read("next.yaml").find("  prior: \"" + Path("r.yaml") + "\""), std::string::npos) << Read("next.yaml");
+    }
+
     const std::string summary = Read("summary.yaml");
     for (const std::string& key : {"cablecal: {version: \"" + std::string(cablecal::Version()) + "\", commit: ",
                                    std::string("command: \"cablecal design --robot "), std::string("criterion: a\n"),
@@ -157,7 +168,7 @@ TEST_F(SpatialDesignCli, HostileInputsExitTwoOrThreeWithOneMessageAndNothingWrit
       {"--poses 1", "--poses: at least 2 poses are needed", 2},
       {"--poses 3 --geometry-sigma 0.6", "--geometry-sigma: must be between 0 and 0.5 m (got 0.6)", 2},
       {"--poses 3 --robust-sigmas 11", "--robust-sigmas: must be between 0 and 10 (got 11)", 2},
-      {"--poses 3 --prior " + Path("prior.yaml"), "--prior: sequential design", 2},
+      {"--poses 3 --prior " + Path("prior.yaml"), Path("prior.yaml") + ": not an identification result", 2},
       {"--poses 3 --plot " + Path("out.png"), "--plot: a figure of a spatial plan is not yet served", 2},
       {"--poses 501", "--poses: at most 500 poses", 2},
       {"--poses 3 --criterion b", "--criterion", 2},

@@ -4,6 +4,8 @@
 #include <Eigen/Dense>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
+#include <cstdio>
 #include <optional>
 
 #include "common/random.h"
@@ -13,6 +15,7 @@
 #include "experiment/spatial_plan.h"
 #include "experiment/spatial_simulation.h"
 #include "identify/spatial_identify.h"
+#include "identify/spatial_report.h"
 #include "model/builtin_spatial_robots.h"
 #include "tests/support/random_spatial_robot.h"
 
@@ -105,6 +108,126 @@ TEST(SpatialInformation, InverseIsTheIdentificationsCovarianceOnRandomRobots) {
     robot.sensors.laser_m = RangedNoise{0.003, 0.001};
     ExpectInformationIsInverseCovariance(robot, 12, 7);
   }
+}
+
+// Calibrating in rounds (--prior): the information a first round's result.yaml gives, written
+// and read back, is the information of its poses (the inverse of its covariance, independently
+// computed by the identification), and the second round's design counts it: its criteria are
+// those of S(new poses) + that information, better than the new poses' alone and than the
+// first round's alone.
+TEST(SpatialDesign, PriorIsTheFirstRoundsInformationAndTheSecondRoundCountsIt) {
+  SpatialRobot robot = BuiltinSpatialRobot("cogiro");
+  robot.sensors.position.reset();
+  robot.sensors.inclinometer_rad = RangedNoise{0.002, 0.001};
+  robot.sensors.laser_m = RangedNoise{0.003, 0.001};
+  const std::vector<SpatialPlanPose> first = SampleSpatialPoses(robot, 12, 31);
+  std::vector<std::string> held;
+  SpatialRobot at;
+  std::vector<SpatialPlanPose> estimated;
+  IdentificationCovariance(robot, first, &held, &at, &estimated);
+  // The first round's result.yaml, as identify writes it.
+  SpatialSimulationOptions quiet;
+  quiet.noisy = NoisySensors::kNone;
+  quiet.encoder_noise = false;
+  Rng rng(3);
+  const SimulatedSpatialExperiment sim = SimulateSpatialExperiment(robot, robot, first, quiet, rng);
+  const SpatialIdentifyResult r = IdentifySpatial(robot, sim.measurements, SpatialIdentifyOptions{});
+  ASSERT_TRUE(r.converged()) << r.message;
+  const std::string path = ::testing::TempDir() + "cablecal_spatial_prior_result.yaml";
+  {
+    std::ofstream out(path);
+    out << SpatialIdentifyResultYaml(robot, SpatialIdentifyOptions{}, r, "test");
+  }
+  const SpatialIdentifiedGeometry known = ReadSpatialIdentifiedGeometry(robot, path);
+  EXPECT_EQ(known.names, r.names);
+  EXPECT_EQ(known.held, r.held);
+  EXPECT_LT((known.geometry - r.geometry).cwiseAbs().maxCoeff(), 1e-12);
+  SpatialInformationLayout L = SpatialDesignLayout(robot, SampleSpatialPoses(robot, 12, 9));
+  HoldAsThePrior(&L, known.held, path);
+  std::vector<std::string> layout_held;
+  for (const int h : L.held) layout_held.push_back(L.names[h]);
+  EXPECT_EQ(layout_held, known.held);
+  const MatrixXd prior = SpatialPriorInformation(L, known.names, known.held, known.covariance, path);
+  const MatrixXd S_first = SpatialInformation(at, L, estimated);  // L without the prior yet
+  L.prior_information = prior;
+  const double first_relative = (prior - S_first).norm() / S_first.norm();
+  EXPECT_LT(first_relative, 1e-6) << "the result's information against its poses' (YAML's 17 digits)";
+  // The second round.
+  SpatialDesignOptions options;
+  options.poses = 10;
+  options.starts = 1;
+  options.random_sets = 3;
+  options.seed = 4;
+  options.geometry_sigma_m = 0.0;
+  options.prior = known;
+  const SpatialRobot second_robot = CalibratedSpatialRobot(robot, known);
+  const SpatialDesignResult second = DesignSpatialPoses(second_robot, options);
+  EXPECT_EQ(second.layout.held, L.held);
+  const MatrixXd S_second = SpatialInformation(second_robot, L, second.poses);  // L counts the prior
+  SpatialInformationLayout without = L;
+  without.prior_information.resize(0, 0);
+  const MatrixXd S_new = SpatialInformation(second_robot, without, second.poses);
+  EXPECT_LT((S_second - S_new - prior).norm(), 1e-9 * S_second.norm());
+  const CriteriaValues counted = SpatialCriteria(S_second), alone = SpatialCriteria(S_new),
+                       before = SpatialCriteria(prior);
+  EXPECT_NEAR(second.criteria.a_trace_covariance_m2, counted.a_trace_covariance_m2, 1e-9 * counted.a_trace_covariance_m2);
+  EXPECT_LT(counted.a_trace_covariance_m2, alone.a_trace_covariance_m2);
+  EXPECT_LT(counted.a_trace_covariance_m2, before.a_trace_covariance_m2);
+  std::printf("trace of the covariance: first round %.3g, second round's poses alone %.3g, both %.3g m^2\n",
+              before.a_trace_covariance_m2, alone.a_trace_covariance_m2, counted.a_trace_covariance_m2);
+  const std::string summary = SpatialDesignSummaryYaml(second_robot, second, options, "test");
+  EXPECT_NE(summary.find("prior: \"" + path + "\""), std::string::npos) << summary;
+  std::remove(path.c_str());
+}
+
+// What a prior cannot be, each an InputError naming the file and key.
+TEST(SpatialDesign, PriorsThatCannotBeAreRefusedNamingTheKey) {
+  SpatialRobot robot = BuiltinSpatialRobot("cogiro");
+  robot.sensors.position.reset();
+  robot.sensors.inclinometer_rad = RangedNoise{0.002, 0.001};
+  robot.sensors.laser_m = RangedNoise{0.003, 0.001};
+  const std::vector<SpatialPlanPose> plan = SampleSpatialPoses(robot, 20, 31);
+  SpatialSimulationOptions quiet;
+  quiet.noisy = NoisySensors::kNone;
+  quiet.encoder_noise = false;
+  Rng rng(3);
+  const SimulatedSpatialExperiment sim = SimulateSpatialExperiment(robot, robot, plan, quiet, rng);
+  const std::string path = ::testing::TempDir() + "cablecal_spatial_bad_prior.yaml";
+  const auto refusal = [&](const SpatialRobot& nominal, const SpatialIdentifyOptions& id, const SpatialRobot& designed) {
+    const SpatialIdentifyResult r = IdentifySpatial(nominal, sim.measurements, id);
+    std::ofstream(path) << SpatialIdentifyResultYaml(nominal, id, r, "test");
+    try {
+      const SpatialIdentifiedGeometry known = ReadSpatialIdentifiedGeometry(designed, path);
+      SpatialInformationLayout L = SpatialDesignLayout(designed, plan);
+      HoldAsThePrior(&L, known.held, path);
+      SpatialPriorInformation(L, known.names, known.held, known.covariance, path);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  SpatialIdentifyOptions none;
+  none.gauge.kind = SpatialGaugeKind::kNone;
+  EXPECT_NE(refusal(robot, none, robot).find(path + ": gauge: a result identified with --gauge none"), std::string::npos);
+  SpatialRobot other = robot;
+  other.name = "another";
+  EXPECT_NE(refusal(robot, {}, other).find("a result of another robot"), std::string::npos);
+  // The design's robot has no laser: the result's held coordinates (its laser saw z) leave the
+  // frame's height free.
+  SpatialRobot no_laser = robot;
+  no_laser.sensors.laser_m.reset();
+  EXPECT_NE(refusal(robot, {}, no_laser).find(path + ": held: holds a1x,a2y,a6y, which leaves 1 of the 4 directions"),
+            std::string::npos)
+      << refusal(robot, {}, no_laser);
+  std::ofstream(path) << "status: converged\nparameters: {}\n";
+  try {
+    ReadSpatialIdentifiedGeometry(robot, path);
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(path + ": robot: not the result of a spatial robot"), std::string::npos)
+        << e.what();
+  }
+  std::remove(path.c_str());
 }
 
 // The gradient of every criterion against central differences of the objective.
