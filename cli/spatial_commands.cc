@@ -231,8 +231,12 @@ int RunSpatialDesign(const Context& ctx, const DesignCommandOptions& options) {
   std::string held;
   for (int h : result.layout.held) held += (held.empty() ? "" : " ") + result.layout.names[h];
   if (held.empty()) held = "nothing (the robot file's sensors see every direction of the geometry)";
-  for (const std::string& d : result.layout.weakly_seen_held) {
-    held += " (with the weakly seen direction " + d.substr(0, d.find(':')) + ", as identify's default gauge)";
+  const std::vector<std::string>& weak = result.layout.weakly_seen_held;
+  if (!weak.empty()) {
+    std::string words;
+    for (const std::string& d : weak) words += (words.empty() ? "" : "; ") + d.substr(0, d.find(':'));
+    held += " (with the weakly seen direction" + std::string(weak.size() > 1 ? "s " : " ") + words +
+            ", as identify's default gauge)";
   }
   std::printf("  the gauge holds %s; %s%s\n", held.c_str(), SpatialRobustnessText(robot, result).c_str(),
               options.geometry_sigma_given || !robot.sensors.tracker_sigma_m ? "" : " (sigma: the robot file's tracker)");

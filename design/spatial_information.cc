@@ -335,13 +335,11 @@ int SpatialValuesPerPose(const SpatialRobot& robot, const SpatialInformationLayo
 SpatialInformationLayout SpatialDesignLayout(const SpatialRobot& robot, const std::vector<SpatialPlanPose>& reference) {
   SpatialInformationLayout L = SpatialSensorLayout(robot);
   L.free.clear();
-  // The identification's own gauge analysis on the readings these poses would give.
-  SpatialSimulationOptions quiet;
-  quiet.noisy = NoisySensors::kNone;
-  quiet.encoder_noise = false;
-  Rng rng(1);  // draws nothing that matters: every noise is off
-  const SimulatedSpatialExperiment readings = SimulateSpatialExperiment(robot, robot, reference, quiet, rng);
-  const SpatialGaugeAnalysis gauge = AnalyzeSpatialGauge(robot, readings.measurements, SpatialIdentifyOptions{});
+  // The identification's own gauge analysis on the readings these poses would give (read at the
+  // poses themselves: a robot of more than 6 inextensible cables cannot be simulated, and the
+  // study's encoders-alone design is made on one).
+  const SpatialGaugeAnalysis gauge =
+      AnalyzeSpatialGauge(robot, PlannedSpatialReadings(robot, reference), SpatialIdentifyOptions{});
   L.held = gauge.held;
   std::vector<const SpatialDirection*> fixed;
   for (const SpatialDirection& d : gauge.null_directions) fixed.push_back(&d);

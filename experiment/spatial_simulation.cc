@@ -118,6 +118,22 @@ SimulatedSpatialExperiment SimulateSpatialExperiment(const SpatialRobot& nominal
   return out;
 }
 
+std::vector<SpatialMeasurement> PlannedSpatialReadings(const SpatialRobot& robot, const std::vector<SpatialPlanPose>& plan) {
+  const SpatialSensorZero zero = SensorZeroAt(robot, SpatialHome(robot).equilibrium.q);
+  std::vector<SpatialMeasurement> readings;
+  for (std::size_t j = 0; j < plan.size(); ++j) {
+    SpatialMeasurement r;
+    r.pose_id = static_cast<int>(j + 1);
+    r.dl_m = plan[j].length_change_m;
+    const auto exact = SpatialSensorReadings<double>(robot, plan[j].q, plan[j].tensions_N, zero);
+    for (const SpatialSensor s : kSpatialSensors) {
+      if (SpatialSensorNoise(robot.sensors, s)) r.values(s) = exact[static_cast<int>(s)];
+    }
+    readings.push_back(std::move(r));
+  }
+  return readings;
+}
+
 SpatialPlanSimulation SimulateSpatialPlan(const SpatialRobot& nominal, const std::optional<SpatialRobot>& truth,
                                           double geometry_sigma_m, const std::vector<SpatialPlanPose>& plan,
                                           const SpatialSimulationOptions& options, std::uint64_t seed,

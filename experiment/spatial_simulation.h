@@ -63,6 +63,12 @@ struct SimulatedSpatialExperiment {
 // zero. SolverFailure when it cannot hold them.
 SpatialPose<double> TrueHome(const SpatialRobot& nominal, const SpatialRobot& truth);
 
+// The noise-free readings `robot` gives at its own plan: each pose is its equilibrium with the
+// plan's tensions, so no forward solve settles it (a robot whose cables cannot be simulated --
+// more than 6 inextensible ones -- has them too); the relative sensors zeroed at its home.
+// Every sensor of the robot file is read. What the design's gauge analysis looks at.
+std::vector<SpatialMeasurement> PlannedSpatialReadings(const SpatialRobot& robot, const std::vector<SpatialPlanPose>& plan);
+
 // The readings of `plan` (one of nominal's) on `truth`. Noise: per pose, in this order whatever
 // sensors the robot has, m encoder draws N(0, encoder sigma), then for each sensor in
 // SpatialSensor order and each of its SpatialSensorSize values an accuracy draw and a

@@ -427,6 +427,57 @@ TEST(SpatialSimulation, NoiselessReadingsAreTheModelsValues) {
   }
 }
 
+// The readings at a robot's own plan without a forward solve (the design's gauge analysis):
+// those the noise-free simulation gives (checked above against an independent construction),
+// and where the robot cannot be simulated (more than 6 inextensible cables) still the model's:
+// the encoders the plan's dl, the inclinometer and laser the pose's.
+TEST(SpatialSimulation, PlannedReadingsAreTheNoiseFreeSimulationsWithoutAForwardSolve) {
+  int unsimulatable = 0;
+  std::vector<SpatialRobot> robots = TestRobots();
+  SpatialRobot rigid = BuiltinSpatialRobot("cogiro");  // 8 cables, taken as inextensible
+  rigid.name = "cogiro-rigid";
+  for (SpatialCable& c : rigid.cables) c.stiffness_N.reset();
+  robots.push_back(rigid);
+  for (const SpatialRobot& robot : robots) {
+    SCOPED_TRACE(robot.name);
+    const std::vector<SpatialPlanPose> plan = SampleSpatialPoses(robot, 5, 22);
+    const std::vector<SpatialMeasurement> planned = PlannedSpatialReadings(robot, plan);
+    ASSERT_EQ(planned.size(), plan.size());
+    const bool simulatable = robot.num_cables() <= 6 || std::all_of(robot.cables.begin(), robot.cables.end(),
+                                                                    [](const SpatialCable& c) { return c.stiffness_N; });
+    if (!simulatable) {
+      ++unsimulatable;
+      for (std::size_t j = 0; j < plan.size(); ++j) {
+        EXPECT_EQ(planned[j].dl_m, plan[j].length_change_m);
+        if (HasSpatialSensor(robot, SpatialSensor::kInclinometer)) {
+          EXPECT_LT((planned[j].values(SpatialSensor::kInclinometer) - plan[j].q.segment<2>(3)).norm(), 1e-12);
+        }
+        if (HasSpatialSensor(robot, SpatialSensor::kLaser)) {
+          EXPECT_NEAR(planned[j].values(SpatialSensor::kLaser)(0), plan[j].q(2) - robot.p_F_frame_min_m.z(), 1e-12);
+        }
+      }
+      continue;
+    }
+    SpatialSimulationOptions options;
+    options.noisy = NoisySensors::kNone;
+    options.encoder_noise = false;
+    const SpatialPlanSimulation run = SimulateSpatialPlan(robot, std::nullopt, 0.0, plan, options, 1, "plan");
+    for (std::size_t j = 0; j < plan.size(); ++j) {
+      const SpatialMeasurement &a = planned[j], &b = run.experiment.measurements[j];
+      EXPECT_EQ(a.pose_id, b.pose_id);
+      EXPECT_EQ(a.dl_m, b.dl_m);
+      for (const SpatialSensor sensor : kSpatialSensors) {
+        ASSERT_EQ(a.has(sensor), b.has(sensor)) << ToString(sensor);
+        if (!a.has(sensor)) continue;
+        // The load cells in newtons, the rest in m and rad: the forward solve's tolerance.
+        const double tol = sensor == SpatialSensor::kLoadCell ? 1e-6 * robot.platform_mass_kg * robot.gravity_mps2 : 1e-6;
+        EXPECT_LT((a.values(sensor) - b.values(sensor)).lpNorm<Eigen::Infinity>(), tol) << ToString(sensor) << " pose " << j;
+      }
+    }
+  }
+  EXPECT_GT(unsimulatable, 0) << "no robot of more than 6 inextensible cables among the test robots";
+}
+
 TEST(SpatialSimulation, NoiseIsReproducibleAndTheStreamIgnoresWhichSensorsAreNoisy) {
   const SpatialRobot robot = RobotWithEverySensor(12, 6);
   const std::vector<SpatialPlanPose> plan = SampleSpatialPoses(robot, 4, 2);
