@@ -216,9 +216,11 @@ int RunSpatialDesign(const Context& ctx, const DesignCommandOptions& options) {
   }
   int verified = 0;
   for (const SpatialStartReport& s : result.starts) verified += s.verified ? 1 : 0;
-  std::printf("designed %zu poses of %s (criterion %s, best of %d starts, %d converged, %d verified): %s",
+  std::printf("designed %zu poses of %s (criterion %s, best of %d start%s, %d converged, %d verified%s): %s",
               result.poses.size(), PrintableText(robot.name).c_str(), ToString(design.criterion), design.starts,
-              result.converged_starts, verified, DescribeCriterion(design.criterion, result.criteria).c_str());
+              design.starts == 1 ? "" : "s", result.converged_starts, verified,
+              design.prior ? ", counting the prior's information" : "",
+              DescribeCriterion(design.criterion, result.criteria).c_str());
   if (design.random_sets > 0) {
     const double factor = Improvement(design.criterion, result.criteria, result.random_median);
     std::printf(", %s", ImprovementText(factor, design.random_sets).c_str());
@@ -235,11 +237,17 @@ int RunSpatialDesign(const Context& ctx, const DesignCommandOptions& options) {
   if (!weak.empty()) {
     std::string words;
     for (const std::string& d : weak) words += (words.empty() ? "" : "; ") + d.substr(0, d.find(':'));
-    held += " (with the weakly seen direction" + std::string(weak.size() > 1 ? "s " : " ") + words +
-            ", as identify's default gauge)";
+    held += " (with the weakly seen direction" + std::string(weak.size() > 1 ? "s " : " ") + words + ")";
+  }
+  // identify's default gauge holds as many, but the coordinates it picks depend on the readings.
+  if (!result.layout.held.empty()) {
+    std::string list;
+    for (int h : result.layout.held) list += (list.empty() ? "" : ",") + result.layout.names[h];
+    held += "; identify with --gauge hold:" + list + " for the covariance it predicts";
   }
   std::printf("  the gauge holds %s; %s%s\n", held.c_str(), SpatialRobustnessText(robot, result).c_str(),
               options.geometry_sigma_given || !robot.sensors.tracker_sigma_m ? "" : " (sigma: the robot file's tracker)");
+  if (!result.prior_note.empty() && !ctx.quiet) std::fprintf(stderr, "cablecal: warning: %s\n", result.prior_note.c_str());
   if (result.robustness_lowered() && !ctx.quiet) {
     std::fprintf(stderr, "cablecal: warning: robustness lowered: %s\n", result.robustness_note.c_str());
   }

@@ -802,11 +802,21 @@ SpatialDesignResult DesignSpatialPoses(const SpatialRobot& robot, const SpatialD
                          " unknowns of its own: these sensors cannot calibrate the geometry at any number of poses");
   }
   const int reference_size = (probe.geometry_size() + net - 1) / net + 2;
+  std::string prior_note;
   SpatialInformationLayout layout = SpatialDesignLayout(
       robot, SampleSpatialPoses(robot, reference_size, StreamSeed(options.seed, {kGaugeStream})));
   if (options.prior) {
     const SpatialIdentifiedGeometry& prior = *options.prior;
+    const std::size_t needed = layout.held.size();
     HoldAsThePrior(&layout, prior.held, prior.source);
+    if (layout.held.size() > needed) {
+      std::string list;
+      for (const int h : layout.held) list += (list.empty() ? "" : ",") + layout.names[h];
+      prior_note = prior.source + " holds " + list + ", " + std::to_string(layout.held.size() - needed) +
+                   " more than this robot file's sensors need (" + std::to_string(needed) +
+                   "): the design takes them as known; a result of fewer sensors than the robot file's, or of a "
+                   "lab's hold:?";
+    }
     layout.prior_information = SpatialPriorInformation(layout, prior.names, prior.held, prior.covariance, prior.source);
   }
   const int n_min = MinSpatialDesignPoses(robot, layout);
@@ -906,6 +916,7 @@ SpatialDesignResult DesignSpatialPoses(const SpatialRobot& robot, const SpatialD
     search.requested_k = search.achieved_k = options.robust_sigmas;
   }
   result.layout = layout;
+  result.prior_note = prior_note;
   result.geometry_sigma_m = sigma_m;
   result.robust_sigmas_requested = search.requested_k;
   result.robust_sigmas_achieved = search.achieved_k;
@@ -977,6 +988,7 @@ std::string SpatialDesignSummaryYaml(const SpatialRobot& robot, const SpatialDes
   if (options.prior) {
     o << Key << "prior" << Value << YamlString{options.prior->source}
       << YAML::Comment("an earlier identification: the robot is its estimate, S counts its information");
+    if (!r.prior_note.empty()) o << Key << "prior_note" << Value << YamlString{r.prior_note};
   }
   o << EndMap;
   o << Key << "criteria" << Value;

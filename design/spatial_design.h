@@ -105,6 +105,9 @@ struct SpatialDesignResult {
   double robust_sigmas_requested = 0.0;
   double robust_sigmas_achieved = 0.0;  // the k the plan holds for
   std::string robustness_note;          // LoweredRobustnessText when lowered, else ""
+  // With a prior that holds more coordinates than this robot file's sensors need (a result of
+  // fewer sensors, or a lab's hold:): which, planned as known; else "".
+  std::string prior_note;
   bool robustness_lowered() const { return robust_sigmas_achieved < robust_sigmas_requested; }
   double wall_time_s = 0.0;
 };

@@ -1,6 +1,7 @@
 // result.yaml of `cablecal identify`: its writer and its reader.
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <sstream>
 
 #include "common/error.h"
@@ -269,11 +270,17 @@ std::string IdentifyResultJson(const IdentifyResult& r, const std::string& comma
 IdentifiedGeometry ReadIdentifiedGeometry(const Robot& nominal, const std::string& path) {
   YAML::Node root;
   try {
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) {
+      throw InputError(path, "", "is a folder, not an identification result (cablecal identify --out)");
+    }
     root = YAML::LoadFile(path);
   } catch (const YAML::BadFile&) {
     throw InputError(path, "", "cannot open the file");
   } catch (const YAML::Exception& e) {
     throw InputError(path, "", std::string("not valid YAML: ") + e.what());
+  } catch (const std::ios_base::failure& e) {  // a device, a file that cannot be read
+    throw InputError(path, "", std::string("cannot read the file: ") + e.what());
   }
   if (!root.IsMap() || !root["status"] || !root["parameters"]) {
     throw InputError(path, "", "not an identification result (cablecal identify --out): no status or parameters");

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <yaml-cpp/yaml.h>
 
 #include "common/error.h"
@@ -60,7 +61,7 @@ std::string GaugeNote(const SpatialIdentifyOptions& options, const SpatialIdenti
         directions += std::string(null > 0 ? " and " : "") + "the " + std::to_string(nearly_rigid) +
                       " weakly seen direction" + (nearly_rigid > 1 ? "s" : "") +
                       " nearly a rigid motion of the frame, which --gauge hold: without " +
-                      (nearly_rigid > 1 ? "them" : "it") + " would estimate";
+                      (nearly_rigid > 1 ? "them" : "it") + " estimates, slowly (raise --max-iterations)";
       }
       return "held at their nominal values: " + held + " (the " +
              (options.anchors ? "exit coordinates, then the anchor coordinates," : "exit coordinates") +
@@ -295,11 +296,17 @@ SpatialRobot CalibratedSpatialRobot(const SpatialRobot& nominal, const SpatialId
 SpatialIdentifiedGeometry ReadSpatialIdentifiedGeometry(const SpatialRobot& nominal, const std::string& path) {
   YAML::Node root;
   try {
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) {
+      throw InputError(path, "", "is a folder, not an identification result (cablecal identify --out)");
+    }
     root = YAML::LoadFile(path);
   } catch (const YAML::BadFile&) {
     throw InputError(path, "", "cannot open the file");
   } catch (const YAML::Exception& e) {
     throw InputError(path, "", std::string("not valid YAML: ") + e.what());
+  } catch (const std::ios_base::failure& e) {  // a device, a file that cannot be read
+    throw InputError(path, "", std::string("cannot read the file: ") + e.what());
   }
   if (!root.IsMap() || !root["status"] || !root["parameters"]) {
     throw InputError(path, "", "not an identification result (cablecal identify --out): no status or parameters");

@@ -134,6 +134,9 @@ py::object SpatialDesign(const SpatialRobot& nominal, py::handle n, py::handle c
   o.interrupted = &stop;
   PySpatialDesign d{robot, Interruptible(stop, [&] { return DesignSpatialPoses(robot, o); }), o};
   d.options.interrupted = nullptr;
+  if (!d.result.prior_note.empty() && PyErr_WarnEx(PyExc_UserWarning, d.result.prior_note.c_str(), 1) < 0) {
+    throw py::error_already_set();  // the CLI's warning
+  }
   if (d.result.robustness_lowered()) {
     // The CLI's "robustness lowered" line: a plan, but for less than asked.
     const std::string note = "robustness lowered: " + d.result.robustness_note;

@@ -123,6 +123,11 @@ TEST_F(SpatialDesignCli, PlanReadsBackAndSimulatesOnIrma4uAndARandomRobot) {
       const RunResult next = RunCablecal(args + " --prior " + Path("r.yaml") + " --out " + Path("next.csv") +
                                          " --summary " + Path("next.yaml"));
       ASSERT_EQ(next.exit_code, 0) << next.output;
+      EXPECT_NE(next.output.find("verified, counting the prior's information): "), std::string::npos) << next.output;
+      // What to identify with for the predicted covariance, when the gauge holds anything.
+      EXPECT_TRUE(next.output.find("; identify with --gauge hold:") != std::string::npos ||
+                  next.output.find("the gauge holds nothing") != std::string::npos)
+          << next.output;
       EXPECT_NE(Read("next.yaml").find("  prior: \"" + Path("r.yaml") + "\""), std::string::npos) << Read("next.yaml");
     }
 
@@ -169,6 +174,7 @@ TEST_F(SpatialDesignCli, HostileInputsExitTwoOrThreeWithOneMessageAndNothingWrit
       {"--poses 3 --geometry-sigma 0.6", "--geometry-sigma: must be between 0 and 0.5 m (got 0.6)", 2},
       {"--poses 3 --robust-sigmas 11", "--robust-sigmas: must be between 0 and 10 (got 11)", 2},
       {"--poses 3 --prior " + Path("prior.yaml"), Path("prior.yaml") + ": not an identification result", 2},
+      {"--poses 3 --prior " + Path(""), "is a folder, not an identification result", 2},
       {"--poses 3 --plot " + Path("out.png"), "--plot: a figure of a spatial plan is not yet served", 2},
       {"--poses 501", "--poses: at most 500 poses", 2},
       {"--poses 3 --criterion b", "--criterion", 2},
