@@ -40,9 +40,18 @@ bool Noisy(NoisySensors noisy, SpatialSensor s) {
 
 }  // namespace
 
+Eigen::VectorXd TrueEncoderZero(const SpatialRobot& nominal, const SpatialRobot& truth) {
+  Eigen::VectorXd zero = SpatialHome(nominal).paid_out_m;
+  for (int i = 0; i < truth.num_cables(); ++i) {
+    if (!truth.cables[i].initial_length_m) return SpatialHome(nominal).paid_out_m;
+    zero(i) = *truth.cables[i].initial_length_m;
+  }
+  return zero;
+}
+
 SpatialPose<double> TrueHome(const SpatialRobot& nominal, const SpatialRobot& truth) {
   const SpatialHomeReference home = SpatialHome(nominal);
-  const SpatialForwardResult fwd = SolveForwardStatics(truth, home.paid_out_m, &home.equilibrium.q);
+  const SpatialForwardResult fwd = SolveForwardStatics(truth, TrueEncoderZero(nominal, truth), &home.equilibrium.q);
   if (fwd.status != ForwardStatus::kConverged) {
     throw SolverFailure("the true robot cannot hold the home pose's commanded lengths (" +
                         CannotHoldReason(fwd.status, "home") + "): its sensors have no zero");
@@ -54,13 +63,13 @@ SimulatedSpatialExperiment SimulateSpatialExperiment(const SpatialRobot& nominal
                                                      const std::vector<SpatialPlanPose>& plan,
                                                      const SpatialSimulationOptions& options, Rng& rng) {
   const int m = nominal.num_cables();
-  const SpatialHomeReference home = SpatialHome(nominal);
   SimulatedSpatialExperiment out;
   out.true_home = TrueHome(nominal, truth);
+  const Eigen::VectorXd zero_paid_out = TrueEncoderZero(nominal, truth);
   const SpatialSensorZero zero = SensorZeroAt(truth, out.true_home);
   for (std::size_t j = 0; j < plan.size(); ++j) {
     const SpatialPlanPose& p = plan[j];
-    const Eigen::VectorXd commanded = home.paid_out_m + p.length_change_m;
+    const Eigen::VectorXd commanded = zero_paid_out + p.length_change_m;
     // The commanded (nominal) pose is a good start: the true one is millimetres away.
     const SpatialForwardResult fwd = SolveForwardStatics(truth, commanded, &p.q);
     std::string infeasible;
@@ -171,9 +180,10 @@ SpatialPlanSimulation SimulateSpatialPlan(const SpatialRobot& nominal, const std
                                           std::to_string(first.pose_id) + ": " + first.reason +
                                           "): the plan cannot be run on this true robot");
   }
-  // The true robot's encoders read zero where the nominal home's commands were paid out: its
-  // initial lengths, so that the truth file predicts its own readings (validate --robot).
-  const Eigen::VectorXd zero = SpatialHome(nominal).paid_out_m;
+  // The true robot's encoders read zero where TrueEncoderZero was paid out: its initial
+  // lengths, so that the truth file predicts its own readings (validate --robot) and the next
+  // round's simulation keeps the same zero.
+  const Eigen::VectorXd zero = TrueEncoderZero(nominal, run.truth);
   for (int i = 0; i < run.truth.num_cables(); ++i) run.truth.cables[i].initial_length_m = zero(i);
   return run;
 }

@@ -3,9 +3,9 @@
 // each commanded pose of a plan (model/forward_statics.h), and its sensors' noisy readings
 // there; the truth file.
 //
-// The controller commands, for each plan pose, the unstretched lengths the nominal model gives
-// (home's paid-out lengths plus the plan's dl): that is what the winches pay out, on the true
-// robot too. The encoders and the relative sensors (swivel encoders, heading) are zeroed at home
+// The controller commands, for each plan pose, the plan's dl from the encoders' zero: the
+// winches pay out the zero's length (TrueEncoderZero) plus dl on the true robot (with the
+// nominal robot itself, the unstretched lengths its model gives). The encoders and the relative sensors (swivel encoders, heading) are zeroed at home
 // on the true robot: where it settles with home's commanded lengths. The encoders then read
 // the commanded changes dl (plus noise): they sit on the motor side and see what was paid out,
 // not where the platform went.
@@ -59,8 +59,13 @@ struct SimulatedSpatialExperiment {
   SpatialPose<double> true_home = SpatialPose<double>::Zero();  // where the sensors were zeroed
 };
 
-// Where the true robot settles at home with the nominal home's paid-out lengths: the sensors'
-// zero. SolverFailure when it cannot hold them.
+// What the true robot's winches have paid out where its encoders read zero: the truth's own
+// initial lengths when its file gives every cable's (a truth file written by simulate
+// --truth-out: the physical zero, kept from one round of a calibration to the next, whatever
+// robot file the controller then commands from), else the nominal home's paid-out lengths.
+Eigen::VectorXd TrueEncoderZero(const SpatialRobot& nominal, const SpatialRobot& truth);
+// Where the true robot settles with TrueEncoderZero paid out: the sensors' zero. SolverFailure
+// when it cannot hold it.
 SpatialPose<double> TrueHome(const SpatialRobot& nominal, const SpatialRobot& truth);
 
 // The noise-free readings `robot` gives at its own plan: each pose is its equilibrium with the
