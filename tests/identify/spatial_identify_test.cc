@@ -1181,7 +1181,9 @@ TEST(SpatialIdentifyAnchors, NullDirectionCountsOnCogiro) {
       EXPECT_EQ(words, frame + "\n  a rotation about z of the frame" + rotations);
       EXPECT_EQ(anchors_held, 3);
     }
-    if (c.bits == (kInc | kLaser)) EXPECT_EQ(anchors_held, 0) << "held an anchor where exits suffice";
+    if (c.bits == (kInc | kLaser)) {
+      EXPECT_EQ(anchors_held, 0) << "held an anchor where exits suffice";
+    }
   }
 }
 
