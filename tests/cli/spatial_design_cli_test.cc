@@ -120,8 +120,10 @@ TEST_F(SpatialDesignCli, PlanReadsBackAndSimulatesOnIrma4uAndARandomRobot) {
       const RunResult id = RunCablecal("identify --robot " + robot + " --measurements " + Path("m.csv") + " --out " +
                                        Path("r.yaml"));
       ASSERT_EQ(id.exit_code, 0) << id.output;
-      const RunResult next = RunCablecal(args + " --prior " + Path("r.yaml") + " --out " + Path("next.csv") +
-                                         " --summary " + Path("next.yaml"));
+      // One start, no random sets, no robustness: the prior's path through the CLI is under test.
+      const RunResult next = RunCablecal("design --robot " + robot + " --poses " + std::to_string(n) +
+                                         " --starts 1 --random-sets 0 --geometry-sigma 0 --prior " + Path("r.yaml") +
+                                         " --out " + Path("next.csv") + " --summary " + Path("next.yaml"));
       ASSERT_EQ(next.exit_code, 0) << next.output;
       EXPECT_NE(next.output.find("verified, counting the prior's information): "), std::string::npos) << next.output;
       // What to identify with for the predicted covariance, when the gauge holds anything.
