@@ -85,7 +85,17 @@ int RunSpatialIdentify(const Context& ctx, const IdentifyCommandOptions& options
           : ReadSpatialMeasurementsCsv(options.holdout_path, nominal.num_cables(), ParseDelimiter(options.delimiter));
   CheckSpatialReadingsPlausible(nominal, readings, options.measurements_path);
   CheckSpatialReadingsPlausible(nominal, holdout, options.holdout_path);
-  const SpatialIdentifyResult result = IdentifySpatial(nominal, readings, id);
+  // What the readings as a whole cannot do (too few values, a pose they do not determine, a
+  // direction nothing fixes) is named by their file, as the other refusals of the data are.
+  const SpatialIdentifyResult result = [&] {
+    try {
+      return IdentifySpatial(nominal, readings, id);
+    } catch (const InputError& e) {
+      if (e.where() != "readings") throw;
+      const std::string prefix = "readings: " + (e.key().empty() ? std::string() : e.key() + ": ");
+      throw InputError(options.measurements_path, e.key(), std::string(e.what()).substr(prefix.size()));
+    }
+  }();
   if (result.status == SpatialIdentifyStatus::kRankDeficient || result.status == SpatialIdentifyStatus::kPoorFit) {
     // The data cannot calibrate it, or do not fit it (poor_fit): bad input, as planar.
     throw InputError(options.measurements_path, "", result.message);

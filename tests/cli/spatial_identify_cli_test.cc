@@ -311,6 +311,8 @@ TEST_F(SpatialIdentifyCli, HostileInputsExitTwoWithOneMessageAndWriteNothing) {
       {"--measurements " + Path("misspelt.csv"), "dx1"},
       {"--measurements " + Path("m.csv") + " --gauge hold:a8x", "'a8x' is not an exit coordinate of this 7-cable robot"},
       {"--measurements " + Path("tilt.csv") + " --gauge hold:a1x", "does not fix the gauge: no reading fixes"},
+      // What the readings as a whole cannot do is named by their file.
+      {"--measurements " + Path("enc.csv"), Path("enc.csv") + ": "},
       {"--measurements " + Path("enc.csv"), "too few to determine the geometry; measure more poses or add a sensor"},
       {"--measurements " + Path("m.csv") + " --estimator paper", "--estimator paper: serves planar robots only"},
       {"--measurements " + Path("m.csv") + " --geometry-prior 0.001", "--geometry-prior: serves planar robots only"},
