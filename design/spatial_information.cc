@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "common/csv.h"  // JoinCsv
 #include "common/error.h"
 #include "common/random.h"
 #include "experiment/spatial_simulation.h"
@@ -377,19 +378,17 @@ void HoldAsThePrior(SpatialInformationLayout* layout, const std::vector<std::str
   if (held.empty()) return;
   SpatialInformationLayout& L = *layout;
   std::vector<int> rows;
-  std::string list;
   for (const std::string& h : held) {
     const auto it = std::find(L.names.begin(), L.names.end(), h);
     if (it == L.names.end()) throw InputError(path, "held", "'" + h + "' is not an unknown of this design");
     rows.push_back(static_cast<int>(it - L.names.begin()));
-    list += (list.empty() ? "" : ",") + h;
   }
   std::sort(rows.begin(), rows.end());
   const MatrixXd null = L.gauge_directions.leftCols(L.null_directions);
   const int pinned = Pinned(null, rows);
   if (pinned < L.null_directions) {
     throw InputError(path, "held",
-                     "holds " + list + ", which leaves " + std::to_string(L.null_directions - pinned) + " of the " +
+                     "holds " + JoinCsv(held) + ", which leaves " + std::to_string(L.null_directions - pinned) + " of the " +
                          std::to_string(L.null_directions) +
                          " directions no reading of this robot file's sensors sees free: identify with the robot "
                          "file's sensors and --gauge auto (or a hold: that fixes them)");
@@ -405,28 +404,19 @@ void HoldAsThePrior(SpatialInformationLayout* layout, const std::vector<std::str
 Eigen::MatrixXd SpatialPriorInformation(const SpatialInformationLayout& layout, const std::vector<std::string>& names,
                                         const std::vector<std::string>& held, const Eigen::MatrixXd& covariance,
                                         const std::string& path) {
-  const auto list = [](const std::vector<std::string>& v) {
-    std::string out;
-    for (const std::string& x : v) out += (out.empty() ? "" : ",") + x;
-    return out;
-  };
   if (names != layout.names) {
     throw InputError(path, "parameters",
-                     "estimates " + list(names) + ", but a design for this robot file's sensors estimates " +
-                         list(layout.names) +
+                     "estimates " + JoinCsv(names) + ", but a design for this robot file's sensors estimates " +
+                         JoinCsv(layout.names) +
                          ": identify from readings of every sensor the robot file has (swivel offsets come with swivel "
                          "readings, yaw0 with heading readings) and the exits, not --identify anchors");
   }
-  std::vector<std::string> design_held;
-  for (const int h : layout.held) design_held.push_back(layout.names[h]);
+  // HoldAsThePrior made the design hold what the result held (a result that held nothing keeps
+  // the design's own gauge): the information below is of the design's free unknowns.
   for (const std::string& h : held) {
-    if (std::find(design_held.begin(), design_held.end(), h) == design_held.end()) {
-      throw InputError(path, "held",
-                       "holds " + h + ", which this design estimates (its gauge holds " +
-                           (design_held.empty() ? std::string("nothing") : list(design_held)) +
-                           "): identify the same readings with --gauge " +
-                           (design_held.empty() ? std::string("prior") : "hold:" + list(design_held)));
-    }
+    CABLECAL_CHECK(std::count(layout.held.begin(), layout.held.end(),
+                              static_cast<int>(std::find(names.begin(), names.end(), h) - names.begin())) == 1,
+                   "the design holds what the prior held (HoldAsThePrior first)");
   }
   const int p = static_cast<int>(names.size());
   CABLECAL_CHECK(covariance.rows() == p && covariance.cols() == p, "a covariance by the result's names");

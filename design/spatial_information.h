@@ -78,10 +78,10 @@ void HoldAsThePrior(SpatialInformationLayout* layout, const std::vector<std::str
 // Calibrating in rounds (design --prior): the information an earlier identification's result
 // (ReadSpatialIdentifiedGeometry) gives about `layout`'s free unknowns, given its held ones: the
 // inverse of the result's covariance over the coordinates it did not hold, restricted to
-// layout.free (the information of the free unknowns with the held ones known). InputError
-// naming `path` and the key when the result estimates other unknowns (another sensor set) or
-// holds a coordinate the design estimates (another gauge: the message names the design's), or
-// its covariance is not positive definite.
+// layout.free (the information of the free unknowns with the held ones known); the layout must
+// hold what the result held (HoldAsThePrior first). InputError naming `path` and the key when
+// the result estimates other unknowns (another sensor set) or its covariance is not positive
+// definite.
 Eigen::MatrixXd SpatialPriorInformation(const SpatialInformationLayout& layout, const std::vector<std::string>& names,
                                         const std::vector<std::string>& held, const Eigen::MatrixXd& covariance,
                                         const std::string& path);

@@ -38,20 +38,10 @@ bool Noisy(NoisySensors noisy, SpatialSensor s) {
   return true;
 }
 
-}  // namespace
-
-Eigen::VectorXd TrueEncoderZero(const SpatialRobot& nominal, const SpatialRobot& truth) {
-  Eigen::VectorXd zero = SpatialHome(nominal).paid_out_m;
-  for (int i = 0; i < truth.num_cables(); ++i) {
-    if (!truth.cables[i].initial_length_m) return SpatialHome(nominal).paid_out_m;
-    zero(i) = *truth.cables[i].initial_length_m;
-  }
-  return zero;
-}
-
-SpatialPose<double> TrueHome(const SpatialRobot& nominal, const SpatialRobot& truth) {
-  const SpatialHomeReference home = SpatialHome(nominal);
-  const SpatialForwardResult fwd = SolveForwardStatics(truth, TrueEncoderZero(nominal, truth), &home.equilibrium.q);
+// Where `truth` settles with `zero_paid_out_m` paid out, from the nominal home: the sensors' zero.
+SpatialPose<double> SettledHome(const SpatialRobot& truth, const SpatialHomeReference& home,
+                                const Eigen::VectorXd& zero_paid_out_m) {
+  const SpatialForwardResult fwd = SolveForwardStatics(truth, zero_paid_out_m, &home.equilibrium.q);
   if (fwd.status != ForwardStatus::kConverged) {
     throw SolverFailure("the true robot cannot hold the home pose's commanded lengths (" +
                         CannotHoldReason(fwd.status, "home") + "): its sensors have no zero");
@@ -59,13 +49,30 @@ SpatialPose<double> TrueHome(const SpatialRobot& nominal, const SpatialRobot& tr
   return fwd.equilibrium.q;
 }
 
+}  // namespace
+
+Eigen::VectorXd TrueEncoderZero(const SpatialRobot& truth, const Eigen::VectorXd& nominal_home_paid_out_m) {
+  Eigen::VectorXd zero(truth.num_cables());
+  for (int i = 0; i < truth.num_cables(); ++i) {
+    if (!truth.cables[i].initial_length_m) return nominal_home_paid_out_m;
+    zero(i) = *truth.cables[i].initial_length_m;
+  }
+  return zero;
+}
+
+SpatialPose<double> TrueHome(const SpatialRobot& nominal, const SpatialRobot& truth) {
+  const SpatialHomeReference home = SpatialHome(nominal);
+  return SettledHome(truth, home, TrueEncoderZero(truth, home.paid_out_m));
+}
+
 SimulatedSpatialExperiment SimulateSpatialExperiment(const SpatialRobot& nominal, const SpatialRobot& truth,
                                                      const std::vector<SpatialPlanPose>& plan,
                                                      const SpatialSimulationOptions& options, Rng& rng) {
   const int m = nominal.num_cables();
   SimulatedSpatialExperiment out;
-  out.true_home = TrueHome(nominal, truth);
-  const Eigen::VectorXd zero_paid_out = TrueEncoderZero(nominal, truth);
+  const SpatialHomeReference home = SpatialHome(nominal);
+  const Eigen::VectorXd zero_paid_out = TrueEncoderZero(truth, home.paid_out_m);
+  out.true_home = SettledHome(truth, home, zero_paid_out);
   const SpatialSensorZero zero = SensorZeroAt(truth, out.true_home);
   for (std::size_t j = 0; j < plan.size(); ++j) {
     const SpatialPlanPose& p = plan[j];
@@ -183,7 +190,7 @@ SpatialPlanSimulation SimulateSpatialPlan(const SpatialRobot& nominal, const std
   // The true robot's encoders read zero where TrueEncoderZero was paid out: its initial
   // lengths, so that the truth file predicts its own readings (validate --robot) and the next
   // round's simulation keeps the same zero.
-  const Eigen::VectorXd zero = TrueEncoderZero(nominal, run.truth);
+  const Eigen::VectorXd zero = TrueEncoderZero(run.truth, SpatialHome(nominal).paid_out_m);
   for (int i = 0; i < run.truth.num_cables(); ++i) run.truth.cables[i].initial_length_m = zero(i);
   return run;
 }

@@ -62,8 +62,9 @@ struct SimulatedSpatialExperiment {
 // What the true robot's winches have paid out where its encoders read zero: the truth's own
 // initial lengths when its file gives every cable's (a truth file written by simulate
 // --truth-out: the physical zero, kept from one round of a calibration to the next, whatever
-// robot file the controller then commands from), else the nominal home's paid-out lengths.
-Eigen::VectorXd TrueEncoderZero(const SpatialRobot& nominal, const SpatialRobot& truth);
+// robot file the controller then commands from), else the nominal home's paid-out lengths
+// (SpatialHome(nominal).paid_out_m).
+Eigen::VectorXd TrueEncoderZero(const SpatialRobot& truth, const Eigen::VectorXd& nominal_home_paid_out_m);
 // Where the true robot settles with TrueEncoderZero paid out: the sensors' zero. SolverFailure
 // when it cannot hold it.
 SpatialPose<double> TrueHome(const SpatialRobot& nominal, const SpatialRobot& truth);

@@ -31,6 +31,7 @@
 
 namespace YAML {
 class Emitter;
+class Node;
 }
 
 namespace cablecal {
@@ -280,6 +281,10 @@ struct IdentifiedGeometry {
   Eigen::MatrixXd covariance;  // (3m - 1) x (3m - 1); its definiteness is left to the caller
 };
 IdentifiedGeometry ReadIdentifiedGeometry(const Robot& nominal, const std::string& result_yaml_path);
+// A result.yaml (planar or spatial) read back, with its status and parameters: InputError naming
+// the file for a folder, a file that cannot be read, text that is not YAML or not a result.
+// What ReadIdentifiedGeometry and ReadSpatialIdentifiedGeometry then check is their own.
+YAML::Node LoadIdentifyResultYaml(const std::string& result_yaml_path);
 // The same content as one line of JSON (identify --json; common/json.h's conventions), the
 // per-pose and per-reading tables written directly rather than parsed back from the YAML.
 std::string IdentifyResultJson(const IdentifyResult& result, const std::string& command_line);

@@ -267,7 +267,7 @@ std::string IdentifyResultJson(const IdentifyResult& r, const std::string& comma
   return MergeJsonObjects(objects);
 }
 
-IdentifiedGeometry ReadIdentifiedGeometry(const Robot& nominal, const std::string& path) {
+YAML::Node LoadIdentifyResultYaml(const std::string& path) {
   YAML::Node root;
   try {
     std::error_code ec;
@@ -285,6 +285,11 @@ IdentifiedGeometry ReadIdentifiedGeometry(const Robot& nominal, const std::strin
   if (!root.IsMap() || !root["status"] || !root["parameters"]) {
     throw InputError(path, "", "not an identification result (cablecal identify --out): no status or parameters");
   }
+  return root;
+}
+
+IdentifiedGeometry ReadIdentifiedGeometry(const Robot& nominal, const std::string& path) {
+  YAML::Node root = LoadIdentifyResultYaml(path);  // not const: a missing key reads as a null node
   if (root["status"].as<std::string>("") != "converged") {
     throw InputError(path, "status", "the identification did not converge: it cannot be a prior");
   }

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
 #include <yaml-cpp/yaml.h>
 
 #include "common/error.h"
@@ -294,23 +293,7 @@ SpatialRobot CalibratedSpatialRobot(const SpatialRobot& nominal, const SpatialId
 }
 
 SpatialIdentifiedGeometry ReadSpatialIdentifiedGeometry(const SpatialRobot& nominal, const std::string& path) {
-  YAML::Node root;
-  try {
-    std::error_code ec;
-    if (std::filesystem::is_directory(path, ec)) {
-      throw InputError(path, "", "is a folder, not an identification result (cablecal identify --out)");
-    }
-    root = YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
-    throw InputError(path, "", "cannot open the file");
-  } catch (const YAML::Exception& e) {
-    throw InputError(path, "", std::string("not valid YAML: ") + e.what());
-  } catch (const std::ios_base::failure& e) {  // a device, a file that cannot be read
-    throw InputError(path, "", std::string("cannot read the file: ") + e.what());
-  }
-  if (!root.IsMap() || !root["status"] || !root["parameters"]) {
-    throw InputError(path, "", "not an identification result (cablecal identify --out): no status or parameters");
-  }
+  YAML::Node root = LoadIdentifyResultYaml(path);  // not const: a missing key reads as a null node
   const YAML::Node of = root["robot"];
   if (!of.IsMap() || of["kind"].as<std::string>("") != "spatial") {
     throw InputError(path, "robot", "not the result of a spatial robot's identification");

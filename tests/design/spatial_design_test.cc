@@ -25,19 +25,36 @@ namespace {
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
-// The identification's predicted covariance at noise-free readings of `plan` on the nominal
-// robot itself: the estimate is the nominal geometry, so its covariance is the inverse of the
-// information at the same poses, independently computed (Ceres' residual blocks there).
-MatrixXd IdentificationCovariance(const SpatialRobot& robot, const std::vector<SpatialPlanPose>& plan,
-                                  std::vector<std::string>* held, SpatialRobot* at,
-                                  std::vector<SpatialPlanPose>* estimated) {
+// Readings without noise: what the identification itself leaves is under test.
+SpatialSimulationOptions NoiseFree() {
   SpatialSimulationOptions quiet;
   quiet.noisy = NoisySensors::kNone;
   quiet.encoder_noise = false;
+  return quiet;
+}
+
+// cogiro with an inclinometer and a laser instead of its position sensor: three null directions
+// (the translations along x and y, the turn about z), held by the gauge.
+SpatialRobot CogiroWithInclinometerAndLaser() {
+  SpatialRobot robot = BuiltinSpatialRobot("cogiro");
+  robot.sensors.position.reset();
+  robot.sensors.inclinometer_rad = RangedNoise{0.002, 0.001};
+  robot.sensors.laser_m = RangedNoise{0.003, 0.001};
+  return robot;
+}
+
+// The identification's predicted covariance at noise-free readings of `plan` on the nominal
+// robot itself: the estimate is the nominal geometry, so its covariance is the inverse of the
+// information at the same poses, independently computed (Ceres' residual blocks there). The
+// whole result too, if `result` is given.
+MatrixXd IdentificationCovariance(const SpatialRobot& robot, const std::vector<SpatialPlanPose>& plan,
+                                  std::vector<std::string>* held, SpatialRobot* at,
+                                  std::vector<SpatialPlanPose>* estimated, SpatialIdentifyResult* result = nullptr) {
   Rng rng(3);
-  const SimulatedSpatialExperiment sim = SimulateSpatialExperiment(robot, robot, plan, quiet, rng);
+  const SimulatedSpatialExperiment sim = SimulateSpatialExperiment(robot, robot, plan, NoiseFree(), rng);
   const SpatialIdentifyResult r = IdentifySpatial(robot, sim.measurements, SpatialIdentifyOptions{});
   EXPECT_TRUE(r.converged()) << r.message << " after " << r.iterations << " iterations, cost " << r.final_cost;
+  if (result) *result = r;
   *held = r.held;
   // The estimate is the nominal geometry and poses to the solver's tolerance only: the
   // information is compared where the covariance was computed, at the estimated exits, poses
@@ -116,23 +133,15 @@ TEST(SpatialInformation, InverseIsTheIdentificationsCovarianceOnRandomRobots) {
 // those of S(new poses) + that information, better than the new poses' alone and than the
 // first round's alone.
 TEST(SpatialDesign, PriorIsTheFirstRoundsInformationAndTheSecondRoundCountsIt) {
-  SpatialRobot robot = BuiltinSpatialRobot("cogiro");
-  robot.sensors.position.reset();
-  robot.sensors.inclinometer_rad = RangedNoise{0.002, 0.001};
-  robot.sensors.laser_m = RangedNoise{0.003, 0.001};
+  const SpatialRobot robot = CogiroWithInclinometerAndLaser();
   const std::vector<SpatialPlanPose> first = SampleSpatialPoses(robot, 12, 31);
   std::vector<std::string> held;
   SpatialRobot at;
   std::vector<SpatialPlanPose> estimated;
-  IdentificationCovariance(robot, first, &held, &at, &estimated);
-  // The first round's result.yaml, as identify writes it.
-  SpatialSimulationOptions quiet;
-  quiet.noisy = NoisySensors::kNone;
-  quiet.encoder_noise = false;
-  Rng rng(3);
-  const SimulatedSpatialExperiment sim = SimulateSpatialExperiment(robot, robot, first, quiet, rng);
-  const SpatialIdentifyResult r = IdentifySpatial(robot, sim.measurements, SpatialIdentifyOptions{});
+  SpatialIdentifyResult r;
+  IdentificationCovariance(robot, first, &held, &at, &estimated, &r);
   ASSERT_TRUE(r.converged()) << r.message;
+  // The first round's result.yaml, as identify writes it.
   const std::string path = ::testing::TempDir() + "cablecal_spatial_prior_result.yaml";
   {
     std::ofstream out(path);
@@ -187,13 +196,8 @@ TEST(SpatialDesign, PriorIsTheFirstRoundsInformationAndTheSecondRoundCountsIt) {
 // zero, the second round's encoders were zeroed at the calibrated home lengths, and the joint
 // fit was refused (a new user: 6.8 sigma with noise-free readings).
 TEST(SpatialDesign, TwoSimulatedRoundsAreOneExperiment) {
-  SpatialRobot robot = BuiltinSpatialRobot("cogiro");
-  robot.sensors.position.reset();
-  robot.sensors.inclinometer_rad = RangedNoise{0.002, 0.001};
-  robot.sensors.laser_m = RangedNoise{0.003, 0.001};
-  SpatialSimulationOptions quiet;
-  quiet.noisy = NoisySensors::kNone;
-  quiet.encoder_noise = false;
+  const SpatialRobot robot = CogiroWithInclinometerAndLaser();
+  SpatialSimulationOptions quiet = NoiseFree();
   quiet.skip_infeasible = true;  // a pose near the tension bounds may not hold on the true robot
   const SpatialPlanSimulation first =
       SimulateSpatialPlan(robot, std::nullopt, 0.0005, SampleSpatialPoses(robot, 14, 41), quiet, 8, "first");
@@ -221,16 +225,10 @@ TEST(SpatialDesign, TwoSimulatedRoundsAreOneExperiment) {
 
 // What a prior cannot be, each an InputError naming the file and key.
 TEST(SpatialDesign, PriorsThatCannotBeAreRefusedNamingTheKey) {
-  SpatialRobot robot = BuiltinSpatialRobot("cogiro");
-  robot.sensors.position.reset();
-  robot.sensors.inclinometer_rad = RangedNoise{0.002, 0.001};
-  robot.sensors.laser_m = RangedNoise{0.003, 0.001};
+  const SpatialRobot robot = CogiroWithInclinometerAndLaser();
   const std::vector<SpatialPlanPose> plan = SampleSpatialPoses(robot, 20, 31);
-  SpatialSimulationOptions quiet;
-  quiet.noisy = NoisySensors::kNone;
-  quiet.encoder_noise = false;
   Rng rng(3);
-  const SimulatedSpatialExperiment sim = SimulateSpatialExperiment(robot, robot, plan, quiet, rng);
+  const SimulatedSpatialExperiment sim = SimulateSpatialExperiment(robot, robot, plan, NoiseFree(), rng);
   const std::string path = ::testing::TempDir() + "cablecal_spatial_bad_prior.yaml";
   const auto refusal = [&](const SpatialRobot& nominal, const SpatialIdentifyOptions& id, const SpatialRobot& designed) {
     const SpatialIdentifyResult r = IdentifySpatial(nominal, sim.measurements, id);
@@ -445,9 +443,7 @@ TEST(SpatialDesign, RandomRobotHoldsAndBeatsRandom) {
 // shows this test can fail.
 int TrueRobotsThatCannotHoldThePlan(const SpatialRobot& robot, const std::vector<SpatialPlanPose>& plan,
                                     double sigma_m, int draws, std::string* first) {
-  SpatialSimulationOptions quiet;
-  quiet.noisy = NoisySensors::kNone;
-  quiet.encoder_noise = false;
+  const SpatialSimulationOptions quiet = NoiseFree();
   Rng rng(StreamSeed(2811, {}));
   int failed = 0;
   for (int d = 0; d < draws; ++d) {
