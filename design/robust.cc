@@ -44,11 +44,12 @@ std::vector<PoseQuantity> PoseQuantities(const Robot& robot) {
 
 namespace {
 
-// `flatten` inlines the Jet arithmetic into each instance of RobustQuantitiesM: with seven
-// instances in this file GCC's inliner otherwise runs out of its unit-growth budget and calls
-// it out of line, which made M = 2 a third slower. Not under AddressSanitizer: instrumented,
-// the seven flattened instances took over 17 minutes to compile (2 without flatten), and that
-// build is for correctness, not speed.
+// `flatten` inlines the Jet arithmetic into RobustQuantitiesM<2>, the paper's robot's (its
+// robust design runs it millions of times): with the seven instances in this file GCC's
+// inliner otherwise runs out of its unit-growth budget and calls it out of line, which made
+// M = 2 a third slower. Only M = 2: flattening all seven took 114 s of this file's 2-core build
+// (bench/README.md, "Build and CI time"), and under AddressSanitizer over 17 minutes, so not
+// there at all (that build is for correctness, not speed).
 #if defined(CABLECAL_ADDRESS_SANITIZER)
 #define CABLECAL_FLATTEN
 #else
@@ -58,7 +59,7 @@ namespace {
 // RobustQuantities for M cables: Jets sized at compile time for (y, g), 3 + M + 3M entries
 // (M = 2: 11, as before the cable count became general).
 template <int M>
-CABLECAL_FLATTEN bool RobustQuantitiesM(const Robot& robot, const std::vector<Eigen::Vector2d>& points, const Eigen::VectorXd& y_in,
+bool RobustQuantitiesM(const Robot& robot, const std::vector<Eigen::Vector2d>& points, const Eigen::VectorXd& y_in,
                        PoseRobustness* out, bool with_derivatives) {
   constexpr int kPose = PlanarKind::kPoseDim, kWrench = PlanarKind::kWrenchDim;
   constexpr int P = kPose + M;  // pose variables x, z, theta, t1..tM
@@ -144,12 +145,18 @@ CABLECAL_FLATTEN bool RobustQuantitiesM(const Robot& robot, const std::vector<Ei
   return true;
 }
 
+CABLECAL_FLATTEN bool RobustQuantitiesTwoCables(const Robot& robot, const std::vector<Eigen::Vector2d>& points,
+                                                const Eigen::VectorXd& y, PoseRobustness* out, bool with_derivatives) {
+  return RobustQuantitiesM<2>(robot, points, y, out, with_derivatives);
+}
+
 }  // namespace
 
 bool RobustQuantities(const Robot& robot, const std::vector<Eigen::Vector2d>& points, const Eigen::VectorXd& y,
                       PoseRobustness* out, bool with_derivatives) {
   const int m = robot.num_cables();
   CABLECAL_CHECK(y.size() == PoseVariables(m), "y holds x, z, theta and one tension per cable");
+  if (m == 2) return RobustQuantitiesTwoCables(robot, points, y, out, with_derivatives);
   return WithCableCount(m, [&](auto cables) {
     return RobustQuantitiesM<decltype(cables)::value>(robot, points, y, out, with_derivatives);
   });
