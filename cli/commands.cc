@@ -27,6 +27,7 @@
 #include "common/yaml_writer.h"
 #include "common/version.h"
 #include "design/design.h"
+#include "design/robustness_search.h"
 #include "identify/calibration_report.h"
 #include "experiment/experiment.h"
 #include "identify/identify.h"
@@ -775,8 +776,7 @@ int RunDesign(const Context& ctx, const DesignCommandOptions& options) {
     std::printf("robustness lowered: %s\n", result.robustness_note.c_str());
   } else if (result.robust_sigmas_achieved > 0.0) {
     // Said also when reached in full: a lab reads what the plan holds for on the console.
-    std::printf("robustness: the plan holds for true geometries within %g x %g m of nominal\n",
-                result.robust_sigmas_achieved, design.geometry_sigma_m);
+    std::printf("robustness: %s\n", RobustnessHoldsText(result.robust_sigmas_achieved, design.geometry_sigma_m).c_str());
   }
   if (!figure_error.empty()) {
     throw FigureFailure(figure_error + "; " + options.out_path +

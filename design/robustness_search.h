@@ -34,16 +34,20 @@ struct RobustnessSearch {
   bool lowered() const { return achieved_k < requested_k; }
 };
 
+// What a plan designed at robustness k holds for: "the plan holds for true geometries within
+// 1.4 x 0.01 m of nominal" (k > 0), or "... for the nominal geometry only (no robustness)".
+inline std::string RobustnessHoldsText(double k, double geometry_sigma_m) {
+  return k > 0.0 ? "the plan holds for true geometries within " + FormatDouble(k) + " x " +
+                       FormatDouble(geometry_sigma_m) + " m of nominal"
+                 : "the plan holds for the nominal geometry only (no robustness)";
+}
+
 // The sentence every output gives when the robustness was lowered: "the plan holds for true
 // geometries within 1.4 x 0.01 m of nominal, not the requested 3 x (the largest k with verified
 // poses, to 0.05; at 1.45 x none)".
 inline std::string LoweredRobustnessText(const RobustnessSearch& s, double geometry_sigma_m) {
   const std::string sigma = FormatDouble(geometry_sigma_m) + " m";
-  const std::string holds = s.achieved_k > 0.0
-                                ? "the plan holds for true geometries within " + FormatDouble(s.achieved_k) + " x " + sigma +
-                                      " of nominal"
-                                : "the plan holds for the nominal geometry only (no robustness)";
-  return holds + ", not the requested " + FormatDouble(s.requested_k) + " x " + sigma +
+  return RobustnessHoldsText(s.achieved_k, geometry_sigma_m) + ", not the requested " + FormatDouble(s.requested_k) + " x " + sigma +
          ": no verified poses at " + FormatDouble(s.failed_k) + " x (the largest robustness with verified poses, "
          "searched in steps of " + FormatDouble(1.0 / kRobustnessStepsPerUnit) + ")";
 }
