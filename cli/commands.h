@@ -141,6 +141,7 @@ struct MonteCarloCommandOptions {
   bool plot = true;
   bool geometry_prior = false;  // --geometry-prior: identify every trial with geometry_sigma_m as a prior
   bool skip_infeasible = false;  // spatial robots: each trial skips the poses its true robot cannot hold
+  bool exact_platform = false;   // spatial robots: SpatialMonteCarloOptions::exact_platform
   double tension_margin_N = 0.0;  // spatial robots: SpatialMonteCarloOptions::plan_tension_margin_N
   double frame_margin_m = 0.0;    // spatial robots: SpatialMonteCarloOptions::plan_margin_m
   double tilt_margin_deg = 0.0;   // spatial robots: SpatialMonteCarloOptions::plan_tilt_margin_rad, in degrees

@@ -312,6 +312,9 @@ int main(int argc, char** argv) {
   mc_cmd->add_flag("--skip-infeasible", mc.skip_infeasible,
                     "spatial robots: each trial skips the poses its true robot cannot hold within its limits (as simulate "
                     "--skip-infeasible) and identifies from the rest, instead of failing");
+  mc_cmd->add_flag("--exact-platform", mc.exact_platform,
+                    "spatial robots: every trial's true platform has the robot file's mass and centre of mass, instead "
+                    "of values drawn from platform.mass_sigma and platform.com_sigma (defaults 1 % and 5 mm)");
   mc_cmd->add_option("--tension-margin", mc.tension_margin_N,
                      "spatial robots: N; plan every pose set with the tension bounds narrowed by this, so the true robot's "
                      "tensions keep room (its limits stay the file's)")

@@ -42,6 +42,7 @@ struct StudiedRobot {
   bool skip_infeasible = false;
   double tension_margin_N = 0.0, frame_margin_m = 0.0, tilt_margin_deg = 0.0;
   int random_pool = 0;
+  bool exact_platform = false;
   bool statics = true;
   std::vector<std::string> sensors;  // the readings the trials take (spatial), encoders first
 };
@@ -56,7 +57,7 @@ StudiedRobot PlanarStudied(const Robot& robot) {
 StudiedRobot Studied(const SpatialRobot& robot, const SpatialMonteCarloOptions& o) {
   StudiedRobot s{robot.name,         robot.source,   true,
                  o.skip_infeasible,  o.plan_tension_margin_N, o.plan_margin_m,
-                 o.plan_tilt_margin_rad * 180.0 / M_PI, o.random_pool, o.statics, {}};
+                 o.plan_tilt_margin_rad * 180.0 / M_PI, o.random_pool, o.exact_platform, o.statics, {}};
   s.sensors = SpatialSensorNames(robot.sensors);
   return s;
 }
@@ -108,6 +109,9 @@ std::string RunYaml(const StudiedRobot& robot, const MonteCarloOptions& o, const
       for (const TrialOutcome& t : c.trials) skipped += t.skipped_poses;
     }
     y << Key << "skip_infeasible" << Value << robot.skip_infeasible;
+    y << Key << "true_platform" << Value << (robot.exact_platform ? "exact" : "drawn")
+      << YAML::Comment(robot.exact_platform ? "the robot file's mass and centre of mass"
+                                            : "mass and centre of mass drawn from platform.mass_sigma, com_sigma");
     y << Key << "skipped_poses" << Value << skipped << YAML::Comment("over every trial");
     y << Key << "readings" << Value << YAML::Flow << YAML::BeginSeq;
     for (const std::string& s : robot.sensors) y << s;
@@ -208,6 +212,7 @@ int RunSpatialMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptio
   o.study.seed = options.seed;
   o.study.design_starts = options.design_starts;
   o.skip_infeasible = options.skip_infeasible;
+  o.exact_platform = options.exact_platform;
   o.plan_tension_margin_N = options.tension_margin_N;
   o.plan_margin_m = options.frame_margin_m;
   o.plan_tilt_margin_rad = options.tilt_margin_deg * M_PI / 180.0;
@@ -252,6 +257,7 @@ int RunSpatialMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptio
 int RunMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptions& options) {
   if (IsSpatialRobotFile(options.robot_path)) return RunSpatialMonteCarloCommand(ctx, options);
   RefuseSpatialOnlyFlag(options.skip_infeasible, "--skip-infeasible");
+  RefuseSpatialOnlyFlag(options.exact_platform, "--exact-platform");
   RefuseSpatialOnlyFlag(options.tension_margin_N != 0.0, "--tension-margin");
   RefuseSpatialOnlyFlag(options.frame_margin_m != 0.0, "--frame-margin");
   RefuseSpatialOnlyFlag(options.tilt_margin_deg != 0.0, "--tilt-margin-deg");

@@ -30,15 +30,16 @@ void RefusePlanarOnlyFlag(bool given, const std::string& flag, const std::string
 }
 
 // The console's value of a geometry unknown: metres to 0.1 um with the std in mm, radians
-// with the std in mrad.
+// with the std in mrad, the mass in kg with its std in g.
 void PrintParameter(const SpatialIdentifyResult& r, int k) {
   const std::string& name = r.names[k];
-  const bool angle = std::string(SpatialGeometryUnit(name)) == "rad";
-  std::printf("  %s = %.7f %s", name.c_str(), r.geometry(k), angle ? "rad" : "m");
+  const std::string unit = SpatialGeometryUnit(name);
+  const char* std_unit = unit == "rad" ? "mrad" : unit == "kg" ? "g" : "mm";
+  std::printf("  %s = %.7f %s", name.c_str(), r.geometry(k), unit.c_str());
   if (std::find(r.held.begin(), r.held.end(), name) != r.held.end()) {
     std::printf("  (held: the gauge)");
   } else if (r.sigma.size() == r.geometry.size()) {
-    std::printf("  (std %.3g %s)", 1e3 * r.sigma(k), angle ? "mrad" : "mm");
+    std::printf("  (std %.3g %s)", 1e3 * r.sigma(k), std_unit);
   }
   std::printf("\n");
 }

@@ -768,7 +768,8 @@ std::string SpatialRobustnessText(const SpatialRobot& robot, const SpatialDesign
 
 int MinSpatialDesignPoses(const SpatialRobot& robot, const SpatialInformationLayout& layout) {
   const int net = SpatialValuesPerPose(robot, layout) - layout.local();
-  const int unknowns = static_cast<int>(layout.free.size());
+  // The platform's unknowns have their prior's 4 values (the identification counts them so).
+  const int unknowns = layout.information_size();
   return net > 0 ? (unknowns + net - 1) / net : std::numeric_limits<int>::max();
 }
 
@@ -822,7 +823,7 @@ SpatialDesignResult DesignSpatialPoses(const SpatialRobot& robot, const SpatialD
   const int n_min = MinSpatialDesignPoses(robot, layout);
   if (n < n_min) {
     throw InputError("--poses", "", "at least " + std::to_string(n_min) + " poses are needed to identify the " +
-                                        std::to_string(layout.free.size()) +
+                                        std::to_string(layout.information_size()) +
                                         " gauge-fixed geometric unknowns with these sensors (got " + std::to_string(n) +
                                         ")");
   }
@@ -937,7 +938,7 @@ SpatialDesignResult DesignSpatialPoses(const SpatialRobot& robot, const SpatialD
       a.push_back(v.a_trace_covariance_m2);
       e.push_back(v.e_min_eigenvalue);
     }
-    result.random_median = {Median(c), Median(d), Median(a), Median(e), static_cast<int>(layout.free.size())};
+    result.random_median = {Median(c), Median(d), Median(a), Median(e), layout.information_size()};
   }
   result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return result;
@@ -958,11 +959,12 @@ std::string SpatialDesignSummaryYaml(const SpatialRobot& robot, const SpatialDes
       << YamlNumber{v.e_min_eigenvalue} << EndMap;
   };
   std::string free_names;
-  for (int c : r.layout.free) free_names += (free_names.empty() ? "" : " ") + r.layout.names[c];
+  for (int c : r.layout.information_unknowns()) free_names += (free_names.empty() ? "" : " ") + r.layout.names[c];
   o << YAML::Comment(
            "cablecal design summary, spatial robot (README, \"Spatial robots\"). Criteria of the returned set are\n"
            "recomputed from its verified poses. S: information of the gauge-fixed geometry (1/m^2, 1/rad^2 for\n"
-           "offsets), the unknowns under `free`; the gauge holds the exit coordinates under `held`.")
+           "offsets), the unknowns under `free`; the gauge holds the exit coordinates under `held`; the platform's\n"
+           "mass and centre of mass, unknowns with their priors when the statics are modelled, are eliminated.")
     << BeginMap;
   o << Key << "cablecal" << Value << Flow << BeginMap << Key << "version" << Value << YamlString{Version()} << Key
     << "commit" << Value << YamlString{GitCommit()} << EndMap;

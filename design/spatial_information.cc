@@ -10,7 +10,6 @@
 #include "common/error.h"
 #include "common/random.h"
 #include "experiment/spatial_simulation.h"
-#include "identify/identify.h"  // kDefaultComSigma_m
 #include "identify/nested_jet.h"
 #include "identify/spatial_identify.h"
 #include "model/spatial_sensor_model.h"
@@ -80,14 +79,14 @@ bool CableModel(const SpatialCable& c, bool elastic, const Vector3d& u_F_referen
   return true;
 }
 
-// The pose's own rows from z = (x, y, z, roll, pitch, yaw, yaw0): out = (gravity wrench (6),
-// roll, pitch, laser, px, py, pz, heading), unwhitened.
-constexpr int kPoseZ = 7, kPoseX = 6, kPoseOut = 13;
+// The pose's own rows from z = (x, y, z, roll, pitch, yaw, yaw0, mass, cx, cy, cz): out =
+// (gravity wrench (6), roll, pitch, laser, px, py, pz, heading), unwhitened.
+constexpr int kPoseZ = 11, kPoseX = 6, kPoseOut = 13;
 template <typename T>
 bool PoseModel(const SpatialRobot& robot, const T* z, T* out) {
   SpatialPose<T> q;
   for (int a = 0; a < 6; ++a) q(a) = z[a];
-  const Eigen::Matrix<T, 6, 1> g = GravityWrench<T>(robot, q);
+  const Eigen::Matrix<T, 6, 1> g = GravityWrench<T>(q, z[7], Vec3<T>(z[8], z[9], z[10]), robot.gravity_mps2);
   for (int a = 0; a < 6; ++a) out[a] = g(a);
   const Vec2<T> tilt = InclinometerReading<T>(q);
   out[6] = tilt(0);
@@ -150,8 +149,8 @@ bool PoseJacobian(const SpatialRobot& robot, const SpatialInformationLayout& L, 
   J->setZero(rows.total, cols);
   if (dJ) dJ->assign(6 + m, MatrixXd::Zero(rows.total, cols));
   const double weight_N = robot.platform_mass_kg * robot.gravity_mps2;
-  const double inv_force = 1.0 / (kEquilibriumWeightRelativeSigma * weight_N);
-  const double inv_moment = 1.0 / (kDefaultComSigma_m * weight_N);
+  const double inv_force = 1.0 / (kEquilibriumForceSigmaRelative * weight_N);
+  const double inv_moment = 1.0 / (kEquilibriumMomentSigma_m * weight_N);
   const double inv_encoder = 1.0 / robot.sensors.encoder_sigma_m;
   const double inv_swivel = L.swivel ? InverseSigma(robot, SpatialSensor::kSwivel) : 0.0;
   const auto equilibrium_weight = [&](int a) { return a < 3 ? inv_force : inv_moment; };
@@ -199,6 +198,8 @@ bool PoseJacobian(const SpatialRobot& robot, const SpatialInformationLayout& L, 
   std::array<double, kPoseZ> z{};
   for (int a = 0; a < 6; ++a) z[a] = q(a);
   z[6] = robot.home_rpy_rad.z();
+  z[7] = robot.platform_mass_kg;
+  for (int a = 0; a < 3; ++a) z[8 + a] = robot.p_P_com_m(a);
   Eigen::Matrix<double, kPoseOut, kPoseZ> Jp;
   std::array<Eigen::Matrix<double, kPoseOut, kPoseZ>, kPoseX> dJp;
   const auto f = [&](const auto* zz, auto* out) { return PoseModel(robot, zz, out); };
@@ -206,6 +207,7 @@ bool PoseJacobian(const SpatialRobot& robot, const SpatialInformationLayout& L, 
   std::array<int, kPoseZ> col;
   for (int a = 0; a < 6; ++a) col[a] = a;
   col[6] = L.heading ? yaw0 : -1;
+  for (int a = 0; a < 4; ++a) col[7 + a] = L.platform ? local + L.geometry_size() - 4 + a : -1;
   std::array<int, kPoseOut> row;
   std::array<double, kPoseOut> weight{};
   for (int a = 0; a < 6; ++a) {
@@ -255,6 +257,37 @@ PoseShare ShareOf(const SpatialInformationLayout& L, const MatrixXd& J) {
 }
 
 constexpr double kSingularRelative = 1e-14;
+
+// The information of the free unknowns before any pose: an earlier identification's (design
+// --prior, which holds the platform's prior already), else the platform's prior when its
+// unknowns are among them.
+MatrixXd InformationBeforePoses(const SpatialRobot& robot, const SpatialInformationLayout& L) {
+  const int f = static_cast<int>(L.free.size());
+  if (L.prior_information.size() > 0) return L.prior_information;
+  MatrixXd F = MatrixXd::Zero(f, f);
+  if (L.platform) F.bottomRightCorner<4, 4>().diagonal() = SpatialPlatformPriorSigma(robot).array().square().inverse().matrix();
+  return F;
+}
+
+// The geometry's information from F (free x free): the platform's unknowns (F's last 4 rows and
+// columns) eliminated, S = A - B C^-1 B^T. K (if given) receives [I; -C^-1 B^T], so that
+// S = K^T F K and, F K being zero in the platform's rows, d S = K^T d F K for any change of F.
+MatrixXd Eliminated(const SpatialInformationLayout& L, const MatrixXd& F, MatrixXd* K) {
+  if (!L.platform) {
+    if (K) *K = MatrixXd::Identity(F.rows(), F.cols());
+    return F;
+  }
+  const int g = L.information_size();
+  const Eigen::LDLT<Eigen::Matrix4d> C(F.bottomRightCorner<4, 4>());
+  const MatrixXd CinvBt = C.solve(F.bottomLeftCorner(4, g));
+  if (K) {
+    K->resize(g + 4, g);
+    K->topRows(g).setIdentity();
+    K->bottomRows(4) = -CinvBt;
+  }
+  MatrixXd S = F.topLeftCorner(g, g) - F.topRightCorner(g, 4) * CinvBt;
+  return 0.5 * (S + S.transpose());
+}
 
 // The criterion's value on S's eigenvalues and, if G is given, d value / d S.
 double CriterionOf(Criterion criterion, const MatrixXd& S, double power, MatrixXd* G) {
@@ -324,7 +357,8 @@ SpatialInformationLayout SpatialSensorLayout(const SpatialRobot& robot) {
   L.heading = HasSpatialSensor(robot, SpatialSensor::kHeading);
   L.load_cells = HasSpatialSensor(robot, SpatialSensor::kLoadCell);
   L.tensions = StaticsModelled(robot);
-  L.names = SpatialGeometryNames(L.num_cables, L.swivel, L.heading);
+  L.platform = L.tensions;
+  L.names = SpatialGeometryNames(L.num_cables, L.swivel, L.heading, false, L.platform);
   for (int c = 0; c < L.geometry_size(); ++c) L.free.push_back(c);
   return L;
 }
@@ -456,15 +490,23 @@ Eigen::MatrixXd SpatialPoseJacobian(const SpatialRobot& robot, const SpatialInfo
   return J;
 }
 
-Eigen::MatrixXd SpatialInformation(const SpatialRobot& robot, const SpatialInformationLayout& layout,
-                                   const std::vector<SpatialPlanPose>& poses) {
-  const int f = static_cast<int>(layout.free.size());
-  MatrixXd S = layout.prior_information.size() > 0 ? layout.prior_information : MatrixXd::Zero(f, f);
+Eigen::MatrixXd SpatialFullInformation(const SpatialRobot& robot, const SpatialInformationLayout& layout,
+                                       const std::vector<SpatialPlanPose>& poses) {
+  MatrixXd F = InformationBeforePoses(robot, layout);
   for (const SpatialPlanPose& p : poses) {
     const PoseShare share = ShareOf(layout, SpatialPoseJacobian(robot, layout, p.q, p.tensions_N));
-    S.noalias() += share.projected.transpose() * share.projected;
+    F.noalias() += share.projected.transpose() * share.projected;
   }
-  return S;
+  return F;
+}
+
+Eigen::MatrixXd SpatialGeometryInformation(const SpatialInformationLayout& layout, const Eigen::MatrixXd& full) {
+  return Eliminated(layout, full, nullptr);
+}
+
+Eigen::MatrixXd SpatialInformation(const SpatialRobot& robot, const SpatialInformationLayout& layout,
+                                   const std::vector<SpatialPlanPose>& poses) {
+  return SpatialGeometryInformation(layout, SpatialFullInformation(robot, layout, poses));
 }
 
 CriteriaValues SpatialCriteria(const Eigen::MatrixXd& S) {
@@ -491,17 +533,20 @@ double SpatialDesignObjective(const SpatialRobot& robot, const SpatialInformatio
   std::vector<MatrixXd> J(n);
   std::vector<std::vector<MatrixXd>> dJ(n);
   std::vector<PoseShare> share(n);
-  MatrixXd S = layout.prior_information.size() > 0 ? layout.prior_information : MatrixXd::Zero(f, f);
+  MatrixXd F = InformationBeforePoses(robot, layout);
   for (int j = 0; j < n; ++j) {
     if (!PoseJacobian(robot, layout, poses[j].q, poses[j].tensions_N, &J[j], gradient ? &dJ[j] : nullptr)) return inf;
     share[j] = ShareOf(layout, J[j]);
-    S.noalias() += share[j].projected.transpose() * share[j].projected;
+    F.noalias() += share[j].projected.transpose() * share[j].projected;
   }
-  MatrixXd G;
-  const double value = CriterionOf(criterion, S, power, gradient ? &G : nullptr);
+  MatrixXd K, G_S;
+  const MatrixXd S = Eliminated(layout, F, gradient ? &K : nullptr);
+  const double value = CriterionOf(criterion, S, power, gradient ? &G_S : nullptr);
   if (!gradient || !std::isfinite(value)) return value;
-  // d value = <G, d S>, d S = sum_j d (Jf^T P Jf): with J = [Jq | Jf], its derivative along any
-  // pose variable is <Lambda_j, d J_j>, Lambda_f = 2 P Jf G, Lambda_q = -Lambda_f (Jq^+ Jf)^T.
+  // d value = <G_S, d S> = <G, d F> with G = K G_S K^T (Eliminated); d F = sum_j d (Jf^T P Jf):
+  // with J = [Jq | Jf], its derivative along any pose variable is <Lambda_j, d J_j>,
+  // Lambda_f = 2 P Jf G, Lambda_q = -Lambda_f (Jq^+ Jf)^T.
+  const MatrixXd G = K * G_S * K.transpose();
   const int local = layout.local();
   gradient->setZero(n * (6 + m));
   for (int j = 0; j < n; ++j) {

@@ -10,10 +10,14 @@
 // the geometry in SpatialIdentifyResult::names order. The rows are the models of
 // model/swivel.h and model/spatial_sensor_model.h differentiated by Jets, one cable at a time.
 // The pose's own unknowns are eliminated (the Schur complement, as an orthogonal projection:
-// M_j = J_g^T (I - J_q J_q^+) J_g), and the information of the geometry is S = sum_j M_j over
-// the unknowns the gauge leaves free: the identification's default gauge, the exit coordinates
-// AnalyzeSpatialGauge holds for these sensors. S^-1 is the covariance the identification
-// predicts at the same poses when the robot is the nominal one.
+// M_j = J_g^T (I - J_q J_q^+) J_g), and the information of the unknowns the gauge leaves free
+// (the identification's default gauge, the exit coordinates AnalyzeSpatialGauge holds for these
+// sensors) is sum_j M_j plus the priors: the platform's mass and centre of mass when the statics
+// are modelled (the last 4 free unknowns, SpatialPlatformPriorSigma), else an earlier
+// identification's (design --prior). The design's S is that of the geometry alone: the mass and
+// centre of mass, nuisances to a design, eliminated in turn (a Schur complement), so that S^-1
+// is the covariance the identification predicts for the geometry at the same poses when the
+// robot is the nominal one.
 //
 // The design criteria on S and their exact gradients with respect to every pose's coordinates
 // and tensions: second derivatives of the readings by nested Jets (identify/nested_jet.h).
@@ -38,6 +42,9 @@ struct SpatialInformationLayout {
   bool swivel = false;    // sw10 .. swm0 among the geometry
   bool heading = false;   // yaw0 among the geometry
   bool load_cells = false;
+  // mass, comx, comy, comz among the unknowns, the last 4 of names and of free (the statics
+  // modelled: tensions); eliminated from S.
+  bool platform = false;
   std::vector<std::string> names;  // the geometry unknowns (SpatialGeometryNames)
   std::vector<int> held;           // the default gauge: indices into names
   std::vector<int> free;           // the others, in names order: S's rows and columns
@@ -50,10 +57,15 @@ struct SpatialInformationLayout {
   Eigen::MatrixXd gauge_directions;
   int null_directions = 0;  // the first columns of gauge_directions
   // Information an earlier identification gathered (design --prior), free x free in `free`'s
-  // order, added to every S (SpatialInformation, SpatialDesignObjective); empty: none.
+  // order, added to every S (SpatialInformation, SpatialDesignObjective) in place of the
+  // platform's prior (which the earlier identification's covariance holds); empty: none.
   Eigen::MatrixXd prior_information;
   int local() const { return 6 + (tensions ? num_cables : 0); }
   int geometry_size() const { return static_cast<int>(names.size()); }
+  // S's size: the free unknowns but the platform's.
+  int information_size() const { return static_cast<int>(free.size()) - (platform ? 4 : 0); }
+  // Those unknowns, indices into names (free less the platform's).
+  std::vector<int> information_unknowns() const { return {free.begin(), free.begin() + information_size()}; }
 };
 
 // The layout for the robot file's sensors without a gauge (held empty, every unknown free).
@@ -91,10 +103,19 @@ Eigen::MatrixXd SpatialPriorInformation(const SpatialInformationLayout& layout, 
 Eigen::MatrixXd SpatialPoseJacobian(const SpatialRobot& robot, const SpatialInformationLayout& layout,
                                     const SpatialPose<double>& q, const Eigen::VectorXd& tensions_N);
 
-// S (free x free, in 1/unit^2 of each unknown: m for exits and lengths, rad for offsets), the
-// layout's prior information included.
+// S (information_size() square, in free's order: 1/unit^2 of each unknown, m for exits and
+// lengths, rad for offsets), the priors included and the platform's unknowns eliminated:
+// SpatialGeometryInformation of SpatialFullInformation.
 Eigen::MatrixXd SpatialInformation(const SpatialRobot& robot, const SpatialInformationLayout& layout,
                                    const std::vector<SpatialPlanPose>& poses);
+// The information of every free unknown (free x free: the platform's too, the last 4), the
+// priors included: the layout's prior_information if any, else the platform's prior.
+Eigen::MatrixXd SpatialFullInformation(const SpatialRobot& robot, const SpatialInformationLayout& layout,
+                                       const std::vector<SpatialPlanPose>& poses);
+// The geometry's information from the free unknowns' (F, free x free): the platform's
+// unknowns eliminated (the Schur complement on F's last 4 rows and columns) when the layout has
+// them, else F.
+Eigen::MatrixXd SpatialGeometryInformation(const SpatialInformationLayout& layout, const Eigen::MatrixXd& full);
 
 // The four criteria of S (design.h's CriteriaValues: the condition number here is that of the
 // whitened reduced Jacobian, sqrt(lambda_max / lambda_min) of S; A's trace mixes m^2 and rad^2

@@ -18,6 +18,14 @@ SpatialRobot PerturbSpatialGeometry(const SpatialRobot& nominal, double sigma_m,
   return truth;
 }
 
+void PerturbSpatialPlatform(SpatialRobot* truth, Rng& rng) {
+  Eigen::Vector4d draw;
+  for (int k = 0; k < 4; ++k) draw(k) = rng.Normal();
+  const Eigen::Vector4d values = truth->platform_values() + SpatialPlatformPriorSigma(*truth).cwiseProduct(draw);
+  truth->platform_mass_kg = values(0);
+  truth->p_P_com_m = values.tail<3>();
+}
+
 namespace {
 
 // The draws one pose's readings take (SimulateSpatialExperiment's order).

@@ -31,6 +31,11 @@ namespace cablecal {
 // then scaled. No coordinate is held: which rigid motion of the frame the sensors leave unseen
 // (the gauge) is the identification's business, not the true robot's.
 SpatialRobot PerturbSpatialGeometry(const SpatialRobot& nominal, double sigma_m, Rng& rng);
+// The true platform: its mass and each coordinate of its centre of mass get N(0, sigma^2) with
+// the robot file's priors on them (SpatialPlatformPriorSigma), 4 standard normals drawn in that
+// order. A real platform is not the file's, and the identification estimates them (when the
+// statics are modelled) within those priors.
+void PerturbSpatialPlatform(SpatialRobot* truth, Rng& rng);
 
 struct SpatialSimulationOptions {
   // Which sensors get noise besides the encoders (simulate --sensors): kBoth every one the

@@ -69,13 +69,12 @@ const char* ToString(Gauge g);
 // max_iterations): a fit that needs more is lost, not slow.
 constexpr int kMaxIdentifyIterations = 100000;
 
-// identify --equilibrium's default (on|off), and the centre of mass's uncertainty taken when
-// the robot file gives no platform.com_sigma (m, per axis). Off for now (README, "The
+// identify --equilibrium's default (on|off); the centre of mass's uncertainty taken when the
+// robot file gives no platform.com_sigma is kDefaultComSigma_m (model/robot.h). Off for now (README, "The
 // equilibrium"): each pose's row is independent, while a wrong centre of mass is one error
 // shared by every pose, and with the file's centre of mass exact the predicted sigmas run 15-40 %
 // above the spread (Consistency tests); the design's information does not have the rows yet.
 constexpr bool kDefaultEquilibrium = false;
-constexpr double kDefaultComSigma_m = 0.005;
 // The equilibrium row's sigma for `robot`: platform.com_sigma, else kDefaultComSigma_m.
 double EquilibriumSigma(const Robot& robot);
 

@@ -21,7 +21,7 @@ constexpr std::size_t kListed = 5;
 
 Eigen::VectorXd NominalOf(const SpatialRobot& nominal, const SpatialIdentifyResult& r) {
   const auto has = [&r](const char* name) { return std::find(r.names.begin(), r.names.end(), name) != r.names.end(); };
-  return NominalSpatialGeometry(nominal, has("sw10"), has("yaw0"), has("b1x"));
+  return NominalSpatialGeometry(nominal, has("sw10"), has("yaw0"), has("b1x"), has("mass"));
 }
 
 bool Held(const SpatialIdentifyResult& r, const std::string& name) {

@@ -36,12 +36,14 @@ struct Layout {
   bool swivel = false;
   bool heading = false;
   bool anchors = false;
+  bool platform = false;  // mass, comx, comy, comz: the statics modelled
   int exit(int i) const { return 3 * i; }
   int length(int i) const { return 3 * m + i; }
   int anchor(int i) const { return 4 * m + 3 * i; }
   int swivel_offset(int i) const { return 4 * m + anchor_coordinates() + i; }
   int yaw0() const { return 4 * m + anchor_coordinates() + (swivel ? m : 0); }
-  int size() const { return yaw0() + (heading ? 1 : 0); }
+  int platform_block() const { return yaw0() + (heading ? 1 : 0); }
+  int size() const { return platform_block() + (platform ? 4 : 0); }
   int exit_coordinates() const { return 3 * m; }
   int anchor_coordinates() const { return anchors ? 3 * m : 0; }
   // The coordinates a gauge may hold, exits first: a1x .. amz, then b1x .. bmz when free.
@@ -204,11 +206,12 @@ struct LoadCellCost {
   }
 };
 
-// The pose's equilibrium W(q, D) t + w_g(q) (model/swivel.h's EquilibriumResidual, its columns
-// WrenchColumn of each cable through the exit block's D rather than the file's), force rows
-// over kEquilibriumWeightRelativeSigma m g, moment rows over m g kDefaultComSigma_m (the header).
-// Parameters: the pose, the m tensions (1 each), the m exit points (3 each), and the m anchors
-// (3 each) when free.
+// The pose's equilibrium W(q, D) t + w_g(q, mass, c) (model/swivel.h's EquilibriumResidual, its
+// columns WrenchColumn of each cable through the exit block's D rather than the file's, its
+// gravity through the platform block's mass and centre of mass), force rows over
+// kEquilibriumForceSigmaRelative m g, moment rows over m g kEquilibriumMomentSigma_m (the
+// header; m g the file's weight). Parameters: the pose, the m tensions (1 each), the m exit
+// points (3 each), the m anchors (3 each) when free, and the platform block (mass, c: 4).
 // Cable i's share t_i W_i of the equilibrium's wrench at pose q (R its rotation), exit d, anchor
 // b (nullptr: the robot file's).
 template <typename T>
@@ -228,7 +231,9 @@ struct EquilibriumCost {
     const int m = static_cast<int>(cables.size());
     const SpatialPose<T> pose = PoseOf(p[0]);
     const Eigen::Matrix<T, 3, 3> R = Rotation<T>(pose);
-    Eigen::Matrix<T, 6, 1> w = GravityWrench<T>(*robot, pose);
+    const T* platform = p[1 + 2 * m + (free_anchors ? m : 0)];
+    Eigen::Matrix<T, 6, 1> w =
+        GravityWrench<T>(pose, platform[0], Vec3<T>(platform[1], platform[2], platform[3]), robot->gravity_mps2);
     for (int i = 0; i < m; ++i) {
       const T* b = free_anchors ? p[1 + 2 * m + i] : nullptr;
       w += CableWrench<T>(cables[i], R, p[0], p[1 + i][0], p[1 + m + i], b);
@@ -242,10 +247,11 @@ struct EquilibriumCost {
 };
 
 // EquilibriumCost with its derivatives cable by cable: one Jet over (pose, t_i, D_i), 10
-// derivatives, per cable, summed in the functor's order. The same numbers to the last bit as
-// differentiating the whole functor (a Jet's components do not mix, and the other cables add
-// exact zeros to t_i's and D_i's), at a fraction of the cost: Ceres' dynamic autodiff ran the
-// whole wrench, every pulley, once per 4 parameters (10 times for 8 cables).
+// derivatives, per cable, summed in the functor's order after gravity's, whose Jet is over
+// (pose, mass, c). The same numbers to the last bit as differentiating the whole functor (a
+// Jet's components do not mix, and the other cables add exact zeros to t_i's and D_i's), at a
+// fraction of the cost: Ceres' dynamic autodiff ran the whole wrench, every pulley, once per 4
+// parameters (10 times for 8 cables).
 class EquilibriumCostFunction : public ceres::CostFunction {
  public:
   explicit EquilibriumCostFunction(EquilibriumCost f) : f_(std::move(f)) {
@@ -254,16 +260,21 @@ class EquilibriumCostFunction : public ceres::CostFunction {
     mutable_parameter_block_sizes()->push_back(6);
     for (int i = 0; i < m; ++i) mutable_parameter_block_sizes()->push_back(1);
     for (int i = 0; i < m; ++i) mutable_parameter_block_sizes()->push_back(3);
+    mutable_parameter_block_sizes()->push_back(4);
   }
   bool Evaluate(double const* const* p, double* residuals, double** jacobians) const override {
     if (!jacobians) return f_(p, residuals);
-    using J = ceres::Jet<double, 10>;  // pose (0..5), t_i (6), D_i (7..9)
+    // pose (0..5), then t_i (6) and D_i (7..9) in a cable's Jet, mass (6) and c (7..9) in gravity's
+    using J = ceres::Jet<double, 10>;
     const int m = static_cast<int>(f_.cables.size());
     std::array<J, 6> q;
     for (int a = 0; a < 6; ++a) q[a] = J(p[0][a], a);
     const SpatialPose<J> pose = PoseOf(q.data());
     const Eigen::Matrix<J, 3, 3> R = Rotation<J>(pose);
-    Eigen::Matrix<J, 6, 1> w = GravityWrench<J>(*f_.robot, pose);
+    const double* platform = p[1 + 2 * m];
+    Eigen::Matrix<J, 6, 1> w = GravityWrench<J>(pose, J(platform[0], 6),
+                                                Vec3<J>(J(platform[1], 7), J(platform[2], 8), J(platform[3], 9)),
+                                                f_.robot->gravity_mps2);
     const double inv[6] = {f_.inv_force, f_.inv_force, f_.inv_force, f_.inv_moment, f_.inv_moment, f_.inv_moment};
     for (int i = 0; i < m; ++i) {
       std::array<J, 3> d;
@@ -283,6 +294,10 @@ class EquilibriumCostFunction : public ceres::CostFunction {
       residuals[a] = w(a).a * inv[a];
       if (jacobians[0]) {
         for (int c = 0; c < 6; ++c) jacobians[0][6 * a + c] = w(a).v(c) * inv[a];
+      }
+      // The cables added to the pose's components only: 6..9 are still gravity's.
+      if (jacobians[1 + 2 * m]) {
+        for (int c = 0; c < 4; ++c) jacobians[1 + 2 * m][4 * a + c] = w(a).v(6 + c) * inv[a];
       }
     }
     return true;
@@ -368,6 +383,16 @@ struct ExitPriorCost {
   }
 };
 
+// The platform's mass and centre of mass about the robot file's, over their priors' sigmas.
+struct PlatformPriorCost {
+  Eigen::Vector4d nominal, inv_sigma;
+  template <typename T>
+  bool operator()(const T* x, T* r) const {
+    for (int a = 0; a < 4; ++a) r[a] = (x[a] - T(nominal(a))) * T(inv_sigma(a));
+    return true;
+  }
+};
+
 // One residual block: its cost, the pose it reads (-1: none) and its geometry blocks (offset
 // into the geometry vector and size), in the cost's parameter order after the pose.
 struct Term {
@@ -375,7 +400,8 @@ struct Term {
   int pose = -1;
   std::vector<int> tension_cables;  // the pose's tension blocks it reads, after the pose block
   std::vector<int> block_offset, block_size;
-  int reading = -1;  // -1: the prior
+  int reading = -1;  // -1: a prior
+  bool gauge_prior = false;  // the tracker's prior on the exits (--gauge prior), not the platform's
   int sensor = -1;   // -1: an encoder; kEquilibriumTerm; else SpatialSensor
   int value = 0;     // the first value of the reading's sensor it computes (the cable, ...)
   int size() const { return cost->num_residuals(); }
@@ -480,6 +506,7 @@ Model BuildModel(const SpatialRobot& robot, const std::vector<SpatialMeasurement
     ++inextensible;
   }
   model.nt = statics && (load_cells || inextensible < m || m < 6) ? m : 0;
+  L.platform = model.nt > 0;
   if (model.nt > 0 && inextensible > 6) {
     // W t = -w_g fixes 6 combinations of the tensions; a rigid cable's length says nothing of
     // its own, so the rest of more than 6 rigid cables' tensions is free whatever is read.
@@ -552,8 +579,10 @@ Model BuildModel(const SpatialRobot& robot, const std::vector<SpatialMeasurement
         offset.push_back(L.anchor(i));
         size.push_back(3);
       }
-      const EquilibriumCost f{shared_robot, cables, 1.0 / (kEquilibriumWeightRelativeSigma * weight_N),
-                              1.0 / (kDefaultComSigma_m * weight_N), L.anchors};
+      offset.push_back(L.platform_block());
+      size.push_back(4);
+      const EquilibriumCost f{shared_robot, cables, 1.0 / (kEquilibriumForceSigmaRelative * weight_N),
+                              1.0 / (kEquilibriumMomentSigma_m * weight_N), L.anchors};
       if (!L.anchors) {
         add(std::make_unique<EquilibriumCostFunction>(f), offset, size, kEquilibriumTerm, 0, tension_cables);
       } else {
@@ -562,7 +591,7 @@ Model BuildModel(const SpatialRobot& robot, const std::vector<SpatialMeasurement
         auto* cost = new ceres::DynamicAutoDiffCostFunction<EquilibriumCost, 4>(new EquilibriumCost(f));
         cost->AddParameterBlock(6);
         for (int i = 0; i < m; ++i) cost->AddParameterBlock(1);
-        for (std::size_t b = 0; b < offset.size(); ++b) cost->AddParameterBlock(3);
+        for (std::size_t b = 0; b < offset.size(); ++b) cost->AddParameterBlock(size[b]);
         cost->SetNumResiduals(6);
         add(std::unique_ptr<ceres::CostFunction>(cost), offset, size, kEquilibriumTerm, 0, tension_cables);
       }
@@ -624,6 +653,16 @@ Model BuildModel(const SpatialRobot& robot, const std::vector<SpatialMeasurement
       }
     }
   }
+  if (L.platform) {
+    Term t;
+    t.cost = Cost<PlatformPriorCost, 4, 4>(
+        PlatformPriorCost{robot.platform_values(), SpatialPlatformPriorSigma(robot).cwiseInverse()});
+    t.block_offset = {L.platform_block()};
+    t.block_size = {4};
+    model.prior_terms.push_back(static_cast<int>(model.terms.size()));
+    model.num_values += 4;
+    model.terms.push_back(std::move(t));
+  }
   if (prior) {
     if (!robot.sensors.tracker_sigma_m || !(*robot.sensors.tracker_sigma_m > 0.0)) {
       throw InputError("--gauge", "prior", "the robot file " + robot.source + " gives no sensors.tracker sigma");
@@ -634,6 +673,7 @@ Model BuildModel(const SpatialRobot& robot, const std::vector<SpatialMeasurement
       t.block_offset = {L.exit(i)};
       t.block_size = {3};
       t.value = i;
+      t.gauge_prior = true;
       model.prior_terms.push_back(static_cast<int>(model.terms.size()));
       model.num_values += 3;
       model.terms.push_back(std::move(t));
@@ -825,8 +865,9 @@ bool SurelyOfFullRank(const MatrixXd& R, MatrixXd* inverse = nullptr) {
 
 // The reduced geometry Jacobian: for each pose, its rows projected onto the orthogonal
 // complement of its own pose columns (Householder QR, nothing squared), so that the stacked
-// rows see exactly the geometry directions no pose change can compensate; the prior's rows as
-// they are (with_prior). InputError for a pose its own readings do not determine (when `refuse`).
+// rows see exactly the geometry directions no pose change can compensate; the priors' rows as
+// they are (the exits' tracker prior only with_prior: it is a gauge, the platform's is
+// knowledge). InputError for a pose its own readings do not determine (when `refuse`).
 MatrixXd ReducedJacobian(const Model& model, const VectorXd& g, const Locals& locals, bool refuse, bool with_prior) {
   const int p = g.size();
   const int cols = model.local();
@@ -870,8 +911,8 @@ MatrixXd ReducedJacobian(const Model& model, const VectorXd& g, const Locals& lo
     total += rows - cols;
   }
   for (int k : model.prior_terms) {
-    if (!with_prior) break;
     const Term& t = model.terms[k];
+    if (t.gauge_prior && !with_prior) continue;
     MatrixXd jg;
     VectorXd r(t.size());
     EvaluateTerm(t, g, locals, r.data(), nullptr, &jg);
@@ -1354,8 +1395,8 @@ Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasureme
   a.model = BuildModel(nominal, readings, options.gauge.kind == SpatialGaugeKind::kPrior, options.statics,
                        options.anchors);
   const Layout& L = a.model.layout;
-  a.g0 = NominalSpatialGeometry(nominal, L.swivel, L.heading, L.anchors);
-  a.gauge.names = SpatialGeometryNames(L.m, L.swivel, L.heading, L.anchors);
+  a.g0 = NominalSpatialGeometry(nominal, L.swivel, L.heading, L.anchors, L.platform);
+  a.gauge.names = SpatialGeometryNames(L.m, L.swivel, L.heading, L.anchors, L.platform);
   const int p = L.size();
   const int n = static_cast<int>(a.model.pose_ids.size());
   const int local = a.model.local();
@@ -1431,11 +1472,23 @@ Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasureme
     for (VectorXd& x : balanced) x.tail(a.model.nt) = BalancedTensions(nominal, x.head<6>(), x.tail(a.model.nt));
   }
   const MatrixXd A = ReducedJacobian(a.model, a.g0, balanced, true, false);
-  const Eigen::BDCSVD<MatrixXd> svd = SmallSvd(A);
+  // The platform's mass and centre of mass (the last columns) are known to their priors, which
+  // no gauge holds and no reading need see: projected off as each pose's unknowns are, so that
+  // the directions below are the geometry's with the platform estimated beside it (their own,
+  // in kg and m, would read as "weakly seen" beside the exits' information).
+  const int platform = L.platform ? 4 : 0;
+  const int g = p - platform;
+  MatrixXd Ag = A.leftCols(g);
+  if (platform > 0) {
+    const Eigen::HouseholderQR<MatrixXd> qr(A.rightCols(platform));
+    Ag.applyOnTheLeft(qr.householderQ().adjoint());
+    Ag = Ag.bottomRows(A.rows() - platform).eval();
+  }
+  const Eigen::BDCSVD<MatrixXd> svd = SmallSvd(Ag);
   const VectorXd& s = svd.singularValues();
   const double largest = s(0);
   std::vector<int> null_cols, weak_cols;
-  for (int c = 0; c < p; ++c) {
+  for (int c = 0; c < g; ++c) {
     if (!(s(c) > kSpatialNullThreshold * largest)) {
       null_cols.push_back(c);
     } else if (s(c) < kSpatialWeakThreshold * largest) {
@@ -1443,8 +1496,8 @@ Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasureme
     }
   }
   const auto columns = [&](const std::vector<int>& cols) {
-    MatrixXd V(p, cols.size());
-    for (std::size_t c = 0; c < cols.size(); ++c) V.col(c) = svd.matrixV().col(cols[c]);
+    MatrixXd V = MatrixXd::Zero(p, cols.size());
+    for (std::size_t c = 0; c < cols.size(); ++c) V.col(c).head(g) = svd.matrixV().col(cols[c]);
     return V;
   };
   const MatrixXd N = columns(null_cols);
@@ -1536,7 +1589,7 @@ Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasureme
 
 }  // namespace
 
-std::vector<std::string> SpatialGeometryNames(int num_cables, bool swivel, bool heading, bool anchors) {
+std::vector<std::string> SpatialGeometryNames(int num_cables, bool swivel, bool heading, bool anchors, bool platform) {
   std::vector<std::string> names = SpatialLayout(num_cables).names();
   for (int i = 1; i <= num_cables && anchors; ++i) {
     for (const char axis : {'x', 'y', 'z'}) names.push_back("b" + std::to_string(i) + axis);
@@ -1545,11 +1598,13 @@ std::vector<std::string> SpatialGeometryNames(int num_cables, bool swivel, bool 
     for (int i = 1; i <= num_cables; ++i) names.push_back("sw" + std::to_string(i) + "0");
   }
   if (heading) names.push_back("yaw0");
+  if (platform) names.insert(names.end(), std::begin(kSpatialPlatformNames), std::end(kSpatialPlatformNames));
   return names;
 }
 
-Eigen::VectorXd NominalSpatialGeometry(const SpatialRobot& nominal, bool swivel, bool heading, bool anchors) {
-  Layout L{nominal.num_cables(), swivel, heading, anchors};
+Eigen::VectorXd NominalSpatialGeometry(const SpatialRobot& nominal, bool swivel, bool heading, bool anchors,
+                                       bool platform) {
+  Layout L{nominal.num_cables(), swivel, heading, anchors, platform};
   VectorXd g = VectorXd::Zero(L.size());
   const VectorXd home_lengths = CableLengths<double>(nominal, nominal.home_pose());
   for (int i = 0; i < L.m; ++i) {
@@ -1558,6 +1613,7 @@ Eigen::VectorXd NominalSpatialGeometry(const SpatialRobot& nominal, bool swivel,
     if (anchors) g.segment<3>(L.anchor(i)) = nominal.cables[i].p_P_anchor_m;
   }
   if (heading) g(L.yaw0()) = nominal.home_rpy_rad.z();
+  if (platform) g.segment<4>(L.platform_block()) = nominal.platform_values();
   return g;
 }
 
@@ -1684,6 +1740,10 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
   if (L.heading) {
     problem.AddParameterBlock(g.data() + L.yaw0(), 1);
     ordering->AddElementToGroup(g.data() + L.yaw0(), 1);
+  }
+  if (L.platform) {
+    problem.AddParameterBlock(g.data() + L.platform_block(), 4);
+    ordering->AddElementToGroup(g.data() + L.platform_block(), 1);
   }
   for (const Term& t : model.terms) {
     std::vector<double*> params;

@@ -10,8 +10,9 @@
 // then sw10 ... swm0 when swivel readings are present (the
 // angle about k_i, from the nominal home's pulley direction, at which encoder i reads zero,
 // rad), then yaw0 when heading readings are present (the yaw at which the IMU reads zero,
-// rad); and each measured pose's (x, y, z, roll, pitch, yaw). Repeated pose ids are repeated
-// readings of one pose.
+// rad), then mass comx comy comz when the statics are modelled (kg; m, in P: below); and each
+// measured pose's (x, y, z, roll, pitch, yaw). Repeated pose ids are repeated readings of one
+// pose.
 //
 // Residuals: model minus reading over the sensor's sigma (robot file: the encoder sigma, each
 // RangedNoise's sigma()), the models those of model/swivel.h and model/spatial_sensor_model.h.
@@ -20,11 +21,19 @@
 // as unknowns, eliminated with its coordinates, when they carry information: load-cell
 // readings are present, a cable has a stiffness, or the robot is underactuated (m < 6). Then
 // - each load cell reads (t_ij - f_ij) / sigma_f;
-// - each pose's equilibrium W(q_j, D) t_j + w_g(q_j) = 0 (model/swivel.h: its wrench columns
-//   through the unknown exit points, mass and centre of mass from the robot file) is 6
-//   residuals: the force rows over kEquilibriumWeightRelativeSigma times the weight, the
-//   moment rows over the weight times kDefaultComSigma_m (identify/identify.h, the planar
-//   equilibrium's): what the robot file's mass and centre of mass are known to;
+// - each pose's equilibrium W(q_j, D) t_j + w_g(q_j, mass, c) = 0 (model/swivel.h: its wrench
+//   columns through the unknown exit points, its gravity through the unknown mass and centre of
+//   mass) is 6 residuals, the statics' tolerance: the force rows over
+//   kEquilibriumForceSigmaRelative times the weight, the moment rows over the weight times
+//   kEquilibriumMomentSigma_m;
+// - the platform's mass and centre of mass c (in P) are 4 unknowns of the geometry vector
+//   (names mass, comx, comy, comz, after everything else), each with a prior residual about the
+//   robot file's value (model/spatial_robot.h's SpatialPlatformPriorSigma: platform.mass_sigma
+//   and platform.com_sigma, by default 1 % of the mass and 5 mm). A wrong centre of mass
+//   is one error shared by every pose, not an independent one per pose: as unknowns with their
+//   priors, their uncertainty reaches the geometry's covariance once, as it reaches the
+//   estimate (a per-pose allowance of the same size made the predicted sigmas of irma4u 1.0 to
+//   1.7 times the spread of simulated experiments, bench/README.md);
 // - the encoder of a cable with a stiffness reads the cable paid out, its unstretched length
 //   (model/robot.h's UnstretchedLength): dl_ij = l_i(q_j) / (1 + t_ij / EA_i) - l_i0, so that
 //   l_i0 is then the cable paid out at home (the unstretched length there), not its geometric
@@ -97,10 +106,17 @@ constexpr double kSpatialWeakThreshold = 1e-4;
 // motion of the frame's exits is "nearly" that motion (SpatialDirection::nearly_rigid).
 constexpr double kSpatialNearlyRigid = 0.05;
 
-// The equilibrium rows' sigma: the force rows this fraction of the platform's weight (a
-// platform weighed, its cables and fittings estimated: 1 %); the moment rows the weight times
-// kDefaultComSigma_m (identify/identify.h: a centre of mass from CAD, known to 5 mm).
-constexpr double kEquilibriumWeightRelativeSigma = 0.01;
+// The equilibrium rows' sigma, the statics' tolerance once the mass and the centre of mass are
+// unknowns: the force rows this fraction of the weight, the moment rows the weight times this
+// arm (0.3 mm). Small enough that the priors above, not the rows, carry what the statics do not
+// know: on irma4u, whose simulated statics are exact, the predicted sigmas are then within 6 %
+// of the spread (1e-3 made them 20 % conservative; 1e-4 within 3.5 %, but the nearly hard
+// constraint took cogiro's identification from 11 Levenberg-Marquardt iterations to 35). Pulley
+// friction, the cables' own weight and anything else the model leaves out must fit in it:
+// where they do not, the equilibrium rows' residuals (SpatialReadingFit::equilibrium,
+// result.yaml) say so.
+constexpr double kEquilibriumForceSigmaRelative = 3e-4;
+constexpr double kEquilibriumMomentSigma_m = 3e-4;
 
 // Plausibility (SpatialIdentifyResult::warnings): an identified exit point farther than this
 // outside the frame box (pulleys sit on the frame; half a metre is beyond any bracket), and an
@@ -245,8 +261,14 @@ std::vector<std::string> SpatialPlausibilityWarnings(const SpatialRobot& nominal
 
 // The nominal geometry vector (names order): exits, lengths at the nominal home (a cable's
 // initial_length where the file gives one), the file's anchors (when anchors), zero swivel
-// offsets (when swivel), the home yaw (when heading).
-Eigen::VectorXd NominalSpatialGeometry(const SpatialRobot& nominal, bool swivel, bool heading, bool anchors = false);
-std::vector<std::string> SpatialGeometryNames(int num_cables, bool swivel, bool heading, bool anchors = false);
+// offsets (when swivel), the home yaw (when heading), the file's mass and centre of mass (when
+// platform: the statics modelled).
+Eigen::VectorXd NominalSpatialGeometry(const SpatialRobot& nominal, bool swivel, bool heading, bool anchors = false,
+                                       bool platform = false);
+std::vector<std::string> SpatialGeometryNames(int num_cables, bool swivel, bool heading, bool anchors = false,
+                                              bool platform = false);
+// The mass and centre-of-mass unknowns' names, in order (the last four of the geometry vector
+// when the statics are modelled; their priors SpatialPlatformPriorSigma, model/spatial_robot.h).
+inline constexpr const char* kSpatialPlatformNames[4] = {"mass", "comx", "comy", "comz"};
 
 }  // namespace cablecal

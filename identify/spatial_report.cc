@@ -103,7 +103,7 @@ struct ResultParts {
 ResultParts Parts(const SpatialRobot& nominal, const SpatialIdentifyOptions& options, const SpatialIdentifyResult& r,
                   const std::string& command_line, bool json) {
   YAML::Emitter o;
-  o << YAML::Comment("cablecal identification result (README, \"identify\"; spatial robot). SI units: m, rad, N.")
+  o << YAML::Comment("cablecal identification result (README, \"identify\"; spatial robot). SI units: m, rad, N, kg.")
     << BeginMap;
   EmitProvenance(o, command_line);
   const int m = nominal.num_cables();
@@ -173,7 +173,7 @@ ResultParts Parts(const SpatialRobot& nominal, const SpatialIdentifyOptions& opt
       const double s = r.sigma(a) * r.sigma(b);
       return s > 0.0 ? r.covariance(a, b) / s : 0.0;
     });
-    o << Key << "covariance" << Value << YAML::Comment("the parameters, in the order above (m, rad)");
+    o << Key << "covariance" << Value << YAML::Comment("the parameters, in the order above (m, rad, kg)");
     EmitMatrixRows(o, n, [&](int a, int b) { return r.covariance(a, b); });
   }
   o << EndMap;
@@ -226,6 +226,7 @@ ResultParts Parts(const SpatialRobot& nominal, const SpatialIdentifyOptions& opt
 }  // namespace
 
 const char* SpatialGeometryUnit(const std::string& name) {
+  if (name == "mass") return "kg";
   return name.rfind("sw", 0) == 0 || name == "yaw0" ? "rad" : "m";
 }
 
@@ -288,6 +289,12 @@ SpatialRobot CalibratedSpatialRobot(const SpatialRobot& nominal, const SpatialId
     calibrated.cables[i].p_F_exit_m = result.geometry.segment<3>(3 * i);
     calibrated.cables[i].initial_length_m = result.geometry(3 * m + i);
     if (anchors) calibrated.cables[i].p_P_anchor_m = result.geometry.segment<3>(4 * m + 3 * i);
+  }
+  // The mass and centre of mass when the statics estimated them: the last four names.
+  const int p = static_cast<int>(result.names.size());
+  if (p >= 4 * m + 4 && result.names[p - 4] == kSpatialPlatformNames[0]) {
+    calibrated.platform_mass_kg = result.geometry(p - 4);
+    calibrated.p_P_com_m = result.geometry.tail<3>();
   }
   return calibrated;
 }

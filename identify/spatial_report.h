@@ -25,7 +25,8 @@ std::vector<std::string> MissingSpatialSensors(const SpatialRobot& nominal, cons
 std::vector<std::pair<std::string, double>> SpatialResidualRms(const SpatialRobot& nominal,
                                                                const SpatialIdentifyResult& result);
 
-// A geometry unknown's unit: "rad" for the swivel offsets and yaw0, "m" otherwise.
+// A geometry unknown's unit: "rad" for the swivel offsets and yaw0, "kg" for the mass, "m"
+// otherwise.
 const char* SpatialGeometryUnit(const std::string& name);
 
 // result.yaml of a spatial identification.
@@ -36,8 +37,10 @@ std::string SpatialIdentifyResultJson(const SpatialRobot& nominal, const Spatial
                                       const SpatialIdentifyResult& result, const std::string& command_line);
 
 // The nominal robot with the identified exit points, the identified anchors (when they were
-// unknowns: --identify anchors) and, as each cable's initial_length, the identified l_i0 (the
-// cable paid out at home, where its encoder reads zero); every other value the nominal robot's. The identified swivel offsets and yaw0 are not robot-file keys: the
+// unknowns: --identify anchors), the identified mass and centre of mass (when the statics were
+// modelled; their priors' sigmas stay the file's) and, as each cable's initial_length, the
+// identified l_i0 (the cable paid out at home, where its encoder reads zero); every other value
+// the nominal robot's. The identified swivel offsets and yaw0 are not robot-file keys: the
 // relative sensors are zeroed at home (README). CABLECAL_CHECK on a result of another robot.
 SpatialRobot CalibratedSpatialRobot(const SpatialRobot& nominal, const SpatialIdentifyResult& result);
 

@@ -137,6 +137,10 @@ struct SensorNoise {
   }
 };
 
+// The centre of mass's uncertainty per axis (m) when the robot file gives no
+// platform.com_sigma: a centre of mass from CAD, known to 5 mm (planar and spatial robots).
+constexpr double kDefaultComSigma_m = 0.005;
+
 struct Robot {
   std::string name;
   std::string source;  // where it was loaded from, for messages ("<built-in>" or a path)

@@ -78,6 +78,12 @@ struct SpatialRobot {
   Eigen::Vector3d p_F_frame_max_m = Eigen::Vector3d::Zero();
   double platform_mass_kg = 0.0;
   Eigen::Vector3d p_P_com_m = Eigen::Vector3d::Zero();
+  // Optional in the file (platform.mass_sigma, platform.com_sigma): how well the mass (kg) and
+  // the centre of mass (m, per axis) are known, one standard deviation; the spatial
+  // identification's priors on them and the Monte Carlo's spread of true platforms
+  // (SpatialPlatformPriorSigma below).
+  std::optional<double> mass_sigma_kg;
+  std::optional<double> com_sigma_m;
   std::vector<SpatialCable> cables;
   double tension_min_N = 0.0;
   double tension_max_N = 0.0;
@@ -88,6 +94,8 @@ struct SpatialRobot {
   SpatialSensors sensors;
 
   int num_cables() const { return static_cast<int>(cables.size()); }
+  // The platform's mass and centre of mass: the platform's 4 values the statics read.
+  Eigen::Vector4d platform_values() const { return {platform_mass_kg, p_P_com_m.x(), p_P_com_m.y(), p_P_com_m.z()}; }
   SpatialPose<double> home_pose() const {
     SpatialPose<double> q;
     q << p_F_home_m, home_rpy_rad;
@@ -135,5 +143,17 @@ constexpr double kPlanarAsSpatialDepth_m = 1.0;
 // Keeps the cable count, so a 2-cable robot makes a SpatialRobot the robot file would refuse
 // (fewer than kMinSpatialCables): the model's functions take any count.
 SpatialRobot PlanarAsSpatial(const Robot& planar);
+
+// The mass's prior sigma when the robot file gives no platform.mass_sigma: this fraction of the
+// mass (a platform weighed, its cables and fittings estimated: 1 %).
+constexpr double kDefaultMassSigmaRelative = 0.01;
+// How well the platform's mass (kg) and centre of mass (m, each axis) are known: the robot
+// file's platform.mass_sigma and platform.com_sigma, else kDefaultMassSigmaRelative of the mass
+// and kDefaultComSigma_m (model/robot.h).
+inline Eigen::Vector4d SpatialPlatformPriorSigma(const SpatialRobot& robot) {
+  const double com_sigma_m = robot.com_sigma_m.value_or(kDefaultComSigma_m);
+  return {robot.mass_sigma_kg.value_or(kDefaultMassSigmaRelative * robot.platform_mass_kg), com_sigma_m, com_sigma_m,
+          com_sigma_m};
+}
 
 }  // namespace cablecal

@@ -126,11 +126,25 @@ SpatialRobot Parse(const YAML::Node& root, const Reader& rd) {
   }
 
   const YAML::Node platform = root["platform"];
-  rd.ExpectMap(platform, "platform", {"mass", "com", "anchors"}, {});
+  rd.ExpectMap(platform, "platform", {"mass", "com", "anchors"}, {"mass_sigma", "com_sigma"});
   robot.platform_mass_kg = rd.Number(platform, "platform", "mass");
   rd.Positive(platform["mass"], "platform.mass", robot.platform_mass_kg);
   rd.AtMost(platform["mass"], "platform.mass", robot.platform_mass_kg, kMaxPlatformMass_kg, "kg");
   robot.p_P_com_m = rd.Vector3(platform["com"], "platform.com");
+  // The identification's priors on the mass and the centre of mass (README, "Spatial
+  // identification"): a centre of mass known better than a sensor's finest sigma would overflow
+  // its weight, and a prior looser than half the mass or 0.1 m is no knowledge a lab would file.
+  if (platform["mass_sigma"]) {
+    robot.mass_sigma_kg = rd.Number(platform, "platform", "mass_sigma");
+    rd.Positive(platform["mass_sigma"], "platform.mass_sigma", *robot.mass_sigma_kg);
+    rd.AtMost(platform["mass_sigma"], "platform.mass_sigma", *robot.mass_sigma_kg, 0.5 * robot.platform_mass_kg,
+              "kg (half the mass)");
+  }
+  if (platform["com_sigma"]) {
+    robot.com_sigma_m = rd.Number(platform, "platform", "com_sigma");
+    rd.AtLeast(platform["com_sigma"], "platform.com_sigma", *robot.com_sigma_m, kMinSensorSigma_m, "m");
+    rd.AtMost(platform["com_sigma"], "platform.com_sigma", *robot.com_sigma_m, 0.1, "m");
+  }
   const YAML::Node anchors = platform["anchors"];
   if (!anchors.IsSequence()) rd.Fail(anchors, "platform.anchors", "must be a list of [x, y, z] points");
 
@@ -443,6 +457,8 @@ std::string SpatialRobotToYaml(const SpatialRobot& robot) {
   o << YAML::Key << "mass" << YAML::Value << YamlNumber{robot.platform_mass_kg};
   o << YAML::Key << "com" << YAML::Value;
   v3(robot.p_P_com_m);
+  if (robot.mass_sigma_kg) o << YAML::Key << "mass_sigma" << YAML::Value << YamlNumber{*robot.mass_sigma_kg};
+  if (robot.com_sigma_m) o << YAML::Key << "com_sigma" << YAML::Value << YamlNumber{*robot.com_sigma_m};
   o << YAML::Key << "anchors" << YAML::Value << YAML::Flow << YAML::BeginSeq;
   for (const SpatialCable& c : robot.cables) v3(c.p_P_anchor_m);
   o << YAML::EndSeq << YAML::EndMap;

@@ -263,14 +263,20 @@ Eigen::Matrix<T, 6, Eigen::Dynamic> WrenchMatrix(const SpatialRobot& robot, cons
   return W;
 }
 
-// Gravity wrench about p: [0; 0; -m g; (R c) x (0, 0, -m g)], c the centre of mass in P.
+// Gravity wrench about p: [0; 0; -m g; (R c) x (0, 0, -m g)], c the centre of mass in P; the
+// mass and c as scalars of their own where they are unknowns (the spatial identification's).
 template <typename T>
-Eigen::Matrix<T, 6, 1> GravityWrench(const SpatialRobot& robot, const SpatialPose<T>& q) {
-  const Vec3<T> force(T(0.0), T(0.0), T(-robot.platform_mass_kg * robot.gravity_mps2));
-  const Vec3<T> r_F_com = Rotation<T>(q) * robot.p_P_com_m.cast<T>();
+Eigen::Matrix<T, 6, 1> GravityWrench(const SpatialPose<T>& q, const T& mass_kg, const Vec3<T>& p_P_com_m,
+                                     double gravity_mps2) {
+  const Vec3<T> force(T(0.0), T(0.0), -mass_kg * gravity_mps2);
+  const Vec3<T> r_F_com = Rotation<T>(q) * p_P_com_m;
   Eigen::Matrix<T, 6, 1> w;
   w << force, r_F_com.cross(force);
   return w;
+}
+template <typename T>
+Eigen::Matrix<T, 6, 1> GravityWrench(const SpatialRobot& robot, const SpatialPose<T>& q) {
+  return GravityWrench<T>(q, T(robot.platform_mass_kg), robot.p_P_com_m.cast<T>(), robot.gravity_mps2);
 }
 
 // Wrench balance residual W t + w_g (N, N m); zero at static equilibrium.

@@ -121,6 +121,11 @@ TrialOutcome RunSpatialTrial(const SpatialRobot& nominal, const SpatialRobot& pl
   const int m = nominal.num_cables();
   SpatialRobot truth = PerturbSpatialGeometry(nominal, o.study.geometry_sigma_m, rng);
   for (const int k : held) truth.cables[k / 3].p_F_exit_m(k % 3) = nominal.cables[k / 3].p_F_exit_m(k % 3);
+  // Its platform from its own stream: the exits' and the noise's draws stay the trial's.
+  if (!o.exact_platform) {
+    Rng platform_rng(StreamSeed(o.study.seed, {n64, d64, t64, 2}));
+    PerturbSpatialPlatform(&truth, platform_rng);
+  }
   std::vector<SpatialPlanPose> sampled;
   if (!designed && !pool.empty()) {
     sampled = DrawFromPool(pool, n, StreamSeed(o.study.seed, {n64, d64, t64, 1}));

@@ -8,7 +8,9 @@
 // study chooses them once, from noise-free readings of the nominal robot at n_min sampled
 // poses, and every trial's identification holds those; each trial's true robot is drawn with
 // them at their nominal values (the frame's definition, as the planar study keeps a1x), so that
-// identified minus true is an error and not a choice of frame.
+// identified minus true is an error and not a choice of frame. Its platform's mass and centre
+// of mass are drawn from the robot file's priors on them (PerturbSpatialPlatform), from a
+// stream of their own, unless SpatialMonteCarloOptions::exact_platform.
 //
 // Depends on montecarlo.h (the study's machinery), experiment/ (sample, grid, simulation) and
 // identify/spatial_identify.h.
@@ -56,6 +58,11 @@ struct SpatialMonteCarloOptions {
   // study (its own seed stream) and each trial's random set is n of them drawn without
   // replacement (its own stream): for robots whose sampler is slow (underactuated equilibria).
   int random_pool = 0;
+  // Each trial's true platform: false, its mass and centre of mass drawn from the robot file's
+  // priors (PerturbSpatialPlatform: what a lab's platform is, the file's values known to
+  // mass_sigma and com_sigma); true, the file's values exactly (montecarlo --exact-platform: a
+  // study of the exits and the noise alone).
+  bool exact_platform = false;
   // Ipopt's iteration cap per start of the criterion designs (SpatialDesignOptions::max_iterations).
   int design_max_iterations = 3000;
   // The exit coordinates every trial holds (the gauge), empty: the default gauge's choice on

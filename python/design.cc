@@ -59,7 +59,7 @@ void BindSpatialDesignResult(py::module_& m) {
       .def_property_readonly("weakly_seen_held", [](const PySpatialDesign& d) { return d.result.layout.weakly_seen_held; },
                              "The weakly seen directions nearly a rigid motion of the frame that the gauge holds too, "
                              "in words (empty for most robots).")
-      .def_property_readonly("free", [](const PySpatialDesign& d) { return LayoutNames(d.result.layout, d.result.layout.free); },
+      .def_property_readonly("free", [](const PySpatialDesign& d) { return LayoutNames(d.result.layout, d.result.layout.information_unknowns()); },
                              "The gauge-fixed geometric unknowns the criteria are about.")
       .def_property_readonly("best_start", [](const PySpatialDesign& d) { return d.result.best_start; })
       .def_property_readonly("converged_starts", [](const PySpatialDesign& d) { return d.result.converged_starts; })

@@ -46,7 +46,7 @@ void BindMonteCarlo(py::module_& m) {
       [](py::handle robot_arg, py::handle poses, py::handle trials, py::handle designs, py::handle estimator,
          py::handle gauge, py::handle sensors, py::handle geometry_sigma, py::handle seed, py::handle design_starts,
          py::handle threads, py::handle progress, py::handle loss, py::handle outliers, py::handle geometry_prior,
-         py::handle equilibrium, py::handle com_error) {
+         py::handle equilibrium, py::handle com_error, py::handle exact_platform) {
         // A SpatialRobot's study (montecarlo/spatial_montecarlo.h) takes the same arguments; the
         // planar-only ones must stay at their defaults.
         const bool spatial = py::isinstance<SpatialRobot>(robot_arg);
@@ -76,6 +76,9 @@ void BindMonteCarlo(py::module_& m) {
         o.com_error_m = AsNumber(com_error, "com_error");
         o.design_in_child_processes = false;  // as design() (design.cc)
         SpatialMonteCarloOptions spatial_options;
+        if (!py::isinstance<py::bool_>(exact_platform)) Bad("exact_platform", "expected True or False");
+        if (!spatial && exact_platform.cast<bool>()) Bad("exact_platform", "serves spatial robots only (a cablecal.SpatialRobot)");
+        spatial_options.exact_platform = exact_platform.cast<bool>();
         if (spatial) {
           spatial_options.study = o;
           ValidateSpatialMonteCarloOptions(robot_arg.cast<const SpatialRobot&>(), spatial_options);
@@ -121,10 +124,12 @@ void BindMonteCarlo(py::module_& m) {
       py::arg("threads") = py::none(), py::arg("progress") = py::none(), py::arg("loss") = "none",
       py::arg("outliers") = "0", py::arg("geometry_prior") = false,
       py::arg("equilibrium") = kDefaultEquilibrium ? "on" : "off", py::arg("com_error") = 0.0,
+      py::arg("exact_platform") = false,
       "The Monte Carlo study (cablecal montecarlo) of a Robot or a SpatialRobot (designs also grid:2x2x2, "
       "grid:3x3x3; the planar-only arguments at their defaults); Ctrl-C raises KeyboardInterrupt. progress(done, total), if "
       "given, is called now and then with the trials done. geometry_prior: identify every trial with "
-      "geometry_sigma as a prior (montecarlo --geometry-prior).");
+      "geometry_sigma as a prior (montecarlo --geometry-prior). exact_platform: a SpatialRobot's true platforms "
+      "have its file's mass and centre of mass (montecarlo --exact-platform), not values drawn from its priors.");
 }
 
 }  // namespace cablecal::python

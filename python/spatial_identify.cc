@@ -188,9 +188,9 @@ void BindSpatialIdentify(py::module_& m) {
       .def_property_readonly("final_cost", [](const PySpatialIdentifyResult& r) { return r.result.final_cost; })
       .def_property_readonly("names", [](const PySpatialIdentifyResult& r) { return r.result.names; },
                              "a1x a1y a1z .. amz l10 .. lm0, then b1x .. bmz with identify='anchors', then sw10 .. swm0 "
-                             "and yaw0 when read")
+                             "and yaw0 when read, then mass comx comy comz when the statics are modelled")
       .def_property_readonly("values", [](const PySpatialIdentifyResult& r) { return Vector(r.result.geometry); },
-                             "by names: m, rad")
+                             "by names: m, rad, kg")
       .def_property_readonly("sigma", [](const PySpatialIdentifyResult& r) { return Vector(r.result.sigma); },
                              "by names; 0 where held")
       .def_property_readonly("covariance", [](const PySpatialIdentifyResult& r) { return Array(r.result.covariance); })

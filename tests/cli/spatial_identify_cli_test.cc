@@ -141,8 +141,10 @@ TEST_F(SpatialIdentifyCli, SimulateIdentifyValidateOnABuiltInAndARandomRobot) {
     const YAML::Node truth = YAML::LoadFile(Path("cal_truth.yaml"));
     EXPECT_EQ(result["status"].as<std::string>(), "converged");
     EXPECT_EQ(result["robot"]["kind"].as<std::string>(), "spatial");
-    EXPECT_EQ(result["parameters"].size(), static_cast<std::size_t>(4 * c.m));
-    EXPECT_EQ(result["covariance"].size(), static_cast<std::size_t>(4 * c.m));
+    // Exits, lengths, then (the stretch modelled) the platform's mass and centre of mass.
+    EXPECT_EQ(result["parameters"].size(), static_cast<std::size_t>(4 * c.m + 4));
+    EXPECT_EQ(result["covariance"].size(), static_cast<std::size_t>(4 * c.m + 4));
+    EXPECT_GT(result["parameters"]["mass"]["std"].as<double>(), 0.0);
     EXPECT_LT(WorstExitSigmas(result, truth), 4.5);
     // The initial lengths: what the winches paid out at home, the nominal home's commands.
     // The calibrated robot file: every identified value, every other key the nominal file's.
@@ -159,7 +161,11 @@ TEST_F(SpatialIdentifyCli, SimulateIdentifyValidateOnABuiltInAndARandomRobot) {
       EXPECT_EQ(calibrated.cables[i].stiffness_N, nominal.cables[i].stiffness_N);
     }
     EXPECT_EQ(calibrated.name, nominal.name);
-    EXPECT_EQ(calibrated.platform_mass_kg, nominal.platform_mass_kg);
+    EXPECT_EQ(calibrated.platform_mass_kg, result["parameters"]["mass"]["value"].as<double>());
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_EQ(calibrated.p_P_com_m(a), result["parameters"][std::string("com") + "xyz"[a]]["value"].as<double>());
+    }
+    EXPECT_EQ(calibrated.com_sigma_m, nominal.com_sigma_m);  // the priors stay the file's
     EXPECT_EQ(cablecal::SpatialRobotToYaml(calibrated).find("initial_length") != std::string::npos, true);
 
     // Held-out poses of the same true robot: the calibrated robot predicts them better.
@@ -210,7 +216,7 @@ TEST_F(SpatialIdentifyCli, TheGaugeFromTheDataJsonAndReport) {
   const YAML::Node r = YAML::LoadFile(Path("r.yaml"));
   EXPECT_EQ(r["held"].size(), 2u);
   EXPECT_EQ(r["null_directions"].size(), 2u);
-  EXPECT_EQ(r["null_directions"][0]["vector"].size(), 28u);
+  EXPECT_EQ(r["null_directions"][0]["vector"].size(), 32u);  // 7 exits, 7 lengths, mass and centre of mass
   for (const YAML::Node& h : r["held"]) EXPECT_TRUE(r["parameters"][h.as<std::string>()]["held"].as<bool>());
   EXPECT_EQ(r["missing_sensors"][0].as<std::string>(), "position");
   for (const char* file : {"report.md", "result.yaml", "parameters.csv", "exits.csv", "residuals.csv", "exits.png",

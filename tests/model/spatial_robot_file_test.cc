@@ -157,6 +157,11 @@ TEST(SpatialRobotFile, RoundTripKeepsEveryValue) {
   SpatialRobot calibrated = robots[0];
   for (int i = 0; i < calibrated.num_cables(); ++i) calibrated.cables[i].initial_length_m = 9.5 + 0.1 * i;
   robots.push_back(calibrated);
+  // The platform's priors (the identification's and the Monte Carlo's).
+  SpatialRobot weighed = robots[2];
+  weighed.mass_sigma_kg = 0.0123;
+  weighed.com_sigma_m = 0.0007;
+  robots.push_back(weighed);
   for (const SpatialRobot& r : robots) {
     const std::string text = SpatialRobotToYaml(r);
     const SpatialRobot back = LoadSpatialRobotFromString(text, "roundtrip");
@@ -174,6 +179,8 @@ TEST(SpatialRobotFile, RoundTripKeepsEveryValue) {
     EXPECT_EQ(back.p_F_frame_min_m, r.p_F_frame_min_m);
     EXPECT_EQ(back.p_F_frame_max_m, r.p_F_frame_max_m);
     EXPECT_EQ(back.p_P_com_m, r.p_P_com_m);
+    EXPECT_EQ(back.mass_sigma_kg, r.mass_sigma_kg);
+    EXPECT_EQ(back.com_sigma_m, r.com_sigma_m);
     EXPECT_EQ(back.p_F_home_m, r.p_F_home_m);
     // Degrees are written to 12 significant digits (as the planar file's).
     EXPECT_LT((back.home_rpy_rad - r.home_rpy_rad).cwiseAbs().maxCoeff(), 1e-11);
@@ -233,6 +240,12 @@ INSTANTIATE_TEST_SUITE_P(
                 "home: must be a list of three numbers \\[x, y, z\\]"},
         BadCase{"MissingKey", "tension: {min: 10.0, max: 720.0}", "", "name: ipanema1", "tension: missing"},
         BadCase{"NonPositiveMass", "mass: 25.0", "mass: 0", "mass: 0", "platform\\.mass: must be > 0 \\(got 0\\)"},
+        BadCase{"MassSigmaAboveHalfTheMass", "mass: 25.0", "mass: 25.0\n  mass_sigma: 13", "mass_sigma",
+                "platform\\.mass_sigma: must be at most 12\\.5 kg \\(half the mass\\) \\(got 13\\)"},
+        BadCase{"MassSigmaZero", "mass: 25.0", "mass: 25.0\n  mass_sigma: 0", "mass_sigma",
+                "platform\\.mass_sigma: must be > 0 \\(got 0\\)"},
+        BadCase{"ComSigmaInMillimetres", "mass: 25.0", "mass: 25.0\n  com_sigma: 5", "com_sigma",
+                "platform\\.com_sigma: must be at most 0\\.1 m \\(got 5\\)"},
         BadCase{"TensionMinAtMax", "tension: {min: 10.0, max: 720.0}", "tension: {min: 720.0, max: 720.0}",
                 "tension: {", "tension: min must be < max"},
         BadCase{"TensionMinZero", "tension: {min: 10.0, max: 720.0}", "tension: {min: 0.0, max: 720.0}", "tension: {",

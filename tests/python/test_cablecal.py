@@ -915,15 +915,21 @@ def test_spatial_sample_workspace_simulate_equal_cli(tmp_path, name):
 def test_spatial_montecarlo_equals_cli(tmp_path):
     path = robot_file("cogiro")
     robot = cablecal.Robot.load(path)
-    # The nominal robot as the truth: cogiro's stiff cables take any exit error under their
-    # tension bound at some of 27 poses (README, "Monte Carlo" of spatial robots).
-    result = cablecal.montecarlo(robot, 27, 3, designs="random,grid:3x3x3", geometry_sigma=0, seed=5)
+    # The nominal robot as the truth, its platform too: cogiro's stiff cables take any exit
+    # error under their tension bound at some of 27 poses (README, "Monte Carlo" of spatial
+    # robots), and a platform drawn from the file's priors (5 mm) moves its tensions as much.
+    result = cablecal.montecarlo(robot, 27, 3, designs="random,grid:3x3x3", geometry_sigma=0, seed=5,
+                                 exact_platform=True)
     cli("montecarlo", "--robot", path, "--poses", "27", "--trials", "3", "--designs", "random,grid:3x3x3",
-        "--geometry-sigma", "0", "--seed", "5", "--no-plot", "--out", str(tmp_path))
+        "--geometry-sigma", "0", "--exact-platform", "--seed", "5", "--no-plot", "--out", str(tmp_path))
     assert result.summary_csv() == data_lines(tmp_path / "summary.csv")
     assert {r["design"] for r in result.summary} == {"random", "grid:3x3x3"}
     assert all(r["failures"] == 0 for r in result.summary)
     assert "a1y" in {r["parameter"] for r in result.summary}
+    with pytest.raises(cablecal.InputError, match="exact_platform: expected True or False"):
+        cablecal.montecarlo(robot, 27, 3, exact_platform="yes")
+    with pytest.raises(cablecal.InputError, match="exact_platform: serves spatial robots only"):
+        cablecal.montecarlo(cablecal.Robot.builtin(), 10, 3, exact_platform=True)
     with pytest.raises(cablecal.InputError, match="--gauge"):
         cablecal.montecarlo(robot, 8, 3, gauge="a1z")
     with pytest.raises(cablecal.InputError, match="--poses 27"):
@@ -974,7 +980,7 @@ def test_spatial_identify_equals_cli_and_takes_arrays(tmp_path):
     # The same solve; the last bits may differ with the heap's alignment (Eigen's summation order).
     np.testing.assert_allclose([doc["parameters"][n]["value"] for n in result.names], result.values, rtol=1e-12)
     np.testing.assert_allclose([doc["parameters"][n]["std"] for n in result.names], result.sigma, rtol=1e-6)
-    assert result.covariance.shape == (32, 32) and result.poses.shape == (len(result.pose_ids), 6)
+    assert result.covariance.shape == (36, 36) and result.poses.shape == (len(result.pose_ids), 6)
     assert result.tensions.shape == (len(result.pose_ids), 8)
     assert result.held == doc["held"] == [] and result.null_directions == []
     assert result.worst_reading["pose_id"] == doc["worst_reading"]["pose"]
