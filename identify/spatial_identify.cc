@@ -887,16 +887,23 @@ MatrixXd ReducedJacobian(const Model& model, const VectorXd& g, const Locals& lo
       row += t.size();
     }
     // The pose's singular values from the QR's triangular factor (the same as Jq's), its full
-    // SVD only to name what a refused pose leaves unseen.
+    // SVD only to name what a refused pose leaves unseen. The rank is judged with every column
+    // scaled to unit norm (R D is the factor of Jq D): a tension's column is in 1/N, a
+    // coordinate's in 1/m or 1/rad, and with the equilibrium rows whitened by the statics'
+    // tolerance a 4-cable pose's largest and smallest singular values were 4e-10 apart while
+    // its tensions were well determined (W of full rank).
     Eigen::HouseholderQR<MatrixXd> qr(Jq);
-    bool deficient = rows < cols;
+    const VectorXd column_norms = Jq.colwise().norm().transpose();
+    bool deficient = rows < cols || !(column_norms.minCoeff() > 0.0);
     if (!deficient) {
       const MatrixXd R = qr.matrixQR().topRows(cols).triangularView<Eigen::Upper>();
-      deficient = !SurelyOfFullRank(R);
+      deficient = !SurelyOfFullRank(R * column_norms.cwiseInverse().asDiagonal());
     }
     if (deficient) {
       if (!refuse) continue;
-      const Eigen::JacobiSVD<MatrixXd> svd(Jq, Eigen::ComputeFullV);
+      const Eigen::JacobiSVD<MatrixXd> svd(
+          Jq * column_norms.cwiseMax(std::numeric_limits<double>::min()).cwiseInverse().asDiagonal(),
+          Eigen::ComputeFullV);
       const std::string unknowns = model.nt > 0 ? "6 coordinates and " + std::to_string(model.nt) + " tensions"
                                                 : "6 coordinates";
       throw InputError(model.pose_where[j], "pose " + std::to_string(model.pose_ids[j]),

@@ -108,15 +108,17 @@ constexpr double kSpatialNearlyRigid = 0.05;
 
 // The equilibrium rows' sigma, the statics' tolerance once the mass and the centre of mass are
 // unknowns: the force rows this fraction of the weight, the moment rows the weight times this
-// arm (0.3 mm). Small enough that the priors above, not the rows, carry what the statics do not
-// know: on irma4u, whose simulated statics are exact, the predicted sigmas are then within 6 %
-// of the spread (1e-3 made them 20 % conservative; 1e-4 within 3.5 %, but the nearly hard
-// constraint took cogiro's identification from 11 Levenberg-Marquardt iterations to 35). Pulley
-// friction, the cables' own weight and anything else the model leaves out must fit in it:
-// where they do not, the equilibrium rows' residuals (SpatialReadingFit::equilibrium,
-// result.yaml) say so.
-constexpr double kEquilibriumForceSigmaRelative = 3e-4;
-constexpr double kEquilibriumMomentSigma_m = 3e-4;
+// arm (0.1 mm). Small enough that the priors above, not the rows, carry what the statics do not
+// know: on irma4u, whose simulated statics are exact, the predicted sigmas are then within 3.5 %
+// of the spread (1e-3 made them 20 % conservative, 3e-4 6 %). Its cost: the nearly hard
+// constraint takes a 30-pose cogiro identification 35 Levenberg-Marquardt iterations (11 at
+// 3e-4, 6 at 1e-3); at 3e-4 a random 6-cable robot's 27-pose design reached Ipopt's iteration
+// cap and a robust design on another held only to 0.85 of the requested robustness (both
+// converge at 1e-4; bench/README.md, irma4u). Pulley friction, the cables' own weight and
+// anything else the model leaves out must fit in it: where they do not, the equilibrium rows'
+// residuals (SpatialReadingFit::equilibrium, result.yaml) say so.
+constexpr double kEquilibriumForceSigmaRelative = 1e-4;
+constexpr double kEquilibriumMomentSigma_m = 1e-4;
 
 // Plausibility (SpatialIdentifyResult::warnings): an identified exit point farther than this
 // outside the frame box (pulleys sit on the frame; half a metre is beyond any bracket), and an

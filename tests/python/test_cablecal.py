@@ -1051,7 +1051,8 @@ def test_a_tilted_swivel_axis_turn_is_held_by_identify_and_design(tmp_path):
     robot = cablecal.Robot.load(path)
     run = cablecal.simulate(robot, cablecal.sample(robot, 30, seed=3), seed=4)
     result = cablecal.identify(robot, run.measurements)
-    assert result.status == "converged" and result.iterations < 30
+    # 35 iterations with the equilibrium rows at 1e-4 of the weight (README, "Statics as information").
+    assert result.status == "converged" and result.iterations < 50
     assert len(result.null_directions) == 2 and len(result.held) == 3
     assert [d["nearly_rigid"] for d in result.weak_directions] == [True]
     assert result.weak_directions[0]["description"].startswith("nearly a rotation about z of the frame")
