@@ -315,6 +315,10 @@ const char* StatusName(Ipopt::ApplicationReturnStatus s) {
 
 }  // namespace
 
+bool InitializeIpopt(Ipopt::IpoptApplication& app) {
+  return app.Initialize(std::string()) == Ipopt::Solve_Succeeded;  // an empty name: no options file read
+}
+
 namespace {
 
 // One Ipopt run from `start` with surrogate sharpness `power` (0: the default); `next`, if
@@ -368,7 +372,7 @@ StartOutcome RunIpopt(const Robot& robot, const DesignOptions& options, const st
     app->Options()->SetIntegerValue("file_print_level", 5);
   }
   StartOutcome out;
-  if (app->Initialize() != Ipopt::Solve_Succeeded) {
+  if (!InitializeIpopt(*app)) {
     out.status = "Invalid_Option";
     return out;
   }

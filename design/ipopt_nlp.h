@@ -7,6 +7,10 @@
 
 #include "design/design.h"
 
+namespace Ipopt {
+class IpoptApplication;  // not included here: Ipopt's headers need its pkg-config flags
+}
+
 namespace cablecal::internal {
 
 // Bounds are tightened by these amounts so that poses re-solved exactly by the model after
@@ -28,5 +32,10 @@ struct StartOutcome {
 // whose scenario check failed).
 StartOutcome SolveDesignNlp(const Robot& robot, const DesignOptions& options, const std::vector<PlanPose>& start,
                             const std::vector<double>* widening = nullptr);
+
+// Initialize() for both designs' Ipopt (planar and spatial) without an options file: Ipopt
+// otherwise reads an ipopt.opt from the working directory, so that a stray file (a lab's own
+// Ipopt work) would change a plan silently. True when Ipopt initialized (its options valid).
+bool InitializeIpopt(Ipopt::IpoptApplication& app);
 
 }  // namespace cablecal::internal

@@ -21,6 +21,7 @@
 #include "common/random.h"
 #include "common/version.h"
 #include "common/yaml_writer.h"
+#include "design/ipopt_nlp.h"
 #include "design/robustness_search.h"
 #include "design/solve_process.h"
 #include "model/forward_statics.h"
@@ -407,7 +408,7 @@ Outcome SolveNlp(const SpatialRobot& robot, const SpatialInformationLayout& layo
     app->Options()->SetNumericValue("bound_frac", 1e-6);
   }
   Outcome out;
-  if (app->Initialize() != Ipopt::Solve_Succeeded) {
+  if (!internal::InitializeIpopt(*app)) {
     out.status = "Invalid_Option";
     return out;
   }
@@ -540,7 +541,8 @@ bool StateQuantities(const SpatialRobot& robot, const SpatialPose<double>& q, co
 struct ScenarioCheck {
   std::string failure;        // the first failure, "" when every pose holds on every scenario robot
   std::vector<bool> failing;  // per pose
-  // Per pose: sqrt(sum over exit coordinates ((c+ - c-) / 2)^2), k sigma |dc/dg|_2 to first order.
+  // Per pose: sqrt(sum over the exit coordinates and the platform's 4 values ((c+ - c-) / 2)^2),
+  // k |dc/dg|_2 over the whitened uncertain values to first order.
   std::vector<PoseTightening> spread;
 };
 
@@ -565,8 +567,12 @@ ScenarioCheck CheckScenarios(const SpatialRobot& robot, const std::vector<Spatia
   };
   std::vector<Scenario> scenarios;
   if (Stretches(robot)) scenarios.push_back({-1, 0.0});
+  // Parameters 0 .. 3m-1 the exit coordinates, moved by k_sigma; 3m .. 3m+3 the platform's mass
+  // and centre of mass, moved by robust_sigmas times their prior sigmas (the Monte Carlo draws
+  // each trial's true platform from those priors).
+  const Eigen::Vector4d platform_step = robust_sigmas * SpatialPlatformPriorSigma(robot);
   if (k_sigma > 0.0) {
-    for (int p = 0; p < 3 * m; ++p) {
+    for (int p = 0; p < 3 * m + 4; ++p) {
       scenarios.push_back({p, -1.0});
       scenarios.push_back({p, 1.0});
     }
@@ -577,7 +583,17 @@ ScenarioCheck CheckScenarios(const SpatialRobot& robot, const std::vector<Spatia
   for (const Scenario& sc : scenarios) {
     SpatialRobot truth = robot;
     std::string name = "the nominal robot (its cables stretched)";
-    if (sc.parameter >= 0) {
+    if (sc.parameter >= 3 * m) {
+      const int c = sc.parameter - 3 * m;
+      const double step = sc.sign * platform_step(c);
+      if (c == 0) {
+        truth.platform_mass_kg += step;
+      } else {
+        truth.p_P_com_m(c - 1) += step;
+      }
+      name = std::string("a true platform with its ") + (c == 0 ? "mass" : std::string("centre of mass's ") + axes[c - 1]) +
+             (sc.sign > 0 ? " +" : " -") + FormatDouble(robust_sigmas) + " sigma";
+    } else if (sc.parameter >= 0) {
       truth.cables[sc.parameter / 3].p_F_exit_m(sc.parameter % 3) += sc.sign * k_sigma;
       name = "a true robot with a" + std::to_string(sc.parameter / 3 + 1) + axes[sc.parameter % 3] +
              (sc.sign > 0 ? " +" : " -") + FormatDouble(robust_sigmas) + " sigma";
@@ -760,9 +776,12 @@ std::string SpatialRobustnessText(const SpatialRobot& robot, const SpatialDesign
     return std::string("each pose holds on the nominal geometry only (no robustness to the true geometry)") +
            (stretches ? ", checked with the elastic forward model" : "");
   }
-  const int scenarios = 6 * robot.num_cables() + (stretches ? 1 : 0);
+  const int scenarios = 6 * robot.num_cables() + 8 + (stretches ? 1 : 0);
+  const Eigen::Vector4d platform_sigma = SpatialPlatformPriorSigma(robot);
   return "each pose holds on true robots with exit points within " + FormatDouble(k) + " x " +
-         FormatDouble(r.geometry_sigma_m) + " m of nominal: to first order, and on " + std::to_string(scenarios) +
+         FormatDouble(r.geometry_sigma_m) + " m of nominal and a platform within " + FormatDouble(k) + " x " +
+         Rounded(platform_sigma(0)) + " kg (mass) and " + FormatDouble(k) + " x " + Rounded(platform_sigma(1)) +
+         " m (centre of mass) of the file's: to first order, and on " + std::to_string(scenarios) +
          " scenario robots with the " + (stretches ? "elastic " : "") + "forward model";
 }
 

@@ -21,11 +21,14 @@
 // Robustness to the unknown true geometry (README, "Spatial robots", "Robust spatial design"):
 // the plan is run open loop, so each pose must hold on every true robot whose exit points are
 // within k sigma of nominal. Checked with the full forward model (model/forward_statics.h, the
-// elastic one for cables with stiffness) on 6m scenario robots, each exit coordinate moved by
-// +-k sigma alone, and on the nominal robot itself when a cable stretches: each pose's commanded
+// elastic one for cables with stiffness) on 6m + 8 scenario robots, each exit coordinate moved by
+// +-k sigma alone or the platform's mass or one centre-of-mass coordinate by +-k its prior sigma
+// (SpatialPlatformPriorSigma: the Monte Carlo draws its true platforms so), and on the nominal
+// robot itself when a cable stretches: each pose's commanded
 // lengths must settle the platform near the pose, feasible on that robot. The same settled
 // states give each bounded quantity c its linearised worst case over the ellipsoid
-// |dg / sigma| <= k, k sigma |dc/dg|_2 = sqrt(sum over coordinates ((c+ - c-) / 2)^2), and the
+// |dg / sigma| <= k (g: the exit coordinates and the platform's 4 values, each over its own
+// sigma), k |dc/dg|_2 = sqrt(sum over those ((c+ - c-) / 2)^2), and the
 // NLP is re-solved from its poses with every bound drawn in by that much (widened for poses
 // that failed a scenario), until the poses keep every bound to first order and on every scenario
 // robot, or kSpatialRobustRounds re-solves. Where no start holds at the requested k, the design
@@ -118,7 +121,8 @@ constexpr int kSpatialRobustRounds = 4;
 double DefaultSpatialGeometrySigma(const SpatialRobot& robot);
 
 // What the summary, the console and Python say of the robustness: "each pose holds on the true
-// robots with exit points within 3 x 0.0005 m of nominal (to first order, and on the 48 scenario
+// robots with exit points within 3 x 0.0005 m of nominal and a platform within 3 x 0.91 kg and 3 x
+// 0.005 m (centre of mass) of the file's (to first order, and on the 57 scenario
 // robots with the elastic forward model)".
 std::string SpatialRobustnessText(const SpatialRobot& robot, const SpatialDesignResult& result);
 

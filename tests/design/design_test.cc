@@ -368,6 +368,29 @@ TEST(Design, SolvesInChildProcessesEqualSolvesInProcess) {
   }
 }
 
+// Ipopt reads an options file, ipopt.opt, from the working directory unless told not to: a
+// stray one (here, one that stops every solve at once) must not change a plan.
+TEST(Design, AnIpoptOptionsFileInTheWorkingDirectoryIsNotRead) {
+  const Robot& robot = BuiltinRobot();
+  DesignOptions options;
+  options.poses = 8;
+  options.starts = 1;
+  options.random_sets = 0;
+  const std::string expected = PosePlanCsv(DesignPoses(robot, options).poses, "");
+  testing_support::TempDir dir;
+  dir.Write("ipopt.opt", "max_iter 0\nmumps_pivot_order 2\n");
+  const std::filesystem::path before = std::filesystem::current_path();
+  std::filesystem::current_path(dir.path());
+  std::string got;
+  try {
+    got = PosePlanCsv(DesignPoses(robot, options).poses, "");
+  } catch (const std::exception& e) {
+    got = e.what();
+  }
+  std::filesystem::current_path(before);
+  EXPECT_EQ(got, expected);
+}
+
 TEST(Design, SolvesWithTheReferenceBlas) {
   // With ATLAS behind libblas.so.3, the same Ipopt/MUMPS solve ended differently in about
   // one run in six (alignment-dependent kernels), so every executable loads the reference

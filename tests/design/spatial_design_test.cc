@@ -4,6 +4,7 @@
 #include <Eigen/Dense>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <cstdio>
 #include <optional>
@@ -18,6 +19,7 @@
 #include "identify/spatial_report.h"
 #include "model/builtin_spatial_robots.h"
 #include "tests/support/random_spatial_robot.h"
+#include "tests/support/temp_dir.h"
 
 
 namespace cablecal {
@@ -391,6 +393,30 @@ TEST(SpatialDesign, SolvesInChildProcessesEqualSolvesInProcess) {
   }
 }
 
+// As the planar design's test: a stray ipopt.opt in the working directory is not read (here
+// one that would make Ipopt write a journal; one iteration is enough to show it).
+TEST(SpatialDesign, AnIpoptOptionsFileInTheWorkingDirectoryIsNotRead) {
+  const SpatialRobot robot = BuiltinSpatialRobot("cogiro");
+  SpatialDesignOptions options;
+  options.poses = 13;
+  options.starts = 1;
+  options.random_sets = 0;
+  options.geometry_sigma_m = 0.0;
+  options.max_iterations = 1;
+  options.solve_in_child_processes = false;
+  testing_support::TempDir dir;
+  dir.Write("ipopt.opt", "output_file journal.txt\nfile_print_level 5\n");
+  const std::filesystem::path before = std::filesystem::current_path();
+  std::filesystem::current_path(dir.path());
+  try {
+    DesignSpatialPoses(robot, options);
+  } catch (const SolverFailure&) {
+    // one iteration converges to nothing: expected
+  }
+  std::filesystem::current_path(before);
+  EXPECT_FALSE(std::filesystem::exists(dir.Path("journal.txt")));
+}
+
 // cogiro's and ipanema1's robust designs are the RobustPlansHold* and RobustnessIsLowered* tests
 // (below): here their nominal designs, four times faster, for the criterion against random sets.
 TEST(SpatialDesign, CogiroHoldsAndBeatsRandom) {
@@ -469,12 +495,18 @@ TEST(SpatialDesign, RandomRobotHoldsAndBeatsRandom) {
 // limits, where true robots drawn the same way fail: that is what the robustness is for, and it
 // shows this test can fail.
 int TrueRobotsThatCannotHoldThePlan(const SpatialRobot& robot, const std::vector<SpatialPlanPose>& plan,
-                                    double sigma_m, int draws, std::string* first) {
+                                    double sigma_m, double platform_scale, int draws, std::string* first) {
   const SpatialSimulationOptions quiet = NoiseFree();
   Rng rng(StreamSeed(2811, {}));
   int failed = 0;
   for (int d = 0; d < draws; ++d) {
-    const SpatialRobot truth = PerturbSpatialGeometry(robot, sigma_m, rng);
+    SpatialRobot truth = PerturbSpatialGeometry(robot, sigma_m, rng);
+    // The platform too, with its priors scaled as the exits' sigma is (platform_scale = the
+    // plan's k / 3), as the Monte Carlo draws it.
+    const Eigen::Vector4d platform_sigma = platform_scale * SpatialPlatformPriorSigma(robot);
+    truth.mass_sigma_kg = platform_sigma(0);
+    truth.com_sigma_m = platform_sigma(1);
+    PerturbSpatialPlatform(&truth, rng);
     try {
       Rng noise(1);
       SimulateSpatialExperiment(robot, truth, plan, quiet, noise);
@@ -503,15 +535,16 @@ void ExpectRobustDesignHoldsOnTrueRobots(const SpatialRobot& robot, int n, doubl
   EXPECT_EQ(robust.geometry_sigma_m, sigma_m.value_or(*robot.sensors.tracker_sigma_m));  // default: the tracker's
   EXPECT_GE(robust.robust_sigmas_achieved, least_k) << robust.robustness_note;
   ASSERT_GT(robust.robust_sigmas_achieved, 0.0);
-  const double draw_sigma_m = robust.robust_sigmas_achieved / 3.0 * robust.geometry_sigma_m;
+  const double platform_scale = robust.robust_sigmas_achieved / 3.0;
+  const double draw_sigma_m = platform_scale * robust.geometry_sigma_m;
   std::string first;
   constexpr int kDraws = 20;
-  const int robust_failed = TrueRobotsThatCannotHoldThePlan(robot, robust.poses, draw_sigma_m, kDraws, &first);
+  const int robust_failed = TrueRobotsThatCannotHoldThePlan(robot, robust.poses, draw_sigma_m, platform_scale, kDraws, &first);
   EXPECT_EQ(robust_failed, 0) << first;
   options.geometry_sigma_m = 0.0;
   const SpatialDesignResult nominal = DesignSpatialPoses(robot, options);
   first.clear();
-  const int nominal_failed = TrueRobotsThatCannotHoldThePlan(robot, nominal.poses, draw_sigma_m, kDraws, &first);
+  const int nominal_failed = TrueRobotsThatCannotHoldThePlan(robot, nominal.poses, draw_sigma_m, platform_scale, kDraws, &first);
   std::printf("%s: %d poses, robust to k = %g; true robots (sigma %.3g m) that cannot hold the plan: %d of %d robust "
               "(%.1f s), %d of %d without robustness (%s)\n", robot.name.c_str(), n, robust.robust_sigmas_achieved,
               draw_sigma_m, robust_failed, kDraws, robust.wall_time_s, nominal_failed, kDraws, first.c_str());
@@ -555,7 +588,7 @@ TEST(SpatialDesign, RobustnessIsLoweredWhereNoPlanHoldsAndSaid) {
   // What was achieved holds: on true robots within the achieved k sigma, drawn at a third of it.
   std::string first;
   EXPECT_EQ(TrueRobotsThatCannotHoldThePlan(robot, r.poses, r.robust_sigmas_achieved * *robot.sensors.tracker_sigma_m / 3.0,
-                                            20, &first),
+                                            r.robust_sigmas_achieved / 3.0, 20, &first),
             0)
       << first;
   options.lower_robustness = false;
