@@ -940,7 +940,11 @@ SpatialDesignResult DesignSpatialPoses(const SpatialRobot& robot, const SpatialD
   result.geometry_sigma_m = sigma_m;
   result.robust_sigmas_requested = search.requested_k;
   result.robust_sigmas_achieved = search.achieved_k;
-  if (search.lowered()) result.robustness_note = LoweredRobustnessText(search, sigma_m);
+  if (search.lowered()) {
+    // The spatial scenarios move the platform too, at the same k (the holds sentence gives its sigmas).
+    result.robustness_note = LoweredRobustnessText(search, sigma_m) +
+                             "; the platform's mass and centre of mass within the same k times their priors";
+  }
   result.criteria = SpatialCriteria(SpatialInformation(robot, layout, result.poses));
   const int R = options.random_sets;
   if (R > 0) {
