@@ -53,6 +53,9 @@ constexpr double kSamePose = 1e-6;
 constexpr double kEquilibriumTolerance = 1e-6;  // of the weight
 
 constexpr std::uint64_t kStartStream = 1, kRandomSetStream = 2, kGaugeStream = 3;
+// The platform's uncertain values a scenario robot moves: the mass and the centre of mass's 3
+// coordinates (SpatialPlatformPriorSigma), after the 3m exit coordinates.
+constexpr int kPlatformScenarioValues = 4;
 
 // The NLP's variables per pose: q then t; Jets of the largest robot's.
 constexpr int kMaxV = 6 + kMaxSpatialCables;
@@ -572,7 +575,7 @@ ScenarioCheck CheckScenarios(const SpatialRobot& robot, const std::vector<Spatia
   // each trial's true platform from those priors).
   const Eigen::Vector4d platform_step = robust_sigmas * SpatialPlatformPriorSigma(robot);
   if (k_sigma > 0.0) {
-    for (int p = 0; p < 3 * m + 4; ++p) {
+    for (int p = 0; p < 3 * m + kPlatformScenarioValues; ++p) {
       scenarios.push_back({p, -1.0});
       scenarios.push_back({p, 1.0});
     }
@@ -776,7 +779,7 @@ std::string SpatialRobustnessText(const SpatialRobot& robot, const SpatialDesign
     return std::string("each pose holds on the nominal geometry only (no robustness to the true geometry)") +
            (stretches ? ", checked with the elastic forward model" : "");
   }
-  const int scenarios = 6 * robot.num_cables() + 8 + (stretches ? 1 : 0);
+  const int scenarios = 2 * (3 * robot.num_cables() + kPlatformScenarioValues) + (stretches ? 1 : 0);
   const Eigen::Vector4d platform_sigma = SpatialPlatformPriorSigma(robot);
   return "each pose holds on true robots with exit points within " + FormatDouble(k) + " x " +
          FormatDouble(r.geometry_sigma_m) + " m of nominal and a platform within " + FormatDouble(k) + " x " +

@@ -379,15 +379,13 @@ TEST(Design, AnIpoptOptionsFileInTheWorkingDirectoryIsNotRead) {
   const std::string expected = PosePlanCsv(DesignPoses(robot, options).poses, "");
   testing_support::TempDir dir;
   dir.Write("ipopt.opt", "max_iter 0\nmumps_pivot_order 2\n");
-  const std::filesystem::path before = std::filesystem::current_path();
-  std::filesystem::current_path(dir.path());
   std::string got;
   try {
+    const testing_support::ScopedWorkingDirectory in_dir(dir.path());
     got = PosePlanCsv(DesignPoses(robot, options).poses, "");
   } catch (const std::exception& e) {
     got = e.what();
   }
-  std::filesystem::current_path(before);
   EXPECT_EQ(got, expected);
 }
 

@@ -406,14 +406,12 @@ TEST(SpatialDesign, AnIpoptOptionsFileInTheWorkingDirectoryIsNotRead) {
   options.solve_in_child_processes = false;
   testing_support::TempDir dir;
   dir.Write("ipopt.opt", "output_file journal.txt\nfile_print_level 5\n");
-  const std::filesystem::path before = std::filesystem::current_path();
-  std::filesystem::current_path(dir.path());
   try {
+    const testing_support::ScopedWorkingDirectory in_dir(dir.path());
     DesignSpatialPoses(robot, options);
   } catch (const SolverFailure&) {
     // one iteration converges to nothing: expected
   }
-  std::filesystem::current_path(before);
   EXPECT_FALSE(std::filesystem::exists(dir.Path("journal.txt")));
 }
 
@@ -494,16 +492,18 @@ TEST(SpatialDesign, RandomRobotHoldsAndBeatsRandom) {
 // within the true robot's limits). The same design without robustness puts its poses on the
 // limits, where true robots drawn the same way fail: that is what the robustness is for, and it
 // shows this test can fail.
+// True robots are drawn at a third of the plan's achieved k: exits with k / 3 x geometry_sigma_m,
+// the platform with k / 3 times its priors, so that the plan's k sigma is their 3 sigma.
 int TrueRobotsThatCannotHoldThePlan(const SpatialRobot& robot, const std::vector<SpatialPlanPose>& plan,
-                                    double sigma_m, double platform_scale, int draws, std::string* first) {
+                                    double achieved_k, double geometry_sigma_m, int draws, std::string* first) {
+  const double scale = achieved_k / 3.0;
+  const Eigen::Vector4d platform_sigma = scale * SpatialPlatformPriorSigma(robot);
   const SpatialSimulationOptions quiet = NoiseFree();
   Rng rng(StreamSeed(2811, {}));
   int failed = 0;
   for (int d = 0; d < draws; ++d) {
-    SpatialRobot truth = PerturbSpatialGeometry(robot, sigma_m, rng);
-    // The platform too, with its priors scaled as the exits' sigma is (platform_scale = the
-    // plan's k / 3), as the Monte Carlo draws it.
-    const Eigen::Vector4d platform_sigma = platform_scale * SpatialPlatformPriorSigma(robot);
+    SpatialRobot truth = PerturbSpatialGeometry(robot, scale * geometry_sigma_m, rng);
+    // The platform too, as the Monte Carlo draws it.
     truth.mass_sigma_kg = platform_sigma(0);
     truth.com_sigma_m = platform_sigma(1);
     PerturbSpatialPlatform(&truth, rng);
@@ -535,16 +535,15 @@ void ExpectRobustDesignHoldsOnTrueRobots(const SpatialRobot& robot, int n, doubl
   EXPECT_EQ(robust.geometry_sigma_m, sigma_m.value_or(*robot.sensors.tracker_sigma_m));  // default: the tracker's
   EXPECT_GE(robust.robust_sigmas_achieved, least_k) << robust.robustness_note;
   ASSERT_GT(robust.robust_sigmas_achieved, 0.0);
-  const double platform_scale = robust.robust_sigmas_achieved / 3.0;
-  const double draw_sigma_m = platform_scale * robust.geometry_sigma_m;
+  const double k = robust.robust_sigmas_achieved, draw_sigma_m = k / 3.0 * robust.geometry_sigma_m;
   std::string first;
   constexpr int kDraws = 20;
-  const int robust_failed = TrueRobotsThatCannotHoldThePlan(robot, robust.poses, draw_sigma_m, platform_scale, kDraws, &first);
+  const int robust_failed = TrueRobotsThatCannotHoldThePlan(robot, robust.poses, k, robust.geometry_sigma_m, kDraws, &first);
   EXPECT_EQ(robust_failed, 0) << first;
   options.geometry_sigma_m = 0.0;
   const SpatialDesignResult nominal = DesignSpatialPoses(robot, options);
   first.clear();
-  const int nominal_failed = TrueRobotsThatCannotHoldThePlan(robot, nominal.poses, draw_sigma_m, platform_scale, kDraws, &first);
+  const int nominal_failed = TrueRobotsThatCannotHoldThePlan(robot, nominal.poses, k, robust.geometry_sigma_m, kDraws, &first);
   std::printf("%s: %d poses, robust to k = %g; true robots (sigma %.3g m) that cannot hold the plan: %d of %d robust "
               "(%.1f s), %d of %d without robustness (%s)\n", robot.name.c_str(), n, robust.robust_sigmas_achieved,
               draw_sigma_m, robust_failed, kDraws, robust.wall_time_s, nominal_failed, kDraws, first.c_str());
@@ -590,8 +589,7 @@ TEST(SpatialDesign, RobustnessIsLoweredWhereNoPlanHoldsAndSaid) {
   EXPECT_NE(summary.find("robustness_lowered: "), std::string::npos) << summary;
   // What was achieved holds: on true robots within the achieved k sigma, drawn at a third of it.
   std::string first;
-  EXPECT_EQ(TrueRobotsThatCannotHoldThePlan(robot, r.poses, r.robust_sigmas_achieved * *robot.sensors.tracker_sigma_m / 3.0,
-                                            r.robust_sigmas_achieved / 3.0, 20, &first),
+  EXPECT_EQ(TrueRobotsThatCannotHoldThePlan(robot, r.poses, r.robust_sigmas_achieved, *robot.sensors.tracker_sigma_m, 20, &first),
             0)
       << first;
   options.lower_robustness = false;

@@ -51,4 +51,22 @@ class TempDir {
   std::filesystem::path path_;
 };
 
+// The working directory set to `path` while it lives, and back to what it was when it ends
+// (an exception included): for code that reads or writes files relative to it.
+class ScopedWorkingDirectory {
+ public:
+  explicit ScopedWorkingDirectory(const std::filesystem::path& path) : before_(std::filesystem::current_path()) {
+    std::filesystem::current_path(path);
+  }
+  ~ScopedWorkingDirectory() {
+    std::error_code ignored;
+    std::filesystem::current_path(before_, ignored);
+  }
+  ScopedWorkingDirectory(const ScopedWorkingDirectory&) = delete;
+  ScopedWorkingDirectory& operator=(const ScopedWorkingDirectory&) = delete;
+
+ private:
+  std::filesystem::path before_;
+};
+
 }  // namespace cablecal::testing_support
