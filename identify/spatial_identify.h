@@ -78,7 +78,10 @@
 // hold is a choice of frame as the null directions' are: the fit is the same to its tiny
 // singular value. --gauge hold: without it estimates it.
 // Solver: Levenberg-Marquardt with the poses eliminated (our block-arrow iterations without a robust
-// loss, Ceres DENSE_SCHUR with one), from each pose's own start at the nominal geometry.
+// loss, Ceres DENSE_SCHUR with one), from each pose's own start at the nominal geometry. Ours
+// falls back to a QR step where the normal equations fail and refits the poses at each
+// candidate once a step was mispredicted near the fit (identify/spatial_identify.cc,
+// SolveBlockArrow: barely determined problems converge instead of crawling).
 // Depends on model/ (header-only parts and the robot), Ceres and experiment/spatial_measurements.h.
 #pragma once
 
