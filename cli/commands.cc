@@ -129,9 +129,15 @@ std::function<void(long, long)> ProgressBar(const std::string& label, const std:
 }
 
 std::function<void(double)> TryingRobustnessNotice(double requested_k) {
-  return [requested_k](double k) {
-    std::fprintf(stderr, "cablecal: design: no verified poses at --robust-sigmas %s; searching for the largest k "
-                 "below it that has some: trying %s\n", FormatDouble(requested_k).c_str(), FormatDouble(k).c_str());
+  // The why once, then each k tried: the search designs at up to six values of k.
+  return [requested_k, first = true](double k) mutable {
+    if (first) {
+      std::fprintf(stderr, "cablecal: design: no verified poses at --robust-sigmas %s; searching for the largest k "
+                   "below it that has some: trying %s\n", FormatDouble(requested_k).c_str(), FormatDouble(k).c_str());
+    } else {
+      std::fprintf(stderr, "cablecal: design: trying --robust-sigmas %s\n", FormatDouble(k).c_str());
+    }
+    first = false;
   };
 }
 

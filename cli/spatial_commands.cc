@@ -245,8 +245,15 @@ int RunSpatialDesign(const Context& ctx, const DesignCommandOptions& options) {
     for (int h : result.layout.held) list += (list.empty() ? "" : ",") + result.layout.names[h];
     held += "; identify with --gauge hold:" + list + " for the covariance it predicts";
   }
+  // Where the exits' sigma came from, unless the user gave it.
+  std::string sigma_from;
+  if (!options.geometry_sigma_given && result.robust_sigmas_achieved * result.geometry_sigma_m > 0.0) {
+    sigma_from = robot.sensors.tracker_sigma_m
+                     ? " (sigma: the robot file's tracker)"
+                     : " (sigma: the default, the robot file gives no sensors.tracker; --geometry-sigma sets it)";
+  }
   std::printf("  the gauge holds %s; %s%s\n", held.c_str(), SpatialRobustnessText(robot, result).c_str(),
-              options.geometry_sigma_given || !robot.sensors.tracker_sigma_m ? "" : " (sigma: the robot file's tracker)");
+              sigma_from.c_str());
   if (!result.prior_note.empty() && !ctx.quiet) std::fprintf(stderr, "cablecal: warning: %s\n", result.prior_note.c_str());
   if (result.robustness_lowered() && !ctx.quiet) {
     std::fprintf(stderr, "cablecal: warning: robustness lowered: %s\n", result.robustness_note.c_str());

@@ -984,8 +984,6 @@ std::string SpatialDesignSummaryYaml(const SpatialRobot& robot, const SpatialDes
       << Value << YamlNumber{v.a_trace_covariance_m2} << Key << "e_min_eigenvalue" << Value
       << YamlNumber{v.e_min_eigenvalue} << EndMap;
   };
-  std::string free_names;
-  for (int c : r.layout.information_unknowns()) free_names += (free_names.empty() ? "" : " ") + r.layout.names[c];
   o << YAML::Comment(
            "cablecal design summary, spatial robot (README, \"Spatial robots\"). Criteria of the returned set are\n"
            "recomputed from its verified poses. S: information of the gauge-fixed geometry (1/m^2, 1/rad^2 for\n"
@@ -1012,7 +1010,9 @@ std::string SpatialDesignSummaryYaml(const SpatialRobot& robot, const SpatialDes
     for (const std::string& d : r.layout.weakly_seen_held) o << YamlString{d};
     o << YAML::EndSeq;
   }
-  o << Key << "free" << Value << YamlString{free_names};
+  o << Key << "free" << Value << Flow << YAML::BeginSeq;  // a list, as `held`
+  for (int c : r.layout.information_unknowns()) o << r.layout.names[c];
+  o << YAML::EndSeq;
   if (options.prior) {
     o << Key << "prior" << Value << YamlString{options.prior->source}
       << YAML::Comment("an earlier identification: the robot is its estimate, S counts its information");

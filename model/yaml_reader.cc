@@ -40,10 +40,27 @@ void Reader::ExpectMap(const YAML::Node& node, const std::string& key, const std
   }
 }
 
+double Reader::Number(const YAML::Node& parent, const std::string& parent_key, const std::string& name) const {
+  const YAML::Node node = parent[name];
+  // A key with nothing after it: its empty value's mark is the next token's, so name the key's line.
+  if (node.IsNull() && parent.IsMap()) {
+    for (const auto& kv : parent) {
+      if (kv.first.Scalar() == name) Fail(kv.first, Join(parent_key, name), "must be a number (got nothing)");
+    }
+  }
+  return NumberNode(node, Join(parent_key, name));
+}
+
 double Reader::NumberNode(const YAML::Node& node, const std::string& key) const {
-  if (!node.IsScalar()) Fail(node, key, "must be a number");
+  if (!node.IsScalar()) {
+    Fail(node, key, std::string("must be a number (got ") +
+                        (node.IsSequence() ? "a list" : node.IsMap() ? "a mapping" : "nothing") + ")");
+  }
   double value = 0.0;
   const std::string text = node.Scalar();
+  // A quoted scalar is YAML's string (its tag "!"): "0.12" would be a number to us and text to
+  // every other YAML reader of the file, so it is refused rather than read.
+  if (node.Tag() == "!") Fail(node, key, "must be a number, not a quoted string (got \"" + text + "\")");
   if (!ParseFiniteDouble(text, &value)) {
     Fail(node, key, "must be a finite number (got '" + text + "')");
   }

@@ -28,9 +28,7 @@ class Reader {
   void ExpectMap(const YAML::Node& node, const std::string& key, const std::set<std::string>& required,
                  const std::set<std::string>& optional) const;
 
-  double Number(const YAML::Node& parent, const std::string& parent_key, const std::string& name) const {
-    return NumberNode(parent[name], Join(parent_key, name));
-  }
+  double Number(const YAML::Node& parent, const std::string& parent_key, const std::string& name) const;
   double NumberNode(const YAML::Node& node, const std::string& key) const;
 
   // [x, z]: a planar point.

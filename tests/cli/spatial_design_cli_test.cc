@@ -5,6 +5,7 @@
 // two starts and few random sets: the point is the command, tests/design checks the design.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <yaml-cpp/yaml.h>
 
 #include <array>
 #include <cstdio>
@@ -139,6 +140,15 @@ TEST_F(SpatialDesignCli, PlanReadsBackAndSimulatesOnIrma4uAndARandomRobot) {
                                    "poses: " + std::to_string(n) + "\n", std::string("seed: 5\n"),
                                    std::string("random_sets: {count: 3,"), std::string("starts: {count: 2,")}) {
       EXPECT_NE(summary.find(key), std::string::npos) << key << "\n" << summary;
+    }
+
+    // The gauge-fixed unknowns and the held ones, each a list of names, none in both.
+    const YAML::Node information = YAML::LoadFile(Path("summary.yaml"))["information"];
+    ASSERT_TRUE(information["free"].IsSequence()) << summary;
+    ASSERT_TRUE(information["held"].IsSequence()) << summary;
+    EXPECT_GT(information["free"].size(), 0u);
+    for (const YAML::Node& f : information["free"]) {
+      for (const YAML::Node& h : information["held"]) EXPECT_NE(f.as<std::string>(), h.as<std::string>());
     }
 
     // The robustness it holds for, said; irma4u (no tracker survey: the default 0.01 m) holds no
