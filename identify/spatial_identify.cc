@@ -1564,14 +1564,10 @@ Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasureme
   // cables: 3 of 12 poses started at tensions of 1e5 N, and the whole fit converged at 30 sigma
   // from noise-free readings). So the pose comes first from the readings without the statics
   // (the encoders' lengths inextensible, as --equilibrium off), then the tensions with that pose
-  // held, then both; the start from home is kept when it fits the pose's readings better. Below
-  // 6 cables too, where the statics decide the orientation: from home, the stiff equilibrium
-  // rows led a pose 0.7 m away into another equilibrium (a 4-cable robot with its centre of
-  // mass off in x: noise-free readings fitted at 17.5 sigma, the exits 0.3 m off; test
-  // FourCablesFarFromHomeWithAnOffsetCentreOfMass); where its readings alone do not fix the
-  // pose (encoders alone), the start from home still competes.
+  // held, then both; the start from home is kept when it fits the pose's readings better. Not
+  // below 6 cables: there the statics, not the cables, hold the platform's pose.
   std::optional<Model> rigid;
-  if (a.model.nt > 0) rigid = BuildModel(nominal, readings, false, false, options.anchors);
+  if (a.model.nt > 0 && L.m >= 6) rigid = BuildModel(nominal, readings, false, false, options.anchors);
   const auto pose_cost = [&](int j, const VectorXd& x) {
     double cost = 0.0;
     for (int k : a.model.pose_terms[j]) {
@@ -1598,10 +1594,8 @@ Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasureme
     }
     staged = StartingLocal(a.model, j, a.g0, StartingLocal(a.model, j, a.g0, staged, 6));
     const double staged_cost = pose_cost(j, staged);
-    // Readings that fit to within their noise need no second opinion; below 6 cables they may
-    // (encoders and an inclinometer: 6 values for 6 coordinates, fitted exactly at a wrong pose
-    // the equilibrium then drags along), so both starts are tried there.
-    if (L.m >= 6 && staged_cost <= a.model.pose_values[j]) {
+    // Readings that fit to within their noise need no second opinion.
+    if (staged_cost <= a.model.pose_values[j]) {
       a.start.push_back(std::move(staged));
       continue;
     }
