@@ -1201,7 +1201,7 @@ BlockArrowSummary SolveBlockArrow(const Model& model, VectorXd& g, Locals& local
       step_g = -ldlt.solve(rhs);
       valid = ldlt.info() == Eigen::Success && step_g.allFinite();
     }
-    double model_decrease = 0.0, step_norm2 = step_g.squaredNorm(), x_norm2 = g.squaredNorm();
+    double model_decrease = 0.0;
     if (valid) {
       double jstep2 = step_g.dot(h * step_g);
       model_decrease = -gradient.dot(step_g);
@@ -1210,8 +1210,6 @@ BlockArrowSummary SolveBlockArrow(const Model& model, VectorXd& g, Locals& local
         step_q[j] = -pose.damped_inverse * (pose.gradient + pose.b.transpose() * step_g);
         jstep2 += step_q[j].dot(pose.a * step_q[j]) + 2.0 * step_g.dot(pose.b * step_q[j]);
         model_decrease -= pose.gradient.dot(step_q[j]);
-        step_norm2 += step_q[j].squaredNorm();
-        x_norm2 += locals[j].squaredNorm();
       }
       model_decrease -= 0.5 * jstep2;
       valid = std::isfinite(model_decrease) && model_decrease > 0.0;
@@ -1221,14 +1219,6 @@ BlockArrowSummary SolveBlockArrow(const Model& model, VectorXd& g, Locals& local
       // digits, the same damped step by orthogonal factorizations (BlockArrowStepQr).
       valid = BlockArrowStepQr(model, g, locals, held, mu, poses, h, step_g, step_q, model_decrease) &&
               std::isfinite(model_decrease) && model_decrease > 0.0;
-      if (valid) {
-        step_norm2 = step_g.squaredNorm();
-        x_norm2 = g.squaredNorm();
-        for (int j = 0; j < n; ++j) {
-          step_norm2 += step_q[j].squaredNorm();
-          x_norm2 += locals[j].squaredNorm();
-        }
-      }
     }
     if (!valid) {
       if (at_limit()) return stop(false, limit_reached);
@@ -1242,6 +1232,12 @@ BlockArrowSummary SolveBlockArrow(const Model& model, VectorXd& g, Locals& local
       continue;
     }
     invalid_steps = 0;
+    // The step's and the iterate's size over every unknown (whichever factorization gave it).
+    double step_norm2 = step_g.squaredNorm(), x_norm2 = g.squaredNorm();
+    for (int j = 0; j < n; ++j) {
+      step_norm2 += step_q[j].squaredNorm();
+      x_norm2 += locals[j].squaredNorm();
+    }
     if (std::sqrt(step_norm2) <= kSettings.parameter_tolerance * (std::sqrt(x_norm2) + kSettings.parameter_tolerance)) {
       return stop(true, "Parameter tolerance reached");
     }
