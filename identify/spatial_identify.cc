@@ -1518,6 +1518,65 @@ std::vector<std::string> SpatialPlausibilityWarnings(const SpatialRobot& nominal
 
 namespace {
 
+// Each pose's start: home, and the tensions its first load-cell reading gives, else the
+// least-squares tensions holding the nominal platform at home.
+//
+// With the statics, a pose's tensions are a second unknown of its start: from home with the
+// home tensions, a pose a metre away can end in a wrong basin (measured on ipanema1, 8 stiff
+// cables: 3 of 12 poses started at tensions of 1e5 N, and the whole fit converged at 30 sigma
+// from noise-free readings). So the pose comes first from the readings without the statics
+// (the encoders' lengths inextensible, as --equilibrium off), then the tensions with that pose
+// held, then both ("staged"); the start from home is kept when it fits the pose's readings
+// better. Below 6 cables the statics, not the cables, hold the platform's pose, and the staged
+// start is tried only when `staged_below_six` (IdentifySpatial's second attempt, when the fit
+// from home ends far from the readings): there readings that fit a staged start to within
+// their noise (encoders and an inclinometer: 6 values for 6 coordinates) may still be at a
+// wrong pose, so the start from home always competes.
+Locals PoseStarts(const Model& model, const SpatialRobot& nominal, const std::vector<SpatialMeasurement>& readings,
+                  bool anchors, const VectorXd& g0, bool staged_below_six) {
+  const Layout& L = model.layout;
+  const int n = static_cast<int>(model.pose_ids.size());
+  VectorXd start0(model.local());
+  start0.head<6>() = nominal.home_pose();
+  if (model.nt > 0) start0.tail(model.nt) = BalancedTensions(nominal, nominal.home_pose(), VectorXd::Zero(model.nt));
+  std::optional<Model> rigid;
+  if (model.nt > 0 && (L.m >= 6 || staged_below_six)) rigid = BuildModel(nominal, readings, false, false, anchors);
+  const auto pose_cost = [&](int j, const VectorXd& x) {
+    double cost = 0.0;
+    for (int k : model.pose_terms[j]) {
+      const Term& t = model.terms[k];
+      VectorXd r(t.size());
+      EvaluateTerm(t, g0, x.data(), static_cast<int>(x.size()), r.data(), nullptr, nullptr);
+      cost += r.squaredNorm();
+    }
+    return std::isfinite(cost) ? cost : std::numeric_limits<double>::infinity();
+  };
+  Locals starts;
+  for (int j = 0; j < n; ++j) {
+    VectorXd s = start0;
+    const SpatialMeasurement& first = readings[model.terms[model.pose_terms[j][0]].reading];
+    const bool load_cells = model.nt > 0 && first.has(SpatialSensor::kLoadCell);
+    if (load_cells) s.tail(model.nt) = first.values(SpatialSensor::kLoadCell);
+    if (!rigid) {
+      starts.push_back(StartingLocal(model, j, g0, s));
+      continue;
+    }
+    VectorXd staged = s;
+    staged.head<6>() = StartingLocal(*rigid, j, g0, start0.head<6>());
+    if (!load_cells) staged.tail(model.nt) = BalancedTensions(nominal, staged.head<6>(), VectorXd::Zero(model.nt));
+    staged = StartingLocal(model, j, g0, StartingLocal(model, j, g0, staged, 6));
+    const double staged_cost = pose_cost(j, staged);
+    // Readings that fit to within their noise need no second opinion (above 6 cables).
+    if (L.m >= 6 && staged_cost <= model.pose_values[j]) {
+      starts.push_back(std::move(staged));
+      continue;
+    }
+    VectorXd from_home = StartingLocal(model, j, g0, s);
+    starts.push_back(pose_cost(j, from_home) < staged_cost ? std::move(from_home) : std::move(staged));
+  }
+  return starts;
+}
+
 struct Analysis {
   Model model;
   VectorXd g0;
@@ -1548,56 +1607,7 @@ Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasureme
                                          " poses" + tensions +
                                          "): too few to determine the geometry; measure more poses or add a sensor");
   }
-  // Each pose's start: home, and the tensions its first load-cell reading gives, else the
-  // least-squares tensions holding the nominal platform at home.
-  VectorXd start0(local);
-  start0.head<6>() = nominal.home_pose();
-  if (a.model.nt > 0) {
-    start0.tail(a.model.nt) = BalancedTensions(nominal, nominal.home_pose(), VectorXd::Zero(a.model.nt));
-  }
-  // With the statics, a pose's tensions are a second unknown of its start: from home with the
-  // home tensions, a pose a metre away can end in a wrong basin (measured on ipanema1, 8 stiff
-  // cables: 3 of 12 poses started at tensions of 1e5 N, and the whole fit converged at 30 sigma
-  // from noise-free readings). So the pose comes first from the readings without the statics
-  // (the encoders' lengths inextensible, as --equilibrium off), then the tensions with that pose
-  // held, then both; the start from home is kept when it fits the pose's readings better. Not
-  // below 6 cables: there the statics, not the cables, hold the platform's pose.
-  std::optional<Model> rigid;
-  if (a.model.nt > 0 && L.m >= 6) rigid = BuildModel(nominal, readings, false, false, options.anchors);
-  const auto pose_cost = [&](int j, const VectorXd& x) {
-    double cost = 0.0;
-    for (int k : a.model.pose_terms[j]) {
-      const Term& t = a.model.terms[k];
-      VectorXd r(t.size());
-      EvaluateTerm(t, a.g0, x.data(), static_cast<int>(x.size()), r.data(), nullptr, nullptr);
-      cost += r.squaredNorm();
-    }
-    return std::isfinite(cost) ? cost : std::numeric_limits<double>::infinity();
-  };
-  for (int j = 0; j < n; ++j) {
-    VectorXd s = start0;
-    const SpatialMeasurement& first = readings[a.model.terms[a.model.pose_terms[j][0]].reading];
-    const bool load_cells = a.model.nt > 0 && first.has(SpatialSensor::kLoadCell);
-    if (load_cells) s.tail(a.model.nt) = first.values(SpatialSensor::kLoadCell);
-    if (!rigid) {
-      a.start.push_back(StartingLocal(a.model, j, a.g0, s));
-      continue;
-    }
-    VectorXd staged = s;
-    staged.head<6>() = StartingLocal(*rigid, j, a.g0, start0.head<6>());
-    if (!load_cells) {
-      staged.tail(a.model.nt) = BalancedTensions(nominal, staged.head<6>(), VectorXd::Zero(a.model.nt));
-    }
-    staged = StartingLocal(a.model, j, a.g0, StartingLocal(a.model, j, a.g0, staged, 6));
-    const double staged_cost = pose_cost(j, staged);
-    // Readings that fit to within their noise need no second opinion.
-    if (staged_cost <= a.model.pose_values[j]) {
-      a.start.push_back(std::move(staged));
-      continue;
-    }
-    VectorXd from_home = StartingLocal(a.model, j, a.g0, s);
-    a.start.push_back(pose_cost(j, from_home) < staged_cost ? std::move(from_home) : std::move(staged));
-  }
+  a.start = PoseStarts(a.model, nominal, readings, options.anchors, a.g0, false);
   // What the readings alone see, at the starts with each pose's tensions moved to the nearest
   // that hold it in exact equilibrium: at a start that misfits the equilibrium (the nominal l_i0
   // of a stretching cable is its length under load, not unloaded), the equilibrium rows see a
@@ -1831,17 +1841,37 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
   result.pose_ids = model.pose_ids;
   for (const VectorXd& x : a.start) result.starting_poses.push_back(x.head<6>());
 
-  VectorXd g = a.g0;
-  Locals locals = a.start;
-  bool converged = false;
-  int iterations = 0;
-  std::string message;
+  // One fit from the given starts: the block-arrow LM for plain least squares, Ceres for a
+  // robust loss. `objective` is what it minimised (Ceres' robust cost with a loss).
+  struct Fit {
+    VectorXd g;
+    Locals locals;
+    bool converged = false;
+    int iterations = 0;
+    double objective = std::numeric_limits<double>::infinity();
+    std::string message;
+  };
+  const auto solve = [&](Locals starts) {
+  Fit fit;
+  fit.g = a.g0;
+  fit.locals = std::move(starts);
+  VectorXd& g = fit.g;
+  Locals& locals = fit.locals;
   if (options.loss.kind == LossKind::kNone) {
     const BlockArrowSummary solved = SolveBlockArrow(model, g, locals, a.gauge.held, options.max_iterations);
-    converged = solved.converged;
-    iterations = solved.iterations + 1;  // with the start, as Ceres counts them
-    message = solved.message;
-  } else {  // a robust loss: Ceres, which reweights each residual block by it
+    fit.converged = solved.converged;
+    fit.iterations = solved.iterations + 1;  // with the start, as Ceres counts them
+    fit.message = solved.message;
+    fit.objective = 0.0;
+    for (const Term& t : model.terms) {
+      VectorXd r(t.size());
+      EvaluateTerm(t, g, locals, r.data(), nullptr, nullptr);
+      fit.objective += 0.5 * r.squaredNorm();
+    }
+    if (!std::isfinite(fit.objective)) fit.objective = std::numeric_limits<double>::infinity();
+    return fit;
+  }
+  // A robust loss: Ceres, which reweights each residual block by it.
   const int local = model.local();
   std::vector<std::unique_ptr<ceres::CostFunction>> adapters;
   ceres::Problem::Options problem_options;
@@ -1926,10 +1956,42 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
   ceres::Solver::Summary summary;
   ceres::Solve(solver, &problem, &summary);
   for (int j = 0; j < n; ++j) locals[j] = Eigen::Map<const VectorXd>(block(j), local);
-  converged = summary.termination_type == ceres::CONVERGENCE;
-  iterations = static_cast<int>(summary.iterations.size());
-  message = summary.message;
+  fit.converged = summary.termination_type == ceres::CONVERGENCE;
+  fit.iterations = static_cast<int>(summary.iterations.size());
+  fit.message = summary.message;
+  fit.objective = std::isfinite(summary.final_cost) ? summary.final_cost : std::numeric_limits<double>::infinity();
+  return fit;
+  };
+  Fit fit = solve(a.start);
+  // Below 6 cables every pose starts from home (PoseStarts), and a pose far from home can end
+  // in another equilibrium: a 4-cable robot with its centre of mass off in x and z, poses 0.7 m
+  // from home, had its noise-free readings fitted at 17.5 sigma, the exits 0.3 m off. Starting
+  // every such pose staged instead led irma4u's noisy experiments to a higher minimum in 55 of
+  // 60 (27 designed poses), so the staged starts are a second attempt only, for a fit that did
+  // not converge or ended beyond kRetryWhitenedRms (whitened RMS over every value, the
+  // equilibrium's rows included): a fit of readings at their noise has an RMS near 1, so a fit
+  // from home that is good keeps its result bit for bit. The lower objective wins.
+  constexpr double kRetryWhitenedRms = 2.0;
+  if (model.nt > 0 && L.m < 6 &&
+      (!fit.converged || !(fit.objective <= 0.5 * kRetryWhitenedRms * kRetryWhitenedRms * model.num_values))) {
+    Locals staged = PoseStarts(model, nominal, readings, options.anchors, a.g0, true);
+    bool differ = false;
+    for (int j = 0; j < n; ++j) differ = differ || staged[j] != a.start[j];
+    if (differ) {
+      Fit second = solve(staged);
+      const bool better = second.converged == fit.converged ? second.objective < fit.objective : second.converged;
+      if (better) {
+        fit = std::move(second);
+        result.starting_poses.clear();
+        for (const VectorXd& x : staged) result.starting_poses.push_back(x.head<6>());
+      }
+    }
   }
+  const VectorXd& g = fit.g;
+  const Locals& locals = fit.locals;
+  const bool converged = fit.converged;
+  const int iterations = fit.iterations;
+  const std::string& message = fit.message;
 
   result.geometry = g;
   for (const VectorXd& x : locals) {

@@ -204,6 +204,10 @@ struct SpatialIdentifyResult {
   Eigen::VectorXd geometry;  // by names; the last iterate when not converged (not a result)
   std::vector<int> pose_ids;  // one per distinct pose id, in order of first appearance
   std::vector<SpatialPose<double>> poses;
+  // Where the kept fit started. Below 6 cables each pose starts from home; a fit from there
+  // that did not converge or misfits its readings (whitened RMS above 2) is tried again from
+  // staged starts (the pose from the readings without the statics first), and the lower cost
+  // kept with its starts and `iterations`.
   std::vector<SpatialPose<double>> starting_poses;
   std::vector<Eigen::VectorXd> tensions_N;  // per pose when the statics are modelled, else empty
   double final_cost = 0.0;  // 1/2 sum of squared whitened residuals (before the loss)

@@ -401,15 +401,12 @@ TEST(SpatialIdentify, FourCablesEncodersSwivelInclinometer) {
   }
 }
 
-// KNOWN DEFECT, disabled (README, "Spatial identification", *Starts*): a new user's 4-cable
-// robot, exits at four heights, the centre of mass off in x and z, poses up to 0.7 m from home.
-// Each pose's start below 6 cables is fitted from home with the stiff equilibrium rows, and on
-// this robot it ends in another equilibrium: noise-free readings are fitted at 17.5 sigma
-// (poor_fit), the exits 0.3 m off. Starting these poses as above 6 cables (the pose from the
-// readings without the statics first) passes this test, but on irma4u's noisy experiments it
-// led the whole fit to a higher minimum in 55 of 60 (27 designed poses), so it was not kept.
-// Enable with --gtest_also_run_disabled_tests once the starts are fixed.
-TEST(SpatialIdentify, DISABLED_FourCablesFarFromHomeWithAnOffsetCentreOfMass) {
+// A new user's 4-cable robot, exits at four heights, the centre of mass off in x and z, poses
+// up to 0.7 m from home. Each pose's start below 6 cables is fitted from home with the stiff
+// equilibrium rows, and on this robot that fit ends in another equilibrium (noise-free readings
+// fitted at 17.5 sigma, the exits 0.3 m off); the second attempt from staged starts
+// (IdentifySpatial) recovers the robot.
+TEST(SpatialIdentify, FourCablesFarFromHomeWithAnOffsetCentreOfMass) {
   const SpatialRobot nominal = WithSensors(Inextensible(LoadSpatialRobotFromString(R"(name: offset4
 kind: spatial
 gravity: 9.81
