@@ -1488,6 +1488,23 @@ std::vector<int> PivotedHoldCoordinates(const MatrixXd& E, int exit_rows) {
 
 }  // namespace
 
+// How many independent null directions (columns of N) move the holdable coordinates by a rigid
+// motion of the frame (or of the anchors in P): the dimension of N's subspace whose exit and
+// anchor rows lie in the span of RigidGenerators, k less the rank of those rows' part off it.
+int RigidNullDimension(const MatrixXd& N, const VectorXd& g, const Layout& L) {
+  const int k = N.cols();
+  if (k == 0) return 0;
+  const MatrixXd G = RigidGenerators(g, L);
+  const Eigen::ColPivHouseholderQR<MatrixXd> qr(G);
+  const MatrixXd Q = qr.householderQ() * MatrixXd::Identity(G.rows(), qr.rank());
+  const MatrixXd E = Rows(N, L.holdable());
+  const MatrixXd off = E - Q * (Q.transpose() * E);
+  const Eigen::JacobiSVD<MatrixXd> svd(off);
+  int seen = 0;
+  for (int c = 0; c < svd.singularValues().size(); ++c) seen += svd.singularValues()(c) > 1e-6;
+  return std::min(k - seen, static_cast<int>(G.cols()));
+}
+
 std::vector<std::string> SpatialPlausibilityWarnings(const SpatialRobot& nominal, const Eigen::VectorXd& g) {
   const Layout L{nominal.num_cables(), false, false};
   CABLECAL_CHECK(g.size() >= L.size(), "a geometry vector shorter than the exits and lengths");
@@ -1577,6 +1594,23 @@ Locals PoseStarts(const Model& model, const SpatialRobot& nominal, const std::ve
   return starts;
 }
 
+// The readings' values cannot determine the unknowns: p geometry coordinates less `held` that a
+// gauge holds (the words say which), and each pose's coordinates and tensions.
+[[noreturn]] void RefuseTooFewValues(const Model& model, int n, int held, const std::string& held_words) {
+  const int p = model.layout.size();
+  const std::string tensions =
+      model.nt > 0 ? " and " + std::to_string(model.nt) +
+                         " tensions per pose (the equilibrium's 6 rows per pose are among the values; a "
+                         "stretching cable's tension is an unknown that load cells would read)"
+                   : "";
+  throw InputError("readings", "",
+                   std::to_string(model.num_values) + " reading values for " +
+                       std::to_string(p - held + model.local() * n) + " unknowns (" + std::to_string(p) +
+                       " of the geometry" + (held > 0 ? held_words : "") + ", 6 coordinates per pose for " +
+                       std::to_string(n) + " poses" + tensions +
+                       "): too few to determine the geometry; measure more poses or add a sensor");
+}
+
 struct Analysis {
   Model model;
   VectorXd g0;
@@ -1595,17 +1629,13 @@ Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasureme
   const int p = L.size();
   const int n = static_cast<int>(a.model.pose_ids.size());
   const int local = a.model.local();
-  if (a.model.num_values < p + local * n) {
-    const std::string tensions =
-        a.model.nt > 0 ? " and " + std::to_string(a.model.nt) +
-                             " tensions per pose (the equilibrium's 6 rows per pose are among the values; a "
-                             "stretching cable's tension is an unknown that load cells would read)"
-                       : "";
-    throw InputError("readings", "", std::to_string(a.model.num_values) + " reading values for " +
-                                         std::to_string(p + local * n) + " unknowns (" + std::to_string(p) +
-                                         " of the geometry, 6 coordinates per pose for " + std::to_string(n) +
-                                         " poses" + tensions +
-                                         "): too few to determine the geometry; measure more poses or add a sensor");
+  // Before the starts, the count with the most a gauge can hold (6 rigid motions of the frame,
+  // 6 more of the anchors in P; none with the tracker's prior, whose rows are among the values):
+  // readings short of that are refused at once, the exact count follows the gauge analysis.
+  const int most_held = options.gauge.kind == SpatialGaugeKind::kPrior ? 0 : L.anchors ? 12 : 6;
+  if (a.model.num_values < p - most_held + local * n) {
+    RefuseTooFewValues(a.model, n, most_held,
+                       " less at most " + std::to_string(most_held) + " rigid motions that a gauge can hold");
   }
   a.start = PoseStarts(a.model, nominal, readings, options.anchors, a.g0, false);
   // What the readings alone see, at the starts with each pose's tensions moved to the nearest
@@ -1659,6 +1689,17 @@ Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasureme
     if (a.gauge.weak_directions[c].nearly_rigid) nearly_rigid_cols.push_back(weak_cols[c]);
   }
   const bool hold_weak = options.gauge.kind == SpatialGaugeKind::kAuto && !nearly_rigid_cols.empty();
+  // Enough values for the unknowns the readings must determine: every geometry coordinate but
+  // the rigid motions of the frame that no reading sees (the gauge holds them; with --gauge
+  // prior the tracker's rows, counted among the values, fix them) and, for the default gauge,
+  // the nearly rigid weak directions it holds, as design's count (MinSpatialDesignPoses). A
+  // null direction from too few readings is no rigid motion and is not subtracted.
+  const int rigid = options.gauge.kind == SpatialGaugeKind::kPrior ? 0 : RigidNullDimension(N, a.g0, L);
+  const int gauge_held = rigid + (hold_weak ? static_cast<int>(nearly_rigid_cols.size()) : 0);
+  if (a.model.num_values < p - gauge_held + local * n) {
+    RefuseTooFewValues(a.model, n, gauge_held,
+                       " less " + std::to_string(gauge_held) + " rigid motion(s) of the frame that the gauge holds");
+  }
   // A lab's hold: list is checked and held even when the readings see everything (holding every
   // exit coordinate identifies the lengths, offsets and poses alone).
   if (k == 0 && options.gauge.kind != SpatialGaugeKind::kHold && !hold_weak) return a;

@@ -251,7 +251,9 @@ SpatialGaugeAnalysis AnalyzeSpatialGauge(const SpatialRobot& nominal, const std:
 // Identifies the geometry and the poses (file comment). InputError (exit 2 in the CLI), naming
 // what is missing, when: no readings; a reading's cable count differs from the robot's; a
 // reading has a sensor the robot file lacks (no sigma); the readings have fewer values than
-// the unknowns; a pose is not determined by its own readings; a null direction moves no exit
+// the unknowns (every geometry coordinate but the rigid motions of the frame that no reading
+// sees and the gauge holds, as design's MinSpatialDesignPoses counts; each pose's coordinates
+// and tensions); a pose is not determined by its own readings; a null direction moves no exit
 // (or, with free anchors, anchor) coordinate (holding them cannot fix it); `hold:` names
 // something other than an exit or free anchor coordinate or leaves a null direction (named in
 // words); `prior` without a tracker sigma, or with free anchors that a null direction moves

@@ -145,6 +145,43 @@ TEST(SpatialInformation, InverseIsTheIdentificationsCovarianceOnRandomRobots) {
   }
 }
 
+// Design and identification count the fewest poses alike: MinSpatialDesignPoses poses of
+// noise-free readings pass the identification's count of values against unknowns (the rigid
+// motions the gauge holds not among them), one pose fewer is refused as too few. Before, the
+// identification counted the held coordinates too and refused a 4-cable robot's 3 designed poses.
+TEST(SpatialDesign, FewestPosesAreTheIdentificationsFewest) {
+  Rng rng(2911);
+  std::vector<SpatialRobot> robots = {BuiltinSpatialRobot("irma4u"), BuiltinSpatialRobot("cogiro"),
+                                      CogiroWithInclinometerAndLaser()};
+  for (int m : {4, 5, 7}) {
+    SpatialRobot robot = testing::RandomSpatialRobot(rng, "random" + std::to_string(m), m);
+    for (int i = 6; i < m; ++i) robot.cables[i].stiffness_N = 2e6;
+    robot.sensors.inclinometer_rad = RangedNoise{0.002, 0.001};
+    robots.push_back(robot);
+  }
+  for (const SpatialRobot& robot : robots) {
+    SCOPED_TRACE(robot.name);
+    const SpatialInformationLayout layout = SpatialDesignLayout(robot, SampleSpatialPoses(robot, 20, 9));
+    const int fewest = MinSpatialDesignPoses(robot, layout);
+    ASSERT_GE(fewest, 1);
+    ASSERT_LE(fewest, 40);
+    for (int n : {fewest, fewest - 1}) {
+      if (n < 1) continue;
+      Rng noise(4);
+      const SimulatedSpatialExperiment sim =
+          SimulateSpatialExperiment(robot, robot, SampleSpatialPoses(robot, n, 11), NoiseFree(), noise);
+      std::string error;
+      try {
+        AnalyzeSpatialGauge(robot, sim.measurements, SpatialIdentifyOptions{});
+      } catch (const InputError& e) {
+        error = e.what();
+      }
+      const bool too_few = error.find("too few to determine the geometry") != std::string::npos;
+      EXPECT_EQ(too_few, n < fewest) << n << " poses of at least " << fewest << ": " << error;
+    }
+  }
+}
+
 // Calibrating in rounds (--prior): the information a first round's result.yaml gives, written
 // and read back, is the information of its poses (the inverse of its covariance, independently
 // computed by the identification), and the second round's design counts it: its criteria are
