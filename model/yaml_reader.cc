@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <vector>
 #include <sstream>
 
 #include "common/format.h"
@@ -16,8 +17,57 @@ namespace cablecal::internal {
 
 void Reader::Fail(const YAML::Node& node, const std::string& key, const std::string& problem) const {
   std::string where = source_;
-  if (node && node.Mark().line >= 0) where += ":" + std::to_string(node.Mark().line + 1);
+  // A key with nothing after it (`com:` alone): yaml-cpp marks the empty value at the next
+  // token, a line or more below, so the key's own line is named.
+  const int key_line = node && node.IsNull() ? KeyLine(key) : -1;
+  if (key_line > 0) {
+    where += ":" + std::to_string(key_line);
+  } else if (node && node.Mark().line >= 0) {
+    where += ":" + std::to_string(node.Mark().line + 1);
+  }
   throw InputError(where, key, problem);
+}
+
+int Reader::KeyLine(const std::string& key_path) const {
+  YAML::Node at = root_;
+  int line = -1;
+  std::size_t begin = 0;
+  while (begin <= key_path.size() && at) {
+    const std::size_t dot = key_path.find('.', begin);
+    std::string part = key_path.substr(begin, dot == std::string::npos ? std::string::npos : dot - begin);
+    begin = dot == std::string::npos ? key_path.size() + 1 : dot + 1;
+    std::vector<std::size_t> indices;
+    for (std::size_t open = part.find('['); open != std::string::npos; open = part.find('[')) {
+      const std::size_t close = part.find(']', open);
+      if (close == std::string::npos) return -1;
+      try {
+        indices.push_back(std::stoul(part.substr(open + 1, close - open - 1)));
+      } catch (const std::exception&) {
+        return -1;
+      }
+      part.erase(open, close - open + 1);
+    }
+    if (!part.empty()) {
+      if (!at.IsMap()) return -1;
+      bool found = false;
+      YAML::Node value;
+      for (const auto& kv : at) {
+        if (kv.first.IsScalar() && kv.first.Scalar() == part) {
+          found = true;
+          line = kv.first.Mark().line + 1;
+          value.reset(kv.second);
+        }
+      }
+      if (!found) return -1;
+      at.reset(value);
+    }
+    for (const std::size_t i : indices) {
+      if (!at.IsSequence() || i >= at.size()) return -1;
+      at.reset(at[i]);
+      if (!at.IsNull()) line = at.Mark().line + 1;
+    }
+  }
+  return line;
 }
 
 void Reader::ExpectMap(const YAML::Node& node, const std::string& key, const std::set<std::string>& required,
@@ -41,14 +91,7 @@ void Reader::ExpectMap(const YAML::Node& node, const std::string& key, const std
 }
 
 double Reader::Number(const YAML::Node& parent, const std::string& parent_key, const std::string& name) const {
-  const YAML::Node node = parent[name];
-  // A key with nothing after it: its empty value's mark is the next token's, so name the key's line.
-  if (node.IsNull() && parent.IsMap()) {
-    for (const auto& kv : parent) {
-      if (kv.first.Scalar() == name) Fail(kv.first, Join(parent_key, name), "must be a number (got nothing)");
-    }
-  }
-  return NumberNode(node, Join(parent_key, name));
+  return NumberNode(parent[name], Join(parent_key, name));
 }
 
 double Reader::NumberNode(const YAML::Node& node, const std::string& key) const {

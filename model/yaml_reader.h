@@ -20,7 +20,8 @@ namespace cablecal::internal {
 // Walks the YAML tree and turns every problem into one InputError "file:line: key: problem".
 class Reader {
  public:
-  explicit Reader(std::string source) : source_(std::move(source)) {}
+  // `root`: the document, to name an empty value's key line (Fail).
+  Reader(std::string source, YAML::Node root) : source_(std::move(source)), root_(std::move(root)) {}
 
   [[noreturn]] void Fail(const YAML::Node& node, const std::string& key, const std::string& problem) const;
 
@@ -50,7 +51,11 @@ class Reader {
   const std::string& source() const { return source_; }
 
  private:
+  // The line (1-based) of the key that `key_path` ("platform.com", "cables[2].exit") names in
+  // the document, or -1.
+  int KeyLine(const std::string& key_path) const;
   std::string source_;
+  YAML::Node root_;
 };
 
 // The text of a robot file. Refuses what is not a regular file (/dev/zero would be read
@@ -67,8 +72,8 @@ YAML::Node LoadRobotDocument(const std::string& yaml_text, const std::string& so
 // every loader's one entry (the planar and spatial robots, the kind alone).
 template <typename Parse>
 auto ParseRobotText(const std::string& yaml_text, const std::string& source, Parse&& parse) {
-  const Reader rd(source);
   const YAML::Node root = LoadRobotDocument(yaml_text, source);
+  const Reader rd(source, root);
   try {
     return parse(root, rd);
   } catch (const YAML::Exception& e) {

@@ -1,6 +1,8 @@
 // Robot files: the built-in robot, and every rejection with its message.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -124,6 +126,18 @@ struct BadCase {
 };
 
 class BadRobotFile : public ::testing::TestWithParam<BadCase> {};
+
+// A key left empty (`com:` alone) is named at its own line: yaml-cpp marks the empty value at
+// the next token, the line below.
+TEST(RobotFile, AnEmptyKeyIsNamedAtItsOwnLine) {
+  const std::string yaml = Replace(BuiltinRobotYaml(), "com: [0.0, 0.0]", "com:");
+  const std::size_t at = yaml.find("com:");
+  ASSERT_NE(at, std::string::npos);
+  const int line = 1 + static_cast<int>(std::count(yaml.begin(), yaml.begin() + at, '\n'));
+  const std::string message = LoadError(yaml);
+  EXPECT_EQ(message.rfind("bad.yaml:" + std::to_string(line) + ": platform.com: must be a list of two numbers", 0), 0u)
+      << message;
+}
 
 TEST_P(BadRobotFile, IsRejectedWithKeyAndLine) {
   const BadCase& c = GetParam();

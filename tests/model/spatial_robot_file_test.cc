@@ -242,6 +242,16 @@ INSTANTIATE_TEST_SUITE_P(
                 "platform\\.com_sigma: must be a number \\(got a list\\)"},
         BadCase{"NothingForANumber", "mass: 25.0", "mass: 25.0\n  com_sigma:", "com_sigma",
                 "platform\\.com_sigma: must be a number \\(got nothing\\)"},
+        // A key left empty is named at its own line, not at the next key's (yaml-cpp marks the
+        // empty value there).
+        BadCase{"NothingForAVector", "com: [0.0, 0.0, 0.0]", "com:", "com:",
+                "platform\\.com: must be a list of three numbers \\[x, y, z\\]"},
+        BadCase{"NothingForAMapping", "frame: {min: [-2.0, -1.5, 0.0], max: [2.0, 1.5, 2.0]}", "frame:", "frame:",
+                "frame: must be a mapping"},
+        BadCase{"NothingForACablesVector",
+                "  - {exit: [-2.0, -1.5, 2.0], swivel_axis: [0, 0, 1], pulley_radius: 0.1, stiffness: 3.11e6}",
+                "  - exit:\n    swivel_axis: [0, 0, 1]\n    pulley_radius: 0.1", "- exit:",
+                "cables\\[3\\]\\.exit: must be a list of three numbers"},
         BadCase{"WrongVectorSize", "home: [0.0, 0.0, 1.0]", "home: [0.0, 1.0]", "home: [0.0, 1.0]",
                 "home: must be a list of three numbers \\[x, y, z\\]"},
         BadCase{"MissingKey", "tension: {min: 10.0, max: 720.0}", "", "name: ipanema1", "tension: missing"},
