@@ -1489,8 +1489,13 @@ std::vector<int> PivotedHoldCoordinates(const MatrixXd& E, int exit_rows) {
 }  // namespace
 
 // How many independent null directions (columns of N) move the holdable coordinates by a rigid
-// motion of the frame (or of the anchors in P): the dimension of N's subspace whose exit and
-// anchor rows lie in the span of RigidGenerators, k less the rank of those rows' part off it.
+// motion of the frame (or of the anchors in P), or nearly (within kSpatialNearlyRigid of one,
+// as SpatialDirection::nearly_rigid): the directions v of N with |off v| <= kSpatialNearlyRigid
+// |E v|, E the exit and anchor rows of N and off their part outside the span of
+// RigidGenerators, counted by the generalized eigenvalues of (off^T off, E^T E). A nearly rigid
+// turn that one tilted swivel axis barely sees is null when the values only just suffice for the
+// other unknowns, and design holds it (weakly_seen_held) whatever the poses. 0 when a null
+// direction moves no holdable coordinate (refused after the count).
 int RigidNullDimension(const MatrixXd& N, const VectorXd& g, const Layout& L) {
   const int k = N.cols();
   if (k == 0) return 0;
@@ -1499,10 +1504,13 @@ int RigidNullDimension(const MatrixXd& N, const VectorXd& g, const Layout& L) {
   const MatrixXd Q = qr.householderQ() * MatrixXd::Identity(G.rows(), qr.rank());
   const MatrixXd E = Rows(N, L.holdable());
   const MatrixXd off = E - Q * (Q.transpose() * E);
-  const Eigen::JacobiSVD<MatrixXd> svd(off);
-  int seen = 0;
-  for (int c = 0; c < svd.singularValues().size(); ++c) seen += svd.singularValues()(c) > 1e-6;
-  return std::min(k - seen, static_cast<int>(G.cols()));
+  const MatrixXd EtE = E.transpose() * E;
+  const Eigen::SelfAdjointEigenSolver<MatrixXd> moved(EtE);
+  if (!(moved.eigenvalues().minCoeff() > 1e-12)) return 0;
+  const Eigen::GeneralizedSelfAdjointEigenSolver<MatrixXd> ratio(off.transpose() * off, EtE);
+  int rigid = 0;
+  for (int c = 0; c < k; ++c) rigid += ratio.eigenvalues()(c) <= kSpatialNearlyRigid * kSpatialNearlyRigid;
+  return std::min(rigid, static_cast<int>(G.cols()));
 }
 
 std::vector<std::string> SpatialPlausibilityWarnings(const SpatialRobot& nominal, const Eigen::VectorXd& g) {
@@ -1694,11 +1702,18 @@ Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasureme
   // prior the tracker's rows, counted among the values, fix them) and, for the default gauge,
   // the nearly rigid weak directions it holds, as design's count (MinSpatialDesignPoses). A
   // null direction from too few readings is no rigid motion and is not subtracted.
+  // A lab's hold: list leaves its coordinates out of the unknowns, whatever they are (it must fix
+  // the null directions, checked below).
   const int rigid = options.gauge.kind == SpatialGaugeKind::kPrior ? 0 : RigidNullDimension(N, a.g0, L);
-  const int gauge_held = rigid + (hold_weak ? static_cast<int>(nearly_rigid_cols.size()) : 0);
+  const int gauge_held = options.gauge.kind == SpatialGaugeKind::kHold
+                             ? static_cast<int>(options.gauge.held.size())
+                             : rigid + (hold_weak ? static_cast<int>(nearly_rigid_cols.size()) : 0);
   if (a.model.num_values < p - gauge_held + local * n) {
     RefuseTooFewValues(a.model, n, gauge_held,
-                       " less " + std::to_string(gauge_held) + " rigid motion(s) of the frame that the gauge holds");
+                       options.gauge.kind == SpatialGaugeKind::kHold
+                           ? " less the " + std::to_string(gauge_held) + " that --gauge hold: holds"
+                           : " less " + std::to_string(gauge_held) +
+                                 " rigid motion(s) of the frame, or nearly, that the gauge holds");
   }
   // A lab's hold: list is checked and held even when the readings see everything (holding every
   // exit coordinate identifies the lengths, offsets and poses alone).
