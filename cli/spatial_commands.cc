@@ -255,6 +255,9 @@ int RunSpatialDesign(const Context& ctx, const DesignCommandOptions& options) {
   std::printf("  the gauge holds %s; %s%s\n", held.c_str(), SpatialRobustnessText(robot, result).c_str(),
               sigma_from.c_str());
   if (!result.prior_note.empty() && !ctx.quiet) std::fprintf(stderr, "cablecal: warning: %s\n", result.prior_note.c_str());
+  if (!result.redundancy_note.empty() && !ctx.quiet) {
+    std::fprintf(stderr, "cablecal: warning: %s\n", result.redundancy_note.c_str());
+  }
   if (result.robustness_lowered() && !ctx.quiet) {
     std::fprintf(stderr, "cablecal: warning: robustness lowered: %s\n", result.robustness_note.c_str());
   }

@@ -940,6 +940,17 @@ SpatialDesignResult DesignSpatialPoses(const SpatialRobot& robot, const SpatialD
   }
   result.layout = layout;
   result.prior_note = prior_note;
+  if (n == n_min) {
+    // Measured: a 4-cable robot with one tilted swivel axis, an inclinometer: its 6 designed
+    // poses (76 values, 76 unknowns) were not identified from noise-free readings (not converged
+    // from the nominal geometry, rank deficient at the estimate with design's hold:), 7 were.
+    const int spare = n * (SpatialValuesPerPose(robot, layout) - layout.local()) - layout.information_size();
+    result.redundancy_note = std::to_string(n) + " poses are the fewest for these sensors: their readings leave " +
+                             std::to_string(spare) + " value" + (spare == 1 ? "" : "s") + " beyond the " +
+                             std::to_string(layout.information_size()) +
+                             " gauge-fixed unknowns and the poses' own, so an identification fits their noise almost "
+                             "exactly (its residuals check little) and may not converge; plan a pose or more beyond";
+  }
   result.geometry_sigma_m = sigma_m;
   result.robust_sigmas_requested = search.requested_k;
   result.robust_sigmas_achieved = search.achieved_k;
@@ -1018,6 +1029,7 @@ std::string SpatialDesignSummaryYaml(const SpatialRobot& robot, const SpatialDes
       << YAML::Comment("an earlier identification: the robot is its estimate, S counts its information");
     if (!r.prior_note.empty()) o << Key << "prior_note" << Value << YamlString{r.prior_note};
   }
+  if (!r.redundancy_note.empty()) o << Key << "redundancy_note" << Value << YamlString{r.redundancy_note};
   o << EndMap;
   o << Key << "criteria" << Value;
   criteria(r.criteria);

@@ -111,6 +111,9 @@ struct SpatialDesignResult {
   // With a prior that holds more coordinates than this robot file's sensors need (a result of
   // fewer sensors, or a lab's hold:): which, planned as known; else "".
   std::string prior_note;
+  // At the fewest poses (MinSpatialDesignPoses): how few values the readings leave beyond the
+  // unknowns, and that such an identification fits the noise exactly and may not converge; else "".
+  std::string redundancy_note;
   bool robustness_lowered() const { return robust_sigmas_achieved < robust_sigmas_requested; }
   double wall_time_s = 0.0;
 };

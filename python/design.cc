@@ -137,6 +137,10 @@ py::object SpatialDesign(const SpatialRobot& nominal, py::handle n, py::handle c
   if (!d.result.prior_note.empty() && PyErr_WarnEx(PyExc_UserWarning, d.result.prior_note.c_str(), 1) < 0) {
     throw py::error_already_set();  // the CLI's warning
   }
+  if (!d.result.redundancy_note.empty() &&
+      PyErr_WarnEx(PyExc_UserWarning, d.result.redundancy_note.c_str(), 1) < 0) {
+    throw py::error_already_set();
+  }
   if (d.result.robustness_lowered()) {
     // The CLI's "robustness lowered" line: a plan, but for less than asked.
     const std::string note = "robustness lowered: " + d.result.robustness_note;

@@ -105,6 +105,12 @@ TEST_F(SpatialDesignCli, PlanReadsBackAndSimulatesOnIrma4uAndARandomRobot) {
                           "covariance [0-9.e+-]+ m\\^2, [0-9.]+ x (better|worse) than the median of 3 random sets");
     EXPECT_TRUE(std::regex_search(r.output, line)) << r.output;
     EXPECT_NE(r.output.find("the gauge holds "), std::string::npos) << r.output;
+    // At the fewest poses a warning (and summary.yaml) says how little the readings leave over;
+    // two more, nothing.
+    const bool fewest_warned = r.output.find("poses are the fewest for these sensors") != std::string::npos;
+    EXPECT_EQ(fewest_warned, extra == 0) << r.output;
+    EXPECT_EQ(static_cast<bool>(YAML::LoadFile(Path("summary.yaml"))["information"]["redundancy_note"]), extra == 0)
+        << Read("summary.yaml");
 
     // The robot's own plan: the reader and the check simulate applies accept it.
     const std::vector<cablecal::SpatialPlanPose> plan = cablecal::ReadSpatialPlanCsv(Path("plan.csv"), model.num_cables());
