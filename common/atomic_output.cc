@@ -95,7 +95,18 @@ void CheckWritable(const std::string& final_path) {
   }
   const fs::path parent = fs::path(final_path).parent_path();
   if (!parent.empty() && !fs::is_directory(parent)) {
+    std::error_code exists_ec;
+    if (fs::exists(parent, exists_ec)) {
+      throw InputError(final_path, "", "cannot write: '" + parent.string() + "' is a file, not a folder");
+    }
     throw InputError(final_path, "", "cannot write: folder '" + parent.string() + "' does not exist");
+  }
+  // The file is written beside its final path and renamed into place: the folder must take new
+  // files. Checked here, before the work, not found when the result is ready.
+  const std::string folder = parent.empty() ? "." : parent.string();
+  if (::access(folder.c_str(), W_OK | X_OK) != 0) {
+    throw InputError(final_path, "", "cannot write: no permission to create files in folder '" + folder + "' (" +
+                                         std::strerror(errno) + ")");
   }
   std::error_code ec;
   if (IsLinkToNothing(final_path)) {

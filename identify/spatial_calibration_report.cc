@@ -197,7 +197,9 @@ std::string Markdown(const SpatialRobot& nominal, const SpatialIdentifyOptions& 
   o << "## Estimates\n\n";
   o << MarkdownFigure(kExitsFigure, "Exit points, nominal and identified, top and side views with 1-σ ellipses",
                       figure_error);
-  o << "| parameter | nominal | identified | σ (mm or mrad) | identified − nominal (mm or mrad) | (σ) |\n"
+  // σ and the change in the thousandth of each parameter's unit, named in each cell: mm, mrad,
+  // and g for the platform's mass.
+  o << "| parameter | nominal | identified | σ | identified − nominal | (σ) |\n"
        "|---|---:|---:|---:|---:|---:|\n";
   const Eigen::VectorXd g0 = NominalOf(nominal, r);
   std::vector<std::pair<double, std::string>> notable;
@@ -205,15 +207,17 @@ std::string Markdown(const SpatialRobot& nominal, const SpatialIdentifyOptions& 
     const int i = static_cast<int>(k);
     const std::string unit = SpatialGeometryUnit(r.names[k]);
     const double change = r.geometry(i) - g0(i);
+    const std::string milli = unit == "m" ? " mm" : unit == "rad" ? " mrad" : unit == "kg" ? " g" : " m" + unit;
     o << "| " << r.names[k] << " | " << Fixed6(g0(i)) << " " << unit << " | " << Fixed6(r.geometry(i))
       << " " << unit << " | ";
     if (Held(r, r.names[k])) {
-      o << "held | " << Rounded(1e3 * change) << " | |\n";
+      o << "held | " << Rounded(1e3 * change) << milli << " | |\n";
     } else if (HasCovariance(r) && r.sigma(i) > 0.0) {
-      o << Rounded(1e3 * r.sigma(i)) << " | " << Rounded(1e3 * change) << " | " << Rounded(change / r.sigma(i)) << " |\n";
+      o << Rounded(1e3 * r.sigma(i)) << milli << " | " << Rounded(1e3 * change) << milli << " | "
+        << Rounded(change / r.sigma(i)) << " |\n";
       if (std::abs(change / r.sigma(i)) > 3.0) notable.push_back({std::abs(change / r.sigma(i)), r.names[k]});
     } else {
-      o << " | " << Rounded(1e3 * change) << " | |\n";
+      o << " | " << Rounded(1e3 * change) << milli << " | |\n";
     }
   }
   o << "\n";

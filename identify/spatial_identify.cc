@@ -2194,7 +2194,9 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
     result.message = std::string(buf) +
                      ": the measurements do not fit this robot (are dl1..dl" + std::to_string(L.m) +
                      " in the order of the robot file's cables, the readings of this robot, in m and rad, and the "
-                     "sensors' sigmas the robot file's?), or the solver stopped in a wrong minimum; not a result";
+                     "sensors' sigmas the robot file's?), or the solver stopped in a wrong minimum; a single gross "
+                     "reading spreads over the whole fit, so the worst named may not be it: --loss cauchy finds it; "
+                     "not a result";
     return result;
   }
   // Readings beyond kOutlierSigmas: without a robust loss any one refuses the fit (for clean

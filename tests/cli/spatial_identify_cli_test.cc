@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <regex>
 #include <string>
 #include <vector>
 
@@ -224,6 +225,12 @@ TEST_F(SpatialIdentifyCli, TheGaugeFromTheDataJsonAndReport) {
     EXPECT_TRUE(fs::exists(Path(std::string("report/") + file))) << file;
   }
   EXPECT_NE(Read("report/report.md").find("## The gauge"), std::string::npos);
+  // The estimates' table names each cell's unit: the mass's sigma in g, not "mm or mrad".
+  const std::string report = Read("report/report.md");
+  EXPECT_TRUE(std::regex_search(report, std::regex("\\| mass \\| [0-9.]+ kg \\| [0-9.]+ kg \\| [0-9.e+-]+ g \\| [0-9.e+-]+ g \\|")))
+      << report;
+  EXPECT_TRUE(std::regex_search(report, std::regex("\\| l10 \\| [0-9.]+ m \\| [0-9.]+ m \\| [0-9.e+-]+ mm \\| [0-9.e+-]+ mm \\|")))
+      << report;
   const RunResult json = RunCablecal("identify --robot " + robot + " --measurements " + Path("tilt.csv") + " --json");
   ASSERT_EQ(json.exit_code, 0) << json.output;
   const YAML::Node j = YAML::Load(json.output);  // JSON is YAML

@@ -1,4 +1,5 @@
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <clocale>
 
@@ -205,6 +206,34 @@ TEST(AtomicOutput, NothingAppearsWithoutCommit) {
 TEST(AtomicOutput, MissingFolderIsInputError) {
   AtomicOutput out;
   EXPECT_THROW(out.WriteText("/nonexistent-folder/x.csv", "x"), InputError);
+}
+
+// Before any work: an output under a regular file says so (not "does not exist"), and a folder
+// that takes no new files is refused naming the flag. Root may write anywhere, so the
+// permission case runs as another user only.
+TEST(AtomicOutput, OutputsThatCannotBeWrittenAreRefusedBeforeTheWork) {
+  const testing_support::TempDir tmp;
+  const std::string file = (tmp.path() / "afile").string();
+  std::ofstream(file) << "x";
+  const auto message = [](const std::string& path) {
+    try {
+      CheckCommandPaths({}, {PathArgument{"--out", path}});
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const std::string under_file = message(file + "/x.csv");
+  EXPECT_NE(under_file.find("--out"), std::string::npos) << under_file;
+  EXPECT_NE(under_file.find("'" + file + "' is a file, not a folder"), std::string::npos) << under_file;
+  EXPECT_EQ(message((tmp.path() / "x.csv").string()), "");
+  if (::geteuid() == 0) GTEST_SKIP() << "root writes into any folder";
+  const fs::path locked = tmp.path() / "locked";
+  fs::create_directory(locked);
+  fs::permissions(locked, fs::perms::owner_read | fs::perms::owner_exec);
+  const std::string denied = message((locked / "x.csv").string());
+  fs::permissions(locked, fs::perms::owner_all);
+  EXPECT_NE(denied.find("no permission to create files in folder"), std::string::npos) << denied;
 }
 
 TEST(Csv, ToleratesBomCrlfCommentsAndSpaces) {
