@@ -114,13 +114,24 @@ int RunSpatialIdentify(const Context& ctx, const IdentifyCommandOptions& options
   }
   AtomicOutput output;
   if (!options.out_path.empty()) output.WriteText(options.out_path, result_yaml);
+  std::string calibrated_load_error;
   if (!options.calibrated_robot_path.empty()) {
-    output.WriteText(options.calibrated_robot_path,
-                     ProvenanceComment(ctx.command_line) +
-                         "# calibrated: " +
-                         (id.anchors ? "exit points, initial lengths and platform anchors" : "exit points and initial lengths") +
-                         " identified (ml, gauge " + ToString(id.gauge) + ")\n" +
-                         SpatialRobotToYaml(CalibratedSpatialRobot(nominal, result)));
+    const std::string text = ProvenanceComment(ctx.command_line) + "# calibrated: " +
+                             (id.anchors ? "exit points, initial lengths and platform anchors"
+                                         : "exit points and initial lengths") +
+                             " identified (ml, gauge " + ToString(id.gauge) + ")\n" +
+                             SpatialRobotToYaml(CalibratedSpatialRobot(nominal, result));
+    // The file keeps the nominal home, where the loader settles the identified platform: a home
+    // the nominal robot barely holds may be no pose of the identified one (a new user's 4-cable
+    // robot holding a yaw band of 0.1 degrees: no_equilibrium; at its identified initial lengths
+    // one cable is slack). Written all the same (the identification is sound), but said, so that
+    // no later command is the first to find it.
+    try {
+      LoadSpatialRobotFromString(text, options.calibrated_robot_path);
+    } catch (const InputError& e) {
+      calibrated_load_error = e.what();
+    }
+    output.WriteText(options.calibrated_robot_path, text);
   }
   std::string figure_error;
   if (report) {
@@ -140,6 +151,12 @@ int RunSpatialIdentify(const Context& ctx, const IdentifyCommandOptions& options
   }
   output.Commit();
   if (report) report->Commit();
+  if (!calibrated_load_error.empty() && !ctx.quiet) {
+    std::fprintf(stderr,
+                 "cablecal: warning: --calibrated-robot: the file was written but does not load: %s (its home is the "
+                 "nominal robot's; set home and home_rpy_deg to a pose the identified robot holds)\n",
+                 calibrated_load_error.c_str());
+  }
   if (!figure_error.empty()) figure_error = ReportWithoutFiguresMessage(options.report_dir, figure_error);
   if (options.json) {
     std::printf("%s\n", SpatialIdentifyResultJson(nominal, id, result, ctx.command_line).c_str());

@@ -220,7 +220,9 @@ SpatialValidationResult ValidateSpatial(const SpatialRobot& calibrated, const st
     result.warnings.push_back(std::string(buffer) +
                               ": the calibrated model does not explain these held-out readings. Check the robot file's "
                               "platform (mass, com, anchors), pulleys and stiffness, which the calibration does not "
-                              "identify, and the sensors' sigma");
+                              "identify, and the sensors' sigma; or the calibration knows the geometry less well "
+                              "than the nominal file did (few or bunched poses: compare result.yaml's sigmas with "
+                              "the survey's, and plan the poses with cablecal design)");
   }
   return result;
 }

@@ -1902,13 +1902,19 @@ TEST_F(Cli, IdentifyReportFolderThatCannotBeWrittenIsExitTwo) {
   fs::create_directory(Path("locked"));
   fs::permissions(Path("locked"), fs::perms::owner_read | fs::perms::owner_exec | fs::perms::group_read |
                                       fs::perms::group_exec | fs::perms::others_read | fs::perms::others_exec);
+  // A folder anyone may write into, for the outputs that are not under test.
+  fs::create_directory(Path("open"));
+  fs::permissions(Path("open"), fs::perms::all);
   // root writes anywhere: the locked folder is tried as nobody then.
   const std::string as_user = ::geteuid() == 0 ? "env setpriv --reuid=65534 --regid=65534 --clear-groups " : "env ";
   const std::string identify = std::string(CABLECAL_BINARY) + " identify --measurements " + Path("meas.csv") + " --out ";
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"env " + identify + Path("r.yaml") + " --report " + Path("file"), "--report: '" + Path("file") + "' exists and is not a folder"},
-      {as_user + identify + Path("locked/r.yaml") + " --report " + Path("locked"), "--report: cannot write into '" + Path("locked") + "': Permission denied"},
-      {as_user + identify + Path("locked/r.yaml") + " --report " + Path("locked/new"), "--report: cannot write into '" + Path("locked") + "': Permission denied"},
+      {as_user + identify + Path("open/r.yaml") + " --report " + Path("locked"), "--report: cannot write into '" + Path("locked") + "': Permission denied"},
+      {as_user + identify + Path("open/r.yaml") + " --report " + Path("locked/new"), "--report: cannot write into '" + Path("locked") + "': Permission denied"},
+      // --out is checked first, and its folder's permission too.
+      {as_user + identify + Path("locked/r.yaml") + " --report " + Path("open/report"),
+       "--out: " + Path("locked/r.yaml") + ": cannot write: no permission to create files in folder '" + Path("locked") + "'"},
       {"env " + identify + Path("r.yaml") + " --report " + Path("nowhere/report"),
        "--report: cannot write into '" + Path("nowhere/report") + "': folder '" + Path("nowhere") + "' does not exist"},
       {"env " + identify + Path("rep/result.yaml") + " --report " + Path("rep"),
@@ -1923,6 +1929,7 @@ TEST_F(Cli, IdentifyReportFolderThatCannotBeWrittenIsExitTwo) {
   EXPECT_EQ(Read("file"), "not a folder");
   EXPECT_FALSE(fs::exists(Path("r.yaml")));
   EXPECT_TRUE(fs::is_empty(Path("locked")));
+  EXPECT_TRUE(fs::is_empty(Path("open")));
   EXPECT_TRUE(fs::is_empty(Path("rep")));
   EXPECT_FALSE(fs::exists(Path("nowhere")));
 }

@@ -201,6 +201,61 @@ TEST_F(SpatialIdentifyCli, SimulateIdentifyValidateOnABuiltInAndARandomRobot) {
 // frame's x and y unseen (its yaw is seen through the tilted swivel axes); the default gauge
 // holds two exit coordinates and names the directions; --json carries the same content;
 // --report writes its files.
+// A new user's 4-cable robot that holds its home only in a yaw band of 0.1 degrees (tension
+// min 5 N): identified from 3 designed poses, its calibrated file keeps the nominal home, which
+// the identified robot cannot hold (no_equilibrium). The file is written with the result, and a
+// warning says it does not load and why, before any later command finds it.
+TEST_F(SpatialIdentifyCli, ACalibratedRobotThatCannotHoldTheNominalHomeIsSaid) {
+  std::ofstream(Path("lab4.yaml")) << R"(name: lab4
+kind: spatial
+gravity: 9.81
+frame: {min: [-1.5, -1.2, 0.0], max: [1.5, 1.2, 2.5]}
+platform:
+  mass: 8.0
+  com: [0.02, -0.015, -0.06]
+  com_sigma: 0.002
+  anchors:
+    - [-0.15, -0.12, 0.05]
+    - [0.15, -0.12, 0.05]
+    - [0.15, 0.12, 0.05]
+    - [-0.15, 0.12, 0.05]
+cables:
+  - {exit: [-1.45, -1.15, 2.40], swivel_axis: [0, 0, 1], pulley_radius: 0.025}
+  - {exit: [1.45, -1.15, 2.20], swivel_axis: [0, 0, 1], pulley_radius: 0.025}
+  - {exit: [1.45, 1.15, 2.45], swivel_axis: [0.17, 0.0, 0.985], pulley_radius: 0.025}
+  - {exit: [-1.45, 1.15, 2.30], swivel_axis: [0, 0, 1], pulley_radius: 0.025}
+tension: {min: 5.0, max: 300.0}
+limits: {tilt_max_deg: 25, margin: 0.05}
+home: [0.0, 0.0, 1.2]
+home_rpy_deg: [0, 0, 0.15]
+sensors:
+  encoder: {sigma: 0.00005}
+  inclinometer: {accuracy_deg: 0.1, repeatability_deg: 0.05}
+  swivel: {accuracy_deg: 0.1, repeatability_deg: 0.05}
+  laser: {accuracy: 0.006, repeatability: 0.0015}
+)";
+  std::ofstream(Path("lab4.csv")) << R"(pose,dl1,dl2,dl3,dl4,roll,pitch,z,sw1,sw2,sw3,sw4
+1,-0.056030688552647624,1.296645110938713,0.493128581450505,-1.8764287835677156,0.08560845762465168,0.16465523848731073,2.2322114038292664,0.8779242453108226,0.011071736534192382,-0.7334082966966924,-0.34543583824510876
+2,0.45275408261562466,-1.0729147616091097,-0.694100056567956,0.6910539826158995,0.015105394261672917,-0.22518148444608155,1.9517027802605873,-0.3385175376044606,-0.5472801752697858,0.6372514587499957,0.1693131724874341
+3,0.9355165638409344,1.1123144628567068,0.7446980357724348,0.46915574238371843,0.41414072089087245,0.13978842679183884,0.11284214684293445,0.28900658550795066,-0.11781574337091823,-0.30379601822426966,0.20405935356846278
+)";
+  const RunResult id = RunCablecal("identify --robot " + Path("lab4.yaml") + " --measurements " + Path("lab4.csv") +
+                                   " --out " + Path("r.yaml") + " --calibrated-robot " + Path("cal.yaml"));
+  ASSERT_EQ(id.exit_code, 0) << id.output;
+  EXPECT_NE(id.output.find("cablecal: warning: --calibrated-robot: the file was written but does not load: " +
+                           Path("cal.yaml") + ":"),
+            std::string::npos)
+      << id.output;
+  EXPECT_NE(id.output.find("no_equilibrium"), std::string::npos) << id.output;
+  EXPECT_TRUE(fs::exists(Path("cal.yaml")));
+  EXPECT_TRUE(fs::exists(Path("r.yaml")));
+  // The nominal file loads (the band holds its home); the calibrated one does not, as warned.
+  EXPECT_EQ(RunCablecal("workspace --robot " + Path("lab4.yaml") + " --out " + Path("w.csv")).exit_code, 0);
+  EXPECT_EQ(RunCablecal("validate --robot " + Path("cal.yaml") + " --measurements " + Path("lab4.csv") + " --out " +
+                        Path("v.csv")).exit_code,
+            2);
+}
+
 TEST_F(SpatialIdentifyCli, TheGaugeFromTheDataJsonAndReport) {
   const std::string robot = RandomRobotFile();
   Simulate(robot, 20, "0.00002", 3, "m");

@@ -1,4 +1,5 @@
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <clocale>
@@ -227,13 +228,26 @@ TEST(AtomicOutput, OutputsThatCannotBeWrittenAreRefusedBeforeTheWork) {
   EXPECT_NE(under_file.find("--out"), std::string::npos) << under_file;
   EXPECT_NE(under_file.find("'" + file + "' is a file, not a folder"), std::string::npos) << under_file;
   EXPECT_EQ(message((tmp.path() / "x.csv").string()), "");
-  if (::geteuid() == 0) GTEST_SKIP() << "root writes into any folder";
   const fs::path locked = tmp.path() / "locked";
   fs::create_directory(locked);
-  fs::permissions(locked, fs::perms::owner_read | fs::perms::owner_exec);
-  const std::string denied = message((locked / "x.csv").string());
-  fs::permissions(locked, fs::perms::owner_all);
-  EXPECT_NE(denied.find("no permission to create files in folder"), std::string::npos) << denied;
+  fs::permissions(locked, fs::perms::owner_read | fs::perms::owner_exec | fs::perms::group_read |
+                              fs::perms::group_exec | fs::perms::others_read | fs::perms::others_exec);
+  const std::string path = (locked / "x.csv").string();
+  if (::geteuid() != 0) {
+    EXPECT_NE(message(path).find("no permission to create files in folder"), std::string::npos) << message(path);
+    return;
+  }
+  // Root writes into any folder: the check runs as nobody in a child process.
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    const bool nobody = ::setgid(65534) == 0 && ::setuid(65534) == 0;
+    ::_exit(!nobody ? 2 : message(path).find("no permission to create files in folder") != std::string::npos ? 0 : 1);
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "1: the locked folder was not refused; 2: could not become nobody";
 }
 
 TEST(Csv, ToleratesBomCrlfCommentsAndSpaces) {
