@@ -87,6 +87,20 @@ struct FolderLocks {
   }
 };
 
+// Why `folder`, which is not a folder, cannot hold an output: the first of it and its parents
+// that exists is a file ("'afile' is a file, not a folder"), or it does not exist.
+std::string NoFolder(const fs::path& folder) {
+  std::error_code ec;
+  for (fs::path p = folder; !p.empty(); p = p.parent_path()) {
+    if (fs::exists(p, ec)) {
+      if (!fs::is_directory(p, ec)) return "'" + p.string() + "' is a file, not a folder";
+      break;
+    }
+    if (p == p.parent_path()) break;
+  }
+  return "folder '" + folder.string() + "' does not exist";
+}
+
 void CheckWritable(const std::string& final_path) {
   if (final_path.empty()) throw InputError("", "output path", "is empty");
   if (IsSystemPath(final_path)) {
@@ -95,11 +109,7 @@ void CheckWritable(const std::string& final_path) {
   }
   const fs::path parent = fs::path(final_path).parent_path();
   if (!parent.empty() && !fs::is_directory(parent)) {
-    std::error_code exists_ec;
-    if (fs::exists(parent, exists_ec)) {
-      throw InputError(final_path, "", "cannot write: '" + parent.string() + "' is a file, not a folder");
-    }
-    throw InputError(final_path, "", "cannot write: folder '" + parent.string() + "' does not exist");
+    throw InputError(final_path, "", "cannot write: " + NoFolder(parent));
   }
   // The file is written beside its final path and renamed into place: the folder must take new
   // files. Checked here, before the work, not found when the result is ready.
@@ -279,7 +289,7 @@ OutputFolder::OutputFolder(const std::string& flag, const std::string& dir, std:
   if (parent.filename().empty()) parent = parent.parent_path();  // a trailing separator
   parent = parent.parent_path();
   if (!fs::is_directory(parent, ec)) {
-    throw InputError(flag_, "", "cannot write into '" + dir_ + "': folder '" + parent.string() + "' does not exist");
+    throw InputError(flag_, "", "cannot write into '" + dir_ + "': " + NoFolder(parent));
   }
   // An owned name that holds something of another kind (a folder where cablecal writes a file)
   // is not a previous run's: it would be deleted at the commit.

@@ -2137,6 +2137,13 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
       result.message += ": readings far from any fit; are they in the file's units (m, rad), of this robot, in the "
                         "order of its cables? Else raise --max-iterations, or try --loss cauchy against a gross "
                         "reading";
+      // Below 6 cables exact readings can end here too: a pose near the workspace's edge (a
+      // helper's 4-cable robot, pitch 0.33 rad of a 0.35 limit) led both starts to another
+      // equilibrium, and without it the rest fitted to 1e-15.
+      if (model.nt > 0 && L.m < 6) {
+        result.message += "; below 6 cables, a pose far from home or near the workspace's edge can also lead the fit "
+                          "to another equilibrium from both its starts: identify without the pose named worst";
+      }
     }
     return result;
   }

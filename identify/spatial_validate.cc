@@ -34,6 +34,21 @@ const char* Unit(SpatialSensor s) {
   return IsAngle(s) ? "rad" : "m";
 }
 
+// `start` with what the reading's absolute sensors read directly put in: the inclinometer's roll
+// and pitch, the heading's yaw, the laser's height, the tracked point's position.
+SpatialPose<double> WhatTheSensorsRead(const SpatialRobot& robot, const SpatialMeasurement& r,
+                                       const SpatialPose<double>& start, const SpatialSensorZero& zero) {
+  SpatialPose<double> read = start;
+  const auto has = [&](SpatialSensor s) { return r.has(s) && SpatialSensorNoise(robot.sensors, s).has_value(); };
+  if (has(SpatialSensor::kInclinometer)) read.segment<2>(3) = r.values(SpatialSensor::kInclinometer);
+  if (has(SpatialSensor::kHeading)) read(5) = zero.yaw_rad + r.values(SpatialSensor::kHeading)(0);
+  if (has(SpatialSensor::kLaser)) read(2) = r.values(SpatialSensor::kLaser)(0) + robot.p_F_frame_min_m.z();
+  if (has(SpatialSensor::kPosition) && robot.sensors.position) {
+    read.head<3>() = r.values(SpatialSensor::kPosition) - Rotation<double>(read) * robot.sensors.position->p_P_target_m;
+  }
+  return read;
+}
+
 // Where the forward model starts for a reading: the pose that best explains it with this
 // robot's geometry, the cables taken as rigid: its encoders' lengths and the absolute sensors'
 // readings (inclinometer, laser, position, heading), each over its sigma. The forward model's
@@ -112,21 +127,30 @@ SpatialPose<double> SensorGuess(const SpatialRobot& robot, const SpatialMeasurem
   // roll and pitch, the heading's yaw, the laser's height, the tracked point's position): from
   // home alone a 4-cable robot's pose 0.4 rad in roll ended at a yaw of -0.9 rad, matching the
   // encoders there. The better fit of the two is kept.
-  SpatialPose<double> read = start;
-  for (const auto& [s, sigma] : absolute) {
-    const Eigen::VectorXd& v = r.values(s);
-    if (s == SpatialSensor::kInclinometer) read.segment<2>(3) = v;
-    if (s == SpatialSensor::kHeading) read(5) = zero.yaw_rad + v(0);
-    if (s == SpatialSensor::kLaser) read(2) = v(0) + robot.p_F_frame_min_m.z();
-  }
-  for (const auto& [s, sigma] : absolute) {
-    if (s != SpatialSensor::kPosition || !robot.sensors.position) continue;
-    read.head<3>() = r.values(s) - Rotation<double>(read) * robot.sensors.position->p_P_target_m;
-  }
+  const SpatialPose<double> read = WhatTheSensorsRead(robot, r, start, zero);
   double cost_home = 0.0, cost_read = 0.0;
   const SpatialPose<double> from_home = solve(start, &cost_home);
   const SpatialPose<double> from_read = solve(read, &cost_read);
   return cost_read < cost_home ? from_read : from_home;
+}
+
+// Whether an equilibrium's absolute sensor readings (inclinometer, laser, position, heading) lie
+// within the other-assembly tolerances (kOtherAssemblyDistance_m, kOtherAssemblyAngle_rad) of a
+// reading's, and the reading has at least one of them.
+bool AgreesWithAbsoluteSensors(const SpatialRobot& robot, const SpatialMeasurement& r, const SpatialForwardResult& fwd,
+                               const SpatialSensorZero& zero) {
+  const auto predicted = SpatialSensorReadings<double>(robot, fwd.equilibrium.q, fwd.equilibrium.tensions_N, zero);
+  int compared = 0;
+  for (const SpatialSensor s : {SpatialSensor::kInclinometer, SpatialSensor::kLaser, SpatialSensor::kPosition,
+                                SpatialSensor::kHeading}) {
+    if (!r.has(s) || !SpatialSensorNoise(robot.sensors, s)) continue;
+    Eigen::VectorXd e = predicted[static_cast<int>(s)] - r.values(s);
+    if (s == SpatialSensor::kHeading) e(0) = WrappedAngle<double>(e(0));
+    const double tolerance = IsAngle(s) ? kOtherAssemblyAngle_rad : kOtherAssemblyDistance_m;
+    if (!(e.cwiseAbs().maxCoeff() <= tolerance)) return false;
+    ++compared;
+  }
+  return compared > 0;
 }
 
 // One robot's model of the lab: its home lengths, the pose they hold (the relative sensors'
@@ -197,7 +221,32 @@ SpatialValidationResult ValidateSpatial(const SpatialRobot& calibrated, const st
       const SpatialMeasurement& r = readings[j];
       const Eigen::VectorXd commanded = model.home_paid_out_m + r.dl_m;
       const SpatialPose<double> guess = SensorGuess(*model.robot, r, commanded, model.zero_pose, model.zero);
-      const SpatialForwardResult fwd = SolveForwardStatics(*model.robot, commanded, &guess);
+      SpatialForwardResult fwd = SolveForwardStatics(*model.robot, commanded, &guess);
+      if (fwd.status != ForwardStatus::kConverged) {
+        // The guess takes the cables as rigid: with stretching cables and few absolute sensors it
+        // can lie far from where the platform hangs (a 4-cable robot of E*A 2e4 N read by an
+        // inclinometer alone: a yaw of -2.1 rad guessed, -0.016 held; from another guess, an
+        // unstable equilibrium). The forward model is then started again where the equilibrium
+        // it found lies, at home and at what the sensors read; an equilibrium it keeps (stable,
+        // a valid assembly, the solver staying there) that agrees with every absolute sensor
+        // within the other-assembly tolerances is the one the lab saw.
+        std::vector<SpatialPose<double>> starts;
+        if (fwd.status == ForwardStatus::kOtherAssembly) starts.push_back(fwd.equilibrium.q);
+        starts.push_back(model.zero_pose);
+        starts.push_back(WhatTheSensorsRead(*model.robot, r, model.zero_pose, model.zero));
+        for (const SpatialPose<double>& start : starts) {
+          SpatialForwardResult again = SolveForwardStatics(*model.robot, commanded, &start);
+          if (again.status == ForwardStatus::kOtherAssembly) {
+            const SpatialPose<double> found = again.equilibrium.q;
+            again = SolveForwardStatics(*model.robot, commanded, &found);
+          }
+          if (again.status == ForwardStatus::kConverged &&
+              AgreesWithAbsoluteSensors(*model.robot, r, again, model.zero)) {
+            fwd = again;
+            break;
+          }
+        }
+      }
       if (fwd.status == ForwardStatus::kConverged) {
         q[k][j] = fwd.equilibrium.q;
         predicted[k][j] = SpatialSensorReadings<double>(*model.robot, fwd.equilibrium.q, fwd.equilibrium.tensions_N,

@@ -227,6 +227,11 @@ TEST(AtomicOutput, OutputsThatCannotBeWrittenAreRefusedBeforeTheWork) {
   const std::string under_file = message(file + "/x.csv");
   EXPECT_NE(under_file.find("--out"), std::string::npos) << under_file;
   EXPECT_NE(under_file.find("'" + file + "' is a file, not a folder"), std::string::npos) << under_file;
+  const std::string deeper = message(file + "/x/y.csv");  // its first existing ancestor is the file
+  EXPECT_NE(deeper.find("'" + file + "' is a file, not a folder"), std::string::npos) << deeper;
+  const std::string missing = message((tmp.path() / "nowhere" / "x.csv").string());
+  EXPECT_NE(missing.find("folder '" + (tmp.path() / "nowhere").string() + "' does not exist"), std::string::npos)
+      << missing;
   EXPECT_EQ(message((tmp.path() / "x.csv").string()), "");
   const fs::path locked = tmp.path() / "locked";
   fs::create_directory(locked);
