@@ -554,7 +554,8 @@ bool WriteValidationOutputs(const Context& ctx, const ValidateCommandOptions& op
       std::fprintf(stderr, "cablecal: skipped pose %d (%s): %s\n", k.pose_id, PrintableText(k.where).c_str(),
                    PrintableText(k.reason).c_str());
     }
-    if (options.skip_infeasible) {
+    // Said on stderr only when something was skipped; the console's summary line counts it always.
+    if (options.skip_infeasible && !skipped.empty()) {
       std::fprintf(stderr, "cablecal: skipped %zu of %zu readings that a robot cannot hold (--skip-infeasible)\n",
                    skipped.size(), readings);
     }
@@ -565,8 +566,12 @@ bool WriteValidationOutputs(const Context& ctx, const ValidateCommandOptions& op
 }
 
 std::string CountedReadings(std::size_t kept, int num_poses) {
-  return num_poses == static_cast<int>(kept) ? std::to_string(kept) + " poses"
-                                             : std::to_string(kept) + " readings (" + std::to_string(num_poses) + " poses)";
+  const auto counted = [](std::size_t n, const char* what) {
+    return std::to_string(n) + " " + what + (n == 1 ? "" : "s");
+  };
+  return num_poses == static_cast<int>(kept)
+             ? counted(kept, "pose")
+             : counted(kept, "reading") + " (" + counted(static_cast<std::size_t>(num_poses), "pose") + ")";
 }
 
 int RunValidate(const Context& ctx, const ValidateCommandOptions& options) {

@@ -253,7 +253,10 @@ SpatialValidationResult ValidateSpatial(const SpatialRobot& calibrated, const st
                                                         model.zero);
         continue;
       }
-      const std::string why = "the " + roles[k] + " robot cannot hold the commanded lengths (" +
+      // Named by its flag and file's name: --robot is often the calibrated file, but may be any
+      // (a truth file, the nominal one).
+      const std::string who = k == 0 ? "--robot's robot " + robots[k]->name : "the --nominal robot " + robots[k]->name;
+      const std::string why = who + " cannot hold the commanded lengths (" +
                               CannotHoldReason(fwd.status, "the pose the sensors read") + ")";
       if (!skip_infeasible) throw InputError(Where(r, source), "", why);
       keep[j] = false;
