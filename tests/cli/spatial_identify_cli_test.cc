@@ -252,6 +252,17 @@ TEST_F(SpatialIdentifyCli, AFourCableRobotPredictsItsOwnTiltedNoiseFreeReadings)
   EXPECT_LT(v["calibrated"]["inclinometer"]["max_abs_rad"].as<double>(), 1e-9) << r.output;
   EXPECT_LT(v["calibrated"]["laser"]["max_abs_m"].as<double>(), 1e-9) << r.output;
   EXPECT_LT(v["calibrated"]["swivel"]["max_abs_rad"].as<double>(), 1e-9) << r.output;
+  // The console counts in the singular for one pose, and says nothing of skipping when nothing
+  // was skipped.
+  r = RunCablecal("sample --robot " + Path("lab4.yaml") + " --poses 1 --seed 3 --out " + Path("one.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = RunCablecal("simulate --robot " + Path("lab4.yaml") + " --plan " + Path("one.csv") + " --out " + Path("m1.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = RunCablecal("validate --robot " + Path("lab4.yaml") + " --measurements " + Path("m1.csv") + " --out " +
+                  Path("v1.csv") + " --skip-infeasible");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("validated on 1 pose of "), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("cablecal: skipped"), std::string::npos) << r.output;
 }
 
 // Another new user's 4-cable robot with stretching cables (E*A 2e4 N) read by its encoders and an
