@@ -996,6 +996,7 @@ struct BlockArrowSummary {
   bool converged = false;
   int iterations = 0;
   std::string message;
+  double cost = std::numeric_limits<double>::infinity();  // 1/2 sum of squares at the last iterate
 };
 
 // Every term of every pose, and the pose-free terms (the prior): the normal equations and the
@@ -1155,6 +1156,7 @@ BlockArrowSummary SolveBlockArrow(const Model& model, VectorXd& g, Locals& local
   const auto stop = [&](bool converged, const std::string& why) {
     summary.converged = converged;
     summary.message = why;
+    summary.cost = cost;
     return summary;
   };
   const auto gradient_small = [&]() {
@@ -1789,6 +1791,125 @@ Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasureme
   return a;
 }
 
+// One fit from the given starts, `held` fixed at g0: the block-arrow LM for plain least squares,
+// Ceres for a robust loss. `objective` is what it minimised (Ceres' robust cost with a loss).
+struct Fit {
+  VectorXd g;
+  Locals locals;
+  bool converged = false;
+  int iterations = 0;
+  double objective = std::numeric_limits<double>::infinity();
+  std::string message;
+};
+Fit FitFrom(const Model& model, const VectorXd& g0, const std::vector<int>& held, const SpatialIdentifyOptions& options,
+            Locals starts) {
+  const Layout& L = model.layout;
+  const int n = static_cast<int>(model.pose_ids.size());
+  Fit fit;
+  fit.g = g0;
+  fit.locals = std::move(starts);
+  VectorXd& g = fit.g;
+  Locals& locals = fit.locals;
+  if (options.loss.kind == LossKind::kNone) {
+    const BlockArrowSummary solved = SolveBlockArrow(model, g, locals, held, options.max_iterations);
+    fit.converged = solved.converged;
+    fit.iterations = solved.iterations + 1;  // with the start, as Ceres counts them
+    fit.message = solved.message;
+    fit.objective = std::isfinite(solved.cost) ? solved.cost : std::numeric_limits<double>::infinity();
+    return fit;
+  }
+  // A robust loss: Ceres, which reweights each residual block by it.
+  const int local = model.local();
+  std::vector<std::unique_ptr<ceres::CostFunction>> adapters;
+  ceres::Problem::Options problem_options;
+  problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  // Every pose's block in one buffer, in pose order: Ceres keeps a group's blocks in a set
+  // ordered by address, so blocks allocated one by one would be eliminated in an order that
+  // changes from run to run, and the result's last bits with it (a Monte Carlo's trials must
+  // give the same bytes every time).
+  std::vector<double> local_buffer(static_cast<std::size_t>(n) * local);
+  const auto block = [&](int j) { return local_buffer.data() + static_cast<std::size_t>(j) * local; };
+  auto* ordering = new ceres::ParameterBlockOrdering;
+  for (int j = 0; j < n; ++j) {
+    Eigen::Map<VectorXd>(block(j), local) = locals[j];
+    problem.AddParameterBlock(block(j), local);
+    ordering->AddElementToGroup(block(j), 0);
+  }
+  for (int i = 0; i < L.m; ++i) {
+    problem.AddParameterBlock(g.data() + L.exit(i), 3);
+    problem.AddParameterBlock(g.data() + L.length(i), 1);
+    ordering->AddElementToGroup(g.data() + L.exit(i), 1);
+    ordering->AddElementToGroup(g.data() + L.length(i), 1);
+    if (L.anchors) {
+      problem.AddParameterBlock(g.data() + L.anchor(i), 3);
+      ordering->AddElementToGroup(g.data() + L.anchor(i), 1);
+    }
+    if (L.swivel) {
+      problem.AddParameterBlock(g.data() + L.swivel_offset(i), 1);
+      ordering->AddElementToGroup(g.data() + L.swivel_offset(i), 1);
+    }
+  }
+  if (L.heading) {
+    problem.AddParameterBlock(g.data() + L.yaw0(), 1);
+    ordering->AddElementToGroup(g.data() + L.yaw0(), 1);
+  }
+  if (L.platform) {
+    problem.AddParameterBlock(g.data() + L.platform_block(), 4);
+    ordering->AddElementToGroup(g.data() + L.platform_block(), 1);
+  }
+  for (const Term& t : model.terms) {
+    std::vector<double*> params;
+    if (t.pose >= 0) params.push_back(block(t.pose));
+    for (int b : t.block_offset) params.push_back(g.data() + b);
+    // The robust loss on the sensors' readings; the equilibrium is the model's, not a reading.
+    const bool reading = t.reading >= 0 && t.sensor != kEquilibriumTerm;
+    ceres::LossFunction* loss = nullptr;
+    if (reading && options.loss.kind == LossKind::kHuber) loss = new ceres::HuberLoss(options.loss.scale_sigmas);
+    if (reading && options.loss.kind == LossKind::kCauchy) loss = new ceres::CauchyLoss(options.loss.scale_sigmas);
+    ceres::CostFunction* cost = t.cost.get();
+    if (t.pose >= 0 && local > 6) {
+      adapters.push_back(std::make_unique<LocalBlockCost>(t, local));
+      cost = adapters.back().get();
+    }
+    problem.AddResidualBlock(cost, loss, params);
+  }
+  // The held coordinates: of the exit points' blocks, then the free anchors'.
+  for (int point = 0; point < (L.exit_coordinates() + L.anchor_coordinates()) / 3; ++point) {
+    const int offset = point < L.m ? L.exit(point) : L.anchor(point - L.m);
+    std::vector<int> axes;
+    for (int axis = 0; axis < 3; ++axis) {
+      if (std::count(held.begin(), held.end(), offset + axis)) axes.push_back(axis);
+    }
+    if (axes.size() == 3) {
+      problem.SetParameterBlockConstant(g.data() + offset);
+    } else if (!axes.empty()) {
+      problem.SetManifold(g.data() + offset, new ceres::SubsetManifold(3, axes));
+    }
+  }
+  ceres::Solver::Options solver;
+  constexpr internal::LevenbergMarquardtSettings kSettings;
+  solver.minimizer_type = ceres::TRUST_REGION;
+  solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  solver.function_tolerance = kSettings.function_tolerance;
+  solver.gradient_tolerance = kSettings.gradient_tolerance;
+  solver.parameter_tolerance = kSettings.parameter_tolerance;
+  solver.initial_trust_region_radius = kSettings.initial_trust_region_radius;
+  solver.linear_solver_type = ceres::DENSE_SCHUR;  // the poses eliminated first
+  solver.linear_solver_ordering.reset(ordering);
+  solver.max_num_iterations = options.max_iterations;
+  solver.num_threads = 1;
+  solver.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver, &problem, &summary);
+  for (int j = 0; j < n; ++j) locals[j] = Eigen::Map<const VectorXd>(block(j), local);
+  fit.converged = summary.termination_type == ceres::CONVERGENCE;
+  fit.iterations = static_cast<int>(summary.iterations.size());
+  fit.message = summary.message;
+  fit.objective = std::isfinite(summary.final_cost) ? summary.final_cost : std::numeric_limits<double>::infinity();
+  return fit;
+}
+
 }  // namespace
 
 std::vector<std::string> SpatialGeometryNames(int num_cables, bool swivel, bool heading, bool anchors, bool platform) {
@@ -1897,128 +2018,7 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
   result.pose_ids = model.pose_ids;
   for (const VectorXd& x : a.start) result.starting_poses.push_back(x.head<6>());
 
-  // One fit from the given starts: the block-arrow LM for plain least squares, Ceres for a
-  // robust loss. `objective` is what it minimised (Ceres' robust cost with a loss).
-  struct Fit {
-    VectorXd g;
-    Locals locals;
-    bool converged = false;
-    int iterations = 0;
-    double objective = std::numeric_limits<double>::infinity();
-    std::string message;
-  };
-  const auto solve = [&](Locals starts) {
-  Fit fit;
-  fit.g = a.g0;
-  fit.locals = std::move(starts);
-  VectorXd& g = fit.g;
-  Locals& locals = fit.locals;
-  if (options.loss.kind == LossKind::kNone) {
-    const BlockArrowSummary solved = SolveBlockArrow(model, g, locals, a.gauge.held, options.max_iterations);
-    fit.converged = solved.converged;
-    fit.iterations = solved.iterations + 1;  // with the start, as Ceres counts them
-    fit.message = solved.message;
-    fit.objective = 0.0;
-    for (const Term& t : model.terms) {
-      VectorXd r(t.size());
-      EvaluateTerm(t, g, locals, r.data(), nullptr, nullptr);
-      fit.objective += 0.5 * r.squaredNorm();
-    }
-    if (!std::isfinite(fit.objective)) fit.objective = std::numeric_limits<double>::infinity();
-    return fit;
-  }
-  // A robust loss: Ceres, which reweights each residual block by it.
-  const int local = model.local();
-  std::vector<std::unique_ptr<ceres::CostFunction>> adapters;
-  ceres::Problem::Options problem_options;
-  problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::Problem problem(problem_options);
-  // Every pose's block in one buffer, in pose order: Ceres keeps a group's blocks in a set
-  // ordered by address, so blocks allocated one by one would be eliminated in an order that
-  // changes from run to run, and the result's last bits with it (a Monte Carlo's trials must
-  // give the same bytes every time).
-  std::vector<double> local_buffer(static_cast<std::size_t>(n) * local);
-  const auto block = [&](int j) { return local_buffer.data() + static_cast<std::size_t>(j) * local; };
-  auto* ordering = new ceres::ParameterBlockOrdering;
-  for (int j = 0; j < n; ++j) {
-    Eigen::Map<VectorXd>(block(j), local) = locals[j];
-    problem.AddParameterBlock(block(j), local);
-    ordering->AddElementToGroup(block(j), 0);
-  }
-  for (int i = 0; i < L.m; ++i) {
-    problem.AddParameterBlock(g.data() + L.exit(i), 3);
-    problem.AddParameterBlock(g.data() + L.length(i), 1);
-    ordering->AddElementToGroup(g.data() + L.exit(i), 1);
-    ordering->AddElementToGroup(g.data() + L.length(i), 1);
-    if (L.anchors) {
-      problem.AddParameterBlock(g.data() + L.anchor(i), 3);
-      ordering->AddElementToGroup(g.data() + L.anchor(i), 1);
-    }
-    if (L.swivel) {
-      problem.AddParameterBlock(g.data() + L.swivel_offset(i), 1);
-      ordering->AddElementToGroup(g.data() + L.swivel_offset(i), 1);
-    }
-  }
-  if (L.heading) {
-    problem.AddParameterBlock(g.data() + L.yaw0(), 1);
-    ordering->AddElementToGroup(g.data() + L.yaw0(), 1);
-  }
-  if (L.platform) {
-    problem.AddParameterBlock(g.data() + L.platform_block(), 4);
-    ordering->AddElementToGroup(g.data() + L.platform_block(), 1);
-  }
-  for (const Term& t : model.terms) {
-    std::vector<double*> params;
-    if (t.pose >= 0) params.push_back(block(t.pose));
-    for (int b : t.block_offset) params.push_back(g.data() + b);
-    // The robust loss on the sensors' readings; the equilibrium is the model's, not a reading.
-    const bool reading = t.reading >= 0 && t.sensor != kEquilibriumTerm;
-    ceres::LossFunction* loss = nullptr;
-    if (reading && options.loss.kind == LossKind::kHuber) loss = new ceres::HuberLoss(options.loss.scale_sigmas);
-    if (reading && options.loss.kind == LossKind::kCauchy) loss = new ceres::CauchyLoss(options.loss.scale_sigmas);
-    ceres::CostFunction* cost = t.cost.get();
-    if (t.pose >= 0 && local > 6) {
-      adapters.push_back(std::make_unique<LocalBlockCost>(t, local));
-      cost = adapters.back().get();
-    }
-    problem.AddResidualBlock(cost, loss, params);
-  }
-  // The held coordinates: of the exit points' blocks, then the free anchors'.
-  for (int point = 0; point < (L.exit_coordinates() + L.anchor_coordinates()) / 3; ++point) {
-    const int offset = point < L.m ? L.exit(point) : L.anchor(point - L.m);
-    std::vector<int> axes;
-    for (int axis = 0; axis < 3; ++axis) {
-      if (std::count(a.gauge.held.begin(), a.gauge.held.end(), offset + axis)) axes.push_back(axis);
-    }
-    if (axes.size() == 3) {
-      problem.SetParameterBlockConstant(g.data() + offset);
-    } else if (!axes.empty()) {
-      problem.SetManifold(g.data() + offset, new ceres::SubsetManifold(3, axes));
-    }
-  }
-  ceres::Solver::Options solver;
-  constexpr internal::LevenbergMarquardtSettings kSettings;
-  solver.minimizer_type = ceres::TRUST_REGION;
-  solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  solver.function_tolerance = kSettings.function_tolerance;
-  solver.gradient_tolerance = kSettings.gradient_tolerance;
-  solver.parameter_tolerance = kSettings.parameter_tolerance;
-  solver.initial_trust_region_radius = kSettings.initial_trust_region_radius;
-  solver.linear_solver_type = ceres::DENSE_SCHUR;  // the poses eliminated first
-  solver.linear_solver_ordering.reset(ordering);
-  solver.max_num_iterations = options.max_iterations;
-  solver.num_threads = 1;
-  solver.logging_type = ceres::SILENT;
-  ceres::Solver::Summary summary;
-  ceres::Solve(solver, &problem, &summary);
-  for (int j = 0; j < n; ++j) locals[j] = Eigen::Map<const VectorXd>(block(j), local);
-  fit.converged = summary.termination_type == ceres::CONVERGENCE;
-  fit.iterations = static_cast<int>(summary.iterations.size());
-  fit.message = summary.message;
-  fit.objective = std::isfinite(summary.final_cost) ? summary.final_cost : std::numeric_limits<double>::infinity();
-  return fit;
-  };
-  Fit fit = solve(a.start);
+  Fit fit = FitFrom(model, a.g0, a.gauge.held, options, a.start);
   // Below 6 cables every pose starts from home (PoseStarts), and a pose far from home can end
   // in another equilibrium: a 4-cable robot with its centre of mass off in x and z, poses 0.7 m
   // from home, had its noise-free readings fitted at 17.5 sigma, the exits 0.3 m off. Starting
@@ -2034,7 +2034,7 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
     bool differ = false;
     for (int j = 0; j < n; ++j) differ = differ || staged[j] != a.start[j];
     if (differ) {
-      Fit second = solve(staged);
+      Fit second = FitFrom(model, a.g0, a.gauge.held, options, staged);
       const bool better = second.converged == fit.converged ? second.objective < fit.objective : second.converged;
       if (better) {
         fit = std::move(second);

@@ -34,12 +34,22 @@ const char* Unit(SpatialSensor s) {
   return IsAngle(s) ? "rad" : "m";
 }
 
+// The sensors that read the pose in F (not relative to home, not the tensions): the guess
+// fits them, and an equilibrium found must agree with them.
+constexpr SpatialSensor kAbsoluteSensors[] = {SpatialSensor::kInclinometer, SpatialSensor::kLaser,
+                                              SpatialSensor::kPosition, SpatialSensor::kHeading};
+
+// Whether reading r has sensor s and the robot file gives its noise (a sensor it can model).
+bool ReadsWith(const SpatialRobot& robot, const SpatialMeasurement& r, SpatialSensor s) {
+  return r.has(s) && SpatialSensorNoise(robot.sensors, s).has_value();
+}
+
 // `start` with what the reading's absolute sensors read directly put in: the inclinometer's roll
 // and pitch, the heading's yaw, the laser's height, the tracked point's position.
 SpatialPose<double> WhatTheSensorsRead(const SpatialRobot& robot, const SpatialMeasurement& r,
                                        const SpatialPose<double>& start, const SpatialSensorZero& zero) {
   SpatialPose<double> read = start;
-  const auto has = [&](SpatialSensor s) { return r.has(s) && SpatialSensorNoise(robot.sensors, s).has_value(); };
+  const auto has = [&](SpatialSensor s) { return ReadsWith(robot, r, s); };
   if (has(SpatialSensor::kInclinometer)) read.segment<2>(3) = r.values(SpatialSensor::kInclinometer);
   if (has(SpatialSensor::kHeading)) read(5) = zero.yaw_rad + r.values(SpatialSensor::kHeading)(0);
   if (has(SpatialSensor::kLaser)) read(2) = r.values(SpatialSensor::kLaser)(0) + robot.p_F_frame_min_m.z();
@@ -64,10 +74,8 @@ SpatialPose<double> SensorGuess(const SpatialRobot& robot, const SpatialMeasurem
   const int m = robot.num_cables();
   const double encoder_sigma = std::max(robot.sensors.encoder_sigma_m, 1e-9);
   std::vector<std::pair<SpatialSensor, double>> absolute;
-  for (const SpatialSensor s : {SpatialSensor::kInclinometer, SpatialSensor::kLaser, SpatialSensor::kPosition,
-                                SpatialSensor::kHeading}) {
-    const std::optional<RangedNoise> noise = SpatialSensorNoise(robot.sensors, s);
-    if (r.has(s) && noise) absolute.push_back({s, std::max(noise->sigma(), 1e-9)});
+  for (const SpatialSensor s : kAbsoluteSensors) {
+    if (ReadsWith(robot, r, s)) absolute.push_back({s, std::max(SpatialSensorNoise(robot.sensors, s)->sigma(), 1e-9)});
   }
   // The whitened misfit at q and its Jacobian.
   const auto evaluate = [&](const SpatialPose<double>& q, Eigen::VectorXd* res, Eigen::MatrixXd* J) {
@@ -141,9 +149,8 @@ bool AgreesWithAbsoluteSensors(const SpatialRobot& robot, const SpatialMeasureme
                                const SpatialSensorZero& zero) {
   const auto predicted = SpatialSensorReadings<double>(robot, fwd.equilibrium.q, fwd.equilibrium.tensions_N, zero);
   int compared = 0;
-  for (const SpatialSensor s : {SpatialSensor::kInclinometer, SpatialSensor::kLaser, SpatialSensor::kPosition,
-                                SpatialSensor::kHeading}) {
-    if (!r.has(s) || !SpatialSensorNoise(robot.sensors, s)) continue;
+  for (const SpatialSensor s : kAbsoluteSensors) {
+    if (!ReadsWith(robot, r, s)) continue;
     Eigen::VectorXd e = predicted[static_cast<int>(s)] - r.values(s);
     if (s == SpatialSensor::kHeading) e(0) = WrappedAngle<double>(e(0));
     const double tolerance = IsAngle(s) ? kOtherAssemblyAngle_rad : kOtherAssemblyDistance_m;
