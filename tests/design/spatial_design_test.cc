@@ -584,7 +584,7 @@ int TrueRobotsThatCannotHoldThePlan(const SpatialRobot& robot, const std::vector
 // robots are drawn with k / 3 x sigma per exit coordinate, so that the plan's k sigma is their 3
 // sigma.
 void ExpectRobustDesignHoldsOnTrueRobots(const SpatialRobot& robot, int n, double least_k,
-                                         std::optional<double> sigma_m = std::nullopt) {
+                                         std::optional<double> sigma_m = std::nullopt, double requested_k = 3.0) {
   SCOPED_TRACE(robot.name);
   ASSERT_TRUE(robot.sensors.tracker_sigma_m.has_value());
   SpatialDesignOptions options;
@@ -593,6 +593,7 @@ void ExpectRobustDesignHoldsOnTrueRobots(const SpatialRobot& robot, int n, doubl
   options.starts = 1;  // the robust rounds are per start: one shows them, in half the time
   options.random_sets = 0;
   options.seed = 11;
+  options.robust_sigmas = requested_k;
   const SpatialDesignResult robust = DesignSpatialPoses(robot, options);
   EXPECT_EQ(robust.geometry_sigma_m, sigma_m.value_or(*robot.sensors.tracker_sigma_m));  // default: the tracker's
   EXPECT_GE(robust.robust_sigmas_achieved, least_k) << robust.robustness_note;
@@ -614,8 +615,9 @@ void ExpectRobustDesignHoldsOnTrueRobots(const SpatialRobot& robot, int n, doubl
 
 TEST(SpatialDesign, RobustPlansHoldOnTrueCogiros) {
   // Measured since the platform's mass and centre of mass are among the scenario robots: k = 3
-  // in 26 s in the suite, but 2.95 (the search's six designs, 105 s) when run after another
-  // test's in-process design: the design is not yet the same whatever ran before it.
+  // (one robust design, 14 s). An earlier version gave 2.95 when another test's in-process design
+  // ran first; at 38dca35 the whole file in one process gives k = 3 here too, and three equal
+  // robust cogiro designs in one Python process are the same plan byte for byte.
   ExpectRobustDesignHoldsOnTrueRobots(BuiltinSpatialRobot("cogiro"), 13, 2.5);
 }
 
@@ -625,12 +627,14 @@ TEST(SpatialDesign, RobustPlansHoldOnTrueRandomRobots) {
   // plans only to k = 0.55 (the search's, measured: 81 s), which the ipanema1 test covers.
   // Measured: k = 1.15 of the requested 3 since the platform is among the scenario robots (1.5
   // before; 2.25 before the platform's mass and centre of mass were unknowns: another optimum; 3
-  // before its turn about z, weakly seen, was held by the gauge).
+  // before its turn about z, weakly seen, was held by the gauge). The search for that k took 70
+  // s of the suite and is what the ipanema1 test below shows; here k = 1 is asked (one design,
+  // 4 s) and the property is the plan's: it holds where the nominal plan does not.
   Rng rng(2816);
   SpatialRobot robot = testing::RandomSpatialRobot(rng, "random6", 6);
   robot.sensors.inclinometer_rad = RangedNoise{0.002, 0.001};
   robot.sensors.laser_m = RangedNoise{0.001, 0.0005};
-  ExpectRobustDesignHoldsOnTrueRobots(robot, 12, 1.0, 5e-5);
+  ExpectRobustDesignHoldsOnTrueRobots(robot, 12, 1.0, 5e-5, /*requested_k=*/1.0);
 }
 
 // Where no start holds at the requested robustness the design runs at the largest k that does
