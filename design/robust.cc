@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "common/error.h"
+#include "common/flatten.h"
 #include "design/ipopt_nlp.h"
 
 namespace cablecal::internal {
@@ -44,17 +45,12 @@ std::vector<PoseQuantity> PoseQuantities(const Robot& robot) {
 
 namespace {
 
-// `flatten` inlines the Jet arithmetic into RobustQuantitiesM<2>, the paper's robot's (its
+// `flatten` (common/flatten.h) inlines the Jet arithmetic into RobustQuantitiesM<2>, the paper's robot's (its
 // robust design runs it millions of times): with the seven instances in this file GCC's
 // inliner otherwise runs out of its unit-growth budget and calls it out of line, which made
 // M = 2 a third slower. Only M = 2: flattening all seven took 114 s of this file's 2-core build
 // (bench/README.md, "Build and CI time"), and under AddressSanitizer over 17 minutes, so not
 // there at all (that build is for correctness, not speed).
-#if defined(CABLECAL_ADDRESS_SANITIZER)
-#define CABLECAL_FLATTEN
-#else
-#define CABLECAL_FLATTEN __attribute__((flatten))
-#endif
 
 // RobustQuantities for M cables: Jets sized at compile time for (y, g), 3 + M + 3M entries
 // (M = 2: 11, as before the cable count became general).

@@ -17,6 +17,7 @@
 #include <utility>
 
 #include "common/error.h"
+#include "common/flatten.h"
 #include "identify/least_squares.h"  // LevenbergMarquardtSettings
 #include "model/geometry.h"
 #include "model/spatial_sensor_model.h"
@@ -95,8 +96,8 @@ struct CableWithGradient {
   double d_exit[3];
   double d_anchor[3];
 };
-CableWithGradient CableAndGradient(const CableData& cable, const double* q, const double* d, const double* b,
-                                   bool gradient) {
+CABLECAL_FLATTEN CableWithGradient CableAndGradient(const CableData& cable, const double* q, const double* d,
+                                                    const double* b, bool gradient) {
   using J3 = ceres::Jet<double, 3>;
   const SpatialPose<double> pose = PoseOf(q);
   CableWithGradient out;
@@ -262,7 +263,8 @@ class EquilibriumCostFunction : public ceres::CostFunction {
     for (int i = 0; i < m; ++i) mutable_parameter_block_sizes()->push_back(3);
     mutable_parameter_block_sizes()->push_back(4);
   }
-  bool Evaluate(double const* const* p, double* residuals, double** jacobians) const override {
+  // Flattened: GCC otherwise calls the Jets' 10-vector arithmetic out of line (common/flatten.h).
+  CABLECAL_FLATTEN bool Evaluate(double const* const* p, double* residuals, double** jacobians) const override {
     if (!jacobians) return f_(p, residuals);
     // pose (0..5), then t_i (6) and D_i (7..9) in a cable's Jet, mass (6) and c (7..9) in gravity's
     using J = ceres::Jet<double, 10>;

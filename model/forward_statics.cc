@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "common/error.h"
+#include "common/flatten.h"
 #include "model/cable.h"
 #include "model/stability.h"
 #include "model/swivel.h"
@@ -44,6 +45,12 @@ struct PlanarAdapter {
   template <typename T>
   static Eigen::Matrix<T, kDim, 1> Gravity(const Robot& robot, const PoseOf<T>& q) {
     return GravityWrench<T>(robot, q);
+  }
+  template <typename T>
+  static void LengthsAndWrench(const Robot& robot, const PoseOf<T>& q, Eigen::Matrix<T, Eigen::Dynamic, 1>* l,
+                               Eigen::Matrix<T, kDim, Eigen::Dynamic>* W) {
+    *l = Lengths<T>(robot, q);
+    *W = Wrench<T>(robot, q);
   }
   static const std::optional<double>& Stiffness(const Robot& robot, int i) { return robot.cables[i].stiffness_N; }
   static PoseD Home(const Robot& robot) { return PoseD(robot.p_F_home_m.x(), robot.p_F_home_m.y(), robot.home_theta_rad); }
@@ -87,6 +94,11 @@ struct SpatialAdapter {
   template <typename T>
   static Eigen::Matrix<T, kDim, 1> Gravity(const SpatialRobot& robot, const PoseOf<T>& q) {
     return GravityWrench<T>(robot, q);
+  }
+  template <typename T>
+  static void LengthsAndWrench(const SpatialRobot& robot, const PoseOf<T>& q, Eigen::Matrix<T, Eigen::Dynamic, 1>* l,
+                               Eigen::Matrix<T, kDim, Eigen::Dynamic>* W) {
+    CableLengthsAndWrench<T>(robot, q, l, W);
   }
   static const std::optional<double>& Stiffness(const SpatialRobot& robot, int i) {
     return robot.cables[i].stiffness_N;
@@ -165,15 +177,16 @@ Cables CablesOf(const typename A::RobotType& robot, const Eigen::VectorXd& L) {
 // metres and newtons alike), and its Jacobian (pose columns from Jets, tension columns W's and
 // the compliances).
 template <class A>
-bool NewtonResidual(const typename A::RobotType& robot, const Cables& cables, const Eigen::VectorXd& L,
+CABLECAL_FLATTEN bool NewtonResidual(const typename A::RobotType& robot, const Cables& cables, const Eigen::VectorXd& L,
                     const Eigen::VectorXd& y, Eigen::VectorXd* r, Eigen::MatrixXd* J) {
   constexpr int d = A::kDim;
   using Jet = ceres::Jet<double, d>;
   const int k = cables.count();
   typename A::template PoseOf<Jet> q;
   for (int c = 0; c < d; ++c) q(c) = Jet(y(c), c);
-  const Eigen::Matrix<Jet, Eigen::Dynamic, 1> l = A::template Lengths<Jet>(robot, q);
-  const Eigen::Matrix<Jet, d, Eigen::Dynamic> W = A::template Wrench<Jet>(robot, q);
+  Eigen::Matrix<Jet, Eigen::Dynamic, 1> l;
+  Eigen::Matrix<Jet, d, Eigen::Dynamic> W;
+  A::template LengthsAndWrench<Jet>(robot, q, &l, &W);
   Eigen::Matrix<Jet, d, 1> f = A::template Gravity<Jet>(robot, q);
   for (int j = 0; j < k; ++j) f += W.col(cables.taut[j]) * Jet(y(d + j));
   r->resize(d + k);
@@ -372,16 +385,19 @@ typename A::Result Solve(const typename A::RobotType& robot, const Eigen::Vector
                          const typename A::PoseD* guess) {
   CABLECAL_CHECK(L.size() == robot.num_cables(), "one unstretched length per cable");
   const Cables cables = CablesOf<A>(robot, L);
-  std::vector<typename A::PoseD> starts;
-  if (guess) starts.push_back(*guess);
-  starts.push_back(A::Home(robot));
-  starts.push_back(LeastSquaresGuess<A>(robot, L));
+  // The starts in order: the guess, home, the least-squares pose (computed only when the
+  // first two do not pass: most calls end at the guess).
+  const int count = guess ? 3 : 2;
+  const auto start_at = [&](int k) -> typename A::PoseD {
+    if (guess && k == 0) return *guess;
+    return k + 1 < count ? A::Home(robot) : LeastSquaresGuess<A>(robot, L);
+  };
   // Reported when no start passes: the first that converged (from the guess, when it did), as
   // its status says most about why the commanded pose cannot be held.
   std::optional<typename A::Result> first_converged;
   typename A::Result last;
-  for (const typename A::PoseD& start : starts) {
-    last = NewtonFrom<A>(robot, cables, L, start);
+  for (int k = 0; k < count; ++k) {
+    last = NewtonFrom<A>(robot, cables, L, start_at(k));
     if (last.status != ForwardStatus::kConverged) continue;
     Check<A>(robot, L, guess, last);
     if (last.status == ForwardStatus::kConverged) return last;

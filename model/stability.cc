@@ -5,6 +5,7 @@
 #include <Eigen/Dense>
 
 #include "common/error.h"
+#include "common/flatten.h"
 #include "model/cable.h"
 #include "model/swivel.h"
 
@@ -114,8 +115,11 @@ StabilityResult StaticStability(const Robot& robot, const PlanarPose& q, const E
   return Stability<PlanarKind::kPoseDim>(robot, q, tensions_N, axial_stiffness_Npm);
 }
 
-StabilityResult StaticStability(const SpatialRobot& robot, const SpatialPose<double>& q,
-                                const Eigen::VectorXd& tensions_N, const Eigen::VectorXd& axial_stiffness_Npm) {
+// Flattened (common/flatten.h): the spatial Monte Carlo tests every simulated pose, and its Jets'
+// arithmetic called out of line was a third of the sampler's time (bench/README.md).
+CABLECAL_FLATTEN StabilityResult StaticStability(const SpatialRobot& robot, const SpatialPose<double>& q,
+                                                 const Eigen::VectorXd& tensions_N,
+                                                 const Eigen::VectorXd& axial_stiffness_Npm) {
   return Stability<SpatialKind::kPoseDim>(robot, q, tensions_N, axial_stiffness_Npm);
 }
 

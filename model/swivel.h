@@ -263,6 +263,23 @@ Eigen::Matrix<T, 6, Eigen::Dynamic> WrenchMatrix(const SpatialRobot& robot, cons
   return W;
 }
 
+// CableLengths and WrenchMatrix from one swivel construction per cable (the forward statics'
+// Newton needs both at each step, and the construction is most of their cost): the same
+// values, bit for bit, as the two calls.
+template <typename T>
+void CableLengthsAndWrench(const SpatialRobot& robot, const SpatialPose<T>& q, Eigen::Matrix<T, Eigen::Dynamic, 1>* l,
+                           Eigen::Matrix<T, 6, Eigen::Dynamic>* W) {
+  const Eigen::Matrix<T, 3, 3> R = Rotation<T>(q);
+  l->resize(robot.num_cables());
+  W->resize(6, robot.num_cables());
+  for (int i = 0; i < robot.num_cables(); ++i) {
+    const SpatialCable& c = robot.cables[i];
+    const SwivelCableState<T> s = SwivelCableAtPose<T>(c, q, R);
+    (*l)(i) = s.length_m;
+    W->col(i) = WrenchColumn<T>(R * c.p_P_anchor_m.cast<T>(), s);
+  }
+}
+
 // Gravity wrench about p: [0; 0; -m g; (R c) x (0, 0, -m g)], c the centre of mass in P; the
 // mass and c as scalars of their own where they are unknowns (the spatial identification's).
 template <typename T>
