@@ -19,6 +19,7 @@
 #include "identify/identify.h"
 #include "common/format.h"
 #include "common/version.h"
+#include "experiment/plan.h"  // kMaxPlanPoses
 
 namespace {
 
@@ -242,7 +243,8 @@ int main(int argc, char** argv) {
   des_cmd->add_option("--poses", des.poses,
                      "number of poses (at least 5 with 2 cables, 4 with 3 to 8; spatial robots: as their sensors need, "
                      "named when too few)")
-      ->required();
+      ->required()
+      ->check(WholeNumberIn(1, cablecal::kMaxPlanPoses));  // the design says its own bound
   des_cmd->add_option("--criterion", des.criterion, "a|d|e|condition")
       ->capture_default_str()
       ->check(CLI::IsMember({"condition", "d", "a", "e"}));

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cctype>
 #include <fstream>
+#include <set>
+#include <string>
 #include <vector>
 
 #include "common/error.h"
@@ -114,14 +116,22 @@ void ForEachCsvLine(std::istream& in, const std::string& path, char delimiter,
 // message part that says so, or "" when the counts agree or either has none.
 std::string OtherCableCount(const std::vector<std::string>& wanted, const std::vector<std::string>& got) {
   // In any case: 'DL1' is a cable's column typed in capitals (refused with a hint), not another robot's.
+  // A dl column given twice ('dl1,dl1') is a repeated column, which the caller names, not
+  // another cable count: -1 then.
   const auto cable_columns = [](const std::vector<std::string>& names) {
-    return std::count_if(names.begin(), names.end(), [](const std::string& c) {
-      return c.size() > 2 && (c[0] == 'd' || c[0] == 'D') && (c[1] == 'l' || c[1] == 'L') &&
-             c.find_first_not_of("0123456789", 2) == std::string::npos;
-    });
+    std::set<std::string> distinct;
+    int count = 0;
+    for (const std::string& c : names) {
+      if (c.size() > 2 && (c[0] == 'd' || c[0] == 'D') && (c[1] == 'l' || c[1] == 'L') &&
+          c.find_first_not_of("0123456789", 2) == std::string::npos) {
+        distinct.insert(c);
+        ++count;
+      }
+    }
+    return static_cast<int>(distinct.size()) == count ? count : -1;
   };
-  const auto want = cable_columns(wanted), have = cable_columns(got);
-  if (want == 0 || have == 0 || want == have) return "";
+  const int want = cable_columns(wanted), have = cable_columns(got);
+  if (want <= 0 || have <= 0 || want == have) return "";
   return "the file has columns for " + std::to_string(have) + " cables, the robot has " + std::to_string(want) +
          ": a file for another robot?";
 }

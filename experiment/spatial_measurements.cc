@@ -147,6 +147,29 @@ void CheckSpatialReadingsPlausible(const SpatialRobot& robot, const std::vector<
         refuse("yaw", FormatDouble(v) + " rad is more than a turn (degrees? angles are in radians)");
       }
     }
+    if (r.has(SpatialSensor::kSwivel)) {
+      const Eigen::VectorXd& v = r.values(SpatialSensor::kSwivel);
+      for (Eigen::Index i = 0; i < v.size(); ++i) {
+        if (!(std::abs(v(i)) <= 2.0 * M_PI + slack(SpatialSensor::kSwivel))) {
+          refuse("sw" + std::to_string(i + 1),
+                 FormatDouble(v(i)) + " rad is more than a turn (degrees? angles are in radians)");
+        }
+      }
+    }
+    // A cable only pulls: a load cell reading a compression beyond its noise was zeroed under
+    // load or is wired with the sign reversed, and the equilibrium cannot explain it.
+    if (r.has(SpatialSensor::kLoadCell)) {
+      const Eigen::VectorXd& v = r.values(SpatialSensor::kLoadCell);
+      const double s = slack(SpatialSensor::kLoadCell);
+      for (Eigen::Index i = 0; i < v.size(); ++i) {
+        if (!(v(i) >= -s)) {
+          refuse("f" + std::to_string(i + 1),
+                 FormatDouble(v(i)) + " N is a compression (" + FormatDouble(s) +
+                     " N of slack: 5 sigma of the load cell's noise), and a cable only pulls: a load cell "
+                     "zeroed under load, or its sign reversed?");
+        }
+      }
+    }
   }
 }
 

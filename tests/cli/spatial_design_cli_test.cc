@@ -195,6 +195,8 @@ TEST_F(SpatialDesignCli, HostileInputsExitTwoOrThreeWithOneMessageAndNothingWrit
       {"--poses 3 --prior " + Path(""), "is a folder, not an identification result", 2},
       {"--poses 3 --plot " + Path("out.png"), "--plot: a figure of a spatial plan is not yet served", 2},
       {"--poses 501", "--poses: at most 500 poses", 2},
+      {"--poses nan", "--poses: must be a whole number from 1 to 100000 (got 'nan')", 2},
+      {"--poses 3.5", "--poses: must be a whole number from 1 to 100000 (got '3.5')", 2},
       {"--poses 3 --criterion b", "--criterion", 2},
       {"--poses 3 --min-spacing -1", "--min-spacing", 2},
       // Poses 50 m apart in a 2 m frame: no start converges, and none is reported as a plan.

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "common/format.h"
 #include "common/random.h"
 #include "model/spatial_robot.h"
 #include "tests/support/random_spatial_robot.h"
@@ -508,6 +509,35 @@ TEST_F(SpatialIdentifyCli, HostileInputsExitTwoWithOneMessageAndWriteNothing) {
   r = RunCablecal("validate --robot " + robot + " --measurements " + Path("enc.csv") + " --out " + Path("v.csv"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("nothing to compare the predictions with"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(Path("v.csv")));
+  // A reading whose cable 1 was paid out 1.5 m more: the platform would settle far from where
+  // the sensors read it. Named by its line and by the flag of the robot that cannot hold it.
+  std::vector<std::string> lines;
+  {
+    std::istringstream in(Read("m.csv"));
+    for (std::string line; std::getline(in, line);) lines.push_back(line);
+  }
+  std::size_t first_row = 0;
+  while (first_row < lines.size() && (lines[first_row].empty() || lines[first_row][0] == '#' ||
+                                      lines[first_row].rfind("pose", 0) == 0)) {
+    ++first_row;
+  }
+  ASSERT_LT(first_row, lines.size());
+  std::vector<std::string> cells = Split(lines[first_row]);
+  cells[1] = cablecal::FormatDouble(std::stod(cells[1]) + 1.5);
+  std::string joined;
+  for (const std::string& c : cells) joined += (joined.empty() ? "" : ",") + c;
+  lines[first_row] = joined;
+  {
+    std::ofstream out(Path("far.csv"));
+    for (const std::string& line : lines) out << line << "\n";
+  }
+  r = RunCablecal("validate --robot " + robot + " --measurements " + Path("far.csv") + " --out " + Path("v.csv"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find(Path("far.csv") + ":" + std::to_string(first_row + 1) + ": --robot's robot random-asymmetric "
+                          "cannot hold the commanded lengths ("),
+            std::string::npos)
+      << r.output;
   EXPECT_FALSE(fs::exists(Path("v.csv")));
 }
 

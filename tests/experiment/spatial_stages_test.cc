@@ -344,6 +344,12 @@ TEST(SpatialMeasurementsCsv, HostileFilesAreNamedByFileLineAndColumn) {
       << read("pose,dl1,dl2,dl3,z\n1,0,0,0,0\n2,0,0,0,nan\n");
   EXPECT_NE(read("pose,dl1,dl2\n1,0,0\n").find("m.csv:1"), std::string::npos) << read("pose,dl1,dl2\n1,0,0\n");
   EXPECT_NE(read("pose,dl1,dl2,dl3\n0,0,0,0\n").find("m.csv:2: column 'pose'"), std::string::npos);
+  // A column given twice is named as such, not taken for another robot's cable count.
+  const std::string twice = read("pose,dl1,dl1,dl2,dl3\n1,0,0,0,0\n");
+  EXPECT_NE(twice.find("m.csv:1: header: column 'dl1' appears 2 times"), std::string::npos) << twice;
+  EXPECT_EQ(twice.find("cables"), std::string::npos) << twice;
+  EXPECT_NE(read("pose,dl1,dl2,dl3,dl4\n1,0,0,0,0\n").find("the file has columns for 4 cables, the robot has 3"),
+            std::string::npos);
 }
 
 TEST(SpatialWorkspace, GridPointsAreTheEvaluationsAndTheThreadCountChangesNothing) {
@@ -543,16 +549,54 @@ TEST(SpatialMeasurementsCheck, ReadingsNoSensorCanGiveAreRefusedNamingTheUnit) {
       {[](SpatialMeasurement& r) { r.values(SpatialSensor::kLaser) *= 1000.0; }, "column 'z'"},
       {[](SpatialMeasurement& r) { r.values(SpatialSensor::kInclinometer)(1) = 20.0; }, "column 'pitch'"},
       {[](SpatialMeasurement& r) { r.values(SpatialSensor::kPosition)(2) *= 1000.0; }, "column 'pz'"},
-      {[](SpatialMeasurement& r) { r.values(SpatialSensor::kHeading)(0) = 90.0; }, "column 'yaw'"}};
+      {[](SpatialMeasurement& r) { r.values(SpatialSensor::kHeading)(0) = 90.0; }, "column 'yaw'"},
+      {[](SpatialMeasurement& r) { r.values(SpatialSensor::kSwivel)(1) = 45.0; }, "column 'sw2'"},
+      {[](SpatialMeasurement& r) { r.values(SpatialSensor::kLoadCell)(2) = -50.0; }, "column 'f3'"}};
   for (const auto& [spoil, column] : cases) {
     const std::string m = message(spoil);
     EXPECT_NE(m.find(pose), std::string::npos) << m;
     EXPECT_NE(m.find(column), std::string::npos) << m;
-    EXPECT_TRUE(m.find("millimetres?") != std::string::npos || m.find("degrees?") != std::string::npos) << m;
+    EXPECT_TRUE(m.find("millimetres?") != std::string::npos || m.find("degrees?") != std::string::npos ||
+                m.find("sign reversed?") != std::string::npos)
+        << m;
   }
+  // A load cell's reading within its noise of zero passes: a slack cable reads a little below.
+  const double slack_N = 5.0 * robot.sensors.load_cell_N->sigma();
+  EXPECT_EQ(message([&](SpatialMeasurement& r) { r.values(SpatialSensor::kLoadCell)(2) = -0.9 * slack_N; }), "accepted");
   // A dl just inside the frame box's diagonal passes: the bound is the box's, not tighter.
   const double diagonal_m = (robot.p_F_frame_max_m - robot.p_F_frame_min_m).norm();
   EXPECT_EQ(message([&](SpatialMeasurement& r) { r.dl_m(0) = 0.99 * diagonal_m; }), "accepted");
+}
+
+
+// A pose the true robot holds beyond its tilt limit is named with the tilt and the limit, as a
+// tension beyond its bounds is named with the tension and the bounds (a lab reads the margin).
+TEST(SpatialSimulation, APoseBeyondTheTiltLimitIsNamedWithTheTiltAndTheLimit) {
+  const SpatialRobot nominal = RobotWithEverySensor(13, 4);
+  const std::vector<SpatialPlanPose> plan = SampleSpatialPoses(nominal, 6, 21);
+  std::size_t most = 0;
+  for (std::size_t j = 1; j < plan.size(); ++j) {
+    if (TiltAngle(plan[j].q) > TiltAngle(plan[most].q)) most = j;
+  }
+  const double tilt_rad = TiltAngle(plan[most].q);
+  ASSERT_GT(tilt_rad, 0.01);
+  SpatialRobot truth = nominal;
+  truth.tilt_max_rad = 0.5 * tilt_rad;  // the same robot, with a stricter limit
+  SpatialSimulationOptions options;
+  options.skip_infeasible = true;
+  Rng rng(3);
+  const SimulatedSpatialExperiment e = SimulateSpatialExperiment(nominal, truth, plan, options, rng);
+  const auto skipped = std::find_if(e.skipped.begin(), e.skipped.end(),
+                                    [&](const SpatialSkippedPose& s) { return s.pose_id == static_cast<int>(most + 1); });
+  ASSERT_NE(skipped, e.skipped.end());
+  const std::string& why = skipped->reason;
+  EXPECT_NE(why.find("(tilt_limit"), std::string::npos) << why;
+  const std::size_t at = why.find(" at ");
+  const std::size_t limit = why.find(" deg, limit ");
+  ASSERT_NE(at, std::string::npos) << why;
+  ASSERT_NE(limit, std::string::npos) << why;
+  EXPECT_NEAR(std::stod(why.substr(at + 4, limit - at - 4)), tilt_rad * 180.0 / M_PI, 0.01) << why;
+  EXPECT_NEAR(std::stod(why.substr(limit + 12)), truth.tilt_max_rad * 180.0 / M_PI, 0.001) << why;
 }
 
 }  // namespace
