@@ -141,6 +141,31 @@ std::string RunYaml(const StudiedRobot& robot, const MonteCarloOptions& o, const
 }
 
 // Writes the data files of one study into `folder` under `prefix` (staged; the caller commits).
+// The montecarlo command's run where no trial succeeded has no statistics: a solver failure
+// (exit 3, nothing written), naming the causes and the first trial's reason, not a table of
+// n/a with exit 0. (reproduce keeps a configuration whose every trial fails: a study's row.)
+void RefuseIfEveryTrialFailed(const MonteCarloResult& r) {
+  long trials = 0, failures = 0;
+  const TrialOutcome* first = nullptr;
+  for (const MonteCarloCell& c : r.cells) {
+    trials += static_cast<long>(c.trials.size());
+    failures += c.failures();
+    for (const TrialOutcome& t : c.trials) {
+      if (!t.ok && !first) first = &t;
+    }
+  }
+  if (trials == 0 || failures < trials) return;
+  std::string causes;
+  for (const std::string& cause : FailureCauses()) {
+    int count = 0;
+    for (const MonteCarloCell& c : r.cells) count += c.failures(cause);
+    if (count > 0) causes += (causes.empty() ? "" : ", ") + cause + " " + std::to_string(count);
+  }
+  throw SolverFailure("every one of the " + std::to_string(trials) + " trials failed (" + causes +
+                      "): no statistics to write; the first: " + (first ? first->failure : std::string("?")) +
+                      " (a smaller --geometry-sigma, --skip-infeasible, more poses or another sensor may help)");
+}
+
 void WriteStudy(const OutputFolder& folder, const std::string& prefix, const StudiedRobot& robot, const MonteCarloOptions& o,
                 const std::string& poses_text, const MonteCarloResult& r, const Context& ctx, int threads,
                 const std::string& title) {
@@ -227,6 +252,7 @@ int RunSpatialMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptio
   if (!ctx.quiet) o.study.progress = ProgressBar("montecarlo", "trials");
   const MonteCarloResult r = RunSpatialMonteCarlo(robot, o);
   if (r.interrupted) throw Interrupted();
+  RefuseIfEveryTrialFailed(r);
   WriteStudy(folder, "", Studied(robot, o), o.study, options.poses, r, ctx, threads,
              "Monte Carlo: " + robot.name);
   std::string figure_error;
@@ -296,6 +322,7 @@ int RunMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptions& opt
   std::string figure_error;
   RunAgreed(ctx.processes, [&] {
     if (!ctx.processes.root()) return;
+    RefuseIfEveryTrialFailed(r);
     WriteStudy(*folder, "", PlanarStudied(robot), o, options.poses, r, ctx, threads, "Monte Carlo: " + robot.name);
     if (options.plot) figure_error = TryPlotStudy(*folder, {folder->staging()}, kStudyFigures);
     folder->Commit();

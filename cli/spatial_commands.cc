@@ -162,9 +162,11 @@ int RunSpatialSimulate(const Context& ctx, const SimulateOptions& options) {
     if (HasSpatialSensor(nominal, s)) sensors += std::string(sensors.empty() ? "" : ", ") + ToString(s);
   }
   const std::string skipped =
-      options.skip_infeasible ? ", " + std::to_string(experiment.skipped.size()) + " of " + std::to_string(plan.size()) +
-                                    " skipped (the true robot cannot hold them)"
-                              : "";
+      !options.skip_infeasible ? ""
+      : experiment.skipped.empty()
+          ? ", 0 of " + std::to_string(plan.size()) + " skipped"
+          : ", " + std::to_string(experiment.skipped.size()) + " of " + std::to_string(plan.size()) +
+                " skipped (the true robot cannot hold them)";
   std::printf("simulated %zu poses of %s%s (encoders%s%s; noisy sensors: %s, encoder noise %s) to %s\n",
               experiment.measurements.size(), PrintableText(nominal.name).c_str(), skipped.c_str(),
               sensors.empty() ? "" : ", ", sensors.c_str(), ToString(sim.noisy), sim.encoder_noise ? "on" : "off",

@@ -917,6 +917,17 @@ SpatialDesignResult DesignSpatialPoses(const SpatialRobot& robot, const SpatialD
                     " iterations: more starts, another seed or fewer poses may converge: design's --starts, --seed, --poses; "
                     "montecarlo's --design-starts)";
       }
+      // Stability is checked after the NLP, not one of its constraints: with stretching cables
+      // an optimum can sit where the platform would not stay (a robot with only some cables
+      // elastic, measured: 12 poses none of 3 starts, 8 poses fine).
+      const bool any_unstable = std::any_of(r.starts.begin(), r.starts.end(), [](const SpatialStartReport& st) {
+        return st.converged && !st.verified && st.verification_failure.find("unstable") != std::string::npos;
+      });
+      if (any_unstable) {
+        statuses += " (the stability of a pose is checked after the optimization, not one of its constraints: where "
+                    "stretching cables let an optimum sit at an unstable pose, more starts (--starts, --seed), fewer "
+                    "poses or the stiffness of every cable given may find a plan)";
+      }
       if (std::none_of(first.begin(), first.end(),
                        [](const StartOutcome& f) { return f.outcome.converged && f.failure.empty(); })) {
         without_robustness = "none of the " + std::to_string(K) + " starts gave verified poses: " + statuses;

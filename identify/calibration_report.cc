@@ -341,7 +341,7 @@ std::string ValidationSection(const ValidationResult& v, const ReportSources& so
   if (readings != static_cast<std::size_t>(v.num_poses)) o << ", " << readings << " readings";
   o << "), which the identification did not see, predicted by the forward model of each robot (where its commanded "
        "lengths hold the platform) and compared with the laser's z and the inclinometer's θ; error = predicted − "
-       "measured. The sensors' own noise, the RMS error even a perfect model would show:";
+       "measured. The sensors' own noise, the least RMS error even a perfect model shows (more where the encoders' noise moves the predicted pose):";
   if (v.has_laser) o << " laser " << Rounded(1e3 * v.laser_sigma_m) << " mm";
   if (v.has_inclinometer) o << (v.has_laser ? "," : "") << " inclinometer " << Rounded(1e3 * v.inclinometer_sigma_rad) << " mrad";
   o << ".\n\n| robot |" << (v.has_laser ? " z RMS (mm) | z max (mm) |" : "")

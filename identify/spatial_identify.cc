@@ -1719,6 +1719,7 @@ Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasureme
                            : " less " + std::to_string(gauge_held) +
                                  " rigid motion(s) of the frame, or nearly, that the gauge holds");
   }
+  a.gauge.redundancy = a.model.num_values - (p - gauge_held + local * n);
   // A lab's hold: list is checked and held even when the readings see everything (holding every
   // exit coordinate identifies the lengths, offsets and poses alone).
   if (k == 0 && options.gauge.kind != SpatialGaugeKind::kHold && !hold_weak) return a;
@@ -2112,6 +2113,13 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
                                            : std::numeric_limits<double>::infinity();
   const std::vector<std::string> implausible = SpatialPlausibilityWarnings(nominal, g);
   result.warnings = implausible;
+  if (a.gauge.redundancy == 0) {
+    result.warnings.push_back(
+        "no redundancy: " + std::to_string(a.model.num_values) +
+        " reading values for as many unknowns, so the fit is exact whatever the readings (noise and gross errors "
+        "alike) and no reading checks another; the sigmas are the model's, not confirmed by the data. Measure "
+        "more poses (design warns at its fewest)");
+  }
   if (std::abs(result.worst_residual) > kOutlierSigmas) {
     char buf[64];
     std::snprintf(buf, sizeof(buf), "%.3g", result.worst_residual);

@@ -244,6 +244,10 @@ struct SpatialGaugeAnalysis {
   std::vector<SpatialDirection> null_directions;
   std::vector<SpatialDirection> weak_directions;
   std::vector<int> held;  // indices into names
+  // Reading values left over once every unknown is counted (the geometry less what the gauge
+  // holds, each pose's coordinates and tensions): 0 is an exactly determined fit, which fits
+  // any readings, noise and gross errors alike (IdentifySpatial warns).
+  int redundancy = -1;
 };
 SpatialGaugeAnalysis AnalyzeSpatialGauge(const SpatialRobot& nominal, const std::vector<SpatialMeasurement>& readings,
                                          const SpatialIdentifyOptions& options);

@@ -432,7 +432,7 @@ std::string SpatialValidationSummaryYaml(const SpatialValidationResult& result, 
       o << YAML::Key << std::string(ToString(s)) + "_sigma_" + Unit(s) << YAML::Value << YamlNumber{result.sigma[i]};
     }
   }
-  o << YAML::EndMap << YAML::Comment("the RMS errors a perfect model would show");
+  o << YAML::EndMap << YAML::Comment("the least RMS errors a perfect model shows: more where encoder noise moves the predicted pose");
   for (const SpatialRobotPrediction& p : result.robots) {
     o << YAML::Key << p.name << YAML::Value << YAML::BeginMap;
     o << YAML::Key << "robot" << YAML::Value << YamlString{p.robot};

@@ -287,7 +287,7 @@ std::string ValidationSummaryYaml(const ValidationResult& result, const std::str
   if (result.has_inclinometer) {
     o << YAML::Key << "inclinometer_sigma_rad" << YAML::Value << YamlNumber{result.inclinometer_sigma_rad};
   }
-  o << YAML::EndMap << YAML::Comment("the RMS errors a perfect model would show");
+  o << YAML::EndMap << YAML::Comment("the least RMS errors a perfect model shows: more where encoder noise moves the predicted pose");
   if (result.corrected_for) EmitSensorCorrection(o, *result.corrected_for, "before the comparison");
   for (const RobotPrediction& p : result.robots) {
     o << YAML::Key << p.name << YAML::Value << YAML::BeginMap;

@@ -432,9 +432,10 @@ void CheckSimulatableKind(const typename A::RobotType& robot, const char* kind) 
                        " cables have no stiffness (inextensible), more than the " + std::to_string(A::kDim) +
                        " degrees of freedom of a " + kind +
                        " platform: the lengths the controller commands from the nominal model cannot all hold "
-                       "on a true robot that differs from it, so it cannot be simulated. Give E*A (N) of at least " +
-                       std::to_string(count - A::kDim) +
-                       " cables (key stiffness; README, \"Any number of cables\")");
+                       "on a true robot that differs from it (by as little as rounding), so it cannot be simulated. "
+                       "Give E*A (N) of at least " +
+                       std::to_string(count - A::kDim) + (count - A::kDim == 1 ? " cable" : " cables") +
+                       " (key stiffness; README, \"Any number of cables\")");
 }
 
 }  // namespace

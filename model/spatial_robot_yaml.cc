@@ -342,6 +342,24 @@ SpatialRobot Parse(const YAML::Node& root, const Reader& rd) {
              ", y = " + FormatDouble(std::round(centroid.y() * 1e3) / 1e3 + 0.0) + " m)" +
              (robot.num_cables() >= 4 ? " at the yaw of the exits' and anchors' layout (often 0)" : "");
     }
+    if (robot.num_cables() >= 6 && !statics.has_equilibrium && statics.feasibility == Feasibility::kNoEquilibrium) {
+      // What the balance asks of the cables: the least-squares tensions (the minimum-norm ones
+      // for m > 6) name the cables that would have to push, which is where a lab looks.
+      const Eigen::Matrix<double, 6, Eigen::Dynamic> W = WrenchMatrix<double>(robot, home);
+      const Eigen::Matrix<double, 6, 1> w_g = GravityWrench<double>(robot, home);
+      const Eigen::VectorXd t = Eigen::MatrixXd(W).completeOrthogonalDecomposition().solve(-w_g);
+      std::string pushing;
+      for (int i = 0; i < robot.num_cables(); ++i) {
+        if (t(i) < 0.0) pushing += (pushing.empty() ? "" : ", ") + std::to_string(i + 1);
+      }
+      if (t.allFinite()) {
+        hint = ". The least-squares tensions that balance it are " + RoundedList(t, 4) + " N" +
+               (pushing.empty() ? std::string()
+                                : ": cable" + std::string(pushing.find(',') == std::string::npos ? " " : "s ") + pushing +
+                                      " would have to push; a home nearer the middle of the exits, or those cables' "
+                                      "exits and anchors, are where to look");
+      }
+    }
     rd.Fail(root["home"], "home",
             "the home pose " + Point(robot.p_F_home_m) + " m at roll, pitch, yaw " +
                 RoundedList(robot.home_rpy_rad / kDegToRad, 4) + " degrees (home_rpy_deg) is not in the feasible workspace: " +

@@ -4,7 +4,9 @@
 
 #include <atomic>
 #include <string>
+#include <utility>
 
+#include "common/error.h"
 #include "design/design.h"
 #include "design/spatial_design.h"
 #include "model/robot.h"
@@ -15,6 +17,26 @@
 
 namespace cablecal::python {
 namespace {
+
+// The design names its inputs by the CLI's flags ("--poses: at least 7 poses ..."); from Python
+// the same problem is named by design()'s argument.
+template <typename F>
+auto WithArgumentNames(F&& f) -> decltype(f()) {
+  try {
+    return f();
+  } catch (const InputError& e) {
+    static const std::pair<const char*, const char*> kArguments[] = {
+        {"--poses", "n"},           {"--criterion", "criterion"},         {"--starts", "starts"},
+        {"--seed", "seed"},         {"--min-spacing", "min_spacing"},     {"--random-sets", "random_sets"},
+        {"--geometry-sigma", "geometry_sigma"}, {"--robust-sigmas", "robust_sigmas"}, {"--prior", "prior"}};
+    for (const auto& [flag, argument] : kArguments) {
+      if (e.where() != flag || !e.key().empty()) continue;
+      const std::string what = e.what();
+      throw InputError(argument, "", what.substr(std::string(flag).size() + 2));
+    }
+    throw;
+  }
+}
 
 struct PyDesign {
   DesignResult result;
@@ -132,7 +154,7 @@ py::object SpatialDesign(const SpatialRobot& nominal, py::handle n, py::handle c
   }
   std::atomic<bool> stop{false};
   o.interrupted = &stop;
-  PySpatialDesign d{robot, Interruptible(stop, [&] { return DesignSpatialPoses(robot, o); }), o};
+  PySpatialDesign d{robot, Interruptible(stop, [&] { return WithArgumentNames([&] { return DesignSpatialPoses(robot, o); }); }), o};
   d.options.interrupted = nullptr;
   if (!d.result.prior_note.empty() && PyErr_WarnEx(PyExc_UserWarning, d.result.prior_note.c_str(), 1) < 0) {
     throw py::error_already_set();  // the CLI's warning
@@ -229,7 +251,7 @@ void BindDesign(py::module_& m) {
         o.solve_in_child_processes = false;
         std::atomic<bool> stop{false};
         o.interrupted = &stop;
-        PyDesign d{Interruptible(stop, [&] { return DesignPoses(robot, o); }), o};
+        PyDesign d{Interruptible(stop, [&] { return WithArgumentNames([&] { return DesignPoses(robot, o); }); }), o};
         d.options.interrupted = nullptr;
         DesignOptions achieved = o;  // the warnings speak of the robustness the plan holds for
         achieved.robust_sigmas = d.result.robust_sigmas_achieved;

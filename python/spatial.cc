@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "common/error.h"
+#include "experiment/spatial_measurements.h"
 #include "experiment/spatial_plan.h"
 #include "experiment/spatial_simulation.h"
 #include "model/builtin_spatial_robots.h"
@@ -100,10 +101,15 @@ void BindSpatial(py::module_& m) {
           "load",
           [](py::handle robot_arg, py::handle path) {
             const SpatialRobot& robot = AsObject<SpatialRobot>(robot_arg, "robot", "SpatialRobot");
-            return PySpatialMeasurements{ReadSpatialMeasurementsCsv(AsPath(path, "path"), robot.num_cables()),
-                                         robot.num_cables()};
+            const std::string p = AsPath(path, "path");
+            PySpatialMeasurements m{ReadSpatialMeasurementsCsv(p, robot.num_cables()), robot.num_cables()};
+            // As the CLI reads a file: values no sensor of this robot can give (millimetres,
+            // degrees) are refused here, naming the pose and column, not later in identify.
+            CheckSpatialReadingsPlausible(robot, m.readings, p);
+            return m;
           },
-          py::arg("robot"), py::arg("path"), "Reads a spatial measurement CSV by column name.")
+          py::arg("robot"), py::arg("path"),
+          "Reads a spatial measurement CSV by column name; values no sensor of `robot` can give are refused.")
       .def_property_readonly("dl", [](const PySpatialMeasurements& p) {
         Eigen::MatrixXd d(p.readings.size(), p.num_cables);
         for (std::size_t j = 0; j < p.readings.size(); ++j) d.row(j) = p.readings[j].dl_m.transpose();

@@ -825,6 +825,34 @@ TEST(SpatialIdentify, FourCablesEncodersSwivelInclinometerHeadingLoadCells) {
   }
 }
 
+// An exactly determined fit (as many reading values as unknowns) fits any readings, so nothing
+// in them checks it: said as a warning. cogiro by its encoders alone, poses near home: 8 values a
+// pose for its 6 coordinates, 32 geometry unknowns less the 6 rigid motions the gauge holds (the
+// 4 unseen and the 2 tilts barely seen near home): 2n - 26, none left at 13 poses; 12 are refused
+// as too few.
+TEST(SpatialIdentify, AnExactlyDeterminedFitIsSaidToHaveNoRedundancy) {
+  Rng rng(515);
+  const SpatialRobot nominal = Builtin("cogiro");
+  const SpatialRobot truth = PerturbedExits(nominal, rng, 0.01);
+  for (const int n : {12, 13, 14}) {
+    SCOPED_TRACE(n);
+    const Experiment e = MakeExperiment(nominal, truth, n, 0, rng);
+    if (n == 12) {
+      EXPECT_NE(InputErrorOf([&] { IdentifySpatial(nominal, e.readings, {}); }).find("too few"), std::string::npos);
+      continue;
+    }
+    const SpatialGaugeAnalysis gauge = AnalyzeSpatialGauge(nominal, e.readings, {});
+    EXPECT_EQ(gauge.held.size(), 6u);
+    EXPECT_EQ(gauge.redundancy, 2 * n - 26);
+    const SpatialIdentifyResult r = IdentifySpatial(nominal, e.readings, {});
+    const std::string values = std::to_string(8 * n);
+    const bool warned = std::any_of(r.warnings.begin(), r.warnings.end(), [&](const std::string& w) {
+      return w.rfind("no redundancy: " + values + " reading values for as many unknowns", 0) == 0;
+    });
+    EXPECT_EQ(warned, n == 13) << ::testing::PrintToString(r.warnings);
+  }
+}
+
 // An underactuated platform read by its encoders and an inclinometer: 6 values for its 6
 // coordinates, nothing left for the geometry without the statics (refused: too few values);
 // its equilibrium adds 6 rows for 4 tensions per pose, and the geometry is recovered.

@@ -910,6 +910,16 @@ def test_spatial_sample_workspace_simulate_equal_cli(tmp_path, name):
     back = cablecal.SpatialMeasurements.load(robot, str(m_out))
     np.testing.assert_array_equal(back.dl, run.measurements.dl)
     assert set(back.sensors) == set(run.measurements.sensors)
+    # A file in millimetres is refused on loading, naming the pose and column, as the CLI reads it.
+    lines = m_out.read_text().splitlines()
+    header = next(i for i, line in enumerate(lines) if line.startswith("pose,"))
+    cells = lines[header + 1].split(",")
+    cells[1] = str(float(cells[1]) * 1000.0 + 100.0)
+    lines[header + 1] = ",".join(cells)
+    mm = tmp_path / "mm.csv"
+    mm.write_text("\n".join(lines) + "\n")
+    with pytest.raises(cablecal.InputError, match=r"column 'dl1'.*millimetres\?"):
+        cablecal.SpatialMeasurements.load(robot, str(mm))
 
 
 def test_spatial_montecarlo_equals_cli(tmp_path):
@@ -1111,4 +1121,7 @@ def test_spatial_design_equals_cli_and_refuses_what_it_does_not_serve(tmp_path):
     with pytest.raises(cablecal.InputError, match="robust_sigmas.*between 0 and 10"):
         cablecal.design(robot, 2, robust_sigmas=11)
     with pytest.raises(cablecal.InputError, match="at least 2 poses"):
+        cablecal.design(robot, 1)
+    # Named by design()'s argument, not by the CLI's flag.
+    with pytest.raises(cablecal.InputError, match=r"^n: at least 2 poses"):
         cablecal.design(robot, 1)
