@@ -19,6 +19,7 @@
 #include "model/swivel.h"
 #include "tests/support/readme.h"
 #include "tests/support/random_spatial_robot.h"
+#include "tests/support/six_mixed_robot.h"
 
 namespace cablecal {
 namespace {
@@ -355,35 +356,17 @@ TEST(SpatialRobotFile, CableCountsAndCollinearAnchorsAreRefused) {
 // to one side): the message gives the least-squares tensions and names the cables that would
 // have to push, where before it said only no_equilibrium.
 TEST(SpatialRobotFile, AHomeWithoutEquilibriumNamesTheCablesThatWouldPush) {
-  const std::string text = R"(name: six-mixed
-kind: spatial
-gravity: 9.81
-frame: {min: [-1.5, -1.2, 0.0], max: [1.6, 1.3, 2.5]}
-platform:
-  mass: 8.0
-  com: [0.02, -0.015, 0.10]
-  anchors: [[0.19, -0.08, 0.0], [-0.04, 0.12, 0.3], [-0.12, -0.18, 0.3], [0.06, 0.18, 0.0], [0.18, 0.07, 0.3],
-            [-0.08, -0.12, 0.3]]
-cables:
-  - {exit: [1.5, -0.6, 2.40], swivel_axis: [0, 0, 1], pulley_radius: 0.03, stiffness: 60000.0}
-  - {exit: [1.5, 0.7, 2.35], swivel_axis: [0.0872, 0, 0.9962], pulley_radius: 0.03}
-  - {exit: [0.1, 1.25, 2.45], swivel_axis: [0, 0, 1], pulley_radius: 0.03, stiffness: 80000.0}
-  - {exit: [-1.45, 0.6, 2.30], swivel_axis: [0, 0, 1], pulley_radius: 0.025}
-  - {exit: [-1.4, -0.65, 2.42], swivel_axis: [0, 0, 1], pulley_radius: 0.025}
-  - {exit: [0.0, -1.15, 2.38], swivel_axis: [0, 0, 1], pulley_radius: 0.03}
-tension: {min: 5.0, max: 400.0}
-limits: {tilt_max_deg: 20, margin: 0.05}
-home: [1.3, 0.0, 1.2]
-sensors:
-  encoder: {sigma: 0.0001}
-)";
+  const std::string text = testing::SixMixedRobotYaml("[1.3, 0.0, 1.2]");
+  const int home_line = LineOf(text, "home:");
   std::string message;
   try {
     LoadSpatialRobotFromString(text, "six.yaml");
   } catch (const InputError& e) {
     message = e.what();
   }
-  EXPECT_NE(message.find("six.yaml:19: home: the home pose (1.3, 0, 1.2) m"), std::string::npos) << message;
+  EXPECT_NE(message.find("six.yaml:" + std::to_string(home_line) + ": home: the home pose (1.3, 0, 1.2) m"),
+            std::string::npos)
+      << message;
   EXPECT_NE(message.find("not in the feasible workspace: no_equilibrium"), std::string::npos) << message;
   const std::size_t at = message.find("The least-squares tensions that balance it are (");
   ASSERT_NE(at, std::string::npos) << message;
