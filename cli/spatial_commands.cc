@@ -35,7 +35,7 @@ std::string TripleArg(const std::string& flag, const Eigen::Vector3d& v) {
   return "--" + flag + "=" + FormatDouble(v.x()) + "," + FormatDouble(v.y()) + "," + FormatDouble(v.z());
 }
 
-// --rpy-deg R,P,Y: three finite numbers of degrees, roll and pitch within +-90.
+// --rpy-deg R,P,Y: three finite numbers of degrees, roll and pitch within +-90, yaw within +-180.
 Eigen::Vector3d ParseRpyDeg(const std::string& text) {
   std::vector<std::string> parts;
   std::stringstream in(text);
@@ -49,6 +49,11 @@ Eigen::Vector3d ParseRpyDeg(const std::string& text) {
   }
   if (!(std::abs(rpy_deg(0)) < 90.0 && std::abs(rpy_deg(1)) < 90.0)) {
     throw InputError("--rpy-deg", "", "roll and pitch must be within (-90, 90) degrees (got '" + PrintableText(text) + "')");
+  }
+  // A yaw of 720 is a yaw of 0 written otherwise, or radians typed as degrees' multiples: the
+  // one range in which every orientation is written once.
+  if (!(std::abs(rpy_deg(2)) <= 180.0)) {
+    throw InputError("--rpy-deg", "", "yaw must be within [-180, 180] degrees (got '" + PrintableText(text) + "')");
   }
   return rpy_deg / kDegPerRad;
 }

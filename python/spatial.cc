@@ -154,7 +154,14 @@ void BindSpatial(py::module_& m) {
 
 py::object SpatialWorkspace(const SpatialRobot& robot, double step_m, py::handle rpy_deg) {
   Eigen::Vector3d rpy_rad = robot.home_rpy_rad;
-  if (!rpy_deg.is_none()) rpy_rad = AsMatrix(rpy_deg, "rpy_deg", 3, 1).col(0) * M_PI / 180.0;
+  if (!rpy_deg.is_none()) {
+    // As the CLI's --rpy-deg: roll and pitch within (-90, 90), yaw within [-180, 180] degrees.
+    const Eigen::Vector3d deg = AsMatrix(rpy_deg, "rpy_deg", 3, 1).col(0);
+    if (!(std::abs(deg(0)) < 90.0 && std::abs(deg(1)) < 90.0 && std::abs(deg(2)) <= 180.0)) {
+      Bad("rpy_deg", "roll and pitch must be within (-90, 90) degrees and yaw within [-180, 180]");
+    }
+    rpy_rad = deg * M_PI / 180.0;
+  }
   SpatialWorkspaceGrid grid;
   {
     py::gil_scoped_release release;

@@ -202,6 +202,8 @@ TEST_F(SpatialCli, HostileInputsExitTwoNamingWhereAndWriteNothing) {
       {"simulate --robot " + robot + " --plan " + Path("plan.csv") + " --systematic-errors --out " + Path("out.csv"),
        "--systematic-errors"},
       {"workspace --robot " + robot + " --rpy-deg 1,2 --out " + Path("out.csv"), "--rpy-deg: must be three numbers"},
+      {"workspace --robot " + robot + " --rpy-deg 0,0,720 --out " + Path("out.csv"),
+       "--rpy-deg: yaw must be within [-180, 180] degrees (got '0,0,720')"},
       {"workspace --robot " + robot + " --step 0.001 --out " + Path("out.csv"), "--step:"},
       {"workspace --rpy-deg 0,0,0 --out " + Path("out.csv"), "--rpy-deg: serves spatial robots only"},
       {"sample --yaw-range-deg 10 --poses 2 --out " + Path("out.csv"), "--yaw-range-deg: serves spatial robots only"},
