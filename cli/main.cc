@@ -42,6 +42,14 @@ CLI::Validator NumberAbove(double lowest, bool inclusive) {
 const CLI::Validator kPositive = NumberAbove(0.0, false);
 const CLI::Validator kNonNegative = NumberAbove(0.0, true);
 constexpr int kMaxThreads = 1024;
+// CLI11 reads an integer with a leading 0 as octal ("010" is 8): a count or seed typed with
+// leading zeros is read as the decimal number it looks like. Called once the text is all digits,
+// by the validators below, which are therefore given with ->transform (->check runs on a copy).
+void AsDecimal(std::string& digits) {
+  const std::size_t first = digits.find_first_not_of('0');
+  digits.erase(0, first == std::string::npos ? digits.size() - 1 : first);
+}
+
 // Seeds are unsigned 64-bit integers; CLI11 would wrap "-1" to 18446744073709551615 and
 // saturate 18446744073709551616 to it: a seed out of range is refused, never another run's.
 const CLI::Validator kSeed(
@@ -52,6 +60,7 @@ const CLI::Validator kSeed(
       if (!digits || std::from_chars(text.data(), end, value).ec != std::errc()) {
         return "must be a whole number from 0 to 18446744073709551615 (got '" + text + "')";
       }
+      AsDecimal(text);
       return "";
     },
     "SEED");
@@ -66,6 +75,7 @@ CLI::Validator WholeNumberIn(long long lowest, long long highest) {
         if (!digits || std::stoll(text) < lowest || std::stoll(text) > highest) {
           return "must be " + wanted + " (got '" + text + "')";
         }
+        AsDecimal(text);
         return "";
       },
       "INT in [" + std::to_string(lowest) + ", " + std::to_string(highest) + "]");
@@ -115,8 +125,8 @@ int main(int argc, char** argv) {
   cablecal::cli::SampleOptions sample;
   CLI::App* sample_cmd = app.add_subcommand("sample", "draw random feasible poses as a pose plan CSV");
   AddRobotOption(sample_cmd, &sample.robot_path);
-  sample_cmd->add_option("--poses", sample.poses, "number of poses")->required()->check(WholeNumberIn(1, 100000));
-  sample_cmd->add_option("--seed", sample.seed, "random seed")->capture_default_str()->check(kSeed);
+  sample_cmd->add_option("--poses", sample.poses, "number of poses")->required()->transform(WholeNumberIn(1, 100000));
+  sample_cmd->add_option("--seed", sample.seed, "random seed")->capture_default_str()->transform(kSeed);
   sample_cmd->add_option("--out", sample.out_path, "pose plan CSV")->required();
   sample_cmd->add_option("--yaw-range-deg", sample.yaw_range_deg,
                          "spatial robots: draw yaw within home's yaw +- this many degrees (default 30)")
@@ -131,7 +141,7 @@ int main(int argc, char** argv) {
                       "N(0, S^2), S in m")
       ->check(kNonNegative);
   sim_cmd->add_option("--plan", sim.plan_path, "pose plan CSV")->required()->check(CLI::ExistingFile);
-  sim_cmd->add_option("--seed", sim.seed, "random seed")->capture_default_str()->check(kSeed);
+  sim_cmd->add_option("--seed", sim.seed, "random seed")->capture_default_str()->transform(kSeed);
   sim_cmd->add_option("--sensors", sim.sensors, "noisy sensors: both|laser|inclinometer|none")
       ->capture_default_str()
       ->check(CLI::IsMember({"both", "laser", "inclinometer", "none"}));
@@ -171,7 +181,7 @@ int main(int argc, char** argv) {
   CLI::Option* max_iterations_option =
       id_cmd->add_option("--max-iterations", ident.max_iterations,
                          "Levenberg-Marquardt iteration limit (default: 100 for planar robots, 200 for spatial ones)")
-      ->check(WholeNumberIn(1, cablecal::kMaxIdentifyIterations));
+      ->transform(WholeNumberIn(1, cablecal::kMaxIdentifyIterations));
   id_cmd->add_option("--identify", ident.identify,
                      "spatial robots: exits (default: the exit points and initial lengths) or anchors (the platform "
                      "anchors b1x .. bmz too)");
@@ -244,20 +254,20 @@ int main(int argc, char** argv) {
                      "number of poses (at least 5 with 2 cables, 4 with 3 to 8; spatial robots: as their sensors need, "
                      "named when too few)")
       ->required()
-      ->check(WholeNumberIn(1, cablecal::kMaxPlanPoses));  // the design says its own bound
+      ->transform(WholeNumberIn(1, cablecal::kMaxPlanPoses));  // the design says its own bound
   des_cmd->add_option("--criterion", des.criterion, "a|d|e|condition")
       ->capture_default_str()
       ->check(CLI::IsMember({"condition", "d", "a", "e"}));
   des_cmd->add_option("--starts", des.starts, "random feasible starts (best kept)")
       ->capture_default_str()
-      ->check(WholeNumberIn(1, 1000));
-  des_cmd->add_option("--seed", des.seed, "random seed")->capture_default_str()->check(kSeed);
+      ->transform(WholeNumberIn(1, 1000));
+  des_cmd->add_option("--seed", des.seed, "random seed")->capture_default_str()->transform(kSeed);
   des_cmd->add_option("--min-spacing", des.min_spacing_m, "minimum distance between poses, m")
       ->capture_default_str()
       ->check(kNonNegative);
   des_cmd->add_option("--random-sets", des.random_sets, "random sets for the reference median (0: none)")
       ->capture_default_str()
-      ->check(WholeNumberIn(0, 100000));
+      ->transform(WholeNumberIn(0, 100000));
   des_cmd->add_option("--geometry-sigma", des.geometry_sigma_m,
                       "uncertainty of the true exit points and initial lengths the plan must survive, m (0: off; "
                       "spatial robots: the exit points, default the robot file's tracker sigma if it has one)")
@@ -281,7 +291,7 @@ int main(int argc, char** argv) {
                                                   : "predict the calibration accuracy by Monte Carlo (OpenMP)");
   AddRobotOption(mc_cmd, &mc.robot_path);
   mc_cmd->add_option("--poses", mc.poses, "pose counts first:last[:step], e.g. 6:50 or 6:50:4")->required();
-  mc_cmd->add_option("--trials", mc.trials, "trials per cell")->required()->check(WholeNumberIn(1, 100000000));
+  mc_cmd->add_option("--trials", mc.trials, "trials per cell")->required()->transform(WholeNumberIn(1, 100000000));
   mc_cmd->add_option("--designs", mc.designs, "comma list of random, optimized (= a), condition, d, a, e; for spatial robots also grid:2x2x2, grid:3x3x3")->capture_default_str();
   mc_cmd->add_option("--estimator", mc.estimator, "ml|paper")->capture_default_str()->check(CLI::IsMember({"ml", "paper"}));
   mc_cmd->add_option("--gauge", mc.gauge, "a1x|prior|none")->capture_default_str()->check(CLI::IsMember({"a1x", "prior", "none"}));
@@ -307,10 +317,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   mc_cmd->add_option("--design-starts", mc.design_starts, "Ipopt starts per designed set")
       ->capture_default_str()
-      ->check(WholeNumberIn(1, 1000));
+      ->transform(WholeNumberIn(1, 1000));
   mc_cmd->add_option("--threads", mc.threads, "OpenMP threads (default: all cores)")
-      ->check(WholeNumberIn(1, kMaxThreads));
-  mc_cmd->add_option("--seed", mc.seed, "random seed")->capture_default_str()->check(kSeed);
+      ->transform(WholeNumberIn(1, kMaxThreads));
+  mc_cmd->add_option("--seed", mc.seed, "random seed")->capture_default_str()->transform(kSeed);
   mc_cmd->add_flag("--skip-infeasible", mc.skip_infeasible,
                     "spatial robots: each trial skips the poses its true robot cannot hold within its limits (as simulate "
                     "--skip-infeasible) and identifies from the rest, instead of failing");
@@ -331,7 +341,7 @@ int main(int argc, char** argv) {
                      "spatial robots: draw each trial's random set from P poses sampled once per study (0: a fresh sample "
                      "per trial)")
       ->capture_default_str()
-      ->check(WholeNumberIn(0, 100000));
+      ->transform(WholeNumberIn(0, 100000));
   mc_cmd->add_flag("!--no-plot", mc.plot, "skip the figures");
   mc_cmd->add_option("--out", mc.out_dir, "output folder")->required();
 
@@ -352,10 +362,10 @@ int main(int argc, char** argv) {
   rep_cmd->add_option("--designs", rep.designs,
                       "spatial study: the designs run, of random,optimized,grid:2x2x2,grid:3x3x3 (default: all four)");
   rep_cmd->add_flag("!--no-plot", rep.plot, "skip the figures");
-  rep_cmd->add_option("--trials", rep.trials, "trials per cell")->capture_default_str()->check(WholeNumberIn(1, 100000000));
+  rep_cmd->add_option("--trials", rep.trials, "trials per cell")->capture_default_str()->transform(WholeNumberIn(1, 100000000));
   rep_cmd->add_option("--threads", rep.threads, "OpenMP threads (default: all cores)")
-      ->check(WholeNumberIn(1, kMaxThreads));
-  rep_cmd->add_option("--seed", rep.seed, "random seed")->capture_default_str()->check(kSeed);
+      ->transform(WholeNumberIn(1, kMaxThreads));
+  rep_cmd->add_option("--seed", rep.seed, "random seed")->capture_default_str()->transform(kSeed);
   rep_cmd->add_option("--out", rep.out_dir, "output folder")->capture_default_str();
 
   // On every subcommand: --version, and -v / -q given after the subcommand's name.

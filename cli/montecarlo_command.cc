@@ -141,31 +141,6 @@ std::string RunYaml(const StudiedRobot& robot, const MonteCarloOptions& o, const
 }
 
 // Writes the data files of one study into `folder` under `prefix` (staged; the caller commits).
-// The montecarlo command's run where no trial succeeded has no statistics: a solver failure
-// (exit 3, nothing written), naming the causes and the first trial's reason, not a table of
-// n/a with exit 0. (reproduce keeps a configuration whose every trial fails: a study's row.)
-void RefuseIfEveryTrialFailed(const MonteCarloResult& r) {
-  long trials = 0, failures = 0;
-  const TrialOutcome* first = nullptr;
-  for (const MonteCarloCell& c : r.cells) {
-    trials += static_cast<long>(c.trials.size());
-    failures += c.failures();
-    for (const TrialOutcome& t : c.trials) {
-      if (!t.ok && !first) first = &t;
-    }
-  }
-  if (trials == 0 || failures < trials) return;
-  std::string causes;
-  for (const std::string& cause : FailureCauses()) {
-    int count = 0;
-    for (const MonteCarloCell& c : r.cells) count += c.failures(cause);
-    if (count > 0) causes += (causes.empty() ? "" : ", ") + cause + " " + std::to_string(count);
-  }
-  throw SolverFailure("every one of the " + std::to_string(trials) + " trials failed (" + causes +
-                      "): no statistics to write; the first: " + (first ? first->failure : std::string("?")) +
-                      " (a smaller --geometry-sigma, --skip-infeasible, more poses or another sensor may help)");
-}
-
 void WriteStudy(const OutputFolder& folder, const std::string& prefix, const StudiedRobot& robot, const MonteCarloOptions& o,
                 const std::string& poses_text, const MonteCarloResult& r, const Context& ctx, int threads,
                 const std::string& title) {

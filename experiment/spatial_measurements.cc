@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <optional>
 
 #include "common/csv.h"
@@ -164,11 +165,31 @@ void CheckSpatialReadingsPlausible(const SpatialRobot& robot, const std::vector<
       for (Eigen::Index i = 0; i < v.size(); ++i) {
         if (!(v(i) >= -s)) {
           refuse("f" + std::to_string(i + 1),
-                 FormatDouble(v(i)) + " N is a compression (" + FormatDouble(s) +
+                 FormatDouble(v(i)) + " N is a compression (" + FormatDouble(std::round(s * 1e3) / 1e3) +
                      " N of slack: 5 sigma of the load cell's noise), and a cable only pulls: a load cell "
                      "zeroed under load, or its sign reversed?");
         }
       }
+    }
+  }
+  // Repeated pose ids are repeated readings of one pose: the same commanded lengths, so encoders
+  // that disagree beyond their noise are two poses under one id (a copied row's id, a typo), which
+  // the fit would otherwise report as readings that fit no robot.
+  std::map<int, const SpatialMeasurement*> first_of;
+  const double tolerance_m = 10.0 * std::sqrt(2.0) * robot.sensors.encoder_sigma_m;
+  for (const SpatialMeasurement& r : readings) {
+    const auto [it, inserted] = first_of.emplace(r.pose_id, &r);
+    if (inserted || it->second->dl_m.size() != r.dl_m.size()) continue;
+    Eigen::Index i = 0;
+    const double apart_m = (r.dl_m - it->second->dl_m).cwiseAbs().maxCoeff(&i);
+    if (!(apart_m <= tolerance_m)) {
+      const std::string where = r.where.empty() ? source + ": pose " + std::to_string(r.pose_id) : r.where;
+      const std::string earlier = it->second->where.empty() ? "an earlier reading" : it->second->where;
+      throw InputError(where, "column 'pose'",
+                       "pose " + std::to_string(r.pose_id) + " was read before (" + earlier + ") with dl" +
+                           std::to_string(i + 1) + " " + FormatDouble(apart_m) +
+                           " m apart, beyond 10 times the encoders' noise: repeated ids are repeated readings of "
+                           "one pose; two poses under one id?");
     }
   }
 }

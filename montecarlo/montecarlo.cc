@@ -116,6 +116,28 @@ const std::vector<std::string>& FailureCauses() {
   return causes;
 }
 
+void RefuseIfEveryTrialFailed(const MonteCarloResult& r) {
+  long trials = 0, failures = 0;
+  const TrialOutcome* first = nullptr;
+  for (const MonteCarloCell& c : r.cells) {
+    trials += static_cast<long>(c.trials.size());
+    failures += c.failures();
+    for (const TrialOutcome& t : c.trials) {
+      if (!t.ok && !first) first = &t;
+    }
+  }
+  if (trials == 0 || failures < trials) return;
+  std::string causes;
+  for (const std::string& cause : FailureCauses()) {
+    int count = 0;
+    for (const MonteCarloCell& c : r.cells) count += c.failures(cause);
+    if (count > 0) causes += (causes.empty() ? "" : ", ") + cause + " " + std::to_string(count);
+  }
+  throw SolverFailure("every one of the " + std::to_string(trials) + " trials failed (" + causes +
+                      "): no statistics to write; the first: " + (first ? first->failure : std::string("?")) +
+                      " (a smaller --geometry-sigma, --skip-infeasible, more poses or another sensor may help)");
+}
+
 int MonteCarloCell::failures(const std::string& cause) const {
   int f = 0;
   for (const TrialOutcome& t : trials) f += !t.ok && t.failure.compare(0, cause.size() + 1, cause + ":") == 0;

@@ -114,6 +114,12 @@ struct MonteCarloResult {
   bool geometry_prior_served = true;  // --geometry-prior exists for this kind (not yet spatial)
 };
 
+// A run in which no trial succeeded has no statistics: SolverFailure counting the failures by
+// cause and quoting the first trial's reason (the montecarlo command's exit 3 with nothing
+// written, Python's SolverError), not a table of zeros or n/a. (reproduce keeps a configuration
+// whose every trial fails: it is a row of its study.)
+void RefuseIfEveryTrialFailed(const MonteCarloResult& result);
+
 // The cells whose calibration knows a geometric parameter hardly better than the lab did before
 // measuring (its sigma above kDataAddLittle x geometry_sigma_m), worst first within each cell:
 // "n=6 random: a2z 13.1 mm, l20 11.2 mm". `worse` keeps only those above geometry_sigma_m.

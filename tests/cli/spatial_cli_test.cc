@@ -339,6 +339,23 @@ TEST_F(SpatialCli, MonteCarloWritesTheStudyAndRefusesPlanarOnlyFlags) {
   EXPECT_NE(run.find("plan_margins: {tension_N: 1, frame_m: 0.001, tilt_deg: 0.1}"), std::string::npos) << run;
 }
 
+// Counts and seeds with leading zeros are the decimal numbers they look like (CLI11 alone reads
+// "010" as octal 8: another run than the one typed).
+TEST_F(SpatialCli, LeadingZerosAreDecimal) {
+  const std::string robot = std::string(CABLECAL_SOURCE_DIR) + "/robots/irma4u.yaml";
+  ASSERT_EQ(RunCablecal("sample --robot " + robot + " --poses 010 --seed 010 --out " + Path("zeros.csv")).exit_code, 0);
+  ASSERT_EQ(RunCablecal("sample --robot " + robot + " --poses 10 --seed 10 --out " + Path("plain.csv")).exit_code, 0);
+  const auto data = [this](const std::string& name) {
+    std::string out;
+    for (const std::string& line : Lines(Read(name))) {
+      if (!line.empty() && line[0] != '#') out += line + "\n";
+    }
+    return out;
+  };
+  EXPECT_EQ(data("zeros.csv"), data("plain.csv"));
+  EXPECT_EQ(Lines(data("zeros.csv")).size(), 11u);  // the header and 10 poses
+}
+
 // A montecarlo run whose every trial fails has no statistics: exit 3 naming the causes and the
 // first trial's reason, nothing written (it was a table of n/a and exit 0), for either kind.
 TEST_F(SpatialCli, AMonteCarloWhoseEveryTrialFailsExitsThreeAndWritesNothing) {

@@ -560,6 +560,23 @@ TEST(SpatialMeasurementsCheck, ReadingsNoSensorCanGiveAreRefusedNamingTheUnit) {
                 m.find("sign reversed?") != std::string::npos)
         << m;
   }
+  // Two poses under one id: named by the later row, the earlier one and the cable most apart;
+  // a repeated reading of one pose (the same lengths, within the encoders' noise) passes.
+  {
+    std::vector<SpatialMeasurement> twice = clean;
+    twice.back().pose_id = twice.front().pose_id;
+    std::string m = "accepted";
+    try {
+      CheckSpatialReadingsPlausible(robot, twice, "meas.csv");
+    } catch (const InputError& e) {
+      m = e.what();
+    }
+    EXPECT_NE(m.find("was read before"), std::string::npos) << m;
+    EXPECT_NE(m.find("two poses under one id?"), std::string::npos) << m;
+    twice.back() = twice.front();
+    twice.back().dl_m.array() += 3.0 * robot.sensors.encoder_sigma_m;
+    EXPECT_NO_THROW(CheckSpatialReadingsPlausible(robot, twice, "meas.csv"));
+  }
   // A load cell's reading within its noise of zero passes: a slack cable reads a little below.
   const double slack_N = 5.0 * robot.sensors.load_cell_N->sigma();
   EXPECT_EQ(message([&](SpatialMeasurement& r) { r.values(SpatialSensor::kLoadCell)(2) = -0.9 * slack_N; }), "accepted");

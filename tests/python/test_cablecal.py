@@ -922,6 +922,13 @@ def test_spatial_sample_workspace_simulate_equal_cli(tmp_path, name):
         cablecal.SpatialMeasurements.load(robot, str(mm))
 
 
+def test_montecarlo_whose_every_trial_fails_raises(tmp_path):
+    # As the CLI's exit 3: no statistics (they were zeros, read as a perfect calibration).
+    robot = cablecal.SpatialRobot.builtin("irma4u")
+    with pytest.raises(cablecal.SolverError, match=r"every one of the 2 trials failed \(simulation 2\)"):
+        cablecal.montecarlo(robot, "4", 2, designs="random", geometry_sigma=0.2)
+
+
 def test_spatial_montecarlo_equals_cli(tmp_path):
     path = robot_file("cogiro")
     robot = cablecal.Robot.load(path)
