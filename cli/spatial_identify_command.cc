@@ -1,6 +1,7 @@
 // identify and validate for a robot file with `kind: spatial` (README, "Spatial robots"): the
 // planar commands' flags and outputs where they mean something for a spatial robot, the
 // planar-only ones refused by name.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -98,8 +99,18 @@ int RunSpatialIdentify(const Context& ctx, const IdentifyCommandOptions& options
     }
   }();
   if (result.status == SpatialIdentifyStatus::kRankDeficient || result.status == SpatialIdentifyStatus::kPoorFit) {
-    // The data cannot calibrate it, or do not fit it (poor_fit): bad input, as planar.
-    throw InputError(options.measurements_path, "", result.message);
+    // The data cannot calibrate it, or do not fit it (poor_fit): bad input, as planar. With the
+    // statics left out, a robot whose cables stretch is fitted as inextensible: a likely cause,
+    // said here (a new user's noise-free readings of a robot with two stretching cables did not
+    // fit with --equilibrium off, and the message blamed a laser reading).
+    const bool stretch = std::any_of(nominal.cables.begin(), nominal.cables.end(),
+                                     [](const SpatialCable& c) { return c.stiffness_N.has_value(); });
+    const std::string hint =
+        result.status == SpatialIdentifyStatus::kPoorFit && !id.statics && stretch
+            ? " (--equilibrium off models every cable as inextensible, and this robot's cables with a stiffness "
+              "stretch under load: without it the stretch is modelled)"
+            : "";
+    throw InputError(options.measurements_path, "", result.message + hint);
   }
   if (!result.converged()) throw SolverFailure(options.measurements_path + ": " + result.message);
   const std::string result_yaml = options.out_path.empty() && options.report_dir.empty()

@@ -163,6 +163,11 @@ void CheckSpatialReadingsPlausible(const SpatialRobot& robot, const std::vector<
       const Eigen::VectorXd& v = r.values(SpatialSensor::kLoadCell);
       const double s = slack(SpatialSensor::kLoadCell);
       for (Eigen::Index i = 0; i < v.size(); ++i) {
+        if (!(v(i) <= 100.0 * robot.tension_max_N + s)) {
+          refuse("f" + std::to_string(i + 1),
+                 FormatDouble(v(i)) + " N is more than 100 times tension.max (" + FormatDouble(robot.tension_max_N) +
+                     " N): no cable of " + robot.name + " pulls that hard (units? forces are in N)");
+        }
         if (!(v(i) >= -s)) {
           refuse("f" + std::to_string(i + 1),
                  FormatDouble(v(i)) + " N is a compression (" + FormatDouble(std::round(s * 1e3) / 1e3) +

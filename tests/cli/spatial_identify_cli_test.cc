@@ -20,6 +20,7 @@
 #include "common/random.h"
 #include "model/spatial_robot.h"
 #include "tests/support/random_spatial_robot.h"
+#include "tests/support/six_mixed_robot.h"
 #include "tests/support/temp_dir.h"
 
 namespace {
@@ -338,6 +339,35 @@ TEST_F(SpatialIdentifyCli, ACalibratedRobotThatCannotHoldTheNominalHomeIsSaid) {
   EXPECT_EQ(RunCablecal("validate --robot " + Path("cal.yaml") + " --measurements " + Path("lab4.csv") + " --out " +
                         Path("v.csv")).exit_code,
             2);
+}
+
+// A new user's robot with two stretching cables (tests/support/six_mixed_robot.h), its fewest
+// designed poses read without noise: identified with the statics, with a warning that nothing is
+// left to check the fit; with --equilibrium off (every cable inextensible) the readings do not
+// fit, and the message says the stretch is what was left out (it blamed a laser reading).
+TEST_F(SpatialIdentifyCli, TheFewestPosesOfAStretchingRobotWarnAndEquilibriumOffNamesTheStretch) {
+  std::ofstream(Path("six.yaml")) << cablecal::testing::SixMixedRobotYaml();
+  RunResult r = RunCablecal("design --robot " + Path("six.yaml") + " --poses 7 --starts 1 --random-sets 0 "
+                            "--geometry-sigma 0 --out " + Path("d7.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = RunCablecal("simulate --robot " + Path("six.yaml") + " --plan " + Path("d7.csv") +
+                  " --sensors none --no-encoder-noise --out " + Path("m7.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = RunCablecal("identify --robot " + Path("six.yaml") + " --measurements " + Path("m7.csv") + " --out " +
+                  Path("r.yaml"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("cablecal: warning: no redundancy: 109 reading values for as many unknowns"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(Read("r.yaml").find("no redundancy"), std::string::npos);
+  r = RunCablecal("identify --robot " + Path("six.yaml") + " --measurements " + Path("m7.csv") +
+                  " --equilibrium off --out " + Path("off.yaml"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("(--equilibrium off models every cable as inextensible, and this robot's cables with a "
+                          "stiffness stretch under load"),
+            std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(Path("off.yaml")));
 }
 
 TEST_F(SpatialIdentifyCli, TheGaugeFromTheDataJsonAndReport) {

@@ -551,13 +551,15 @@ TEST(SpatialMeasurementsCheck, ReadingsNoSensorCanGiveAreRefusedNamingTheUnit) {
       {[](SpatialMeasurement& r) { r.values(SpatialSensor::kPosition)(2) *= 1000.0; }, "column 'pz'"},
       {[](SpatialMeasurement& r) { r.values(SpatialSensor::kHeading)(0) = 90.0; }, "column 'yaw'"},
       {[](SpatialMeasurement& r) { r.values(SpatialSensor::kSwivel)(1) = 45.0; }, "column 'sw2'"},
-      {[](SpatialMeasurement& r) { r.values(SpatialSensor::kLoadCell)(2) = -50.0; }, "column 'f3'"}};
+      {[](SpatialMeasurement& r) { r.values(SpatialSensor::kLoadCell)(2) = -50.0; }, "column 'f3'"},
+      {[&robot](SpatialMeasurement& r) { r.values(SpatialSensor::kLoadCell)(1) = 1000.0 * robot.tension_max_N; },
+       "column 'f2'"}};
   for (const auto& [spoil, column] : cases) {
     const std::string m = message(spoil);
     EXPECT_NE(m.find(pose), std::string::npos) << m;
     EXPECT_NE(m.find(column), std::string::npos) << m;
     EXPECT_TRUE(m.find("millimetres?") != std::string::npos || m.find("degrees?") != std::string::npos ||
-                m.find("sign reversed?") != std::string::npos)
+                m.find("sign reversed?") != std::string::npos || m.find("units? forces are in N") != std::string::npos)
         << m;
   }
   // Two poses under one id: named by the later row, the earlier one and the cable most apart;
