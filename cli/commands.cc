@@ -387,8 +387,8 @@ int RunSimulate(const Context& ctx, const SimulateOptions& options) {
           ? ", 0 of " + std::to_string(plan.size()) + " skipped"
           : ", " + std::to_string(experiment.skipped.size()) + " of " + std::to_string(plan.size()) +
                 " skipped (the true robot cannot hold them)";
-  std::printf("simulated %zu poses%s (noisy sensors: %s, encoder noise %s%s) to %s\n",
-              experiment.measurements.size(), skipped.c_str(), ToString(sim.noisy), sim.encoder_noise ? "on" : "off",
+  std::printf("simulated %zu pose%s%s (noisy sensors: %s, encoder noise %s%s) to %s\n",
+              experiment.measurements.size(), experiment.measurements.size() == 1 ? "" : "s", skipped.c_str(), ToString(sim.noisy), sim.encoder_noise ? "on" : "off",
               sim.systematic_errors ? ", systematic sensor errors added" : "", options.out_path.c_str());
   return kExitOk;
 }
