@@ -381,14 +381,10 @@ int RunSimulate(const Context& ctx, const SimulateOptions& options) {
                    skipped.reason.c_str());
     }
   }
-  const std::string skipped =
-      !options.skip_infeasible ? ""
-      : experiment.skipped.empty()
-          ? ", 0 of " + std::to_string(plan.size()) + " skipped"
-          : ", " + std::to_string(experiment.skipped.size()) + " of " + std::to_string(plan.size()) +
-                " skipped (the true robot cannot hold them)";
-  std::printf("simulated %zu pose%s%s (noisy sensors: %s, encoder noise %s%s) to %s\n",
-              experiment.measurements.size(), experiment.measurements.size() == 1 ? "" : "s", skipped.c_str(), ToString(sim.noisy), sim.encoder_noise ? "on" : "off",
+  std::printf("simulated %s%s (noisy sensors: %s, encoder noise %s%s) to %s\n",
+              Counted(experiment.measurements.size(), "pose").c_str(),
+              SkippedPosesText(options.skip_infeasible, experiment.skipped.size(), plan.size()).c_str(),
+              ToString(sim.noisy), sim.encoder_noise ? "on" : "off",
               sim.systematic_errors ? ", systematic sensor errors added" : "", options.out_path.c_str());
   return kExitOk;
 }
@@ -567,13 +563,20 @@ bool WriteValidationOutputs(const Context& ctx, const ValidateCommandOptions& op
   return true;
 }
 
+std::string Counted(std::size_t n, const std::string& noun) {
+  return std::to_string(n) + " " + noun + (n == 1 ? "" : "s");
+}
+
+std::string SkippedPosesText(bool skip_infeasible, std::size_t skipped, std::size_t planned) {
+  if (!skip_infeasible) return "";
+  return ", " + std::to_string(skipped) + " of " + std::to_string(planned) + " skipped" +
+         (skipped > 0 ? " (the true robot cannot hold them)" : "");
+}
+
 std::string CountedReadings(std::size_t kept, int num_poses) {
-  const auto counted = [](std::size_t n, const char* what) {
-    return std::to_string(n) + " " + what + (n == 1 ? "" : "s");
-  };
   return num_poses == static_cast<int>(kept)
-             ? counted(kept, "pose")
-             : counted(kept, "reading") + " (" + counted(static_cast<std::size_t>(num_poses), "pose") + ")";
+             ? Counted(kept, "pose")
+             : Counted(kept, "reading") + " (" + Counted(static_cast<std::size_t>(num_poses), "pose") + ")";
 }
 
 int RunValidate(const Context& ctx, const ValidateCommandOptions& options) {

@@ -102,6 +102,10 @@ bool WriteValidationOutputs(const Context& ctx, const ValidateCommandOptions& op
                             const std::vector<SkippedReading>& skipped, std::size_t readings);
 // "12 poses", or "14 readings (12 poses)" when poses were read more than once.
 std::string CountedReadings(std::size_t kept, int num_poses);
+// "7 poses", "1 pose": a count and its noun, plural but for one.
+std::string Counted(std::size_t n, const std::string& noun);
+// simulate's ", K of N skipped" with --skip-infeasible, the reason said when K > 0; "" without.
+std::string SkippedPosesText(bool skip_infeasible, std::size_t skipped, std::size_t planned);
 
 // identify and validate for a robot file with `kind: spatial` (cli/spatial_identify_command.cc):
 // RunIdentify and RunValidate hand such a file over to them.

@@ -233,23 +233,15 @@ int RunSpatialMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptio
   std::string figure_error;
   if (options.plot) figure_error = TryPlotStudy(folder, {folder.staging()}, kStudyFigures);
   folder.Commit();
-  int failures = 0;
-  for (const MonteCarloCell& c : r.cells) failures += c.failures();
-  std::printf("ran %zu cells x %d trials in %.1f s on %d threads (%d failed trials); the gauge held %zu exit "
+  const FailureTally tally = TallyFailures(r);
+  std::printf("ran %zu cells x %d trials in %.1f s on %d threads (%ld failed trials); the gauge held %zu exit "
               "coordinates; wrote %s/\n",
-              r.cells.size(), o.study.trials, r.wall_time_s, threads, failures, r.held_names.size(),
+              r.cells.size(), o.study.trials, r.wall_time_s, threads, tally.failed, r.held_names.size(),
               options.out_dir.c_str());
-  const long trials = static_cast<long>(r.cells.size()) * o.study.trials;
-  if (!ctx.quiet && 2 * failures > trials) {
-    std::string causes;
-    for (const std::string& cause : FailureCauses()) {
-      int count = 0;
-      for (const MonteCarloCell& c : r.cells) count += c.failures(cause);
-      if (count > 0) causes += (causes.empty() ? "" : ", ") + cause + " " + std::to_string(count);
-    }
-    std::fprintf(stderr, "cablecal: warning: %d of %ld trials failed (%s): the statistics speak of the few that did "
+  if (!ctx.quiet && 2 * tally.failed > tally.trials) {
+    std::fprintf(stderr, "cablecal: warning: %ld of %ld trials failed (%s): the statistics speak of the few that did "
                  "not; failures.csv says why (a smaller --geometry-sigma, --skip-infeasible, more poses or another "
-                 "sensor may help)\n", failures, trials, causes.c_str());
+                 "sensor may help)\n", tally.failed, tally.trials, tally.by_cause.c_str());
   }
   if (!figure_error.empty()) throw FigureFailure(figure_error + "; the study's data were written to " + options.out_dir);
   return kExitOk;

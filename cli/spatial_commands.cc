@@ -166,15 +166,9 @@ int RunSpatialSimulate(const Context& ctx, const SimulateOptions& options) {
   for (const SpatialSensor s : kSpatialSensors) {
     if (HasSpatialSensor(nominal, s)) sensors += std::string(sensors.empty() ? "" : ", ") + ToString(s);
   }
-  const std::string skipped =
-      !options.skip_infeasible ? ""
-      : experiment.skipped.empty()
-          ? ", 0 of " + std::to_string(plan.size()) + " skipped"
-          : ", " + std::to_string(experiment.skipped.size()) + " of " + std::to_string(plan.size()) +
-                " skipped (the true robot cannot hold them)";
-  std::printf("simulated %zu pose%s of %s%s (encoders%s%s; noisy sensors: %s, encoder noise %s) to %s\n",
-              experiment.measurements.size(), experiment.measurements.size() == 1 ? "" : "s",
-              PrintableText(nominal.name).c_str(), skipped.c_str(),
+  std::printf("simulated %s of %s%s (encoders%s%s; noisy sensors: %s, encoder noise %s) to %s\n",
+              Counted(experiment.measurements.size(), "pose").c_str(), PrintableText(nominal.name).c_str(),
+              SkippedPosesText(options.skip_infeasible, experiment.skipped.size(), plan.size()).c_str(),
               sensors.empty() ? "" : ", ", sensors.c_str(), ToString(sim.noisy), sim.encoder_noise ? "on" : "off",
               options.out_path.c_str());
   return kExitOk;

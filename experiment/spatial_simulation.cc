@@ -95,23 +95,23 @@ SimulatedSpatialExperiment SimulateSpatialExperiment(const SpatialRobot& nominal
       int cable = -1;
       const Eigen::VectorXd t = SnapTensionsToBounds(fwd.equilibrium.tensions_N, truth.tension_min_N, truth.tension_max_N);
       const Feasibility f = CheckSpatialFeasibility(truth, fwd.equilibrium.q, t, &cable);
-      std::string tension;  // the value beyond its bound, and the bound
+      std::string beyond;  // the value beyond its bound, and the bound
       if (f == Feasibility::kTensionLow || f == Feasibility::kTensionHigh) {
         // The cable furthest beyond its bound, as t1..tm number them.
         Eigen::Index i = 0;
         if (f == Feasibility::kTensionLow) t.minCoeff(&i);
         else t.maxCoeff(&i);
         cable = static_cast<int>(i);
-        tension = " at " + FormatDouble(std::round(t(i) * 1e3) / 1e3) + " N, bounds [" + FormatDouble(truth.tension_min_N) +
-                  ", " + FormatDouble(truth.tension_max_N) + "]";
+        beyond = " at " + FormatDouble(std::round(t(i) * 1e3) / 1e3) + " N, bounds [" + FormatDouble(truth.tension_min_N) +
+                 ", " + FormatDouble(truth.tension_max_N) + "]";
       }
       if (f == Feasibility::kTiltLimit) {
-        tension = " at " + FormatDouble(std::round(TiltAngle(fwd.equilibrium.q) * 180.0 / M_PI * 1e3) / 1e3) +
-                  " deg, limit " + FormatDouble(std::round(truth.tilt_max_rad * 180.0 / M_PI * 1e3) / 1e3) + " deg";
+        beyond = " at " + FormatDouble(std::round(TiltAngle(fwd.equilibrium.q) * 180.0 / M_PI * 1e3) / 1e3) +
+                 " deg, limit " + FormatDouble(std::round(truth.tilt_max_rad * 180.0 / M_PI * 1e3) / 1e3) + " deg";
       }
       if (f != Feasibility::kFeasible) {
         infeasible = "the true robot settles outside its workspace (" + std::string(ToString(f)) +
-                     (cable >= 0 ? ", cable " + std::to_string(cable + 1) : std::string()) + tension + ")";
+                     (cable >= 0 ? ", cable " + std::to_string(cable + 1) : std::string()) + beyond + ")";
       }
     }
     if (!infeasible.empty()) {

@@ -116,25 +116,28 @@ const std::vector<std::string>& FailureCauses() {
   return causes;
 }
 
-void RefuseIfEveryTrialFailed(const MonteCarloResult& r) {
-  long trials = 0, failures = 0;
-  const TrialOutcome* first = nullptr;
+FailureTally TallyFailures(const MonteCarloResult& r) {
+  FailureTally tally;
   for (const MonteCarloCell& c : r.cells) {
-    trials += static_cast<long>(c.trials.size());
-    failures += c.failures();
+    tally.trials += static_cast<long>(c.trials.size());
+    tally.failed += c.failures();
     for (const TrialOutcome& t : c.trials) {
-      if (!t.ok && !first) first = &t;
+      if (!t.ok && !tally.first) tally.first = &t;
     }
   }
-  if (trials == 0 || failures < trials) return;
-  std::string causes;
   for (const std::string& cause : FailureCauses()) {
     int count = 0;
     for (const MonteCarloCell& c : r.cells) count += c.failures(cause);
-    if (count > 0) causes += (causes.empty() ? "" : ", ") + cause + " " + std::to_string(count);
+    if (count > 0) tally.by_cause += (tally.by_cause.empty() ? "" : ", ") + cause + " " + std::to_string(count);
   }
-  throw SolverFailure("every one of the " + std::to_string(trials) + " trials failed (" + causes +
-                      "): no statistics to write; the first: " + (first ? first->failure : std::string("?")) +
+  return tally;
+}
+
+void RefuseIfEveryTrialFailed(const MonteCarloResult& r) {
+  const FailureTally tally = TallyFailures(r);
+  if (tally.trials == 0 || tally.failed < tally.trials) return;
+  throw SolverFailure("every one of the " + std::to_string(tally.trials) + " trials failed (" + tally.by_cause +
+                      "): no statistics to write; the first: " + (tally.first ? tally.first->failure : std::string("?")) +
                       " (a smaller --geometry-sigma, --skip-infeasible, more poses or another sensor may help)");
 }
 

@@ -114,6 +114,16 @@ struct MonteCarloResult {
   bool geometry_prior_served = true;  // --geometry-prior exists for this kind (not yet spatial)
 };
 
+// A run's failed trials: how many of how many, by cause ("simulation 4, design 2": the causes
+// with none left out, in FailureCauses' order), and the first failed trial (nullptr if none).
+struct FailureTally {
+  long trials = 0;
+  long failed = 0;
+  std::string by_cause;
+  const TrialOutcome* first = nullptr;
+};
+FailureTally TallyFailures(const MonteCarloResult& result);
+
 // A run in which no trial succeeded has no statistics: SolverFailure counting the failures by
 // cause and quoting the first trial's reason (the montecarlo command's exit 3 with nothing
 // written, Python's SolverError), not a table of zeros or n/a. (reproduce keeps a configuration

@@ -117,14 +117,11 @@ void BindMonteCarlo(py::module_& m) {
             report);
         report();  // the last count: (total, total)
         RefuseIfEveryTrialFailed(r);  // SolverError, as the CLI's exit 3: no statistics to return
-        long run = 0, failures = 0;
-        for (const MonteCarloCell& c : r.cells) {
-          run += static_cast<long>(c.trials.size());
-          failures += c.failures();
-        }
-        if (2 * failures > run) {
-          const std::string note = std::to_string(failures) + " of " + std::to_string(run) +
-                                   " trials failed: the statistics speak of the few that did not; failures_csv() says why";
+        const FailureTally tally = TallyFailures(r);
+        if (2 * tally.failed > tally.trials) {  // the CLI's warning
+          const std::string note = std::to_string(tally.failed) + " of " + std::to_string(tally.trials) +
+                                   " trials failed (" + tally.by_cause +
+                                   "): the statistics speak of the few that did not; failures_csv() says why";
           if (PyErr_WarnEx(PyExc_UserWarning, note.c_str(), 1) < 0) throw py::error_already_set();
         }
         return r;
