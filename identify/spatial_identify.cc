@@ -1712,14 +1712,14 @@ Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasureme
   const int gauge_held = options.gauge.kind == SpatialGaugeKind::kHold
                              ? static_cast<int>(options.gauge.held.size())
                              : rigid + (hold_weak ? static_cast<int>(nearly_rigid_cols.size()) : 0);
-  if (a.model.num_values < p - gauge_held + local * n) {
+  a.gauge.redundancy = a.model.num_values - (p - gauge_held + local * n);
+  if (a.gauge.redundancy < 0) {
     RefuseTooFewValues(a.model, n, gauge_held,
                        options.gauge.kind == SpatialGaugeKind::kHold
                            ? " less the " + std::to_string(gauge_held) + " that --gauge hold: holds"
                            : " less " + std::to_string(gauge_held) +
                                  " rigid motion(s) of the frame, or nearly, that the gauge holds");
   }
-  a.gauge.redundancy = a.model.num_values - (p - gauge_held + local * n);
   // A lab's hold: list is checked and held even when the readings see everything (holding every
   // exit coordinate identifies the lengths, offsets and poses alone).
   if (k == 0 && options.gauge.kind != SpatialGaugeKind::kHold && !hold_weak) return a;
