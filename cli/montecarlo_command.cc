@@ -240,8 +240,8 @@ int RunSpatialMonteCarloCommand(const Context& ctx, const MonteCarloCommandOptio
               options.out_dir.c_str());
   if (!ctx.quiet && 2 * tally.failed > tally.trials) {
     std::fprintf(stderr, "cablecal: warning: %ld of %ld trials failed (%s): the statistics speak of the few that did "
-                 "not; failures.csv says why (a smaller --geometry-sigma, --skip-infeasible, more poses or another "
-                 "sensor may help)\n", tally.failed, tally.trials, tally.by_cause.c_str());
+                 "not; failures.csv says why (%s)\n", tally.failed, tally.trials, tally.by_cause.c_str(),
+                 tally.hint.c_str());
   }
   if (!figure_error.empty()) throw FigureFailure(figure_error + "; the study's data were written to " + options.out_dir);
   return kExitOk;

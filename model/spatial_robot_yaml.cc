@@ -335,12 +335,20 @@ SpatialRobot Parse(const YAML::Node& root, const Reader& rd) {
       for (const SpatialCable& c : robot.cables) centroid += c.p_F_exit_m;
       centroid /= robot.num_cables();
       // + 0.0: a centroid of -1e-17 reads 0, not -0.
+      const std::string at = "x = " + FormatDouble(std::round(centroid.x() * 1e3) / 1e3 + 0.0) +
+                             ", y = " + FormatDouble(std::round(centroid.y() * 1e3) / 1e3 + 0.0) + " m";
+      // A home already below the centroid (within a centimetre) is not helped by moving there.
+      const bool below_centroid = (robot.p_F_home_m.head<2>() - centroid.head<2>()).norm() < 0.01;
+      const bool yaw_held = robot.num_cables() >= 4;
       hint = ". With fewer than 6 cables the platform hangs in equilibrium only where gravity lies in the cables' "
              "span: home_rpy_deg's roll and pitch are only the solver's first guess" +
-             std::string(robot.num_cables() >= 4 ? ", its yaw is held, and such a robot holds a narrow band of yaw" : "") +
-             "; try a home below the exits (their centroid is at x = " + FormatDouble(std::round(centroid.x() * 1e3) / 1e3 + 0.0) +
-             ", y = " + FormatDouble(std::round(centroid.y() * 1e3) / 1e3 + 0.0) + " m)" +
-             (robot.num_cables() >= 4 ? " at the yaw of the exits' and anchors' layout (often 0)" : "");
+             std::string(yaw_held ? ", its yaw is held, and such a robot holds a narrow band of yaw" : "") +
+             (below_centroid
+                  ? "; the home is already below the exits' centroid (" + at + "): look at " +
+                        (yaw_held ? "the yaw (that of the exits' and anchors' layout, often 0), " : "") +
+                        "the height, the centre of mass and the anchors"
+                  : "; try a home below the exits (their centroid is at " + at + ")" +
+                        (yaw_held ? " at the yaw of the exits' and anchors' layout (often 0)" : ""));
     }
     if (robot.num_cables() >= 6 && !statics.has_equilibrium && statics.feasibility == Feasibility::kNoEquilibrium) {
       // What the balance asks of the cables: the least-squares tensions (the minimum-norm ones

@@ -125,10 +125,26 @@ FailureTally TallyFailures(const MonteCarloResult& r) {
       if (!t.ok && !tally.first) tally.first = &t;
     }
   }
+  int most = 0;
+  std::string most_cause;
   for (const std::string& cause : FailureCauses()) {
     int count = 0;
     for (const MonteCarloCell& c : r.cells) count += c.failures(cause);
     if (count > 0) tally.by_cause += (tally.by_cause.empty() ? "" : ", ") + cause + " " + std::to_string(count);
+    if (count > most) {
+      most = count;
+      most_cause = cause;
+    }
+  }
+  if (most_cause == "design") {
+    tally.hint = "the optimized sets could not be designed: cablecal design on the same robot and --poses says why";
+  } else if (most_cause == "sampling") {
+    tally.hint = "too few feasible poses for the random sets: fewer --poses, or smaller plan margins";
+  } else if (most_cause == "simulation") {
+    tally.hint = "the true robots could not hold the poses: a smaller --geometry-sigma, or for a spatial robot "
+                 "--skip-infeasible or plan margins";
+  } else if (most_cause == "identification") {
+    tally.hint = "the identifications failed: more --poses, another sensor, or --loss cauchy against gross readings";
   }
   return tally;
 }
@@ -138,7 +154,7 @@ void RefuseIfEveryTrialFailed(const MonteCarloResult& r) {
   if (tally.trials == 0 || tally.failed < tally.trials) return;
   throw SolverFailure("every one of the " + std::to_string(tally.trials) + " trials failed (" + tally.by_cause +
                       "): no statistics to write; the first: " + (tally.first ? tally.first->failure : std::string("?")) +
-                      " (a smaller --geometry-sigma, --skip-infeasible, more poses or another sensor may help)");
+                      " (" + tally.hint + ")");
 }
 
 int MonteCarloCell::failures(const std::string& cause) const {

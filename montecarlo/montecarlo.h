@@ -121,6 +121,9 @@ struct FailureTally {
   long failed = 0;
   std::string by_cause;
   const TrialOutcome* first = nullptr;
+  // What may help, for the cause with the most failures (the first in FailureCauses' order on a
+  // tie); empty when none failed.
+  std::string hint;
 };
 FailureTally TallyFailures(const MonteCarloResult& result);
 

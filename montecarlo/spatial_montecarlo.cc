@@ -65,9 +65,10 @@ std::vector<std::string> StudyGauge(const SpatialRobot& nominal, const SpatialRo
       flag = name;
       list += (given++ ? ", " : "") + std::string(name) + " " + shown;
     };
-    margin(o.plan_tension_margin_N, "--tension-margin", FormatDouble(o.plan_tension_margin_N) + " N");
-    margin(o.plan_margin_m, "--frame-margin", FormatDouble(o.plan_margin_m) + " m");
-    margin(o.plan_tilt_margin_rad, "--tilt-margin-deg", FormatDouble(o.plan_tilt_margin_rad * 180.0 / M_PI));
+    // Rounded: the tilt margin comes back from radians (0.5 degrees would read 0.49999999999999994).
+    margin(o.plan_tension_margin_N, "--tension-margin", Rounded(o.plan_tension_margin_N, 6) + " N");
+    margin(o.plan_margin_m, "--frame-margin", Rounded(o.plan_margin_m, 6) + " m");
+    margin(o.plan_tilt_margin_rad, "--tilt-margin-deg", Rounded(o.plan_tilt_margin_rad * 180.0 / M_PI, 6));
     if (given > 0) {
       throw InputError(given == 1 ? flag : "--poses", "",
                        "no " + std::to_string(fewest) + " feasible poses to study within the plan margins (" + list +

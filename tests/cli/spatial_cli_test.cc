@@ -276,8 +276,22 @@ TEST_F(SpatialCli, MessagesNameTheTruthTheCableAndTheGrid) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("no_equilibrium"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("its yaw is held"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("(their centroid is at x = 0, y = 0 m)"), std::string::npos) << r.output;
+  // Its home is below the exits' centroid already: the hint does not send it there.
+  EXPECT_NE(r.output.find("the home is already below the exits' centroid (x = 0, y = 0 m): look at the yaw"),
+            std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("try a home below the exits"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(Path("ws2.csv")));
+  // Half a metre off it, the hint names the centroid as a place to try.
+  const std::string home = "home: [0.0, 0.0, 1.0]";
+  ASSERT_NE(moved.find(home), std::string::npos);
+  moved.replace(moved.find(home), home.size(), "home: [0.5, 0.0, 1.0]");
+  std::ofstream(Path("moved_off.yaml")) << moved;
+  r = RunCablecal("workspace --robot " + Path("moved_off.yaml") + " --out " + Path("ws3.csv"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("no_equilibrium"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("; try a home below the exits (their centroid is at x = 0, y = 0 m)"), std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(Path("ws3.csv")));
 }
 
 namespace {
@@ -323,6 +337,14 @@ TEST_F(SpatialCli, MonteCarloWritesTheStudyAndRefusesPlanarOnlyFlags) {
   EXPECT_EQ(empty.exit_code, 2) << empty.output;
   EXPECT_NE(empty.output.find("--tension-margin: no 30 feasible poses to study within the plan margins "
                               "(--tension-margin 2400 N)"), std::string::npos) << empty.output;
+  EXPECT_FALSE(fs::exists(Path("bad")));
+  // Two margins: both named, the tilt's as given (0.9 degrees through radians reads 0.9000000000000001).
+  const RunResult both = RunCablecal("montecarlo --robot " + std::string(CABLECAL_SOURCE_DIR) +
+                                     "/robots/cogiro.yaml --trials 2 --poses 30 --designs random "
+                                     "--tension-margin 2400 --tilt-margin-deg 0.9 --no-plot --out " + Path("bad"));
+  EXPECT_EQ(both.exit_code, 2) << both.output;
+  EXPECT_NE(both.output.find("within the plan margins (--tension-margin 2400 N, --tilt-margin-deg 0.9)"),
+            std::string::npos) << both.output;
   EXPECT_FALSE(fs::exists(Path("bad")));
   const RunResult planar = RunCablecal("montecarlo --poses 6 --trials 2 --tension-margin 10 --no-plot --out " + Path("bad"));
   EXPECT_EQ(planar.exit_code, 2) << planar.output;
@@ -370,6 +392,10 @@ TEST_F(SpatialCli, AMonteCarloWhoseEveryTrialFailsExitsThreeAndWritesNothing) {
                             "simulation: "),
               std::string::npos)
         << r.output;
+    // The hint is the simulation's (the cause of every failure here), not the identification's.
+    EXPECT_NE(r.output.find("(the true robots could not hold the poses: a smaller --geometry-sigma"), std::string::npos)
+        << r.output;
+    EXPECT_EQ(r.output.find("--loss cauchy"), std::string::npos) << r.output;
     EXPECT_FALSE(fs::exists(Path("all_failed"))) << robot;
   }
 }
