@@ -234,7 +234,15 @@ std::vector<SpatialPlanPose> MakeSpatialDesignedSet(const SpatialRobot& planning
         SpatialDesignOptions more = opt;
         more.starts = 4 * opt.starts;
         more.lower_robustness = true;
-        SpatialDesignResult r = DesignSpatialPoses(robot, more);
+        SpatialDesignResult r;
+        try {
+          r = DesignSpatialPoses(robot, more);
+        } catch (const SolverFailure& e) {
+          // Both attempts, so that "none of the 4 starts" reads right beside --design-starts 1.
+          throw SolverFailure("with " + std::to_string(opt.starts) + " start" + (opt.starts == 1 ? "" : "s") +
+                              ", then with " + std::to_string(more.starts) +
+                              " and the robustness lowered where needed: " + e.what());
+        }
         if (r.robustness_lowered()) {
           std::fprintf(stderr, "cablecal: montecarlo: the designed set for n=%d, %s: robustness lowered: %s\n", key.n,
                        ToString(key.design), r.robustness_note.c_str());

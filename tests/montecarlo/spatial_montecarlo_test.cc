@@ -268,6 +268,26 @@ TEST(SpatialMonteCarlo, SkippedPosesAreCountedAndLeftOutOfTheStatistics) {
   EXPECT_NE(SummaryMarkdown(skipping, "t").find("skipped " + std::to_string(skipped) + " poses"), std::string::npos);
 }
 
+// A designed set that cannot be made, even with the retry's four times as many starts and the
+// robustness lowered: the cell's trials fail as "design", and stderr says that both attempts
+// were made (the design's own "none of the 4 starts" read wrong beside --design-starts 1).
+// Ipopt held to one iteration makes every start fail quickly.
+TEST(SpatialMonteCarlo, ADesignThatCannotBeMadeSaysBothAttempts) {
+  SpatialMonteCarloOptions o = Study(12, 2, 0.0005);
+  o.study.designs = {PoseSetDesign::kOptimized};
+  o.study.design_starts = 1;
+  o.study.design_in_child_processes = false;
+  o.design_max_iterations = 1;
+  ::testing::internal::CaptureStderr();
+  const MonteCarloResult r = RunSpatialMonteCarlo(BuiltinSpatialRobot("cogiro"), o);
+  const std::string err = ::testing::internal::GetCapturedStderr();
+  EXPECT_EQ(r.cells[0].failures("design"), 2) << err;
+  EXPECT_NE(err.find("no pose set for n=12, optimized: with 1 start, then with 4 and the robustness lowered where "
+                     "needed: none of the 4 starts"),
+            std::string::npos)
+      << err;
+}
+
 TEST(SpatialMonteCarlo, RefusesWhatItDoesNotServe) {
   const SpatialRobot robot = RandomRobot(49, 6, 5e-5, 1e-3);
   SpatialMonteCarloOptions o = Study(10, 2, 0.002);
