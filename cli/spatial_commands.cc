@@ -47,15 +47,7 @@ Eigen::Vector3d ParseRpyDeg(const std::string& text) {
     throw InputError("--rpy-deg", "", "must be three numbers R,P,Y: roll, pitch and yaw in degrees, e.g. 0,5,-10 (got '" +
                                           PrintableText(text) + "')");
   }
-  if (!(std::abs(rpy_deg(0)) < 90.0 && std::abs(rpy_deg(1)) < 90.0)) {
-    throw InputError("--rpy-deg", "", "roll and pitch must be within (-90, 90) degrees (got '" + PrintableText(text) + "')");
-  }
-  // A yaw of 720 is a yaw of 0 written otherwise, or radians typed as degrees' multiples: the
-  // one range in which every orientation is written once.
-  if (!(std::abs(rpy_deg(2)) <= 180.0)) {
-    throw InputError("--rpy-deg", "", "yaw must be within [-180, 180] degrees (got '" + PrintableText(text) + "')");
-  }
-  return rpy_deg / kDegPerRad;
+  return WorkspaceOrientation(rpy_deg);
 }
 
 std::string DegreesText(const Eigen::Vector3d& rpy_rad) {

@@ -155,12 +155,13 @@ void BindSpatial(py::module_& m) {
 py::object SpatialWorkspace(const SpatialRobot& robot, double step_m, py::handle rpy_deg) {
   Eigen::Vector3d rpy_rad = robot.home_rpy_rad;
   if (!rpy_deg.is_none()) {
-    // As the CLI's --rpy-deg: roll and pitch within (-90, 90), yaw within [-180, 180] degrees.
     const Eigen::Vector3d deg = AsMatrix(rpy_deg, "rpy_deg", 3, 1).col(0);
-    if (!(std::abs(deg(0)) < 90.0 && std::abs(deg(1)) < 90.0 && std::abs(deg(2)) <= 180.0)) {
-      Bad("rpy_deg", "roll and pitch must be within (-90, 90) degrees and yaw within [-180, 180]");
+    try {
+      rpy_rad = WorkspaceOrientation(deg);  // the CLI's --rpy-deg check
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      Bad("rpy_deg", what.substr(std::string("--rpy-deg: ").size()));
     }
-    rpy_rad = deg * M_PI / 180.0;
   }
   SpatialWorkspaceGrid grid;
   {

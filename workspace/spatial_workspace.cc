@@ -19,6 +19,16 @@ double DefaultSpatialStep(const SpatialRobot& robot) {
   return 10.0 * decade;
 }
 
+Eigen::Vector3d WorkspaceOrientation(const Eigen::Vector3d& rpy_deg) {
+  const std::string got = " (got " + FormatDouble(rpy_deg(0)) + ", " + FormatDouble(rpy_deg(1)) + ", " +
+                          FormatDouble(rpy_deg(2)) + ")";
+  if (!(std::abs(rpy_deg(0)) < 90.0 && std::abs(rpy_deg(1)) < 90.0)) {
+    throw InputError("--rpy-deg", "", "roll and pitch must be within (-90, 90) degrees" + got);
+  }
+  if (!(std::abs(rpy_deg(2)) <= 180.0)) throw InputError("--rpy-deg", "", "yaw must be within [-180, 180] degrees" + got);
+  return rpy_deg * M_PI / 180.0;
+}
+
 SpatialWorkspaceGrid ComputeSpatialWorkspace(const SpatialRobot& robot, const Eigen::Vector3d& rpy_rad, double step_m) {
   if (!(step_m > 0.0) || !std::isfinite(step_m)) {
     throw InputError("--step", "", "must be a positive number of metres (got " + FormatDouble(step_m) + ")");

@@ -41,6 +41,12 @@ constexpr double kMaxSpatialGridPoints = 2e5;
 // a side, so that the default runs in seconds on any frame size.
 double DefaultSpatialStep(const SpatialRobot& robot);
 
+// The workspace's orientation from roll, pitch, yaw in degrees, in radians: roll and pitch
+// within (-90, 90) and yaw within [-180, 180] degrees, the one range in which every orientation
+// is written once (a yaw of 720 is a yaw of 0 written otherwise, or radians typed as degrees'
+// multiples). InputError naming --rpy-deg otherwise (the CLI's flag; Python names rpy_deg).
+Eigen::Vector3d WorkspaceOrientation(const Eigen::Vector3d& rpy_deg);
+
 // The grid frame.min + k step (k = 0, 1, ... while inside the frame box) at orientation
 // rpy_rad (roll, pitch, yaw), evaluated in parallel (OpenMP); the result does not depend on the
 // thread count. InputError naming --step for a step that is not positive, leaves fewer than 5

@@ -962,8 +962,9 @@ def test_spatial_arguments_are_checked():
         cablecal.sample(planar, 3, yaw_range_deg=10)
     with pytest.raises(cablecal.InputError, match="rpy_deg"):
         cablecal.workspace(planar, rpy_deg=[0, 0, 0])
-    for rpy in ([0, 0, 720], [95, 0, 0], [0, -90, 0]):  # as the CLI's --rpy-deg
-        with pytest.raises(cablecal.InputError, match=r"rpy_deg: roll and pitch must be within"):
+    for rpy, what in (([0, 0, 720], "yaw must be within"), ([95, 0, 0], "roll and pitch must be within"),
+                      ([0, -90, 0], "roll and pitch must be within")):  # the CLI's --rpy-deg check
+        with pytest.raises(cablecal.InputError, match=r"rpy_deg: " + what):
             cablecal.workspace(robot, rpy_deg=rpy)
     plan = cablecal.sample(robot, 2)
     with pytest.raises(cablecal.InputError, match="SpatialPlan"):
