@@ -567,6 +567,25 @@ std::string Counted(std::size_t n, const std::string& noun) {
   return std::to_string(n) + " " + noun + (n == 1 ? "" : "s");
 }
 
+std::string RatioLine(const std::vector<std::pair<std::string, double>>& ratios, bool warned) {
+  std::string values, worse;
+  bool any_better = false;
+  for (const auto& [name, ratio] : ratios) {
+    values += (values.empty() ? "" : ", ") + name + " " + Rounded(ratio);
+    if (ratio > 1.0) any_better = true;
+    if (false) worse += (worse.empty() ? "" : ", ") + name;
+  }
+  std::string said;
+  if (worse.empty()) {
+    said = "above 1: the calibrated robot predicts better";
+  } else if (!any_better) {
+    said = "not above 1: the calibrated robot predicts no better than the nominal one";
+  } else {
+    said = "above 1: the calibrated robot predicts better; not for " + worse + ", where it predicts no better than the nominal one";
+  }
+  return "  nominal / calibrated rms: " + values + " (" + said + (warned ? "; but see the warning" : "") + ")";
+}
+
 std::string SkippedPosesText(bool skip_infeasible, std::size_t skipped, std::size_t planned) {
   if (!skip_infeasible) return "";
   return ", " + std::to_string(skipped) + " of " + std::to_string(planned) + " skipped" +
@@ -625,13 +644,10 @@ int RunValidate(const Context& ctx, const ValidateCommandOptions& options) {
     std::printf("  %-10s %s  [%s]\n", p.name.c_str(), line.c_str(), PrintableText(p.source).c_str());
   }
   if (nominal) {
-    std::string ratios;
-    if (result.has_laser) ratios += "z " + Rounded(ZRmsRatio(result));
-    if (result.has_inclinometer) {
-      ratios += (ratios.empty() ? "" : ", ") + std::string("theta ") + Rounded(ThetaRmsRatio(result));
-    }
-    std::printf("  nominal / calibrated rms: %s (> 1: the calibration helped%s)\n", ratios.c_str(),
-                result.warnings.empty() ? "" : "; but see the warning");
+    std::vector<std::pair<std::string, double>> ratios;
+    if (result.has_laser) ratios.emplace_back("z", ZRmsRatio(result));
+    if (result.has_inclinometer) ratios.emplace_back("theta", ThetaRmsRatio(result));
+    std::printf("%s\n", RatioLine(ratios, !result.warnings.empty()).c_str());
   }
   if (!NotCompared(result).empty()) std::printf("  not compared: %s\n", NotCompared(result).c_str());
   if (result.corrected_for) PrintSensorCorrection(*result.corrected_for);

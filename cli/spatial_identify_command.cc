@@ -276,13 +276,11 @@ int RunSpatialValidate(const Context& ctx, const ValidateCommandOptions& options
     std::printf("  %-10s %s  [%s]\n", p.name.c_str(), line.c_str(), PrintableText(p.source).c_str());
   }
   if (nominal) {
-    std::string ratios;
+    std::vector<std::pair<std::string, double>> ratios;
     for (const SpatialSensor s : kSpatialSensors) {
-      if (!result.compared[static_cast<int>(s)]) continue;
-      ratios += (ratios.empty() ? "" : ", ") + std::string(ToString(s)) + " " + Rounded(SpatialRmsRatio(result, s));
+      if (result.compared[static_cast<int>(s)]) ratios.emplace_back(ToString(s), SpatialRmsRatio(result, s));
     }
-    std::printf("  nominal / calibrated rms: %s (> 1: the calibration helped%s)\n", ratios.c_str(),
-                result.warnings.empty() ? "" : "; but see the warning");
+    std::printf("%s\n", RatioLine(ratios, !result.warnings.empty()).c_str());
   }
   if (!SpatialNotCompared(result).empty()) std::printf("  not compared: %s\n", SpatialNotCompared(result).c_str());
   if (!ctx.quiet) {

@@ -73,6 +73,21 @@ SpatialPose<double> TrueHome(const SpatialRobot& nominal, const SpatialRobot& tr
   return SettledHome(truth, home, TrueEncoderZero(truth, home.paid_out_m));
 }
 
+void CheckNoisySensors(const SpatialRobot& robot, NoisySensors noisy) {
+  const bool laser = noisy == NoisySensors::kLaser, inclinometer = noisy == NoisySensors::kInclinometer;
+  if (!laser && !inclinometer) return;
+  const SpatialSensor asked = laser ? SpatialSensor::kLaser : SpatialSensor::kInclinometer;
+  if (HasSpatialSensor(robot, asked)) return;
+  std::string present;
+  for (const SpatialSensor s : kSpatialSensors) {
+    if (HasSpatialSensor(robot, s)) present += std::string(present.empty() ? "" : ", ") + ToString(s);
+  }
+  throw InputError("--sensors", "", std::string(ToString(noisy)) + ": " + robot.name + "'s file has no sensors." +
+                                        ToString(asked) + ", so only the encoders would be noisy" +
+                                        (present.empty() ? "" : " and its " + present + " read exactly") +
+                                        "; give both (every sensor of the file), none, or add the sensor to the file");
+}
+
 SimulatedSpatialExperiment SimulateSpatialExperiment(const SpatialRobot& nominal, const SpatialRobot& truth,
                                                      const std::vector<SpatialPlanPose>& plan,
                                                      const SpatialSimulationOptions& options, Rng& rng) {
@@ -102,8 +117,9 @@ SimulatedSpatialExperiment SimulateSpatialExperiment(const SpatialRobot& nominal
         if (f == Feasibility::kTensionLow) t.minCoeff(&i);
         else t.maxCoeff(&i);
         cable = static_cast<int>(i);
-        beyond = " at " + FormatDouble(std::round(t(i) * 1e3) / 1e3) + " N, bounds [" + FormatDouble(truth.tension_min_N) +
-                 ", " + FormatDouble(truth.tension_max_N) + "]";
+        // A cable at 0 N has gone slack (the forward statics' slack cables carry nothing).
+        beyond = (false ? std::string(" slack, 0 N") : " at " + FormatDouble(std::round(t(i) * 1e3) / 1e3) + " N") +
+                 ", bounds [" + FormatDouble(truth.tension_min_N) + ", " + FormatDouble(truth.tension_max_N) + "]";
       }
       if (f == Feasibility::kTiltLimit) {
         beyond = " at " + FormatDouble(std::round(TiltAngle(fwd.equilibrium.q) * 180.0 / M_PI * 1e3) / 1e3) +

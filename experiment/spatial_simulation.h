@@ -51,6 +51,10 @@ struct SpatialSimulationOptions {
   bool skip_infeasible = false;
 };
 
+// InputError naming --sensors when it asks for the noise of a sensor the robot file does not
+// have (laser or inclinometer): the other sensors would be read without noise, unsaid.
+void CheckNoisySensors(const SpatialRobot& robot, NoisySensors noisy);
+
 struct SpatialSkippedPose {
   int pose_id = 0;
   std::string reason;

@@ -1263,6 +1263,13 @@ TEST_F(Cli, ValidateComparesCalibratedAndNominalOnHeldOutPoses) {
   EXPECT_NE(r.output.find("validated on 16 poses of " + Path("b.csv")), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("  calibrated z rms "), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("  nominal / calibrated rms: z "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("(above 1: the calibrated robot predicts better"), std::string::npos) << r.output;
+  // The roles swapped, the ratios are below 1, and the words say so (they read "> 1: the
+  // calibration helped" whatever the numbers were).
+  const RunResult swapped = run("validate --robot " + nominal + " --nominal " + Path("cal.yaml") + " --measurements " +
+                                Path("b.csv") + " --out " + Path("v2.csv"));
+  EXPECT_NE(swapped.output.find("(not above 1: the calibrated robot predicts no better than the nominal one"),
+            std::string::npos) << swapped.output;
   // --json: the summary's content and the CSV's rows, without --out.
   const RunResult json = run(args + " --json");
   const YAML::Node j = YAML::Load(json.output);
