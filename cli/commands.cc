@@ -573,7 +573,7 @@ std::string RatioLine(const std::vector<std::pair<std::string, double>>& ratios,
   for (const auto& [name, ratio] : ratios) {
     values += (values.empty() ? "" : ", ") + name + " " + Rounded(ratio);
     if (ratio > 1.0) any_better = true;
-    if (false) worse += (worse.empty() ? "" : ", ") + name;
+    if (!(ratio > 1.0)) worse += (worse.empty() ? "" : ", ") + name;
   }
   std::string said;
   if (worse.empty()) {

@@ -91,6 +91,7 @@ void CheckNoisySensors(const SpatialRobot& robot, NoisySensors noisy) {
 SimulatedSpatialExperiment SimulateSpatialExperiment(const SpatialRobot& nominal, const SpatialRobot& truth,
                                                      const std::vector<SpatialPlanPose>& plan,
                                                      const SpatialSimulationOptions& options, Rng& rng) {
+  CheckNoisySensors(nominal, options.noisy);
   const int m = nominal.num_cables();
   SimulatedSpatialExperiment out;
   const SpatialHomeReference home = SpatialHome(nominal);
@@ -118,7 +119,7 @@ SimulatedSpatialExperiment SimulateSpatialExperiment(const SpatialRobot& nominal
         else t.maxCoeff(&i);
         cable = static_cast<int>(i);
         // A cable at 0 N has gone slack (the forward statics' slack cables carry nothing).
-        beyond = (false ? std::string(" slack, 0 N") : " at " + FormatDouble(std::round(t(i) * 1e3) / 1e3) + " N") +
+        beyond = (t(i) <= 0.0 ? std::string(" slack, 0 N") : " at " + FormatDouble(std::round(t(i) * 1e3) / 1e3) + " N") +
                  ", bounds [" + FormatDouble(truth.tension_min_N) + ", " + FormatDouble(truth.tension_max_N) + "]";
       }
       if (f == Feasibility::kTiltLimit) {

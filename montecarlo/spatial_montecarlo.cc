@@ -285,6 +285,7 @@ void ValidateSpatialMonteCarloOptions(const SpatialRobot& nominal, const Spatial
   planar_only(s.com_error_m != 0.0, "--com-error", "not yet served for spatial robots");
   planar_only(s.outliers.rate > 0.0, "--outliers", "not yet served for spatial robots");
   ValidateStudyOptions(s, 4 * nominal.num_cables());
+  CheckNoisySensors(nominal, s.sensors);
   PlanningRobot(nominal, o);
   if (o.random_pool < 0) throw InputError("--random-pool", "", "must be 0 (a fresh sample per trial) or a pose count");
   const bool any_random = std::find(s.designs.begin(), s.designs.end(), PoseSetDesign::kRandom) != s.designs.end();
