@@ -97,6 +97,12 @@ int RunSpatialWorkspace(const Context& ctx, const WorkspaceOptions& options) {
     std::printf("  %d cables: %s each point's equilibrium (the CSV's orientation columns)\n", robot.num_cables(),
                 robot.num_cables() >= 4 ? "roll and pitch follow from" : "the orientation follows from");
   }
+  // Not exit 3: the map of why no point is feasible is the answer a lab asked for.
+  if (grid.num_feasible == 0 && !ctx.quiet) {
+    std::fprintf(stderr, "cablecal: warning: no grid point is feasible at %s: the CSV's reason column says why at "
+                 "each; another --rpy-deg (home's is %s) or a finer --step may find some\n",
+                 DegreesText(rpy_rad).c_str(), DegreesText(robot.home_rpy_rad).c_str());
+  }
   if (!figure_error.empty()) throw FigureFailure(figure_error + "; " + options.out_path + " was written");
   return kExitOk;
 }

@@ -276,6 +276,13 @@ TEST_F(SpatialCli, MessagesNameTheTruthTheCableAndTheGrid) {
   }
   EXPECT_GT(rows, 1000);
   EXPECT_TRUE(ws.find("\n0.3,") != std::string::npos) << ws.substr(0, 400);
+  // A workspace with no feasible point is still written (its reason column is the answer), with
+  // a warning naming the orientation and home's (irma4u at yaw 30: it holds about +-1 degree).
+  r = RunCablecal("workspace --robot " + Builtin("irma4u") + " --rpy-deg 0,0,30 --step 0.2 --out " + Path("ws30.csv"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("warning: no grid point is feasible at roll 0, pitch 0, yaw 30 deg"), std::string::npos)
+      << r.output;
+  EXPECT_TRUE(fs::exists(Path("ws30.csv")));
   // irma4u at a home yaw of 20 degrees (it holds about +-1 degree): no equilibrium, and a hint.
   std::ifstream in(Builtin("irma4u"));
   std::stringstream text;
