@@ -177,24 +177,36 @@ void CheckSpatialReadingsPlausible(const SpatialRobot& robot, const std::vector<
       }
     }
   }
-  // Repeated pose ids are repeated readings of one pose: the same commanded lengths, so encoders
-  // that disagree beyond their noise are two poses under one id (a copied row's id, a typo), which
-  // the fit would otherwise report as readings that fit no robot.
+  // Repeated pose ids are repeated readings of one pose: the same commanded lengths and the same
+  // settled pose, so encoders, or any other sensor, that disagree beyond 10 sqrt(2) times their
+  // noise are two poses under one id (a copied row's id, a typo), which the fit would otherwise
+  // report as readings that fit no robot.
   std::map<int, const SpatialMeasurement*> first_of;
-  const double tolerance_m = 10.0 * std::sqrt(2.0) * robot.sensors.encoder_sigma_m;
   for (const SpatialMeasurement& r : readings) {
     const auto [it, inserted] = first_of.emplace(r.pose_id, &r);
     if (inserted || it->second->dl_m.size() != r.dl_m.size()) continue;
-    Eigen::Index i = 0;
-    const double apart_m = (r.dl_m - it->second->dl_m).cwiseAbs().maxCoeff(&i);
-    if (!(apart_m <= tolerance_m)) {
+    const auto check = [&](const Eigen::VectorXd& a, const Eigen::VectorXd& b, double sigma,
+                           const std::vector<std::string>& columns, const std::string& unit, const std::string& noise) {
+      if (a.size() != b.size() || !(sigma > 0.0)) return;
+      Eigen::Index i = 0;
+      const double apart = (a - b).cwiseAbs().maxCoeff(&i);
+      if (apart <= 10.0 * std::sqrt(2.0) * sigma) return;
       const std::string where = r.where.empty() ? source + ": pose " + std::to_string(r.pose_id) : r.where;
       const std::string earlier = it->second->where.empty() ? "an earlier reading" : it->second->where;
       throw InputError(where, "column 'pose'",
-                       "pose " + std::to_string(r.pose_id) + " was read before (" + earlier + ") with dl" +
-                           std::to_string(i + 1) + " " + FormatDouble(apart_m) +
-                           " m apart, beyond 10 times the encoders' noise: repeated ids are repeated readings of "
-                           "one pose; two poses under one id?");
+                       "pose " + std::to_string(r.pose_id) + " was read before (" + earlier + ") with " + columns[i] +
+                           " " + FormatDouble(apart) + " " + unit + " apart, beyond 10 times " + noise +
+                           ": repeated ids are repeated readings of one pose; two poses under one id?");
+    };
+    std::vector<std::string> dl;
+    for (Eigen::Index i = 0; i < r.dl_m.size(); ++i) dl.push_back("dl" + std::to_string(i + 1));
+    check(r.dl_m, it->second->dl_m, robot.sensors.encoder_sigma_m, dl, "m", "the encoders' noise");
+    for (const SpatialSensor s : kSpatialSensors) {
+      const std::optional<RangedNoise> noise = SpatialSensorNoise(robot.sensors, s);
+      if (!noise || !r.has(s) || !it->second->has(s)) continue;
+      const bool angle = s == SpatialSensor::kInclinometer || s == SpatialSensor::kSwivel || s == SpatialSensor::kHeading;
+      check(r.values(s), it->second->values(s), noise->sigma(), SpatialSensorColumns(s, static_cast<int>(r.dl_m.size())),
+            s == SpatialSensor::kLoadCell ? "N" : angle ? "rad" : "m", std::string("the ") + ToString(s) + "'s noise");
     }
   }
 }

@@ -578,6 +578,24 @@ TEST(SpatialMeasurementsCheck, ReadingsNoSensorCanGiveAreRefusedNamingTheUnit) {
     twice.back() = twice.front();
     twice.back().dl_m.array() += 3.0 * robot.sensors.encoder_sigma_m;
     EXPECT_NO_THROW(CheckSpatialReadingsPlausible(robot, twice, "meas.csv"));
+    // The other sensors too (a new user's px 5 cm apart under one id reached the solver): each
+    // named by its column; each within 3 sigma of the first passes.
+    for (const auto& [sensor, column] : std::vector<std::pair<SpatialSensor, std::string>>{
+             {SpatialSensor::kPosition, "px"}, {SpatialSensor::kInclinometer, "roll"}, {SpatialSensor::kLoadCell, "f1"}}) {
+      const double sigma = SpatialSensorNoise(robot.sensors, sensor)->sigma();
+      twice.back() = twice.front();
+      twice.back().values(sensor)(0) += 20.0 * sigma;
+      m = "accepted";
+      try {
+        CheckSpatialReadingsPlausible(robot, twice, "meas.csv");
+      } catch (const InputError& e) {
+        m = e.what();
+      }
+      EXPECT_NE(m.find("with " + column + " "), std::string::npos) << m;
+      EXPECT_NE(m.find("beyond 10 times the " + std::string(ToString(sensor)) + "'s noise"), std::string::npos) << m;
+      twice.back().values(sensor)(0) -= 17.0 * sigma;
+      EXPECT_NO_THROW(CheckSpatialReadingsPlausible(robot, twice, "meas.csv")) << column;
+    }
   }
   // A load cell's reading within its noise of zero passes: a slack cable reads a little below.
   const double slack_N = 5.0 * robot.sensors.load_cell_N->sigma();
