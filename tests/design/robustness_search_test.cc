@@ -118,6 +118,16 @@ TEST(RobustnessSearch, TheSentenceSaysWhatHolds) {
   s.achieved_k = 0.0;
   s.failed_k = 0.05;
   EXPECT_NE(LoweredRobustnessText(s, 0.01).find("the nominal geometry only (no robustness)"), std::string::npos);
+  // Below one sigma, the consequence is said (at 1.4 it is not).
+  EXPECT_NE(LoweredRobustnessText(s, 0.01).find("less than one sigma of the exits' survey, so a true robot is likely "
+                                               "to lose poses of this plan"),
+            std::string::npos);
+  s.achieved_k = 0.95;
+  s.failed_k = 1.0;
+  EXPECT_NE(LoweredRobustnessText(s, 0.01).find("less than one sigma"), std::string::npos);
+  s.achieved_k = 1.0;
+  s.failed_k = 1.05;
+  EXPECT_EQ(LoweredRobustnessText(s, 0.01).find("less than one sigma"), std::string::npos);
 }
 
 // Whether every pose of `plan` is held by each true robot with one geometric parameter moved by
