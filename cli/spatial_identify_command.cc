@@ -163,10 +163,18 @@ int RunSpatialIdentify(const Context& ctx, const IdentifyCommandOptions& options
   output.Commit();
   if (report) report->Commit();
   if (!calibrated_load_error.empty() && !ctx.quiet) {
+    // Its home and initial lengths are the nominal home's (l_i0 is the length there): moving
+    // home alone does not mend it, as a new user found; what does depends on the reason.
+    const bool bound = calibrated_load_error.find("tension_low") != std::string::npos ||
+                       calibrated_load_error.find("tension_high") != std::string::npos;
     std::fprintf(stderr,
-                 "cablecal: warning: --calibrated-robot: the file was written but does not load: %s (its home is the "
-                 "nominal robot's; set home and home_rpy_deg to a pose the identified robot holds)\n",
-                 calibrated_load_error.c_str());
+                 "cablecal: warning: --calibrated-robot: the file was written but does not load: %s (its home and "
+                 "initial lengths are the nominal home's, which the identified robot %s; moving home alone does not "
+                 "mend it: its initial_length values are the lengths there)\n",
+                 calibrated_load_error.c_str(),
+                 bound ? "holds only beyond a tension bound: the nominal home was near the bound; widen tension in the "
+                         "written file if the lab accepts it, or identify with a nominal home farther from it"
+                       : "cannot hold: identify with a nominal home nearer the middle of the workspace");
   }
   if (!figure_error.empty()) figure_error = ReportWithoutFiguresMessage(options.report_dir, figure_error);
   if (options.json) {
