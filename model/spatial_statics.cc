@@ -106,10 +106,41 @@ struct NewtonRoot {
   Eigen::VectorXd tensions_N;
 };
 
+// (W t + w_g) / weight at y = (the free angles, t / weight), the pose's other coordinates
+// `base`'s, and, if J is given, its Jacobian: the angles' columns by Jets, the tensions' columns
+// W. Without J, in doubles: the same arithmetic as the Jets' values, a quarter of the cost (the
+// line search's rejected trials need no Jacobian).
+Eigen::Matrix<double, 6, 1> BalanceResidual(const SpatialRobot& robot, const SpatialPose<double>& base,
+                                            const std::vector<int>& free, const Eigen::VectorXd& y,
+                                            Eigen::Matrix<double, 6, Eigen::Dynamic>* J) {
+  using Jet3 = ceres::Jet<double, 3>;
+  const int m = robot.num_cables(), na = static_cast<int>(free.size());
+  const double weight_N = Weight(robot);
+  SpatialPose<double> q = base;
+  for (int a = 0; a < na; ++a) q(free[a]) = y(a);
+  if (!J) {
+    const Eigen::Matrix<double, 6, Eigen::Dynamic> W = WrenchMatrix<double>(robot, q);
+    const Eigen::VectorXd s = y.tail(m);
+    const Eigen::Matrix<double, 6, 1> r = W * s + GravityWrench<double>(robot, q) / weight_N;
+    return r;
+  }
+  SpatialPose<Jet3> qj = q.cast<Jet3>();
+  for (int k = 3; k < 6; ++k) qj(k) = Jet3(q(k), k - 3);
+  const Eigen::Matrix<Jet3, 6, Eigen::Dynamic> W = WrenchMatrix<Jet3>(robot, qj);
+  const Eigen::Matrix<Jet3, Eigen::Dynamic, 1> s = y.tail(m).cast<Jet3>();
+  const Eigen::Matrix<Jet3, 6, 1> r = W * s + GravityWrench<Jet3>(robot, qj) / weight_N;
+  Eigen::Matrix<double, 6, 1> value;
+  for (int row = 0; row < 6; ++row) {
+    value(row) = r(row).a;
+    for (int a = 0; a < na; ++a) (*J)(row, a) = r(row).v(free[a] - 3);
+    for (int i = 0; i < m; ++i) (*J)(row, na + i) = W(row, i).a;
+  }
+  return value;
+}
+
 // Newton from `start` on (W t + w_g) / weight = 0 in y = (the free angles, t / weight), the
 // minimum-norm step each time, cut to kMaxAngleStep_rad and backtracked on |r|.
 NewtonRoot EquilibriumNewton(const SpatialRobot& robot, const SpatialPose<double>& start, const std::vector<int>& free) {
-  using Jet3 = ceres::Jet<double, 3>;
   const int m = robot.num_cables(), na = static_cast<int>(free.size()), n = na + m;
   const double weight_N = Weight(robot);
   const auto pose_of = [&](const Eigen::VectorXd& y) {
@@ -117,31 +148,8 @@ NewtonRoot EquilibriumNewton(const SpatialRobot& robot, const SpatialPose<double
     for (int a = 0; a < na; ++a) q(free[a]) = y(a);
     return q;
   };
-  // r(y) and, if asked, its Jacobian: the angles' columns by Jets, the tensions' columns W.
-  // Without J, in doubles: the same arithmetic as the Jets' values, a quarter of the cost (the
-  // line search's rejected trials need no Jacobian).
   const auto residual = [&](const Eigen::VectorXd& y, Eigen::Matrix<double, 6, Eigen::Dynamic>* J) {
-    const SpatialPose<double> q = pose_of(y);
-    if (!J) {
-      const Eigen::Matrix<double, 6, Eigen::Dynamic> W = WrenchMatrix<double>(robot, q);
-      const Eigen::VectorXd s = y.tail(m);
-      const Eigen::Matrix<double, 6, 1> r = W * s + GravityWrench<double>(robot, q) / weight_N;
-      return r;
-    }
-    SpatialPose<Jet3> qj = q.cast<Jet3>();
-    for (int k = 3; k < 6; ++k) qj(k) = Jet3(q(k), k - 3);
-    const Eigen::Matrix<Jet3, 6, Eigen::Dynamic> W = WrenchMatrix<Jet3>(robot, qj);
-    const Eigen::Matrix<Jet3, Eigen::Dynamic, 1> s = y.tail(m).cast<Jet3>();
-    const Eigen::Matrix<Jet3, 6, 1> r = W * s + GravityWrench<Jet3>(robot, qj) / weight_N;
-    Eigen::Matrix<double, 6, 1> value;
-    for (int row = 0; row < 6; ++row) {
-      value(row) = r(row).a;
-      if (J) {
-        for (int a = 0; a < na; ++a) (*J)(row, a) = r(row).v(free[a] - 3);
-        for (int i = 0; i < m; ++i) (*J)(row, na + i) = W(row, i).a;
-      }
-    }
-    return value;
+    return BalanceResidual(robot, start, free, y, J);
   };
 
   Eigen::VectorXd y(n);
@@ -188,6 +196,76 @@ NewtonRoot EquilibriumNewton(const SpatialRobot& robot, const SpatialPose<double
   root.tensions_N = y.tail(m) * weight_N;
   root.converged = root.converged && root.q.allFinite() && root.tensions_N.allFinite();
   return root;
+}
+
+// Five cables: the equilibria at the controlled coordinates form a curve in (free angles,
+// tensions), and Newton's minimum-norm steps end at its point nearest their start, where a cable
+// may push while elsewhere on the curve every cable pulls (a new user's 5-cable robot: no
+// equilibrium found at home, one at roll 6, pitch 4.9 degrees with every tension above 13 N).
+// From such a root, walk along the curve (its tangent: the Jacobian's null vector) the way the
+// smallest tension grows, each step corrected back onto the curve by minimum-norm Newton, until
+// every cable pulls with at least tension.min (the root returned), or the smallest tension stops
+// growing (the root returned if every cable pulls there: the feasibility test then names the
+// low tension), the tilt leaves its limit (by more than a step), or kWalkSteps steps (not
+// converged). SolveSpatialEquilibrium walks only where no start found a root with every cable
+// pulling, from at most kWalkRoots distinct roots: elsewhere its results are as before.
+constexpr int kWalkSteps = 30;
+constexpr double kWalkAngleStep_rad = 0.05;
+constexpr int kWalkRoots = 3;
+
+NewtonRoot WalkToTaut(const SpatialRobot& robot, const NewtonRoot& root, const std::vector<int>& free) {
+  const int m = robot.num_cables(), na = static_cast<int>(free.size()), n = na + m;
+  const double weight_N = Weight(robot);
+  NewtonRoot out;
+  if (n != 7) return out;  // a curve only with one unknown more than the 6 rows
+  Eigen::VectorXd y(n);
+  for (int a = 0; a < na; ++a) y(a) = root.q(free[a]);
+  y.tail(m) = root.tensions_N / weight_N;
+  Eigen::Matrix<double, 6, Eigen::Dynamic> J(6, n);
+  Eigen::VectorXd previous = Eigen::VectorXd::Zero(n);
+  const auto tilt_of = [&](const Eigen::VectorXd& v) {
+    SpatialPose<double> q = root.q;
+    for (int a = 0; a < na; ++a) q(free[a]) = v(a);
+    return TiltAngle(q);
+  };
+  const auto done = [&](const Eigen::VectorXd& at) {
+    out.converged = true;
+    out.q = root.q;
+    for (int a = 0; a < na; ++a) out.q(free[a]) = std::remainder(at(a), 2.0 * M_PI);
+    out.tensions_N = at.tail(m) * weight_N;
+    return out;
+  };
+  for (int step = 0; step < kWalkSteps; ++step) {
+    BalanceResidual(robot, root.q, free, y, &J);
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Eigen::MatrixXd(J), Eigen::ComputeFullV);
+    Eigen::VectorXd tangent = svd.matrixV().col(n - 1);
+    Eigen::Index weakest = 0;
+    y.tail(m).minCoeff(&weakest);
+    const double sign = previous.isZero() ? (tangent(na + weakest) >= 0.0 ? 1.0 : -1.0)
+                                          : (tangent.dot(previous) >= 0.0 ? 1.0 : -1.0);
+    tangent *= sign;
+    if (!(tangent(na + weakest) > 0.0)) {  // the smallest tension no longer grows this way
+      return y.tail(m).minCoeff() > kTautFraction ? done(y) : out;
+    }
+    const double angle_rate = tangent.head(na).cwiseAbs().maxCoeff();
+    const double h = angle_rate > 0.0 ? kWalkAngleStep_rad / angle_rate : kWalkAngleStep_rad;
+    Eigen::VectorXd next = y + h * tangent;
+    // Back onto the curve: minimum-norm Newton (a few steps: the step is short).
+    bool on_curve = false;
+    for (int it = 0; it < 10 && next.allFinite(); ++it) {
+      const Eigen::Matrix<double, 6, 1> r = BalanceResidual(robot, root.q, free, next, &J);
+      if (r.norm() < kConvergedResidual) {
+        on_curve = true;
+        break;
+      }
+      next -= J.completeOrthogonalDecomposition().solve(r);
+    }
+    if (!on_curve || !(tilt_of(next) <= robot.tilt_max_rad + kWalkAngleStep_rad)) return out;
+    previous = tangent;
+    y = next;
+    if (y.tail(m).minCoeff() * weight_N >= std::max(robot.tension_min_N, kTautFraction * weight_N)) return done(y);
+  }
+  return y.tail(m).minCoeff() > kTautFraction ? done(y) : out;
 }
 
 // The tensions at a root: Newton's, unless W has a null space there (a degenerate robot, e.g.
@@ -237,6 +315,7 @@ SpatialEquilibriumResult SolveSpatialEquilibrium(const SpatialRobot& robot, cons
   bool any_valid_start = false, any_taut = false;
   CableGeometryCheck invalid_root;  // the first converged root with invalid cable geometry
   double best_distance = std::numeric_limits<double>::infinity();
+  std::vector<NewtonRoot> pushing;  // converged roots, valid geometry, a cable pushing
   for (int c = 0; c < combinations; ++c) {
     SpatialPose<double> start = guess;
     for (int a = 0, rest = c; a < na; ++a, rest /= kOffsets) {
@@ -252,7 +331,10 @@ SpatialEquilibriumResult SolveSpatialEquilibrium(const SpatialRobot& robot, cons
       continue;
     }
     const Eigen::VectorXd tensions_N = ChooseTensions(robot, root.q, root.tensions_N);
-    if (!(tensions_N.minCoeff() > kTautFraction * weight_N)) continue;
+    if (!(tensions_N.minCoeff() > kTautFraction * weight_N)) {
+      pushing.push_back(root);
+      continue;
+    }
     any_taut = true;
     // Only a root nearer than the best so far can be kept: the stability test (the costliest
     // step) is for those alone.
@@ -265,6 +347,28 @@ SpatialEquilibriumResult SolveSpatialEquilibrium(const SpatialRobot& robot, cons
     result.status = EquilibriumStatus::kFound;
   }
   if (result.status == EquilibriumStatus::kFound) return result;
+  // Five cables and no root with every cable pulling: walk along the curve from those roots
+  // (WalkToTaut), the distinct ones in start order; the first stable one found is kept.
+  if (!any_taut && na + robot.num_cables() == 7) {
+    std::vector<SpatialPose<double>> walked_from;
+    for (const NewtonRoot& root : pushing) {
+      if (static_cast<int>(walked_from.size()) >= kWalkRoots) break;
+      bool seen = false;
+      for (const SpatialPose<double>& q : walked_from) seen = seen || OrientationDistance(q, root.q) < 1e-3;
+      if (seen) continue;
+      walked_from.push_back(root.q);
+      const NewtonRoot walked = WalkToTaut(robot, root, free);
+      if (!walked.converged || !CableGeometryAt(robot, walked.q).valid()) continue;
+      const Eigen::VectorXd tensions_N = ChooseTensions(robot, walked.q, walked.tensions_N);
+      if (!(tensions_N.minCoeff() > kTautFraction * weight_N)) continue;
+      any_taut = true;
+      const SpatialEquilibrium eq = MakeEquilibrium(robot, walked.q, tensions_N);
+      if (!eq.stable) continue;
+      result.equilibrium = eq;
+      result.status = EquilibriumStatus::kFound;
+      return result;
+    }
+  }
   if (any_taut) {
     result.status = EquilibriumStatus::kUnstable;
   } else if (!any_valid_start || !invalid_root.valid()) {

@@ -169,7 +169,7 @@ TEST(SpatialStatics, EquilibriaBalanceWithinBoundsAndSatisfyVirtualWork) {
   double worst_balance = 0.0, worst_work = 0.0;
   for (const SpatialRobot& robot : TestRobots()) {
     const double weight = Weight(robot);
-    const std::vector<SpatialPoseEvaluation> poses = FeasibleEquilibria(robot, rng, 12);
+    const std::vector<SpatialPoseEvaluation> poses = FeasibleEquilibria(robot, rng, 30);
     EXPECT_GE(poses.size(), 3u) << robot.name;
     for (const SpatialPoseEvaluation& e : poses) {
       const SpatialEquilibrium& eq = e.equilibrium;
@@ -199,6 +199,67 @@ TEST(SpatialStatics, EquilibriaBalanceWithinBoundsAndSatisfyVirtualWork) {
 }
 
 // The controlled coordinates are kept: the equilibrium differs from the request only in the others.
+// A new user's 5-cable robot (eyelets, exits at five heights, its centre of mass 25 mm off):
+// the equilibria at home's position and yaw form a curve in (roll, pitch, tensions), and the
+// Newton steps from the starts end where a cable pushes, so home read no_equilibrium and the
+// file did not load, though along the curve every cable pulls (the user found roll 6, pitch 4.9
+// degrees with tensions of 13 N and more). The walk along the curve (WalkToTaut) finds such an
+// equilibrium; it balances and does virtual work zero by the independent construction, within
+// the bounds, stable.
+TEST(SpatialStatics, FiveCablesWalkTheirCurveToWhereEveryCablePulls) {
+  const std::string yaml = R"(name: lab5
+kind: spatial
+gravity: 9.81
+frame: {min: [0.0, 0.0, 0.0], max: [3.0, 2.5, 2.5]}
+platform:
+  mass: 6.0
+  com: [0.02, -0.015, -0.06]
+  anchors: [[-0.15, -0.12, 0.05], [0.15, -0.12, 0.05], [0.15, 0.12, 0.05], [-0.15, 0.12, 0.05], [0.0, 0.14, 0.0]]
+cables:
+  - {exit: [0.05, 0.05, 2.40], swivel_axis: [0, 0, 1], pulley_radius: 0, stiffness: 3.0e4}
+  - {exit: [2.95, 0.05, 2.30], swivel_axis: [0, 0, 1], pulley_radius: 0}
+  - {exit: [2.95, 2.45, 2.45], swivel_axis: [0, 0, 1], pulley_radius: 0, stiffness: 5.0e4}
+  - {exit: [0.05, 2.45, 2.35], swivel_axis: [0, 0, 1], pulley_radius: 0}
+  - {exit: [1.50, 2.45, 2.20], swivel_axis: [0, 0, 1], pulley_radius: 0}
+tension: {min: 5.0, max: 300.0}
+limits: {tilt_max_deg: 25, margin: 0.05}
+home: [1.5, 1.2, 1.2]
+sensors:
+  encoder: {sigma: 0.00005}
+)";
+  SpatialRobot robot;
+  ASSERT_NO_THROW(robot = LoadSpatialRobotFromString(yaml, "lab5.yaml"));
+  const SpatialPoseEvaluation home = EvaluateSpatialHome(robot);
+  ASSERT_TRUE(home.feasible()) << ToString(home.feasibility);
+  const SpatialEquilibrium& eq = home.equilibrium;
+  const double weight = Weight(robot);
+  EXPECT_EQ(eq.q.head<3>(), robot.p_F_home_m);
+  EXPECT_EQ(eq.q(5), 0.0);  // the yaw is held
+  EXPECT_GE(eq.tensions_N.minCoeff(), robot.tension_min_N);
+  EXPECT_LE(TiltAngle(eq.q), robot.tilt_max_rad);
+  EXPECT_LT(EquilibriumResidual<double>(robot, eq.q, eq.tensions_N).norm() / weight, kBalanceTol);
+  const Eigen::Matrix<double, 6, 1> work = PotentialGradientByDifferences(robot, eq.q) +
+                                           LengthJacobianByDifferences(robot, eq.q).transpose() * eq.tensions_N;
+  EXPECT_LT(work.norm() / weight, kVirtualWorkTol) << eq.q.transpose();
+  EXPECT_TRUE(eq.stable);
+  // Around home, on a coarse grid at its height: the points found feasible are balanced
+  // equilibria too.
+  int more = 0;
+  for (double x = 1.0; x <= 2.01; x += 0.25) {
+    for (double y = 0.7; y <= 1.71; y += 0.25) {
+      SpatialPose<double> q = robot.home_pose();
+      q(0) = x;
+      q(1) = y;
+      const SpatialPoseEvaluation e = EvaluateSpatialPose(robot, q);
+      if (!e.feasible()) continue;
+      ++more;
+      EXPECT_LT(EquilibriumResidual<double>(robot, e.equilibrium.q, e.equilibrium.tensions_N).norm() / weight,
+                kBalanceTol);
+    }
+  }
+  EXPECT_GE(more, 5);
+}
+
 TEST(SpatialStatics, ControlledCoordinatesAreKept) {
   Rng rng(43);
   for (const SpatialRobot& robot : TestRobots()) {
