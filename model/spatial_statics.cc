@@ -346,6 +346,27 @@ SpatialEquilibriumResult SolveSpatialEquilibrium(const SpatialRobot& robot, cons
     result.equilibrium = eq;
     result.status = EquilibriumStatus::kFound;
   }
+  // Five cables, a root found but a cable below tension.min there: the curve may hold the
+  // platform within the bounds further on (a new user's home read tension_low, 1.8 N of 3, at
+  // roll -0.5, pitch -4.5 degrees, while at roll -7.8, pitch -3.8 every cable pulls with 8 N or
+  // more): walk from it, and keep where it ends if every cable is then within the bound and the
+  // equilibrium stable.
+  if (result.status == EquilibriumStatus::kFound && na + robot.num_cables() == 7 &&
+      result.equilibrium.tensions_N.minCoeff() < robot.tension_min_N) {
+    NewtonRoot found;
+    found.converged = true;
+    found.q = result.equilibrium.q;
+    found.tensions_N = result.equilibrium.tensions_N;
+    const NewtonRoot walked = WalkToTaut(robot, found, free);
+    if (walked.converged && walked.tensions_N.minCoeff() >= robot.tension_min_N &&
+        CableGeometryAt(robot, walked.q).valid()) {
+      const Eigen::VectorXd tensions_N = ChooseTensions(robot, walked.q, walked.tensions_N);
+      if (tensions_N.minCoeff() >= robot.tension_min_N) {
+        const SpatialEquilibrium eq = MakeEquilibrium(robot, walked.q, tensions_N);
+        if (eq.stable) result.equilibrium = eq;
+      }
+    }
+  }
   if (result.status == EquilibriumStatus::kFound) return result;
   // Five cables and no root with every cable pulling: walk along the curve from those roots
   // (WalkToTaut), the distinct ones in start order; the first stable one found is kept.

@@ -51,8 +51,9 @@ std::vector<int> ControlledCoordinates(const SpatialRobot& robot);
 // m tensions; equations: W t + w_g = 0 (6 rows, divided by the weight). m = 3, 4: a square
 // system; m = 5: one unknown more, a curve of equilibria, of which the minimum-norm Newton steps
 // (in rad and tension / weight) find the one nearest the guess; where every start's root has a
-// cable pushing, a walk along the curve looks for its part where every cable pulls (the file's
-// WalkToTaut). Newton runs from the guess,
+// cable pushing, or the root kept holds a cable below tension.min, a walk along the curve looks
+// for its part where every cable pulls with at least tension.min (the file's WalkToTaut). Newton
+// runs from the guess,
 // then from a small grid of orientations (kSpatialEquilibriumStartsDeg about the guess); of the
 // roots with taut cables (t > 0), valid cable geometry and a stable equilibrium, the one whose
 // orientation is nearest the guess's (the angle of R_guess^T R) is kept.

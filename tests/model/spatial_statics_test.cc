@@ -260,6 +260,45 @@ sensors:
   EXPECT_GE(more, 5);
 }
 
+// A second new user's 5-cable robot: its home's nearest equilibrium holds cable 3 at 1.8 N,
+// below tension.min (3 N), while further along the curve (roll -7.8, pitch -3.8 degrees) every
+// cable pulls with 8 N or more. The walk runs from a found root below the bound too, so the
+// home loads; the equilibrium it gives balances and keeps the bounds.
+TEST(SpatialStatics, FiveCablesWalkFromARootBelowTheTensionBound) {
+  const std::string yaml = R"(name: labB5
+kind: spatial
+gravity: 9.81
+frame: {min: [-1.5, -1.0, 0.2], max: [1.5, 1.0, 2.4]}
+platform:
+  mass: 4.0
+  com: [-0.015, 0.02, -0.05]
+  anchors: [[-0.10, -0.08, 0.04], [0.10, -0.08, 0.04], [0.12, 0.06, 0.04], [-0.12, 0.06, 0.04], [0.0, 0.10, 0.02]]
+cables:
+  - {exit: [-1.45, -0.95, 2.35], swivel_axis: [0, 0, 1], pulley_radius: 0.02}
+  - {exit: [1.45, -0.95, 2.20], swivel_axis: [-0.2588, 0, 0.9659], pulley_radius: 0.03, stiffness: 2.0e4}
+  - {exit: [1.40, 0.95, 2.30], swivel_axis: [0, 0, 1], pulley_radius: 0.0}
+  - {exit: [-1.40, 0.95, 2.05], swivel_axis: [0, 0, 1], pulley_radius: 0.015}
+  - {exit: [0.0, 0.98, 2.38], swivel_axis: [0, 0, 1], pulley_radius: 0.04, stiffness: 3.0e4}
+tension: {min: 3.0, max: 200.0}
+limits: {tilt_max_deg: 25, margin: 0.04}
+home: [0.0, 0.0, 1.2]
+sensors:
+  encoder: {sigma: 0.0001}
+)";
+  SpatialRobot robot;
+  ASSERT_NO_THROW(robot = LoadSpatialRobotFromString(yaml, "labB5.yaml"));
+  const SpatialPoseEvaluation home = EvaluateSpatialHome(robot);
+  ASSERT_TRUE(home.feasible()) << ToString(home.feasibility);
+  const SpatialEquilibrium& eq = home.equilibrium;
+  EXPECT_GE(eq.tensions_N.minCoeff(), robot.tension_min_N);
+  EXPECT_LE(TiltAngle(eq.q), robot.tilt_max_rad);
+  EXPECT_LT(EquilibriumResidual<double>(robot, eq.q, eq.tensions_N).norm() / Weight(robot), kBalanceTol);
+  const Eigen::Matrix<double, 6, 1> work = PotentialGradientByDifferences(robot, eq.q) +
+                                           LengthJacobianByDifferences(robot, eq.q).transpose() * eq.tensions_N;
+  EXPECT_LT(work.norm() / Weight(robot), kVirtualWorkTol) << eq.q.transpose();
+  EXPECT_TRUE(eq.stable);
+}
+
 TEST(SpatialStatics, ControlledCoordinatesAreKept) {
   Rng rng(43);
   for (const SpatialRobot& robot : TestRobots()) {
