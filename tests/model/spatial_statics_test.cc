@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -199,6 +200,35 @@ TEST(SpatialStatics, EquilibriaBalanceWithinBoundsAndSatisfyVirtualWork) {
 }
 
 // The controlled coordinates are kept: the equilibrium differs from the request only in the others.
+// A robot file's home, loaded and evaluated: feasible, its equilibrium within the tension
+// bounds and the tilt limit, balanced, of zero virtual work by the independent construction, and
+// stable. The home's equilibrium is returned for the test's own checks (none if the file is
+// refused, as it was before the walk).
+std::optional<SpatialEquilibrium> ExpectHomeHeldWithinBounds(const std::string& yaml, const std::string& name,
+                                                             SpatialRobot* robot) {
+  try {
+    *robot = LoadSpatialRobotFromString(yaml, name);
+  } catch (const InputError& e) {
+    ADD_FAILURE() << name << " refused: " << e.what();
+    return std::nullopt;
+  }
+  const SpatialPoseEvaluation home = EvaluateSpatialHome(*robot);
+  if (!home.feasible()) {
+    ADD_FAILURE() << name << ": home " << ToString(home.feasibility);
+    return std::nullopt;
+  }
+  const SpatialEquilibrium& eq = home.equilibrium;
+  const double weight = Weight(*robot);
+  EXPECT_GE(eq.tensions_N.minCoeff(), robot->tension_min_N) << name;
+  EXPECT_LE(TiltAngle(eq.q), robot->tilt_max_rad) << name;
+  EXPECT_LT(EquilibriumResidual<double>(*robot, eq.q, eq.tensions_N).norm() / weight, kBalanceTol) << name;
+  const Eigen::Matrix<double, 6, 1> work = PotentialGradientByDifferences(*robot, eq.q) +
+                                           LengthJacobianByDifferences(*robot, eq.q).transpose() * eq.tensions_N;
+  EXPECT_LT(work.norm() / weight, kVirtualWorkTol) << name << " " << eq.q.transpose();
+  EXPECT_TRUE(eq.stable) << name;
+  return eq;
+}
+
 // A new user's 5-cable robot (eyelets, exits at five heights, its centre of mass 25 mm off):
 // the equilibria at home's position and yaw form a curve in (roll, pitch, tensions), and the
 // Newton steps from the starts end where a cable pushes, so home read no_equilibrium and the
@@ -228,20 +258,12 @@ sensors:
   encoder: {sigma: 0.00005}
 )";
   SpatialRobot robot;
-  ASSERT_NO_THROW(robot = LoadSpatialRobotFromString(yaml, "lab5.yaml"));
-  const SpatialPoseEvaluation home = EvaluateSpatialHome(robot);
-  ASSERT_TRUE(home.feasible()) << ToString(home.feasibility);
-  const SpatialEquilibrium& eq = home.equilibrium;
+  const std::optional<SpatialEquilibrium> held = ExpectHomeHeldWithinBounds(yaml, "lab5.yaml", &robot);
+  ASSERT_TRUE(held);
+  const SpatialEquilibrium& eq = *held;
   const double weight = Weight(robot);
   EXPECT_EQ(eq.q.head<3>(), robot.p_F_home_m);
   EXPECT_EQ(eq.q(5), 0.0);  // the yaw is held
-  EXPECT_GE(eq.tensions_N.minCoeff(), robot.tension_min_N);
-  EXPECT_LE(TiltAngle(eq.q), robot.tilt_max_rad);
-  EXPECT_LT(EquilibriumResidual<double>(robot, eq.q, eq.tensions_N).norm() / weight, kBalanceTol);
-  const Eigen::Matrix<double, 6, 1> work = PotentialGradientByDifferences(robot, eq.q) +
-                                           LengthJacobianByDifferences(robot, eq.q).transpose() * eq.tensions_N;
-  EXPECT_LT(work.norm() / weight, kVirtualWorkTol) << eq.q.transpose();
-  EXPECT_TRUE(eq.stable);
   // Around home, on a coarse grid at its height: the points found feasible are balanced
   // equilibria too.
   int more = 0;
@@ -286,17 +308,7 @@ sensors:
   encoder: {sigma: 0.0001}
 )";
   SpatialRobot robot;
-  ASSERT_NO_THROW(robot = LoadSpatialRobotFromString(yaml, "labB5.yaml"));
-  const SpatialPoseEvaluation home = EvaluateSpatialHome(robot);
-  ASSERT_TRUE(home.feasible()) << ToString(home.feasibility);
-  const SpatialEquilibrium& eq = home.equilibrium;
-  EXPECT_GE(eq.tensions_N.minCoeff(), robot.tension_min_N);
-  EXPECT_LE(TiltAngle(eq.q), robot.tilt_max_rad);
-  EXPECT_LT(EquilibriumResidual<double>(robot, eq.q, eq.tensions_N).norm() / Weight(robot), kBalanceTol);
-  const Eigen::Matrix<double, 6, 1> work = PotentialGradientByDifferences(robot, eq.q) +
-                                           LengthJacobianByDifferences(robot, eq.q).transpose() * eq.tensions_N;
-  EXPECT_LT(work.norm() / Weight(robot), kVirtualWorkTol) << eq.q.transpose();
-  EXPECT_TRUE(eq.stable);
+  ExpectHomeHeldWithinBounds(yaml, "labB5.yaml", &robot);
 }
 
 TEST(SpatialStatics, ControlledCoordinatesAreKept) {
