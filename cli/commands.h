@@ -106,7 +106,7 @@ std::string CountedReadings(std::size_t kept, int num_poses);
 std::string Counted(std::size_t n, const std::string& noun);
 // validate's console line of nominal / calibrated RMS ratios, (name, ratio) each, and what they
 // say: "  nominal / calibrated rms: z 2.1, theta 0.8 (above 1: the calibrated robot predicts
-// better; below 1 for theta: worse than the nominal one there)".
+// better; not for theta, where it predicts no better than the nominal one)".
 std::string RatioLine(const std::vector<std::pair<std::string, double>>& ratios, bool warned);
 // simulate's ", K of N skipped" with --skip-infeasible, the reason said when K > 0; "" without.
 std::string SkippedPosesText(bool skip_infeasible, std::size_t skipped, std::size_t planned);

@@ -204,9 +204,8 @@ void CheckSpatialReadingsPlausible(const SpatialRobot& robot, const std::vector<
     for (const SpatialSensor s : kSpatialSensors) {
       const std::optional<RangedNoise> noise = SpatialSensorNoise(robot.sensors, s);
       if (!noise || !r.has(s) || !it->second->has(s)) continue;
-      const bool angle = s == SpatialSensor::kInclinometer || s == SpatialSensor::kSwivel || s == SpatialSensor::kHeading;
       check(r.values(s), it->second->values(s), noise->sigma(), SpatialSensorColumns(s, static_cast<int>(r.dl_m.size())),
-            s == SpatialSensor::kLoadCell ? "N" : angle ? "rad" : "m", std::string("the ") + ToString(s) + "'s noise");
+            SpatialSensorUnit(s), std::string("the ") + ToString(s) + "'s noise");
     }
   }
 }

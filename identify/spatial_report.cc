@@ -22,14 +22,6 @@ using YAML::Flow;
 using YAML::Key;
 using YAML::Value;
 
-const char* SpatialUnitOf(SpatialSensor s) {
-  switch (s) {
-    case SpatialSensor::kLaser:
-    case SpatialSensor::kPosition: return "m";
-    case SpatialSensor::kLoadCell: return "N";
-    default: return "rad";
-  }
-}
 
 bool SensorRead(const SpatialIdentifyResult& r, SpatialSensor s) {
   return std::any_of(r.fits.begin(), r.fits.end(),
@@ -261,7 +253,7 @@ std::vector<std::pair<std::string, double>> SpatialResidualRms(const SpatialRobo
     const auto values = [s](const SpatialReadingFit& f) -> const Eigen::VectorXd& {
       return f.sensors[static_cast<int>(s)];
     };
-    out.emplace_back(std::string(ToString(s)) + "_" + SpatialUnitOf(s), rms(values, noise->sigma()));
+    out.emplace_back(std::string(ToString(s)) + "_" + SpatialSensorUnit(s), rms(values, noise->sigma()));
   }
   return out;
 }

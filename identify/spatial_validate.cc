@@ -29,10 +29,6 @@ bool IsAngle(SpatialSensor s) {
   return s == SpatialSensor::kInclinometer || s == SpatialSensor::kSwivel || s == SpatialSensor::kHeading;
 }
 
-const char* Unit(SpatialSensor s) {
-  if (s == SpatialSensor::kLoadCell) return "N";
-  return IsAngle(s) ? "rad" : "m";
-}
 
 // The sensors that read the pose in F (not relative to home, not the tensions): the guess
 // fits them, and an equilibrium found must agree with them.
@@ -320,7 +316,7 @@ SpatialValidationResult ValidateSpatial(const SpatialRobot& calibrated, const st
     std::snprintf(buffer, sizeof(buffer),
                   "the calibrated robot's %s RMS error on these readings is %.3g %s, %.3g times its sigma (%.3g %s; more "
                   "than %g)",
-                  ToString(s), e->rms, Unit(s), e->rms / result.sigma[i], result.sigma[i], Unit(s),
+                  ToString(s), e->rms, SpatialSensorUnit(s), e->rms / result.sigma[i], result.sigma[i], SpatialSensorUnit(s),
                   kUnexplainedNoiseFactor);
     result.warnings.push_back(std::string(buffer) +
                               ": the calibrated model does not explain these held-out readings. Check the robot file's "
@@ -429,7 +425,7 @@ std::string SpatialValidationSummaryYaml(const SpatialValidationResult& result, 
   for (const SpatialSensor s : kSpatialSensors) {
     const int i = static_cast<int>(s);
     if (result.compared[i] && std::isfinite(result.sigma[i])) {
-      o << YAML::Key << std::string(ToString(s)) + "_sigma_" + Unit(s) << YAML::Value << YamlNumber{result.sigma[i]};
+      o << YAML::Key << std::string(ToString(s)) + "_sigma_" + SpatialSensorUnit(s) << YAML::Value << YamlNumber{result.sigma[i]};
     }
   }
   o << YAML::EndMap << YAML::Comment("the least RMS errors a perfect model shows: more where encoder noise moves the predicted pose");
@@ -441,8 +437,8 @@ std::string SpatialValidationSummaryYaml(const SpatialValidationResult& result, 
       const std::optional<ErrorSummary>& e = p.summary[static_cast<int>(s)];
       if (!e) continue;
       o << YAML::Key << ToString(s) << YAML::Value << YAML::Flow << YAML::BeginMap << YAML::Key
-        << std::string("rms_") + Unit(s) << YAML::Value << YamlNumber{e->rms} << YAML::Key
-        << std::string("max_abs_") + Unit(s) << YAML::Value << YamlNumber{e->max_abs} << YAML::EndMap;
+        << std::string("rms_") + SpatialSensorUnit(s) << YAML::Value << YamlNumber{e->rms} << YAML::Key
+        << std::string("max_abs_") + SpatialSensorUnit(s) << YAML::Value << YamlNumber{e->max_abs} << YAML::EndMap;
     }
     o << YAML::EndMap;
   }

@@ -44,6 +44,16 @@ inline const char* ToString(SpatialSensor s) {
   return "?";
 }
 
+// The SI unit of the sensor's values: m (laser, position), N (load cells), rad (the angles).
+inline const char* SpatialSensorUnit(SpatialSensor s) {
+  switch (s) {
+    case SpatialSensor::kLaser:
+    case SpatialSensor::kPosition: return "m";
+    case SpatialSensor::kLoadCell: return "N";
+    default: return "rad";
+  }
+}
+
 // How many values one reading of the sensor has on a robot of m cables.
 inline int SpatialSensorSize(SpatialSensor s, int num_cables) {
   switch (s) {

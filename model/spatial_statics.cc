@@ -207,8 +207,9 @@ NewtonRoot EquilibriumNewton(const SpatialRobot& robot, const SpatialPose<double
 // every cable pulls with at least tension.min (the root returned), or the smallest tension stops
 // growing (the root returned if every cable pulls there: the feasibility test then names the
 // low tension), the tilt leaves its limit (by more than a step), or kWalkSteps steps (not
-// converged). SolveSpatialEquilibrium walks only where no start found a root with every cable
-// pulling, from at most kWalkRoots distinct roots: elsewhere its results are as before.
+// converged). SolveSpatialEquilibrium walks only from the root it kept when that one holds a
+// cable below tension.min, or, where no start found a root with every cable pulling, from at
+// most kWalkRoots distinct roots: elsewhere its results are as before.
 constexpr int kWalkSteps = 30;
 constexpr double kWalkAngleStep_rad = 0.05;
 constexpr int kWalkRoots = 3;
