@@ -95,7 +95,9 @@ std::vector<SpatialPlanPose> SampleSpatialPoses(const SpatialRobot& robot, int n
       q = q_home;  // the uncontrolled coordinates' first guess
       for (const int k : controlled) q(k) = draw(k);
     }
-    ParallelFor(batch, 4, [&](long k) { evaluations[k] = EvaluateSpatialPose(robot, candidates[k]); });
+    ParallelFor(batch, 4, [&](long k) {
+      evaluations[k] = EvaluateSpatialPose(robot, candidates[k], SpatialEvaluationDepth::kVerdict);
+    });
     for (int k = 0; k < batch && static_cast<int>(plan.size()) < n && draws < max_draws; ++k, ++draws) {
       if (evaluations[k].feasible()) plan.push_back(MakeSpatialPlanPose(robot, evaluations[k].equilibrium, home));
     }

@@ -414,13 +414,15 @@ Feasibility CheckSpatialFeasibility(const SpatialRobot& robot, const SpatialPose
   return f;
 }
 
-SpatialPoseEvaluation EvaluateSpatialPose(const SpatialRobot& robot, const SpatialPose<double>& q) {
+SpatialPoseEvaluation EvaluateSpatialPose(const SpatialRobot& robot, const SpatialPose<double>& q,
+                                          SpatialEvaluationDepth depth) {
   SpatialPoseEvaluation e;
   e.equilibrium.q = q;
+  const bool verdict = depth == SpatialEvaluationDepth::kVerdict;
   if (robot.num_cables() >= 6) {
     e.feasibility = PoseFeasibility(robot, q, &e.cable);
-    if (e.feasibility != Feasibility::kFeasible && e.feasibility != Feasibility::kTiltLimit &&
-        e.feasibility != Feasibility::kOutsideFrame) {
+    if (e.feasibility != Feasibility::kFeasible && (verdict || (e.feasibility != Feasibility::kTiltLimit &&
+                                                                e.feasibility != Feasibility::kOutsideFrame))) {
       return e;  // invalid cable geometry: no wrench matrix to distribute over
     }
     const Feasibility pose_feasibility = e.feasibility;
@@ -430,6 +432,10 @@ SpatialPoseEvaluation EvaluateSpatialPose(const SpatialRobot& robot, const Spati
       // The pose's own failure first, as the order of the tests says.
       e.feasibility = pose_feasibility == Feasibility::kFeasible ? Feasibility::kNoEquilibrium : pose_feasibility;
       return e;
+    }
+    if (verdict && pose_feasibility == Feasibility::kFeasible) {
+      e.feasibility = TensionFeasibility(robot, t.tensions_N);
+      if (e.feasibility != Feasibility::kFeasible) return e;
     }
     e.has_equilibrium = true;
     e.equilibrium = MakeEquilibrium(robot, q, t.tensions_N);

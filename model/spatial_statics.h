@@ -79,7 +79,13 @@ constexpr double kSpatialEquilibriumStartsDeg[] = {0.0, -25.0, 25.0};
 // m < 6: q's controlled coordinates are kept and its other coordinates are the first guess: the
 // reference point's frame test, SolveSpatialEquilibrium (no_equilibrium, unstable, or the cable
 // geometry reason), then the same tests at the equilibrium.
-SpatialPoseEvaluation EvaluateSpatialPose(const SpatialRobot& robot, const SpatialPose<double>& q);
+// `depth`: kFull also gives the equilibrium of a pose failing the tilt, frame or tension tests
+// (the workspace map shows it); kVerdict stops at the first failed test (the sampler, whose
+// candidates fail half the time on the pose alone, keeps only the feasible ones), the same
+// verdict and, for a feasible pose, the same evaluation to the last bit.
+enum class SpatialEvaluationDepth { kFull, kVerdict };
+SpatialPoseEvaluation EvaluateSpatialPose(const SpatialRobot& robot, const SpatialPose<double>& q,
+                                          SpatialEvaluationDepth depth = SpatialEvaluationDepth::kFull);
 
 // Checks the conditions of EvaluateSpatialPose at a known equilibrium (q, t); does not
 // re-solve. *cable (if given) is set to the cable a cable-geometry reason is about, else -1.

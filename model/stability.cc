@@ -71,16 +71,9 @@ StabilityResult Stability(const RobotT& robot, const Eigen::Matrix<double, D, 1>
       t(i) = J(0.0);
     }
   }
-  const Eigen::Matrix<J, D, 1> f = GeneralizedForce<J>(robot, q_jet, t);
-  Eigen::Matrix<double, D, D> H;
-  for (int r = 0; r < D; ++r) H.row(r) = -f(r).v.transpose();
-  H = (0.5 * (H + H.transpose())).eval();
-  Eigen::Matrix<double, D, D> H_geometric = H;  // without the springs: the neutral test's scale
-  for (int i = 0; i < m; ++i) {
-    const double k = axial_stiffness_Npm(i);
-    if (k > 0.0 && !std::isinf(k)) H_geometric -= k * l(i).v * l(i).v.transpose();
-  }
-
+  // The free motions first: where the inextensible cables hold every coordinate (6 or more
+  // taut cables of full rank, the sampler's every candidate) the platform is held and the
+  // Hessian, a second swivel construction per cable in Jets, is not needed.
   Eigen::Matrix<double, D, Eigen::Dynamic> N;  // orthonormal basis of the free motions
   if (constraints == 0) {
     N = Eigen::Matrix<double, D, D>::Identity();
@@ -100,6 +93,15 @@ StabilityResult Stability(const RobotT& robot, const Eigen::Matrix<double, D, 1>
   if (result.free_motions == 0) {
     result.stable = true;
     return result;
+  }
+  const Eigen::Matrix<J, D, 1> f = GeneralizedForce<J>(robot, q_jet, t);
+  Eigen::Matrix<double, D, D> H;
+  for (int r = 0; r < D; ++r) H.row(r) = -f(r).v.transpose();
+  H = (0.5 * (H + H.transpose())).eval();
+  Eigen::Matrix<double, D, D> H_geometric = H;  // without the springs: the neutral test's scale
+  for (int i = 0; i < m; ++i) {
+    const double k = axial_stiffness_Npm(i);
+    if (k > 0.0 && !std::isinf(k)) H_geometric -= k * l(i).v * l(i).v.transpose();
   }
   const Eigen::MatrixXd H_reduced = N.transpose() * H * N;
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(H_reduced, Eigen::EigenvaluesOnly);
