@@ -4,7 +4,9 @@
 #include <omp.h>
 
 #include <atomic>
+#include <cmath>
 #include <string>
+#include <utility>
 
 #include "model/robot.h"
 #include "model/spatial_robot.h"
@@ -46,7 +48,8 @@ void BindMonteCarlo(py::module_& m) {
       [](py::handle robot_arg, py::handle poses, py::handle trials, py::handle designs, py::handle estimator,
          py::handle gauge, py::handle sensors, py::handle geometry_sigma, py::handle seed, py::handle design_starts,
          py::handle threads, py::handle progress, py::handle loss, py::handle outliers, py::handle geometry_prior,
-         py::handle equilibrium, py::handle com_error, py::handle exact_platform) {
+         py::handle equilibrium, py::handle com_error, py::handle exact_platform, py::handle skip_infeasible,
+         py::handle tension_margin, py::handle frame_margin, py::handle tilt_margin_deg, py::handle random_pool) {
         // A SpatialRobot's study (montecarlo/spatial_montecarlo.h) takes the same arguments; the
         // planar-only ones must stay at their defaults.
         const bool spatial = py::isinstance<SpatialRobot>(robot_arg);
@@ -79,6 +82,26 @@ void BindMonteCarlo(py::module_& m) {
         if (!py::isinstance<py::bool_>(exact_platform)) Bad("exact_platform", "expected True or False");
         if (!spatial && exact_platform.cast<bool>()) Bad("exact_platform", "serves spatial robots only (a cablecal.SpatialRobot)");
         spatial_options.exact_platform = exact_platform.cast<bool>();
+        // The spatial study's planning margins and pool (montecarlo --skip-infeasible,
+        // --tension-margin, --frame-margin, --tilt-margin-deg, --random-pool): refused for a
+        // planar robot unless at their defaults, as the CLI's flags.
+        if (!py::isinstance<py::bool_>(skip_infeasible)) Bad("skip_infeasible", "expected True or False");
+        spatial_options.skip_infeasible = skip_infeasible.cast<bool>();
+        spatial_options.plan_tension_margin_N = AsNumber(tension_margin, "tension_margin");
+        spatial_options.plan_margin_m = AsNumber(frame_margin, "frame_margin");
+        spatial_options.plan_tilt_margin_rad = AsNumber(tilt_margin_deg, "tilt_margin_deg") * M_PI / 180.0;
+        spatial_options.random_pool = static_cast<int>(AsInteger(random_pool, "random_pool", 0, 100000));
+        if (!spatial) {
+          const std::pair<bool, const char*> spatial_only[] = {
+              {spatial_options.skip_infeasible, "skip_infeasible"},
+              {spatial_options.plan_tension_margin_N != 0.0, "tension_margin"},
+              {spatial_options.plan_margin_m != 0.0, "frame_margin"},
+              {spatial_options.plan_tilt_margin_rad != 0.0, "tilt_margin_deg"},
+              {spatial_options.random_pool != 0, "random_pool"}};
+          for (const auto& [given, name] : spatial_only) {
+            if (given) Bad(name, "serves spatial robots only (a cablecal.SpatialRobot)");
+          }
+        }
         if (spatial) {
           spatial_options.study = o;
           ValidateSpatialMonteCarloOptions(robot_arg.cast<const SpatialRobot&>(), spatial_options);
@@ -132,12 +155,15 @@ void BindMonteCarlo(py::module_& m) {
       py::arg("threads") = py::none(), py::arg("progress") = py::none(), py::arg("loss") = "none",
       py::arg("outliers") = "0", py::arg("geometry_prior") = false,
       py::arg("equilibrium") = kDefaultEquilibrium ? "on" : "off", py::arg("com_error") = 0.0,
-      py::arg("exact_platform") = false,
+      py::arg("exact_platform") = false, py::arg("skip_infeasible") = false, py::arg("tension_margin") = 0.0,
+      py::arg("frame_margin") = 0.0, py::arg("tilt_margin_deg") = 0.0, py::arg("random_pool") = 0,
       "The Monte Carlo study (cablecal montecarlo) of a Robot or a SpatialRobot (designs also grid:2x2x2, "
       "grid:3x3x3; the planar-only arguments at their defaults); Ctrl-C raises KeyboardInterrupt. progress(done, total), if "
       "given, is called now and then with the trials done. geometry_prior: identify every trial with "
       "geometry_sigma as a prior (montecarlo --geometry-prior). exact_platform: a SpatialRobot's true platforms "
-      "have its file's mass and centre of mass (montecarlo --exact-platform), not values drawn from its priors.");
+      "have its file's mass and centre of mass (montecarlo --exact-platform), not values drawn from its priors. "
+      "skip_infeasible, tension_margin (N), frame_margin (m), tilt_margin_deg, random_pool: a SpatialRobot's "
+      "montecarlo --skip-infeasible, --tension-margin, --frame-margin, --tilt-margin-deg, --random-pool.");
 }
 
 }  // namespace cablecal::python

@@ -955,6 +955,35 @@ def test_spatial_montecarlo_equals_cli(tmp_path):
         cablecal.montecarlo(robot, 8, 3, designs="random")
 
 
+def test_spatial_montecarlo_margins_and_pool_equal_cli(tmp_path):
+    # The spatial study's planning margins, pool and skipped poses, as the CLI's flags.
+    path = robot_file("cogiro")
+    robot = cablecal.Robot.load(path)
+    result = cablecal.montecarlo(robot, 27, 2, designs="random", geometry_sigma=0.001, seed=5,
+                                 skip_infeasible=True, tension_margin=50.0, frame_margin=0.02,
+                                 tilt_margin_deg=1.0, random_pool=40)
+    cli("montecarlo", "--robot", path, "--poses", "27", "--trials", "2", "--designs", "random",
+        "--geometry-sigma", "0.001", "--seed", "5", "--skip-infeasible", "--tension-margin", "50",
+        "--frame-margin", "0.02", "--tilt-margin-deg", "1", "--random-pool", "40", "--no-plot",
+        "--out", str(tmp_path))
+    assert result.summary_csv() == data_lines(tmp_path / "summary.csv")
+    # Not the defaults' study: the margins change the plans.
+    plain = cablecal.montecarlo(robot, 27, 2, designs="random", geometry_sigma=0.001, seed=5,
+                                skip_infeasible=True)
+    assert plain.summary_csv() != result.summary_csv()
+    with pytest.raises(cablecal.InputError, match="--random-pool.*cannot give 27"):
+        cablecal.montecarlo(robot, 27, 2, designs="random", random_pool=20)
+    with pytest.raises(cablecal.InputError, match="--tension-margin"):
+        cablecal.montecarlo(robot, 27, 2, designs="random", tension_margin=-1.0)
+    planar = cablecal.Robot.builtin()
+    for name, value in [("skip_infeasible", True), ("tension_margin", 5.0), ("frame_margin", 0.01),
+                        ("tilt_margin_deg", 1.0), ("random_pool", 100)]:
+        with pytest.raises(cablecal.InputError, match=name + ": serves spatial robots only"):
+            cablecal.montecarlo(planar, 10, 3, **{name: value})
+    with pytest.raises(cablecal.InputError, match="skip_infeasible: expected True or False"):
+        cablecal.montecarlo(robot, 27, 2, skip_infeasible="yes")
+
+
 def test_spatial_arguments_are_checked():
     robot = cablecal.SpatialRobot.builtin("irma4u")
     planar = cablecal.Robot.builtin()
