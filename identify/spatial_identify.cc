@@ -941,6 +941,64 @@ MatrixXd ReducedJacobian(const Model& model, const VectorXd& g, const Locals& lo
   return A;
 }
 
+// Each term's rows' leverages (SpatialReadingLeverage) at (g, locals), `free` the geometry
+// columns not held and `cov_free` their covariance (the inverse of the reduced Jacobian's normal
+// matrix, priors included, as IdentifySpatial computes it). The hat matrix of the whole
+// whitened fit splits by pose (Frisch-Waugh): a row's leverage is its pose's own part, the
+// squared norm of its row of Q (Jq = Q R, thin), plus the geometry's, m^T C m with m the row of
+// Jg less its projection onto the pose's columns (as ReducedJacobian's rows, before their
+// rotation). A pose its own readings do not determine gets NaN.
+struct TermLeverage {
+  VectorXd total, geometry;  // per row: h, and its geometry part m^T C m
+};
+std::vector<TermLeverage> TermLeverages(const Model& model, const VectorXd& g, const Locals& locals,
+                                        const std::vector<int>& free, const MatrixXd& cov_free) {
+  const int p = g.size();
+  const int cols = model.local();
+  std::vector<TermLeverage> out(model.terms.size());
+  const auto geometry_part = [&](const MatrixXd& m) {
+    MatrixXd m_free(m.rows(), free.size());
+    for (std::size_t c = 0; c < free.size(); ++c) m_free.col(c) = m.col(free[c]);
+    return VectorXd((m_free * cov_free).cwiseProduct(m_free).rowwise().sum());
+  };
+  for (std::size_t j = 0; j < model.pose_ids.size(); ++j) {
+    const int rows = model.pose_values[j];
+    MatrixXd Jq(rows, cols), Jg(rows, p);
+    VectorXd r(rows);
+    int row = 0;
+    for (int k : model.pose_terms[j]) {
+      const Term& t = model.terms[k];
+      MatrixXd jp, jg;
+      EvaluateTerm(t, g, locals, r.data() + row, &jp, &jg);
+      Jq.middleRows(row, t.size()) = jp;
+      Jg.middleRows(row, t.size()) = jg;
+      row += t.size();
+    }
+    VectorXd h = VectorXd::Constant(rows, std::numeric_limits<double>::quiet_NaN()), h_geometry = h;
+    const Eigen::ColPivHouseholderQR<MatrixXd> qr(Jq);
+    if (rows >= cols && qr.rank() == cols) {
+      const MatrixXd Q = qr.householderQ() * MatrixXd::Identity(rows, cols);
+      const MatrixXd m = Jg - Q * (Q.transpose() * Jg);
+      h_geometry = geometry_part(m);
+      h = Q.rowwise().squaredNorm() + h_geometry;
+    }
+    row = 0;
+    for (int k : model.pose_terms[j]) {
+      out[k] = {h.segment(row, model.terms[k].size()), h_geometry.segment(row, model.terms[k].size())};
+      row += model.terms[k].size();
+    }
+  }
+  for (int k : model.prior_terms) {
+    const Term& t = model.terms[k];
+    MatrixXd jg;
+    VectorXd r(t.size());
+    EvaluateTerm(t, g, locals, r.data(), nullptr, &jg);
+    out[k].geometry = geometry_part(jg);
+    out[k].total = out[k].geometry;
+  }
+  return out;
+}
+
 // A's p x p triangular factor R (A = Q R; A may have thousands of rows): R^T R = A^T A.
 MatrixXd TriangularFactor(const MatrixXd& A) {
   const int p = A.cols();
@@ -2024,6 +2082,76 @@ SpatialGaugeAnalysis AnalyzeSpatialGauge(const SpatialRobot& nominal, const std:
   return Analyze(nominal, readings, options).gauge;
 }
 
+namespace {
+
+// The leverages into result->fits (TermLeverages), and a warning naming the values no other
+// reading checks (kUncheckedLeverage) whose error would go mostly into the geometry (its part
+// of the leverage at least half), in a fit with redundancy (without, every value is unchecked,
+// as the warning before says). A value whose error its own pose's unknowns take (an encoder of
+// a stretching cable, whose tension follows it) leaves the geometry alone and is not named.
+void AddReadingLeverages(const Model& model, const VectorXd& g, const Locals& locals, const std::vector<int>& free,
+                         const MatrixXd& cov_free, int redundancy, SpatialIdentifyResult* result) {
+  const Layout& L = model.layout;
+  const std::vector<TermLeverage> leverages = TermLeverages(model, g, locals, free, cov_free);
+  for (std::size_t k = 0; k < model.terms.size(); ++k) {
+    const Term& t = model.terms[k];
+    if (t.reading < 0) {
+      result->prior_leverage += leverages[k].total.sum();
+      continue;
+    }
+    SpatialReadingLeverage& out = result->fits[t.reading].leverage;
+    VectorXd& v = t.sensor == kEquilibriumTerm ? out.equilibrium
+                  : t.sensor < 0              ? out.encoders
+                                              : out.sensors[t.sensor];
+    const int size = t.sensor == kEquilibriumTerm ? 6
+                     : t.sensor < 0              ? L.m
+                                                 : SpatialSensorSize(static_cast<SpatialSensor>(t.sensor), L.m);
+    if (v.size() != size) v = VectorXd::Constant(size, std::numeric_limits<double>::quiet_NaN());
+    v.segment(t.value, t.size()) = leverages[k].total;
+  }
+  if (redundancy <= 0) return;
+  struct Unchecked {
+    double leverage;
+    int term, row;
+  };
+  std::vector<Unchecked> unchecked;
+  for (std::size_t k = 0; k < model.terms.size(); ++k) {
+    const Term& t = model.terms[k];
+    if (t.reading < 0 || t.sensor == kEquilibriumTerm) continue;
+    for (int v = 0; v < t.size(); ++v) {
+      const double h = leverages[k].total(v);
+      if (h >= kUncheckedLeverage && leverages[k].geometry(v) >= 0.5 * h) {
+        unchecked.push_back({h, static_cast<int>(k), v});
+      }
+    }
+  }
+  if (unchecked.empty()) return;
+  std::stable_sort(unchecked.begin(), unchecked.end(),
+                   [](const Unchecked& a, const Unchecked& b) { return a.leverage > b.leverage; });
+  std::string named;
+  constexpr std::size_t kNamed = 3;
+  for (std::size_t u = 0; u < std::min(kNamed, unchecked.size()); ++u) {
+    const Term& t = model.terms[unchecked[u].term];
+    const int index = t.value + unchecked[u].row;
+    const std::string value = t.sensor < 0 ? "encoder " + std::to_string(index + 1)
+                                           : std::string(ToString(static_cast<SpatialSensor>(t.sensor))) + " " +
+                                                 SpatialSensorColumns(static_cast<SpatialSensor>(t.sensor), L.m)[index];
+    char buf[200];
+    std::snprintf(buf, sizeof(buf), "%s of pose %d (leverage %.3f)", value.c_str(), model.pose_ids[t.pose],
+                  unchecked[u].leverage);
+    named += (named.empty() ? "" : "; ") + std::string(buf);
+  }
+  result->warnings.push_back(
+      std::to_string(unchecked.size()) + " reading value" + (unchecked.size() == 1 ? "" : "s") +
+      " that no other reading checks (leverage at least 0.99, most of it the geometry's: " + named +
+      (unchecked.size() > kNamed ? "; ..." : "") +
+      "): the fit follows such a value, so an error in it shows at most a tenth of itself in its residual and "
+      "moves the calibrated geometry instead; read it again, or add poses or a sensor whose readings see the "
+      "same directions");
+}
+
+}  // namespace
+
 SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::vector<SpatialMeasurement>& readings,
                                       const SpatialIdentifyOptions& options) {
   if (options.max_iterations < 1) throw InputError("--max-iterations", "", "must be at least 1");
@@ -2218,6 +2346,9 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
                      " direction(s) of the geometry beyond the gauge are unseen at the estimate (the readings "
                      "saw them at the start only): not a result";
     return result;
+  }
+  if (options.reading_leverage && options.loss.kind == LossKind::kNone) {
+    AddReadingLeverages(model, g, locals, free, cov_free, a.gauge.redundancy, &result);
   }
   // The verdicts of a converged fit (the planar identification's): readings far from it are
   // not noise, and a geometry off the frame is no robot's. Either is a status, never a result.

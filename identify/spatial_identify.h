@@ -148,6 +148,10 @@ struct SpatialIdentifyOptions {
   int max_iterations = 200;
   bool statics = true;  // the tensions, load cells, equilibrium and stretch (file comment)
   bool anchors = false;  // --identify anchors: every platform anchor b_i an unknown too (file comment)
+  // Each reading value's leverage (SpatialReadingFit::leverage) and the warning for values no
+  // other reading checks. Off in the Monte Carlo, which reads neither; computed with no robust
+  // loss only (a loss reweights the rows: the leverages would be the weighted fit's).
+  bool reading_leverage = true;
   // Refuse an estimate no robot of this file can have (SpatialPlausibilityWarnings: an exit
   // point off the frame box, an initial length off by more than its diagonal) as poor_fit, as
   // the planar identification does. Off in the Monte Carlo: there a wild estimate from a poor
@@ -177,6 +181,18 @@ struct SpatialDirection {
   bool nearly_rigid = false;
 };
 
+// Each value's leverage h in [0, 1] (the diagonal of the whitened fit's hat matrix, the pose
+// unknowns and the free geometry together): how much of a change in the reading the fitted
+// value follows (h = d model / d reading). A value with h near 1 is checked by no other reading:
+// its residual shows only sqrt(1 - h) of an error in it, and the rest moves the estimate. Over
+// every value (the equilibrium's rows and the priors' included) the leverages sum to the
+// number of unknowns the values determine.
+struct SpatialReadingLeverage {
+  Eigen::VectorXd encoders;  // per cable
+  std::array<Eigen::VectorXd, kNumSpatialSensors> sensors;  // as SpatialReadingFit::sensors
+  Eigen::VectorXd equilibrium;
+};
+
 // How one reading fits at the estimate: each value's whitened residual (model - reading) / sigma.
 struct SpatialReadingFit {
   int pose_id = 0;
@@ -186,7 +202,14 @@ struct SpatialReadingFit {
   // The pose's 6 equilibrium residuals (force, moment), on the pose's first reading when the
   // statics are modelled; empty otherwise.
   Eigen::VectorXd equilibrium;
+  // Empty unless computed (a converged fit, SpatialIdentifyOptions::reading_leverage, no loss);
+  // NaN for a pose whose own readings do not determine it.
+  SpatialReadingLeverage leverage;
 };
+
+// A value at or above this leverage is checked by no other reading (its residual shows at most
+// 10 % of an error in it): named in a warning of a fit with redundancy.
+constexpr double kUncheckedLeverage = 0.99;  // the warning says 0.99
 
 enum class SpatialIdentifyStatus {
   kConverged,
@@ -233,6 +256,9 @@ struct SpatialIdentifyResult {
   std::vector<std::string> warnings;
   // The RMS of the readings' whitened residuals (kSpatialPoorFitFactor's), 0 until computed.
   double whitened_rms = 0.0;
+  // The priors' rows' leverages summed (the platform's, the tracker's with --gauge prior): with
+  // the readings' (SpatialReadingFit::leverage) they make the unknowns' count. 0 without.
+  double prior_leverage = 0.0;
   bool converged() const { return status == SpatialIdentifyStatus::kConverged; }
 };
 

@@ -204,6 +204,12 @@ ResultParts Parts(const SpatialRobot& nominal, const SpatialIdentifyOptions& opt
       if (v.size() > 0) list(readings, std::string(ToString(s)) + "_sigmas", v);
     }
     if (f.equilibrium.size() > 0) list(readings, "equilibrium_sigmas", f.equilibrium);
+    // Each value's leverage (SpatialReadingLeverage), when computed.
+    if (f.leverage.encoders.size() > 0) list(readings, "encoder_leverage", f.leverage.encoders);
+    for (const SpatialSensor s : kSpatialSensors) {
+      const Eigen::VectorXd& v = f.leverage.sensors[static_cast<int>(s)];
+      if (v.size() > 0) list(readings, std::string(ToString(s)) + "_leverage", v);
+    }
     readings.EndRow();
   }
   return {YamlText(o),
@@ -212,7 +218,8 @@ ResultParts Parts(const SpatialRobot& nominal, const SpatialIdentifyOptions& opt
                                                        "cable tensions (N)"),
           readings.Finish("readings",
                           "per reading (data row), each value's residual (model - reading) over its sigma; "
-                          "equilibrium: force then moment rows, on a pose's first reading")};
+                          "equilibrium: force then moment rows, on a pose's first reading; _leverage: how much of "
+                          "each value the fit follows (0 to 1; near 1, no other reading checks it)")};
 }
 
 }  // namespace

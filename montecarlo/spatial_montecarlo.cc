@@ -43,6 +43,7 @@ SpatialIdentifyOptions TrialIdentifyOptions(const SpatialMonteCarloOptions& o, c
   id.max_iterations = kSpatialTrialMaxIterations;
   // A wild estimate from a poor pose set is a result to count (the planar Monte Carlo's rule).
   id.check_plausible_geometry = false;
+  id.reading_leverage = false;  // no trial reads it
   id.gauge.kind = SpatialGaugeKind::kHold;
   id.gauge.held = held;
   return id;

@@ -853,6 +853,101 @@ TEST(SpatialIdentify, AnExactlyDeterminedFitIsSaidToHaveNoRedundancy) {
   }
 }
 
+// ---- Leverage: how much of a reading the fit follows ---------------------------------------
+//
+// Theory. The whitened fit's hat matrix H = J (J^T J)^-1 J^T over every unknown (each pose's
+// coordinates and tensions, the free geometry) is a projection of rank the unknowns' count, so
+// its diagonal (the leverages) sums to that count; and a value's leverage is the derivative of
+// its fitted value with respect to its reading, so moving one reading by d moves its whitened
+// residual (model - reading) / sigma by -(1 - h) d / sigma. Both are checked against the
+// leverages IdentifySpatial computes by splitting H per pose.
+
+double LeverageSum(const SpatialIdentifyResult& r) {
+  double sum = r.prior_leverage;
+  for (const SpatialReadingFit& f : r.fits) {
+    sum += f.leverage.encoders.sum() + f.leverage.equilibrium.sum();
+    for (const VectorXd& v : f.leverage.sensors) sum += v.sum();
+  }
+  return sum;
+}
+
+TEST(SpatialIdentify, LeveragesSumToTheUnknownsAndAreEachReadingsPull) {
+  Rng rng(616);
+  struct Case {
+    SpatialRobot nominal;
+    int bits;
+  };
+  std::vector<Case> cases;
+  cases.push_back({WithSensors(RandomInextensible(rng, "random7", 7), kInc | kLaser), kInc | kLaser});
+  cases.push_back({WithSensors(Builtin("irma4u"), kSwivel | kInc), kSwivel | kInc});  // the statics, tensions
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.nominal.name);
+    const Experiment e = MakeExperiment(c.nominal, PerturbedExits(c.nominal, rng, 0.01), 20, c.bits, rng);
+    const SpatialIdentifyResult r = IdentifySpatial(c.nominal, e.readings, {});
+    ASSERT_TRUE(r.converged()) << r.message;
+    const int local = 6 + (r.tensions_N.empty() ? 0 : static_cast<int>(r.tensions_N[0].size()));
+    const double unknowns = static_cast<double>(r.names.size() - r.held.size() + local * r.poses.size());
+    EXPECT_NEAR(LeverageSum(r), unknowns, 1e-6 * unknowns);
+    // The encoder values of least and most leverage, each moved by a tenth of its sigma.
+    int low = -1, high = -1;
+    for (int k = 0; k < static_cast<int>(r.fits.size()); ++k) {
+      for (int i = 0; i < r.fits[k].leverage.encoders.size(); ++i) {
+        const double h = r.fits[k].leverage.encoders(i);
+        ASSERT_TRUE(h >= -1e-12 && h <= 1.0 + 1e-12) << h;
+        if (low < 0 || h < r.fits[low / 100].leverage.encoders(low % 100)) low = 100 * k + i;
+        if (high < 0 || h > r.fits[high / 100].leverage.encoders(high % 100)) high = 100 * k + i;
+      }
+    }
+    const double sigma = c.nominal.sensors.encoder_sigma_m;
+    for (const int which : {low, high}) {
+      const int k = which / 100, i = which % 100;
+      std::vector<SpatialMeasurement> moved = e.readings;
+      const double d = 0.1 * sigma;
+      moved[k].dl_m(i) += d;
+      const SpatialIdentifyResult again = IdentifySpatial(c.nominal, moved, {});
+      ASSERT_TRUE(again.converged()) << again.message;
+      const double h = r.fits[k].leverage.encoders(i);
+      const double followed = 1.0 + (again.fits[k].encoders(i) - r.fits[k].encoders(i)) * sigma / d;
+      EXPECT_NEAR(followed, h, 2e-3) << "reading " << k << ", encoder " << i + 1;
+    }
+  }
+}
+
+// One laser reading among 20 poses is the only value that sees the frame's height: the fit
+// follows it whatever it reads (leverage 1), and the warning names it; with the laser at every
+// pose no value is unchecked.
+TEST(SpatialIdentify, AValueNoOtherReadingChecksIsNamed) {
+  Rng rng(626);
+  const SpatialRobot nominal = WithSensors(RandomInextensible(rng, "random8", 8), kInc | kLaser);
+  const Experiment e = MakeExperiment(nominal, PerturbedExits(nominal, rng, 0.01), 20, kInc | kLaser, rng);
+  const auto unchecked_warning = [](const SpatialIdentifyResult& r) {
+    for (const std::string& w : r.warnings) {
+      if (w.find("that no other reading checks") != std::string::npos) return w;
+    }
+    return std::string();
+  };
+  const SpatialIdentifyResult every = IdentifySpatial(nominal, e.readings, {});
+  ASSERT_TRUE(every.converged()) << every.message;
+  EXPECT_EQ(unchecked_warning(every), "") << ::testing::PrintToString(every.warnings);
+  std::vector<SpatialMeasurement> one = e.readings;
+  for (std::size_t k = 1; k < one.size(); ++k) one[k].values(SpatialSensor::kLaser) = VectorXd();
+  const SpatialIdentifyResult r = IdentifySpatial(nominal, one, {});
+  ASSERT_TRUE(r.converged()) << r.message;
+  EXPECT_NEAR(r.fits[0].leverage.sensors[static_cast<int>(SpatialSensor::kLaser)](0), 1.0, 1e-9);
+  const std::string w = unchecked_warning(r);
+  EXPECT_EQ(w.rfind("1 reading value that no other reading checks (leverage at least 0.99, most of it the geometry's: laser z of pose " +
+                        std::to_string(e.readings[0].pose_id) + " (leverage 1.000))",
+                    0),
+            0u)
+      << w;
+  // Computed only when asked, and with no robust loss.
+  SpatialIdentifyOptions off;
+  off.reading_leverage = false;
+  const SpatialIdentifyResult without = IdentifySpatial(nominal, one, off);
+  EXPECT_EQ(without.fits[0].leverage.encoders.size(), 0);
+  EXPECT_EQ(unchecked_warning(without), "");
+}
+
 // An underactuated platform read by its encoders and an inclinometer: 6 values for its 6
 // coordinates, nothing left for the geometry without the statics (refused: too few values);
 // its equilibrium adds 6 rows for 4 tensions per pose, and the geometry is recovered.
