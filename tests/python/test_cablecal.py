@@ -1165,3 +1165,22 @@ def test_spatial_design_equals_cli_and_refuses_what_it_does_not_serve(tmp_path):
     # Named by design()'s argument, not by the CLI's flag.
     with pytest.raises(cablecal.InputError, match=r"^n: at least 2 poses"):
         cablecal.design(robot, 1)
+
+
+def test_study_figures_show_a_spatial_robots_every_free_coordinate():
+    # plot_montecarlo.py chose its panels by the planar names (x and z): a spatial study's y
+    # coordinates were left out and its legend said a1x was held whatever the gauge held.
+    import importlib.util
+    path = os.path.join(os.environ["CABLECAL_SOURCE_DIR"], "scripts", "plot_montecarlo.py")
+    spec = importlib.util.spec_from_file_location("plot_montecarlo", path)
+    plot = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(plot)
+    names = ["x4", "l20", "a2z", "a1y", "a2x", "a1x", "l10", "a1z", "a2y", "b1x"]
+    assert plot.geometry_names(names) == ["a1x", "a1y", "a1z", "a2x", "a2y", "a2z", "l10", "l20"]
+    summary = [{"parameter": p, "max_abs": v} for p, v in
+               [("a1x", "0"), ("a1y", "0"), ("a1z", "0.002"), ("a2y", "0"), ("a2y", ""), ("a2y", "0.001"),
+                ("l10", "nan"), ("l10", "0")]]
+    assert plot.held_names(summary) == {"a1x", "a1y", "l10"}
+    assert plot.held_label(["a1x"]) == "geometric parameters (under the default gauge a1x is held: error 0)"
+    assert plot.held_label(["a1x", "a2y"]) == "geometric parameters (held by the gauge, error 0: a1x, a2y)"
+    assert plot.held_label([]) == "geometric parameters"
