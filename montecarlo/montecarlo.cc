@@ -142,7 +142,9 @@ FailureTally TallyFailures(const MonteCarloResult& r) {
     tally.hint = "too few feasible poses for the random sets: fewer --poses, or smaller plan margins";
   } else if (most_cause == "simulation") {
     tally.hint = "the true robots could not hold the poses: a smaller --geometry-sigma, or for a spatial robot "
-                 "--skip-infeasible or plan margins";
+                 "plan margins (--tension-margin, --frame-margin, --tilt-margin-deg), --skip-infeasible, or "
+                 "--exact-platform (true platforms drawn from the file's mass and centre-of-mass sigmas move the "
+                 "tensions too)";
   } else if (most_cause == "identification") {
     tally.hint = "the identifications failed: more --poses, another sensor, or --loss cauchy against gross readings";
   }

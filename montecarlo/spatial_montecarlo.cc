@@ -151,12 +151,21 @@ TrialOutcome RunSpatialTrial(const SpatialRobot& nominal, const SpatialRobot& pl
     return out;
   }
   out.skipped_poses = static_cast<int>(sim.skipped.size());  // counted in a failed trial too
+  // Poses skipped (--skip-infeasible) leaving too few to identify: the simulation's failure, as
+  // the remedy is the plan's (margins), not the identification's.
+  const std::string skipped = std::to_string(sim.skipped.size()) + " of " + std::to_string(n) +
+                              " poses the true robot could not hold within its limits (--skip-infeasible)";
+  if (sim.measurements.empty()) {
+    out.failure = "simulation: " + skipped + ": none left to identify";
+    return out;
+  }
   SpatialIdentifyResult r;
   try {
     r = IdentifySpatial(planning, sim.measurements, id);
   } catch (const InputError& e) {
     // The study's check passed at its own poses; these ones leave something unseen.
-    out.failure = std::string("identification: refused (") + e.what() + ")";
+    out.failure = sim.skipped.empty() ? std::string("identification: refused (") + e.what() + ")"
+                                      : "simulation: " + skipped + ", and the rest refused (" + e.what() + ")";
     return out;
   }
   if (!r.converged()) {
