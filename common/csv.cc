@@ -100,11 +100,15 @@ void ForEachCsvLine(std::istream& in, const std::string& path, char delimiter,
                     const std::function<void(int, const std::string&, std::vector<std::string>&)>& on_line) {
   std::string line;
   int line_no = 0;
+  bool content = false;  // a content line seen (the header)
   while (ReadLine(in, line, path, line_no + 1)) {
     ++line_no;
-    if (line_no == 1 && line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);  // UTF-8 BOM
+    // A UTF-8 byte-order mark: at the file's start (Excel's "CSV UTF-8"), or before the header
+    // when a lab pasted a BOM-marked header below the comment lines.
+    if (!content && line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);
     const std::string trimmed = Trim(line);
     if (trimmed.empty() || trimmed[0] == '#') continue;
+    content = true;
     std::vector<std::string> cells = Split(trimmed, delimiter);
     on_line(line_no, trimmed, cells);
   }
@@ -281,13 +285,15 @@ void ForEachCsvRowByName(std::istream& in, const std::string& path, char delimit
 
 void ForEachCsvRowByNameStrict(std::istream& in, const std::string& path, char delimiter,
                                const std::vector<std::string>& required, const std::vector<std::string>& optional,
-                               const std::function<void(const CsvRow&)>& on_row) {
+                               const std::function<void(const CsvRow&)>& on_row,
+                               const std::function<std::string(const std::vector<std::string>&)>& explain) {
   ForEachCsvRowByNameAt(
       in, path, delimiter, required, optional,
       [&](const std::string& where, const std::vector<std::string>& other) {
         throw InputError(where, "column '" + other.front() + "'",
                          "unknown column (the columns are '" + JoinCsv(required) + "'" +
-                             (optional.empty() ? std::string() : ", optionally '" + JoinCsv(optional) + "'") + ")");
+                             (optional.empty() ? std::string() : ", optionally '" + JoinCsv(optional) + "'") + ")" +
+                             (explain ? explain(other) : std::string()));
       },
       on_row);
 }

@@ -55,10 +55,12 @@ void ForEachCsvRowByName(std::istream& in, const std::string& name, char delimit
                          const std::function<void(const CsvRow&)>& on_row);
 
 // The same for a file cablecal wrote, where a column it does not know is a mistake (a
-// misspelt or another kind's column): refused naming the header's line and the column.
+// misspelt or another kind's column): refused naming the header's line and the column, and
+// what `explain` (if given) says of the unknown columns, appended.
 void ForEachCsvRowByNameStrict(std::istream& in, const std::string& name, char delimiter,
                                const std::vector<std::string>& required, const std::vector<std::string>& optional,
-                               const std::function<void(const CsvRow&)>& on_row);
+                               const std::function<void(const CsvRow&)>& on_row,
+                               const std::function<std::string(const std::vector<std::string>&)>& explain = nullptr);
 
 constexpr std::size_t kMaxCsvLineBytes = 1 << 16;
 

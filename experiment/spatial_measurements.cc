@@ -1,5 +1,6 @@
 #include "experiment/spatial_measurements.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -53,6 +54,18 @@ std::vector<SpatialMeasurement> ReadSpatialMeasurementsCsv(std::istream& in, con
   }
   std::vector<SpatialMeasurement> out;
   std::array<bool, kNumSpatialSensors> has{};
+  // What a lab likely gave instead: a pose plan (sample's or design's: x, y, z, ..., l1..lm,
+  // whose roll, pitch and yaw are also sensor columns) or its own log's extra columns.
+  const auto explain = [](const std::vector<std::string>& other) {
+    const auto has = [&](const char* c) { return std::find(other.begin(), other.end(), c) != other.end(); };
+    if (has("x") && has("l1")) {
+      return std::string(": this looks like a pose plan (sample's or design's output), not readings: run it on the "
+                         "robot and record what the sensors read, or simulate it (cablecal simulate --plan)");
+    }
+    return std::string(": a spatial robot's readings have only these columns (remove any other, a timestamp or a "
+                       "temperature: an unknown column is refused so that a misspelt sensor column is never dropped "
+                       "unsaid)");
+  };
   ForEachCsvRowByNameStrict(in, path, delimiter, required, optional, [&](const CsvRow& row) {
     if (out.empty()) {
       // A sensor is read whole or not at all: half a position is a mistake, not a sensor.
@@ -86,7 +99,7 @@ std::vector<SpatialMeasurement> ReadSpatialMeasurementsCsv(std::istream& in, con
       for (Eigen::Index k = 0; k < v.size(); ++k) v(k) = row.Number(first[static_cast<int>(s)] + static_cast<int>(k));
     }
     out.push_back(std::move(m));
-  });
+  }, explain);
   return out;
 }
 

@@ -336,6 +336,16 @@ TEST(SpatialMeasurementsCsv, HostileFilesAreNamedByFileLineAndColumn) {
   EXPECT_NE(read("# c\npose,dl1,dl2,dl3,theta\n1,0,0,0,0\n").find("m.csv:2: column 'theta': unknown column"),
             std::string::npos)
       << read("# c\npose,dl1,dl2,dl3,theta\n1,0,0,0,0\n");
+  // A lab log's extra column, and a pose plan given as readings: each told what it is.
+  EXPECT_NE(read("pose,dl1,dl2,dl3,temp\n1,0,0,0,21\n").find("remove any other, a timestamp or a temperature"),
+            std::string::npos);
+  const std::string plan =
+      read("pose,x,y,z,roll,pitch,yaw,t1,t2,t3,l1,l2,l3,dl1,dl2,dl3\n1,0,0,1,0,0,0,1,1,1,1,1,1,0,0,0\n");
+  EXPECT_NE(plan.find("m.csv:1: column 'x': unknown column"), std::string::npos) << plan;
+  EXPECT_NE(plan.find("this looks like a pose plan"), std::string::npos) << plan;
+  // A byte-order mark before the header below comment lines is read as Excel's at the start is.
+  std::istringstream bom("# c\n\xEF\xBB\xBFpose,dl1,dl2,dl3\n4,0.1,0.2,0.3\n");
+  EXPECT_EQ(ReadSpatialMeasurementsCsv(bom, "m.csv", 3).at(0).pose_id, 4);
   EXPECT_NE(read("pose,dl1,dl2,dl3,roll\n1,0,0,0,0\n").find("m.csv:1: column 'pitch': missing: the inclinometer"),
             std::string::npos)
       << read("pose,dl1,dl2,dl3,roll\n1,0,0,0,0\n");
