@@ -30,6 +30,10 @@ using internal::Reader;
 
 // Two points closer than this are one (anchors, exit points), as in the planar loader.
 constexpr double kSamePoint_m = 1e-6;
+// initial_length may differ from its cable's length at home by this fraction of it plus
+// kInitialLengthSlack_m (the LoadSpatialRobot check): a calibration's home error is centimetres.
+constexpr double kInitialLengthSlack = 0.1;
+constexpr double kInitialLengthSlack_m = 0.05;
 // The least load-cell sigma: a milli-newton is finer than any load cell of a cable robot.
 constexpr double kMinLoadCellSigma_N = 1e-3;
 
@@ -372,6 +376,25 @@ SpatialRobot Parse(const YAML::Node& root, const Reader& rd) {
             "the home pose " + Point(robot.p_F_home_m) + " m at roll, pitch, yaw " +
                 RoundedList(robot.home_rpy_rad / kDegToRad, 4) + " degrees (home_rpy_deg) is not in the feasible workspace: " +
                 why + hint);
+  }
+  // An initial_length far from its cable's length at home (exit to anchor at the home
+  // equilibrium) is no calibration of this robot: millimetres, another cable's, or a typo (a new
+  // user's 1.0 m for a cable 2.10 m long loaded, and simulate then blamed the plan). A calibrated
+  // file's l_i0 differs from it by its home's own error, centimetres.
+  const Eigen::VectorXd home_lengths_m = CableLengths<double>(robot, statics.equilibrium.q);
+  for (int i = 0; i < robot.num_cables(); ++i) {
+    if (!robot.cables[i].initial_length_m) continue;
+    const double length_m = home_lengths_m(i), given_m = *robot.cables[i].initial_length_m;
+    if (std::abs(given_m - length_m) <= kInitialLengthSlack * length_m + kInitialLengthSlack_m) continue;
+    const std::string key = "cables[" + std::to_string(i) + "].initial_length";
+    rd.Fail(root["cables"][i]["initial_length"], key,
+            Rounded(given_m, 6) + " m, but the cable runs " + Rounded(length_m, 6) +
+                " m from its exit to its anchor at the home equilibrium (" +
+                (given_m < length_m ? "it could not reach" : "it would hang slack") +
+                "): initial_length is the cable paid out at home, where its encoder reads zero (identify "
+                "--calibrated-robot writes it); in metres, of this cable? More than " +
+                Rounded(100 * kInitialLengthSlack, 3) + " % + " + Rounded(kInitialLengthSlack_m, 3) +
+                " m off is refused");
   }
 
   const YAML::Node sensors = root["sensors"];

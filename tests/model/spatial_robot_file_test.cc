@@ -228,6 +228,15 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(
         BadCase{"ZeroSwivelAxis", kCable1, "{exit: [-2.0, 1.5, 2.0], swivel_axis: [0, 0, 0], pulley_radius: 0.1}",
                 "swivel_axis: [0, 0, 0]", "cables\\[0\\]\\.swivel_axis: has zero length"},
+        // initial_length far from the cable's length at home: a typo, and millimetres.
+        BadCase{"InitialLengthThatCannotReach", kCable1,
+                "{exit: [-2.0, 1.5, 2.0], swivel_axis: [0, 0, 1], pulley_radius: 0.1, initial_length: 1.0}",
+                "initial_length: 1.0",
+                "cables\\[0\\]\\.initial_length: 1 m, but the cable runs [0-9.]+ m from its exit to its anchor at "
+                "the home equilibrium \\(it could not reach\\)"},
+        BadCase{"InitialLengthInMillimetres", kCable1,
+                "{exit: [-2.0, 1.5, 2.0], swivel_axis: [0, 0, 1], pulley_radius: 0.1, initial_length: 2500}",
+                "initial_length: 2500", "cables\\[0\\]\\.initial_length: 2500 m, .*\\(it would hang slack\\).* in metres"},
         BadCase{"ExitOutsideTheFrame", "exit: [-2.0, 1.5, 2.0]", "exit: [-2.2, 1.5, 2.0]", "exit: [-2.2",
                 "cables\\[0\\]\\.exit: \\(-2\\.2, 1\\.5, 2\\) m is outside the frame box .* by more than 0\\.1 m"},
         BadCase{"ExitAboveTheFrame", "exit: [2.0, 1.5, 2.0]", "exit: [2.0, 1.5, 2.2]", "exit: [2.0, 1.5, 2.2]",
