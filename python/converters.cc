@@ -140,6 +140,19 @@ py::object FromYaml(const YAML::Node& n) {
   return ScalarFromYaml(n.Scalar());
 }
 
+void RethrowWithoutDictLine(const InputError& e) {
+  // "robot dict:30: gravty: ..." names a line of the YAML made from the dict, not of anything
+  // the user wrote: keep the key.
+  std::string message = e.what();
+  const std::string prefix = "robot dict:";
+  const std::size_t colon = message.find(':', prefix.size());
+  if (message.rfind(prefix, 0) == 0 && colon != std::string::npos &&
+      message.find_first_not_of("0123456789", prefix.size()) == colon) {
+    message = prefix + message.substr(colon + 1);
+  }
+  throw InputError("", "", message);
+}
+
 void ToYaml(YAML::Emitter& out, py::handle h, const std::string& where) {
   if (py::isinstance<py::dict>(h)) {
     out << YAML::BeginMap;

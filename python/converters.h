@@ -11,6 +11,8 @@
 #include <cstdint>
 #include <string>
 
+#include "common/error.h"
+
 namespace py = pybind11;
 
 namespace cablecal::python {
@@ -48,6 +50,22 @@ const T& AsObject(py::handle h, const std::string& name, const char* type) {
 py::object FromYaml(const YAML::Node& n);
 // A dict in the robot file's schema to YAML text, for the file's own loader and its checks.
 void ToYaml(YAML::Emitter& out, py::handle h, const std::string& where);
+
+[[noreturn]] void RethrowWithoutDictLine(const InputError& e);
+// Robot.from_dict / SpatialRobot.from_dict: the dict (the robot file's schema) loaded by `load`
+// (LoadRobotFromString or LoadSpatialRobotFromString) as a file named "robot dict", with its
+// checks; an error names the key, not a line of the YAML made here. BadArgument if not a dict.
+template <typename Load>
+auto RobotFromDict(py::handle d, Load load) {
+  if (!py::isinstance<py::dict>(d)) Bad("robot", "expected a dict in the robot file's schema, got " + TypeName(d));
+  YAML::Emitter out;
+  ToYaml(out, d, "");
+  try {
+    return load(std::string(out.c_str()), std::string("robot dict"));
+  } catch (const InputError& e) {
+    RethrowWithoutDictLine(e);
+  }
+}
 
 py::array_t<double> Array(const Eigen::MatrixXd& m);
 py::array_t<double> Vector(const Eigen::VectorXd& v);

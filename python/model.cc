@@ -39,25 +39,16 @@ void BindModel(py::module_& m) {
           py::arg("name") = "wang2022", "The built-in robot (wang2022).")
       .def_static(
           "from_dict",
-          [](py::handle d) {
-            if (!py::isinstance<py::dict>(d)) Bad("robot", "expected a dict in the robot file's schema, got " + TypeName(d));
-            YAML::Emitter out;
-            ToYaml(out, d, "");
-            try {
-              return LoadRobotFromString(out.c_str(), "robot dict");
-            } catch (const InputError& e) {
-              // "robot dict:30: gravty: ..." names a line of the YAML made here, not of anything
-              // the user wrote: keep the key.
-              std::string message = e.what();
-              const std::size_t colon = message.find(':', std::string("robot dict:").size());
-              if (message.rfind("robot dict:", 0) == 0 && colon != std::string::npos &&
-                  message.find_first_not_of("0123456789", 11) == colon) {
-                message = "robot dict:" + message.substr(colon + 1);
-              }
-              throw InputError("", "", message);
-            }
+          [](py::handle d) -> py::object {
+            // By its kind, as Robot.load reads a file: a spatial dict gives a SpatialRobot.
+            const bool spatial = py::isinstance<py::dict>(d) && d.cast<py::dict>().contains("kind") &&
+                                 py::str(d.cast<py::dict>()["kind"]).cast<std::string>() == "spatial";
+            if (spatial) return py::cast(RobotFromDict(d, LoadSpatialRobotFromString));
+            return py::cast(RobotFromDict(d, LoadRobotFromString));
           },
-          py::arg("d"), "A robot from a dict in the robot file's schema (the file's checks apply).")
+          py::arg("d"),
+          "A robot from a dict in the robot file's schema (the file's checks apply); a SpatialRobot when its kind "
+          "is spatial.")
       .def("to_dict", [](const Robot& r) { return FromYaml(YAML::Load(RobotToYaml(r))); })
       .def("to_yaml", [](const Robot& r) { return RobotToYaml(r); })
       .def_property_readonly("name", [](const Robot& r) { return r.name; })

@@ -50,6 +50,9 @@ void BindSpatial(py::module_& m) {
       .def_static("builtin", [](py::handle name) { return BuiltinSpatialRobot(AsText(name, "name")); }, py::arg("name"),
                   "A built-in spatial robot: 'cogiro', 'ipanema1' or 'irma4u' (robots/<name>.yaml).")
       .def_static("builtin_names", [] { return BuiltinSpatialRobotNames(); })
+      .def_static(
+          "from_dict", [](py::handle d) { return RobotFromDict(d, LoadSpatialRobotFromString); }, py::arg("d"),
+          "A spatial robot from a dict in the robot file's schema (kind: spatial; the file's checks apply).")
       .def("to_dict", [](const SpatialRobot& r) { return FromYaml(YAML::Load(SpatialRobotToYaml(r))); })
       .def("to_yaml", [](const SpatialRobot& r) { return SpatialRobotToYaml(r); })
       .def_property_readonly("name", [](const SpatialRobot& r) { return r.name; })

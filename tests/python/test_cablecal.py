@@ -1184,3 +1184,21 @@ def test_study_figures_show_a_spatial_robots_every_free_coordinate():
     assert plot.held_label(["a1x"]) == "geometric parameters (under the default gauge a1x is held: error 0)"
     assert plot.held_label(["a1x", "a2y"]) == "geometric parameters (held by the gauge, error 0: a1x, a2y)"
     assert plot.held_label([]) == "geometric parameters"
+
+
+def test_spatial_robot_round_trips_through_its_dict():
+    # A new user's to_dict() could not be loaded back: Robot.from_dict read planar robots only and
+    # SpatialRobot had no from_dict.
+    robot = cablecal.SpatialRobot.builtin("irma4u")
+    d = robot.to_dict()
+    for back in (cablecal.SpatialRobot.from_dict(d), cablecal.Robot.from_dict(d)):
+        assert isinstance(back, cablecal.SpatialRobot)
+        assert back.to_yaml() == robot.to_yaml()
+    assert isinstance(cablecal.Robot.from_dict(cablecal.Robot.builtin().to_dict()), cablecal.Robot)
+    d["gravity"] = -1.0
+    with pytest.raises(cablecal.InputError, match=r"^robot dict: gravity: must be > 0"):
+        cablecal.SpatialRobot.from_dict(d)
+    with pytest.raises(cablecal.InputError, match="reads spatial robots only"):
+        cablecal.SpatialRobot.from_dict(cablecal.Robot.builtin().to_dict())
+    with pytest.raises(cablecal.InputError, match="expected a dict"):
+        cablecal.SpatialRobot.from_dict([1, 2])
