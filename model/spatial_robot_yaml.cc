@@ -415,6 +415,15 @@ SpatialRobot Parse(const YAML::Node& root, const Reader& rd) {
                                   kMinSensorSigma_m, "m", {"target"});
     if (sensors["position"]["target"]) {
       position.p_P_target_m = rd.Vector3(sensors["position"]["target"], "sensors.position.target");
+      // A point of the platform: beyond the frame box's diagonal from its origin it is none
+      // (a new user's target of 50 loaded; millimetres typed for metres read so).
+      const double diagonal_m = (robot.p_F_frame_max_m - robot.p_F_frame_min_m).norm();
+      if (position.p_P_target_m.norm() > diagonal_m) {
+        rd.Fail(sensors["position"]["target"], "sensors.position.target",
+                Rounded(position.p_P_target_m.norm(), 6) + " m from the platform frame's origin, more than the "
+                "frame box's diagonal (" + Rounded(diagonal_m, 6) + " m): the target is a point of the platform, "
+                "in metres (millimetres?)");
+      }
     }
     s.position = position;
   }

@@ -228,6 +228,11 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(
         BadCase{"ZeroSwivelAxis", kCable1, "{exit: [-2.0, 1.5, 2.0], swivel_axis: [0, 0, 0], pulley_radius: 0.1}",
                 "swivel_axis: [0, 0, 0]", "cables\\[0\\]\\.swivel_axis: has zero length"},
+        BadCase{"PositionTargetInMillimetres", "encoder: {sigma: 0.00005}",
+                "encoder: {sigma: 0.00005}\n  position: {accuracy: 0.0003, repeatability: 0.0001, target: [0, 0, 20]}",
+                "target: [0, 0, 20]",
+                "sensors\\.position\\.target: 20 m from the platform frame's origin, more than the frame box's "
+                "diagonal .*millimetres\\?"},
         // initial_length far from the cable's length at home: a typo, and millimetres.
         BadCase{"InitialLengthThatCannotReach", kCable1,
                 "{exit: [-2.0, 1.5, 2.0], swivel_axis: [0, 0, 1], pulley_radius: 0.1, initial_length: 1.0}",
