@@ -869,6 +869,24 @@ bool SurelyOfFullRank(const MatrixXd& R, MatrixXd* inverse = nullptr) {
   return s(k - 1) > kSpatialNullThreshold * s(0);
 }
 
+// Pose j's Jacobians at (g, locals), its terms' rows in order: d r / d local (values x
+// Model::local()) and d r / d geometry (values x p).
+void PoseJacobians(const Model& model, int j, const VectorXd& g, const Locals& locals, MatrixXd* Jq, MatrixXd* Jg) {
+  const int rows = model.pose_values[j];
+  Jq->resize(rows, model.local());
+  Jg->resize(rows, g.size());
+  VectorXd r(rows);
+  int row = 0;
+  for (int k : model.pose_terms[j]) {
+    const Term& t = model.terms[k];
+    MatrixXd jp, jg;
+    EvaluateTerm(t, g, locals, r.data() + row, &jp, &jg);
+    Jq->middleRows(row, t.size()) = jp;
+    Jg->middleRows(row, t.size()) = jg;
+    row += t.size();
+  }
+}
+
 // The reduced geometry Jacobian: for each pose, its rows projected onto the orthogonal
 // complement of its own pose columns (Householder QR, nothing squared), so that the stacked
 // rows see exactly the geometry directions no pose change can compensate; the priors' rows as
@@ -881,17 +899,8 @@ MatrixXd ReducedJacobian(const Model& model, const VectorXd& g, const Locals& lo
   int total = 0;
   for (std::size_t j = 0; j < model.pose_ids.size(); ++j) {
     const int rows = model.pose_values[j];
-    MatrixXd Jq(rows, cols), Jg(rows, p);
-    int row = 0;
-    VectorXd r(rows);
-    for (int k : model.pose_terms[j]) {
-      const Term& t = model.terms[k];
-      MatrixXd jp, jg;
-      EvaluateTerm(t, g, locals, r.data() + row, &jp, &jg);
-      Jq.middleRows(row, t.size()) = jp;
-      Jg.middleRows(row, t.size()) = jg;
-      row += t.size();
-    }
+    MatrixXd Jq, Jg;
+    PoseJacobians(model, static_cast<int>(j), g, locals, &Jq, &Jg);
     // The pose's singular values from the QR's triangular factor (the same as Jq's), its full
     // SVD only to name what a refused pose leaves unseen. The rank is judged with every column
     // scaled to unit norm (R D is the factor of Jq D): a tension's column is in 1/N, a
@@ -953,7 +962,6 @@ struct TermLeverage {
 };
 std::vector<TermLeverage> TermLeverages(const Model& model, const VectorXd& g, const Locals& locals,
                                         const std::vector<int>& free, const MatrixXd& cov_free) {
-  const int p = g.size();
   const int cols = model.local();
   std::vector<TermLeverage> out(model.terms.size());
   const auto geometry_part = [&](const MatrixXd& m) {
@@ -963,17 +971,9 @@ std::vector<TermLeverage> TermLeverages(const Model& model, const VectorXd& g, c
   };
   for (std::size_t j = 0; j < model.pose_ids.size(); ++j) {
     const int rows = model.pose_values[j];
-    MatrixXd Jq(rows, cols), Jg(rows, p);
-    VectorXd r(rows);
+    MatrixXd Jq, Jg;
+    PoseJacobians(model, static_cast<int>(j), g, locals, &Jq, &Jg);
     int row = 0;
-    for (int k : model.pose_terms[j]) {
-      const Term& t = model.terms[k];
-      MatrixXd jp, jg;
-      EvaluateTerm(t, g, locals, r.data() + row, &jp, &jg);
-      Jq.middleRows(row, t.size()) = jp;
-      Jg.middleRows(row, t.size()) = jg;
-      row += t.size();
-    }
     VectorXd h = VectorXd::Constant(rows, std::numeric_limits<double>::quiet_NaN()), h_geometry = h;
     const Eigen::ColPivHouseholderQR<MatrixXd> qr(Jq);
     if (rows >= cols && qr.rank() == cols) {
