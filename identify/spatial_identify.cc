@@ -892,11 +892,22 @@ void PoseJacobians(const Model& model, int j, const VectorXd& g, const Locals& l
 // rows see exactly the geometry directions no pose change can compensate; the priors' rows as
 // they are (the exits' tracker prior only with_prior: it is a gauge, the platform's is
 // knowledge). InputError for a pose its own readings do not determine (when `refuse`).
-MatrixXd ReducedJacobian(const Model& model, const VectorXd& g, const Locals& locals, bool refuse, bool with_prior) {
+// What the leverages need of each pose (TermLeverages), kept by ReducedJacobian as it goes: the
+// diagonal of the pose's own hat matrix (Q1's rows' squared norms, Jq = Q1 R) and its geometry
+// rows less their projection onto the pose's columns (Q2 Q2^T Jg, in the readings' rows, not
+// rotated); for a prior's rows, those rows. Empty for a pose ReducedJacobian skipped.
+struct LeverageParts {
+  VectorXd pose_h;
+  MatrixXd m;
+};
+
+MatrixXd ReducedJacobian(const Model& model, const VectorXd& g, const Locals& locals, bool refuse, bool with_prior,
+                         std::vector<LeverageParts>* parts = nullptr) {
   const int p = g.size();
   const int cols = model.local();
   std::vector<MatrixXd> blocks;
   int total = 0;
+  if (parts) parts->assign(model.terms.size(), {});
   for (std::size_t j = 0; j < model.pose_ids.size(); ++j) {
     const int rows = model.pose_values[j];
     MatrixXd Jq, Jg;
@@ -931,6 +942,17 @@ MatrixXd ReducedJacobian(const Model& model, const VectorXd& g, const Locals& lo
     const MatrixXd& projected = Jg;
     blocks.push_back(projected.bottomRows(rows - cols));
     total += rows - cols;
+    if (parts) {
+      const MatrixXd Q = qr.householderQ() * MatrixXd::Identity(rows, rows);
+      const VectorXd pose_h = Q.leftCols(cols).rowwise().squaredNorm();
+      const MatrixXd m = Q.rightCols(rows - cols) * projected.bottomRows(rows - cols);
+      int row = 0;
+      for (int k : model.pose_terms[j]) {
+        const int size = model.terms[k].size();
+        (*parts)[k] = {pose_h.segment(row, size), m.middleRows(row, size)};
+        row += size;
+      }
+    }
   }
   for (int k : model.prior_terms) {
     const Term& t = model.terms[k];
@@ -938,6 +960,7 @@ MatrixXd ReducedJacobian(const Model& model, const VectorXd& g, const Locals& lo
     MatrixXd jg;
     VectorXd r(t.size());
     EvaluateTerm(t, g, locals, r.data(), nullptr, &jg);
+    if (parts) (*parts)[k] = {VectorXd::Zero(t.size()), jg};
     blocks.push_back(jg);
     total += t.size();
   }
@@ -950,51 +973,34 @@ MatrixXd ReducedJacobian(const Model& model, const VectorXd& g, const Locals& lo
   return A;
 }
 
-// Each term's rows' leverages (SpatialReadingLeverage) at (g, locals), `free` the geometry
-// columns not held and `cov_free` their covariance (the inverse of the reduced Jacobian's normal
-// matrix, priors included, as IdentifySpatial computes it). The hat matrix of the whole
-// whitened fit splits by pose (Frisch-Waugh): a row's leverage is its pose's own part, the
-// squared norm of its row of Q (Jq = Q R, thin), plus the geometry's, m^T C m with m the row of
-// Jg less its projection onto the pose's columns (as ReducedJacobian's rows, before their
-// rotation). A pose its own readings do not determine gets NaN.
+// Each term's rows' leverages (SpatialReadingLeverage) from ReducedJacobian's LeverageParts,
+// `free` the geometry columns not held and `cov_free` their covariance (the inverse of the
+// reduced Jacobian's normal matrix, priors included, as IdentifySpatial computes it). The hat
+// matrix of the whole whitened fit splits by pose (Frisch-Waugh): a row's leverage is its
+// pose's own part plus the geometry's, m^T C m. A pose ReducedJacobian skipped (its own
+// readings do not determine it) gets NaN.
 struct TermLeverage {
   VectorXd total, geometry;  // per row: h, and its geometry part m^T C m
 };
-std::vector<TermLeverage> TermLeverages(const Model& model, const VectorXd& g, const Locals& locals,
+std::vector<TermLeverage> TermLeverages(const Model& model, const std::vector<LeverageParts>& parts,
                                         const std::vector<int>& free, const MatrixXd& cov_free) {
-  const int cols = model.local();
-  std::vector<TermLeverage> out(model.terms.size());
-  const auto geometry_part = [&](const MatrixXd& m) {
-    MatrixXd m_free(m.rows(), free.size());
-    for (std::size_t c = 0; c < free.size(); ++c) m_free.col(c) = m.col(free[c]);
-    return VectorXd((m_free * cov_free).cwiseProduct(m_free).rowwise().sum());
-  };
-  for (std::size_t j = 0; j < model.pose_ids.size(); ++j) {
-    const int rows = model.pose_values[j];
-    MatrixXd Jq, Jg;
-    PoseJacobians(model, static_cast<int>(j), g, locals, &Jq, &Jg);
-    int row = 0;
-    VectorXd h = VectorXd::Constant(rows, std::numeric_limits<double>::quiet_NaN()), h_geometry = h;
-    const Eigen::ColPivHouseholderQR<MatrixXd> qr(Jq);
-    if (rows >= cols && qr.rank() == cols) {
-      const MatrixXd Q = qr.householderQ() * MatrixXd::Identity(rows, cols);
-      const MatrixXd m = Jg - Q * (Q.transpose() * Jg);
-      h_geometry = geometry_part(m);
-      h = Q.rowwise().squaredNorm() + h_geometry;
-    }
-    row = 0;
-    for (int k : model.pose_terms[j]) {
-      out[k] = {h.segment(row, model.terms[k].size()), h_geometry.segment(row, model.terms[k].size())};
-      row += model.terms[k].size();
-    }
+  // Every term's free columns stacked, for one product with the covariance.
+  int total = 0;
+  for (std::size_t k = 0; k < model.terms.size(); ++k) total += parts[k].m.rows();
+  MatrixXd m_free(total, free.size());
+  for (std::size_t k = 0, row = 0; k < model.terms.size(); row += parts[k].m.rows(), ++k) {
+    for (std::size_t c = 0; c < free.size(); ++c) m_free.col(c).segment(row, parts[k].m.rows()) = parts[k].m.col(free[c]);
   }
-  for (int k : model.prior_terms) {
-    const Term& t = model.terms[k];
-    MatrixXd jg;
-    VectorXd r(t.size());
-    EvaluateTerm(t, g, locals, r.data(), nullptr, &jg);
-    out[k].geometry = geometry_part(jg);
-    out[k].total = out[k].geometry;
+  const VectorXd geometry = (m_free * cov_free).cwiseProduct(m_free).rowwise().sum();
+  std::vector<TermLeverage> out(model.terms.size());
+  for (std::size_t k = 0, row = 0; k < model.terms.size(); row += parts[k].m.rows(), ++k) {
+    const int size = model.terms[k].size();
+    if (parts[k].m.rows() != size) {
+      out[k].total = out[k].geometry = VectorXd::Constant(size, std::numeric_limits<double>::quiet_NaN());
+      continue;
+    }
+    out[k].geometry = geometry.segment(row, size);
+    out[k].total = parts[k].pose_h + out[k].geometry;
   }
   return out;
 }
@@ -2089,10 +2095,10 @@ namespace {
 // of the leverage at least half), in a fit with redundancy (without, every value is unchecked,
 // as the warning before says). A value whose error its own pose's unknowns take (an encoder of
 // a stretching cable, whose tension follows it) leaves the geometry alone and is not named.
-void AddReadingLeverages(const Model& model, const VectorXd& g, const Locals& locals, const std::vector<int>& free,
+void AddReadingLeverages(const Model& model, const std::vector<LeverageParts>& parts, const std::vector<int>& free,
                          const MatrixXd& cov_free, int redundancy, SpatialIdentifyResult* result) {
   const Layout& L = model.layout;
-  const std::vector<TermLeverage> leverages = TermLeverages(model, g, locals, free, cov_free);
+  const std::vector<TermLeverage> leverages = TermLeverages(model, parts, free, cov_free);
   for (std::size_t k = 0; k < model.terms.size(); ++k) {
     const Term& t = model.terms[k];
     if (t.reading < 0) {
@@ -2306,8 +2312,10 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
     }
     return result;
   }
-  // Covariance at the estimate with the gauge held.
-  const MatrixXd A = ReducedJacobian(model, g, locals, false, true);
+  // Covariance at the estimate with the gauge held (and what the leverages need, when asked).
+  const bool leverages = options.reading_leverage && options.loss.kind == LossKind::kNone;
+  std::vector<LeverageParts> leverage_parts;
+  const MatrixXd A = ReducedJacobian(model, g, locals, false, true, leverages ? &leverage_parts : nullptr);
   std::vector<int> free;
   for (int c = 0; c < p; ++c) {
     if (!std::count(a.gauge.held.begin(), a.gauge.held.end(), c)) free.push_back(c);
@@ -2347,8 +2355,8 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
                      "saw them at the start only): not a result";
     return result;
   }
-  if (options.reading_leverage && options.loss.kind == LossKind::kNone) {
-    AddReadingLeverages(model, g, locals, free, cov_free, a.gauge.redundancy, &result);
+  if (leverages) {
+    AddReadingLeverages(model, leverage_parts, free, cov_free, a.gauge.redundancy, &result);
   }
   // The verdicts of a converged fit (the planar identification's): readings far from it are
   // not noise, and a geometry off the frame is no robot's. Either is a status, never a result.
