@@ -106,6 +106,14 @@ struct NewtonRoot {
   Eigen::VectorXd tensions_N;
 };
 
+// `base` with its free angles (indices into the pose) set to the first entries of y.
+SpatialPose<double> WithFreeAngles(const SpatialPose<double>& base, const std::vector<int>& free,
+                                   const Eigen::VectorXd& y) {
+  SpatialPose<double> q = base;
+  for (std::size_t a = 0; a < free.size(); ++a) q(free[a]) = y(static_cast<Eigen::Index>(a));
+  return q;
+}
+
 // (W t + w_g) / weight at y = (the free angles, t / weight), the pose's other coordinates
 // `base`'s, and, if J is given, its Jacobian: the angles' columns by Jets, the tensions' columns
 // W. Without J, in doubles: the same arithmetic as the Jets' values, a quarter of the cost (the
@@ -116,8 +124,7 @@ Eigen::Matrix<double, 6, 1> BalanceResidual(const SpatialRobot& robot, const Spa
   using Jet3 = ceres::Jet<double, 3>;
   const int m = robot.num_cables(), na = static_cast<int>(free.size());
   const double weight_N = Weight(robot);
-  SpatialPose<double> q = base;
-  for (int a = 0; a < na; ++a) q(free[a]) = y(a);
+  const SpatialPose<double> q = WithFreeAngles(base, free, y);
   if (!J) {
     const Eigen::Matrix<double, 6, Eigen::Dynamic> W = WrenchMatrix<double>(robot, q);
     const Eigen::VectorXd s = y.tail(m);
@@ -143,11 +150,6 @@ Eigen::Matrix<double, 6, 1> BalanceResidual(const SpatialRobot& robot, const Spa
 NewtonRoot EquilibriumNewton(const SpatialRobot& robot, const SpatialPose<double>& start, const std::vector<int>& free) {
   const int m = robot.num_cables(), na = static_cast<int>(free.size()), n = na + m;
   const double weight_N = Weight(robot);
-  const auto pose_of = [&](const Eigen::VectorXd& y) {
-    SpatialPose<double> q = start;
-    for (int a = 0; a < na; ++a) q(free[a]) = y(a);
-    return q;
-  };
   const auto residual = [&](const Eigen::VectorXd& y, Eigen::Matrix<double, 6, Eigen::Dynamic>* J) {
     return BalanceResidual(robot, start, free, y, J);
   };
@@ -190,7 +192,7 @@ NewtonRoot EquilibriumNewton(const SpatialRobot& robot, const SpatialPose<double
     J = J_new;
   }
   if (!root.converged && r.allFinite() && r.norm() < kConvergedResidual) root.converged = true;
-  root.q = pose_of(y);
+  root.q = WithFreeAngles(start, free, y);
   // A start a turn away can converge there: the same orientation, reported in (-pi, pi].
   for (int k = 3; k < 6; ++k) root.q(k) = std::remainder(root.q(k), 2.0 * M_PI);
   root.tensions_N = y.tail(m) * weight_N;
@@ -224,11 +226,7 @@ NewtonRoot WalkToTaut(const SpatialRobot& robot, const NewtonRoot& root, const s
   y.tail(m) = root.tensions_N / weight_N;
   Eigen::Matrix<double, 6, Eigen::Dynamic> J(6, n);
   Eigen::VectorXd previous = Eigen::VectorXd::Zero(n);
-  const auto tilt_of = [&](const Eigen::VectorXd& v) {
-    SpatialPose<double> q = root.q;
-    for (int a = 0; a < na; ++a) q(free[a]) = v(a);
-    return TiltAngle(q);
-  };
+  const auto tilt_of = [&](const Eigen::VectorXd& v) { return TiltAngle(WithFreeAngles(root.q, free, v)); };
   const auto done = [&](const Eigen::VectorXd& at) {
     out.converged = true;
     out.q = root.q;
@@ -433,13 +431,11 @@ SpatialPoseEvaluation EvaluateSpatialPose(const SpatialRobot& robot, const Spati
       e.feasibility = pose_feasibility == Feasibility::kFeasible ? Feasibility::kNoEquilibrium : pose_feasibility;
       return e;
     }
-    if (verdict && pose_feasibility == Feasibility::kFeasible) {
-      e.feasibility = TensionFeasibility(robot, t.tensions_N);
-      if (e.feasibility != Feasibility::kFeasible) return e;
-    }
+    e.feasibility = pose_feasibility == Feasibility::kFeasible ? TensionFeasibility(robot, t.tensions_N) : pose_feasibility;
+    // kVerdict: a pose the tension bounds refuse needs no equilibrium (nor its stability test).
+    if (verdict && e.feasibility != Feasibility::kFeasible) return e;
     e.has_equilibrium = true;
     e.equilibrium = MakeEquilibrium(robot, q, t.tensions_N);
-    e.feasibility = pose_feasibility == Feasibility::kFeasible ? TensionFeasibility(robot, t.tensions_N) : pose_feasibility;
     return e;
   }
   if (!InBoxLessMargin(robot, q.head<3>())) {
