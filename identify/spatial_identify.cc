@@ -411,6 +411,22 @@ struct Term {
 
 constexpr int kEquilibriumTerm = -2;
 
+// The vector of a reading's per-value record (SpatialReadingFit, SpatialReadingLeverage) that
+// term t's values go into: its sensor's, the encoders' or the equilibrium's.
+template <typename PerReading>
+VectorXd& ValuesOf(PerReading& f, const Term& t) {
+  return t.sensor == kEquilibriumTerm ? f.equilibrium : t.sensor < 0 ? f.encoders : f.sensors[t.sensor];
+}
+
+// Value v of term t in words: "encoder 3", "inclinometer roll", "equilibrium force x".
+std::string ValueName(const Term& t, int v, int num_cables) {
+  if (t.sensor == kEquilibriumTerm) return std::string("equilibrium ") + (v < 3 ? "force " : "moment ") + "xyz"[v % 3];
+  const int index = t.value + v;
+  if (t.sensor < 0) return "encoder " + std::to_string(index + 1);
+  const SpatialSensor sensor = static_cast<SpatialSensor>(t.sensor);
+  return std::string(ToString(sensor)) + " " + SpatialSensorColumns(sensor, num_cables)[index];
+}
+
 template <typename Functor, int... Sizes>
 std::unique_ptr<ceres::CostFunction> Cost(Functor f) {
   return std::make_unique<ceres::AutoDiffCostFunction<Functor, Sizes...>>(new Functor(f));
@@ -1670,8 +1686,8 @@ Locals PoseStarts(const Model& model, const SpatialRobot& nominal, const std::ve
   if (!rigid) return starts;
   // From 6 cables on, the start from home competes only where the staged start looks like a
   // wrong basin: its cost above the readings' noise and, among at least kFewPoses poses, more
-  // than kWrongBasinRatio times the poses' median cost per value (the nominal geometry's misfit raises every pose's
-  // cost alike; a wrong basin stands out). Measured on the spatial study's cogiro trials and
+  // than kWrongBasinRatio times the poses' median cost per value (the nominal geometry's misfit
+  // raises every pose's cost alike; a wrong basin stands out). Measured on the spatial study's cogiro trials and
   // the spatial tests (3968 poses): where the start from home fitted better by more than 10 %,
   // the staged cost was 5.8e3 to 3.5e4 times the median, or at rounding (1e-20); elsewhere at
   // most 38 times. Running it for every pose was 20 % of a Monte Carlo trial.
@@ -2105,13 +2121,9 @@ void AddReadingLeverages(const Model& model, const std::vector<LeverageParts>& p
       result->prior_leverage += leverages[k].total.sum();
       continue;
     }
-    SpatialReadingLeverage& out = result->fits[t.reading].leverage;
-    VectorXd& v = t.sensor == kEquilibriumTerm ? out.equilibrium
-                  : t.sensor < 0              ? out.encoders
-                                              : out.sensors[t.sensor];
-    const int size = t.sensor == kEquilibriumTerm ? 6
-                     : t.sensor < 0              ? L.m
-                                                 : SpatialSensorSize(static_cast<SpatialSensor>(t.sensor), L.m);
+    SpatialReadingFit& fit = result->fits[t.reading];
+    VectorXd& v = ValuesOf(fit.leverage, t);
+    const Eigen::Index size = ValuesOf(fit, t).size();  // as its residuals
     if (v.size() != size) v = VectorXd::Constant(size, std::numeric_limits<double>::quiet_NaN());
     v.segment(t.value, t.size()) = leverages[k].total;
   }
@@ -2138,13 +2150,9 @@ void AddReadingLeverages(const Model& model, const std::vector<LeverageParts>& p
   constexpr std::size_t kNamed = 3;
   for (std::size_t u = 0; u < std::min(kNamed, unchecked.size()); ++u) {
     const Term& t = model.terms[unchecked[u].term];
-    const int index = t.value + unchecked[u].row;
-    const std::string value = t.sensor < 0 ? "encoder " + std::to_string(index + 1)
-                                           : std::string(ToString(static_cast<SpatialSensor>(t.sensor))) + " " +
-                                                 SpatialSensorColumns(static_cast<SpatialSensor>(t.sensor), L.m)[index];
     char buf[200];
-    std::snprintf(buf, sizeof(buf), "%s of pose %d (leverage %.3f)", value.c_str(), model.pose_ids[t.pose],
-                  unchecked[u].leverage);
+    std::snprintf(buf, sizeof(buf), "%s of pose %d (leverage %.3f)", ValueName(t, unchecked[u].row, L.m).c_str(),
+                  model.pose_ids[t.pose], unchecked[u].leverage);
     named += (named.empty() ? "" : "; ") + std::string(buf);
   }
   result->warnings.push_back(
@@ -2244,7 +2252,7 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
       }
     }
     SpatialReadingFit& fit = result.fits[t.reading];
-    VectorXd& out = t.sensor == kEquilibriumTerm ? fit.equilibrium : t.sensor < 0 ? fit.encoders : fit.sensors[t.sensor];
+    VectorXd& out = ValuesOf(fit, t);
     if (t.sensor == kEquilibriumTerm) out.resize(6);
     out.segment(t.value, t.size()) = r;
     for (int v = 0; v < t.size(); ++v) {
@@ -2252,15 +2260,7 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
       result.worst_residual = r(v);
       result.worst_pose_id = readings[t.reading].pose_id;
       result.worst_where = readings[t.reading].where;
-      const int index = t.value + v + 1;
-      if (t.sensor == kEquilibriumTerm) {
-        result.worst_sensor = std::string("equilibrium ") + (v < 3 ? "force " : "moment ") + "xyz"[v % 3];
-      } else if (t.sensor < 0) {
-        result.worst_sensor = "encoder " + std::to_string(index);
-      } else {
-        const SpatialSensor sensor = static_cast<SpatialSensor>(t.sensor);
-        result.worst_sensor = std::string(ToString(sensor)) + " " + SpatialSensorColumns(sensor, L.m)[index - 1];
-      }
+      result.worst_sensor = ValueName(t, v, L.m);
     }
   }
   result.final_cost = cost;

@@ -153,10 +153,12 @@ TrialOutcome RunSpatialTrial(const SpatialRobot& nominal, const SpatialRobot& pl
   out.skipped_poses = static_cast<int>(sim.skipped.size());  // counted in a failed trial too
   // Poses skipped (--skip-infeasible) leaving too few to identify: the simulation's failure, as
   // the remedy is the plan's (margins), not the identification's.
-  const std::string skipped = std::to_string(sim.skipped.size()) + " of " + std::to_string(n) +
-                              " poses the true robot could not hold within its limits (--skip-infeasible)";
+  const auto skipped = [&] {
+    return std::to_string(sim.skipped.size()) + " of " + std::to_string(n) +
+           " poses the true robot could not hold within its limits (--skip-infeasible)";
+  };
   if (sim.measurements.empty()) {
-    out.failure = "simulation: " + skipped + ": none left to identify";
+    out.failure = "simulation: " + skipped() + ": none left to identify";
     return out;
   }
   SpatialIdentifyResult r;
@@ -165,7 +167,7 @@ TrialOutcome RunSpatialTrial(const SpatialRobot& nominal, const SpatialRobot& pl
   } catch (const InputError& e) {
     // The study's check passed at its own poses; these ones leave something unseen.
     out.failure = sim.skipped.empty() ? std::string("identification: refused (") + e.what() + ")"
-                                      : "simulation: " + skipped + ", and the rest refused (" + e.what() + ")";
+                                      : "simulation: " + skipped() + ", and the rest refused (" + e.what() + ")";
     return out;
   }
   if (!r.converged()) {
