@@ -394,7 +394,8 @@ int RunSimulate(const Context& ctx, const SimulateOptions& options) {
 int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   CheckCommandPaths({{"--robot", options.robot_path},
                      {"--measurements", options.measurements_path},
-                     {"--holdout", options.holdout_path}},
+                     {"--holdout", options.holdout_path},
+                     {"--plan", options.plan_path}},
                     {{"--out", options.out_path}, {"--calibrated-robot", options.calibrated_robot_path}});
   if (options.out_path.empty() && !options.json) throw InputError("--out", "", "required (or print the result with --json)");
   if (!options.holdout_path.empty() && options.report_dir.empty()) {
@@ -404,6 +405,7 @@ int RunIdentify(const Context& ctx, const IdentifyCommandOptions& options) {
   if (IsSpatialRobotFile(options.robot_path)) return RunSpatialIdentify(ctx, options);
   RefuseSpatialOnlyFlag(options.gauge == "auto" || options.gauge.rfind("hold:", 0) == 0, "--gauge " + options.gauge);
   RefuseSpatialOnlyFlag(!options.identify.empty(), "--identify " + options.identify);
+  RefuseSpatialOnlyFlag(!options.plan_path.empty(), "--plan");
   // The report's folder is checked before any work, and no other file may be one it writes.
   std::unique_ptr<OutputFolder> report;
   if (!options.report_dir.empty()) {

@@ -80,6 +80,7 @@ struct IdentifyCommandOptions {
   std::string report_dir;        // --report: the calibration report's folder (identify/calibration_report.h)
   std::string holdout_path;      // --holdout: held-out readings the report validates the calibration on
   std::string identify;          // --identify (spatial robots: exits or anchors, ParseSpatialIdentify); "" not given
+  std::string plan_path;         // --plan (spatial robots): the experiment's pose plan, each pose's start; "" none
   double geometry_prior_sigma_m = 0.0;  // --geometry-prior, when geometry_prior_given
   bool geometry_prior_given = false;    // (given as 0 it is refused, not taken for none)
   // Whether given: a spatial robot's defaults differ (gauge auto, the library's iteration limit,

@@ -185,6 +185,10 @@ int main(int argc, char** argv) {
   id_cmd->add_option("--identify", ident.identify,
                      "spatial robots: exits (default: the exit points and initial lengths) or anchors (the platform "
                      "anchors b1x .. bmz too)");
+  id_cmd->add_option("--plan", ident.plan_path,
+                     "spatial robots: the pose plan CSV the readings were taken at (as sample or design write it): "
+                     "each pose's search starts from its commanded pose, matched by pose id, instead of from home")
+      ->check(CLI::ExistingFile);
   id_cmd->add_option("--out", ident.out_path, "result YAML (required unless --json)");
   id_cmd->add_flag("--json", ident.json, "print the result (the YAML's content) as JSON on stdout");
   id_cmd->add_option("--delimiter", ident.delimiter, "the measurement CSV's separator: ',', ';' or tab")

@@ -16,6 +16,7 @@
 #include "common/version.h"
 #include "experiment/measurements.h"  // ParseDelimiter
 #include "experiment/spatial_measurements.h"
+#include "experiment/spatial_plan.h"
 #include "identify/spatial_calibration_report.h"
 #include "identify/spatial_identify.h"
 #include "identify/spatial_report.h"
@@ -67,6 +68,7 @@ int RunSpatialIdentify(const Context& ctx, const IdentifyCommandOptions& options
     report->RefuseInputs({{"--robot", options.robot_path},
                           {"--measurements", options.measurements_path},
                           {"--holdout", options.holdout_path},
+                          {"--plan", options.plan_path},
                           {"--out", options.out_path},
                           {"--calibrated-robot", options.calibrated_robot_path}});
   }
@@ -87,15 +89,27 @@ int RunSpatialIdentify(const Context& ctx, const IdentifyCommandOptions& options
           : ReadSpatialMeasurementsCsv(options.holdout_path, nominal.num_cables(), ParseDelimiter(options.delimiter));
   CheckSpatialReadingsPlausible(nominal, readings, options.measurements_path);
   CheckSpatialReadingsPlausible(nominal, holdout, options.holdout_path);
+  // --plan: the commanded poses, each its pose's start. The plan must be this robot's (its
+  // poses equilibria of the robot file's statics): another robot's would start the search at
+  // poses the readings were not taken at.
+  if (!options.plan_path.empty()) {
+    std::vector<int> plan_ids;
+    const std::vector<SpatialPlanPose> plan = ReadSpatialPlanCsv(options.plan_path, nominal.num_cables(), &plan_ids);
+    CheckSpatialPlanMatchesRobot(nominal, plan, options.plan_path);
+    for (std::size_t k = 0; k < plan.size(); ++k) id.pose_starts[plan_ids[k]] = {plan[k].q, plan[k].tensions_N};
+  }
   // What the readings as a whole cannot do (too few values, a pose they do not determine, a
   // direction nothing fixes) is named by their file, as the other refusals of the data are.
   const SpatialIdentifyResult result = [&] {
     try {
       return IdentifySpatial(nominal, readings, id);
     } catch (const InputError& e) {
-      if (e.where() != "readings") throw;
-      const std::string prefix = "readings: " + (e.key().empty() ? std::string() : e.key() + ": ");
-      throw InputError(options.measurements_path, e.key(), std::string(e.what()).substr(prefix.size()));
+      const std::string file = e.where() == "readings" ? options.measurements_path
+                               : e.where() == "plan"   ? options.plan_path
+                                                       : std::string();
+      if (file.empty()) throw;
+      const std::string prefix = e.where() + ": " + (e.key().empty() ? std::string() : e.key() + ": ");
+      throw InputError(file, e.key(), std::string(e.what()).substr(prefix.size()));
     }
   }();
   if (result.status == SpatialIdentifyStatus::kRankDeficient || result.status == SpatialIdentifyStatus::kPoorFit) {

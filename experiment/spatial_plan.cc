@@ -178,13 +178,15 @@ std::string SpatialPlanCsv(const std::vector<SpatialPlanPose>& plan, const std::
   return out;
 }
 
-std::vector<SpatialPlanPose> ReadSpatialPlanCsv(const std::string& path, int num_cables) {
+std::vector<SpatialPlanPose> ReadSpatialPlanCsv(const std::string& path, int num_cables, std::vector<int>* pose_ids) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "", "cannot open the file");
-  return ReadSpatialPlanCsv(in, path, num_cables);
+  return ReadSpatialPlanCsv(in, path, num_cables, pose_ids);
 }
 
-std::vector<SpatialPlanPose> ReadSpatialPlanCsv(std::istream& in, const std::string& path, int num_cables) {
+std::vector<SpatialPlanPose> ReadSpatialPlanCsv(std::istream& in, const std::string& path, int num_cables,
+                                                std::vector<int>* pose_ids) {
+  if (pose_ids) pose_ids->clear();
   const std::vector<std::string> header = PlanHeader(num_cables);
   std::vector<SpatialPlanPose> plan;
   std::set<int> ids;
@@ -194,6 +196,7 @@ std::vector<SpatialPlanPose> ReadSpatialPlanCsv(std::istream& in, const std::str
     }
     const int id = row.PositiveInt(0);
     if (!ids.insert(id).second) throw InputError(row.Where(), "column 'pose'", "duplicate pose id " + std::to_string(id));
+    if (pose_ids) pose_ids->push_back(id);
     SpatialPlanPose p;
     for (int k = 0; k < 6; ++k) p.q(k) = row.Number(1 + k);
     Eigen::VectorXd* columns[3] = {&p.tensions_N, &p.lengths_m, &p.length_change_m};

@@ -71,9 +71,12 @@ std::vector<SpatialPlanPose> GridSpatialPoses(const SpatialRobot& robot, int sid
 std::string SpatialPlanCsv(const std::vector<SpatialPlanPose>& plan, const std::string& provenance);
 // Reads it; '#' lines are comments. InputError naming file, line and column on a wrong header
 // (another cable count, a planar plan), a bad number, a duplicate or non-positive pose id; at
-// most kMaxPlanPoses rows (experiment/plan.h).
-std::vector<SpatialPlanPose> ReadSpatialPlanCsv(const std::string& path, int num_cables);
-std::vector<SpatialPlanPose> ReadSpatialPlanCsv(std::istream& in, const std::string& name, int num_cables);
+// most kMaxPlanPoses rows (experiment/plan.h). `pose_ids`, when given, receives each row's pose
+// id (simulate numbers its readings 1..n in row order; identify --plan matches them by id).
+std::vector<SpatialPlanPose> ReadSpatialPlanCsv(const std::string& path, int num_cables,
+                                                std::vector<int>* pose_ids = nullptr);
+std::vector<SpatialPlanPose> ReadSpatialPlanCsv(std::istream& in, const std::string& name, int num_cables,
+                                                std::vector<int>* pose_ids = nullptr);
 
 // A plan read from a file must be one of `robot`'s: p inside the frame box, the tilt within
 // tilt_max, each pose an equilibrium of its statics with the plan's tensions (residual below

@@ -87,6 +87,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -142,8 +143,23 @@ struct SpatialGauge {
 SpatialGauge ParseSpatialGauge(const std::string& text);
 std::string ToString(const SpatialGauge& gauge);
 
+// Where a pose's search starts when the lab knows what it commanded there (identify --plan: a
+// row of the plan CSV that made the experiment): the commanded pose, an equilibrium of the
+// nominal robot, and the nominal tensions that hold it there.
+struct SpatialPoseStart {
+  SpatialPose<double> q = SpatialPose<double>::Zero();  // x y z (m), roll pitch yaw (rad), in F
+  Eigen::VectorXd tensions_N;  // one per cable; empty: those nearest holding the nominal platform at q
+};
+
 struct SpatialIdentifyOptions {
   SpatialGauge gauge;
+  // By pose id. A pose with a start here begins from it; the others from home, fitted first
+  // to their readings without the statics, then with them (PoseStarts in spatial_identify.cc).
+  // The true robot settles within its geometry's errors of the commanded pose, so from 6 cables
+  // on no per-pose fit is needed (below 6 the commanded start is fitted and competes with one
+  // from home). A start whose misfit stands out among those of the poses started alike
+  // (another pose's plan row, a wrong basin) is fitted and competes with one from home.
+  std::map<int, SpatialPoseStart> pose_starts;
   RobustLoss loss;  // on each whitened sensor value (an encoder, roll, px, ...) on its own
   int max_iterations = 200;
   bool statics = true;  // the tensions, load cells, equilibrium and stretch (file comment)

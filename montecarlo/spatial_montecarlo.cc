@@ -161,9 +161,15 @@ TrialOutcome RunSpatialTrial(const SpatialRobot& nominal, const SpatialRobot& pl
     out.failure = "simulation: " + skipped() + ": none left to identify";
     return out;
   }
+  // The lab knows what it commanded: each pose starts from its plan pose (identify --plan).
+  SpatialIdentifyOptions commanded = id;
+  const std::vector<SpatialPlanPose>& plan = designed ? *designed : sampled;
+  for (std::size_t j = 0; j < plan.size(); ++j) {
+    commanded.pose_starts[static_cast<int>(j + 1)] = {plan[j].q, plan[j].tensions_N};
+  }
   SpatialIdentifyResult r;
   try {
-    r = IdentifySpatial(planning, sim.measurements, id);
+    r = IdentifySpatial(planning, sim.measurements, commanded);
   } catch (const InputError& e) {
     // The study's check passed at its own poses; these ones leave something unseen.
     out.failure = sim.skipped.empty() ? std::string("identification: refused (") + e.what() + ")"

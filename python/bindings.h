@@ -42,6 +42,7 @@ struct PyMeasurements {
 struct PySpatialPlan {
   std::vector<SpatialPlanPose> poses;
   int num_cables = 0;
+  std::vector<int> pose_ids;  // a loaded file's pose column; empty: 1..n in order (as simulate numbers them)
 };
 struct PySpatialMeasurements {
   std::vector<SpatialMeasurement> readings;
@@ -61,7 +62,7 @@ py::object SpatialSimulate(const SpatialRobot& robot, py::handle plan, py::handl
 void BindSpatialIdentify(py::module_& m);  // SpatialIdentifyResult, SpatialValidation
 py::object SpatialIdentify(const SpatialRobot& robot, py::handle measurements, py::handle estimator, py::handle gauge,
                            py::handle max_iterations, py::handle loss, py::handle geometry_prior,
-                           py::handle equilibrium, py::handle identify);
+                           py::handle equilibrium, py::handle identify, py::handle plan);
 py::object SpatialCalibratedRobot(const SpatialRobot& nominal, py::handle result);
 py::object SpatialValidatePy(const SpatialRobot& robot, py::handle measurements, py::handle nominal,
                              bool skip_infeasible);

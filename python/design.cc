@@ -67,7 +67,7 @@ std::vector<std::string> LayoutNames(const SpatialInformationLayout& layout, con
 void BindSpatialDesignResult(py::module_& m) {
   py::class_<PySpatialDesign>(m, "SpatialDesignResult", "cablecal.design on a SpatialRobot (README, \"Spatial robots\").")
       .def_property_readonly("plan", [](const PySpatialDesign& d) {
-        return PySpatialPlan{d.result.poses, d.robot.num_cables()};
+        return PySpatialPlan{d.result.poses, d.robot.num_cables(), {}};
       })
       .def_property_readonly("criteria", [](const PySpatialDesign& d) { return CriteriaDict(d.result.criteria); })
       .def_property_readonly("random_median", [](const PySpatialDesign& d) { return CriteriaDict(d.result.random_median); })

@@ -162,14 +162,15 @@ void BindIdentify(py::module_& m) {
       "identify",
       [](py::handle robot_arg, py::handle measurements_arg, py::handle estimator, py::handle gauge,
          py::handle max_iterations, py::handle loss, py::handle geometry_prior, py::handle equilibrium,
-         py::handle identify) -> py::object {
+         py::handle identify, py::handle plan) -> py::object {
         if (py::isinstance<SpatialRobot>(robot_arg)) {
           return SpatialIdentify(robot_arg.cast<const SpatialRobot&>(), measurements_arg, estimator, gauge,
-                                 max_iterations, loss, geometry_prior, equilibrium, identify);
+                                 max_iterations, loss, geometry_prior, equilibrium, identify, plan);
         }
         if (!identify.is_none()) {
           throw InputError("identify", AsText(identify, "identify"), "serves spatial robots only (a SpatialRobot)");
         }
+        if (!plan.is_none()) throw InputError("plan", "", "serves spatial robots only (a SpatialRobot)");
         const Robot& robot = AsObject<Robot>(robot_arg, "robot", "Robot");
         const PyMeasurements& measurements = AsObject<PyMeasurements>(measurements_arg, "measurements", "Measurements");
         if (measurements.num_cables != robot.num_cables()) Bad("measurements", "read for a robot with another number of cables");
@@ -199,14 +200,16 @@ void BindIdentify(py::module_& m) {
       },
       py::arg("robot"), py::arg("measurements"), py::arg("estimator") = "ml", py::arg("gauge") = py::none(),
       py::arg("max_iterations") = py::none(), py::arg("loss") = "none", py::arg("geometry_prior") = py::none(),
-      py::arg("equilibrium") = py::none(), py::arg("identify") = py::none(),
+      py::arg("equilibrium") = py::none(), py::arg("identify") = py::none(), py::arg("plan") = py::none(),
       "Identifies exit points and initial lengths (cablecal identify); InputError when the data cannot "
       "calibrate this robot, SolverError when the solve does not converge. geometry_prior: the standard "
       "deviation (m) of the nominal geometry, a prior as identify --geometry-prior (None: none). Defaults (None): "
       "gauge 'a1x', 100 iterations, equilibrium as the CLI's; for a SpatialRobot and SpatialMeasurements: gauge "
       "'auto' (or 'none', 'prior', 'hold:a1x,a1y,...,b1x,...'), 200 iterations, the statics on ('off' to leave them "
       "out), identify 'exits' ('anchors': the platform anchors b1x .. bmz too, as identify --identify anchors), "
-      "estimator 'ml' only, no geometry_prior; it returns a SpatialIdentifyResult.");
+      "plan: the SpatialPlan the readings were taken at (as identify --plan: each pose starts from its commanded "
+      "pose, matched by pose id; None: from home), estimator 'ml' only, no geometry_prior; it returns a "
+      "SpatialIdentifyResult.");
   m.def("calibrated_robot", [](py::handle nominal_arg, py::handle result_arg) -> py::object {
         if (py::isinstance<SpatialRobot>(nominal_arg)) {
           return SpatialCalibratedRobot(nominal_arg.cast<const SpatialRobot&>(), result_arg);

@@ -70,7 +70,8 @@ void BindSpatial(py::module_& m) {
           [](py::handle robot_arg, py::handle path) {
             const SpatialRobot& robot = AsObject<SpatialRobot>(robot_arg, "robot", "SpatialRobot");
             const std::string p = AsPath(path, "path");
-            PySpatialPlan plan{ReadSpatialPlanCsv(p, robot.num_cables()), robot.num_cables()};
+            PySpatialPlan plan{{}, robot.num_cables(), {}};
+            plan.poses = ReadSpatialPlanCsv(p, robot.num_cables(), &plan.pose_ids);
             CheckSpatialPlanMatchesRobot(robot, plan.poses, p);
             return plan;
           },
@@ -201,7 +202,7 @@ py::object SpatialSample(const SpatialRobot& robot, int n, std::uint64_t seed, p
   const std::optional<double> yaw = OptionalDegrees(yaw_range_deg, "yaw_range_deg");
   if (yaw && !(*yaw > 0.0)) Bad("yaw_range_deg", "must be positive (degrees)");
   const double yaw_rad = yaw ? *yaw * M_PI / 180.0 : kDefaultSampleYawRange_rad;
-  PySpatialPlan plan{{}, robot.num_cables()};
+  PySpatialPlan plan{{}, robot.num_cables(), {}};
   {
     py::gil_scoped_release release;
     plan.poses = SampleSpatialPoses(robot, n, seed, yaw_rad);

@@ -14,6 +14,7 @@
 #include "identify/spatial_report.h"
 #include "identify/spatial_validate.h"
 #include "experiment/spatial_measurements.h"
+#include "experiment/spatial_plan.h"
 #include "model/spatial_robot.h"
 #include "python/bindings.h"
 #include "python/converters.h"
@@ -92,7 +93,7 @@ PySpatialMeasurements MakeSpatialMeasurements(const SpatialRobot& robot, py::han
 
 py::object SpatialIdentify(const SpatialRobot& robot, py::handle measurements_arg, py::handle estimator,
                            py::handle gauge, py::handle max_iterations, py::handle loss, py::handle geometry_prior,
-                           py::handle equilibrium, py::handle identify) {
+                           py::handle equilibrium, py::handle identify, py::handle plan_arg) {
   const PySpatialMeasurements& measurements =
       AsObject<PySpatialMeasurements>(measurements_arg, "measurements", "SpatialMeasurements");
   if (measurements.num_cables != robot.num_cables()) Bad("measurements", "read for a robot with another number of cables");
@@ -113,6 +114,16 @@ py::object SpatialIdentify(const SpatialRobot& robot, py::handle measurements_ar
   out.options.statics = equilibrium.is_none() || OnOff(equilibrium, "equilibrium");
   out.options.anchors = !identify.is_none() && ParseSpatialIdentify(AsText(identify, "identify"));
   CheckSpatialReadingsPlausible(robot, measurements.readings, "measurements");
+  // As identify --plan: each pose starts from its commanded pose, matched by pose id.
+  if (!plan_arg.is_none()) {
+    const PySpatialPlan& plan = AsObject<PySpatialPlan>(plan_arg, "plan", "SpatialPlan");
+    if (plan.num_cables != robot.num_cables()) Bad("plan", "made for a robot with another number of cables");
+    CheckSpatialPlanMatchesRobot(robot, plan.poses, "plan");
+    for (std::size_t k = 0; k < plan.poses.size(); ++k) {
+      const int id = plan.pose_ids.empty() ? static_cast<int>(k + 1) : plan.pose_ids[k];
+      out.options.pose_starts[id] = {plan.poses[k].q, plan.poses[k].tensions_N};
+    }
+  }
   {
     py::gil_scoped_release release;
     out.result = IdentifySpatial(robot, measurements.readings, out.options);

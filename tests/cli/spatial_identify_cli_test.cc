@@ -507,6 +507,67 @@ TEST_F(SpatialIdentifyCli, IdentifyAnchorsEndToEnd) {
   EXPECT_NEAR(j["parameters"]["b3y"]["value"].as<double>(), r["parameters"]["b3y"]["value"].as<double>(), 1e-9);
 }
 
+// identify --plan on the random asymmetric robot: the result the starts from home give (the
+// same parameters to a twentieth of their sigma), a warning naming the poses the plan lacks, and
+// refusals naming the plan file for another experiment's pose ids or another robot's plan.
+TEST_F(SpatialIdentifyCli, ThePlanStartsEachPoseFromItsCommandedPose) {
+  const std::string robot = RandomRobotFile();
+  Simulate(robot, 24, "0.0003", 1, "p");
+  const std::string id = "identify --robot " + robot + " --measurements " + Path("p.csv");
+  RunResult r = RunCablecal(id + " --out " + Path("home.yaml"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = RunCablecal(id + " --plan " + Path("p_plan.csv") + " --out " + Path("planned.yaml"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output.find("no row in the plan"), std::string::npos) << r.output;
+  const YAML::Node home = YAML::LoadFile(Path("home.yaml"));
+  const YAML::Node planned = YAML::LoadFile(Path("planned.yaml"));
+  for (const auto& p : home["parameters"]) {
+    const std::string name = p.first.as<std::string>();
+    if (p.second["held"]) continue;
+    EXPECT_LT(std::abs(planned["parameters"][name]["value"].as<double>() - p.second["value"].as<double>()),
+              0.05 * p.second["std"].as<double>())
+        << name;
+  }
+  // The plan without its rows of the second and third poses read (its header and comments kept).
+  std::vector<std::string> read_ids;
+  std::istringstream readings(Read("p.csv"));
+  for (std::string line; std::getline(readings, line) && read_ids.size() < 3;) {
+    if (!line.empty() && std::isdigit(line[0])) read_ids.push_back(Split(line)[0]);
+  }
+  ASSERT_EQ(read_ids.size(), 3u);
+  std::istringstream in(Read("p_plan.csv"));
+  std::ofstream part(Path("part_plan.csv"));
+  std::ofstream other(Path("other_plan.csv"));
+  for (std::string line; std::getline(in, line);) {
+    const bool row = !line.empty() && std::isdigit(line[0]);
+    if (!row || (Split(line)[0] != read_ids[1] && Split(line)[0] != read_ids[2])) part << line << "\n";
+    other << (row ? "100" : "") << line << "\n";
+  }
+  part.close();
+  other.close();
+  r = RunCablecal(id + " --plan " + Path("part_plan.csv") + " --out " + Path("part.yaml"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("warning: poses " + read_ids[1] + ", " + read_ids[2] +
+                          " have no row in the plan: started from home"),
+            std::string::npos)
+      << r.output;
+  r = RunCablecal(id + " --plan " + Path("other_plan.csv") + " --out " + Path("other.yaml"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find(Path("other_plan.csv") + ": column 'pose': none of the readings' "), std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(Path("other.yaml")));
+  r = RunCablecal("sample --robot " + Builtin("cogiro") + " --poses 3 --out " + Path("cogiro_plan.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = RunCablecal(id + " --plan " + Path("cogiro_plan.csv") + " --out " + Path("other.yaml"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find(Path("cogiro_plan.csv") + ":"), std::string::npos) << r.output;  // another robot's
+  EXPECT_FALSE(fs::exists(Path("other.yaml")));
+  r = RunCablecal("identify --measurements " + Path("p.csv") + " --plan " + Path("p_plan.csv") + " --out " +
+                  Path("other.yaml"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--plan: serves spatial robots only"), std::string::npos) << r.output;
+}
+
 TEST_F(SpatialIdentifyCli, HostileInputsExitTwoWithOneMessageAndWriteNothing) {
   const std::string robot = RandomRobotFile();
   Simulate(robot, 12, "0", 5, "m");

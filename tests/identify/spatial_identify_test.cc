@@ -1480,5 +1480,127 @@ TEST(SpatialIdentifyAnchors, CovarianceCarriesTheAnchors) {
   for (int k = 0; k < 28; ++k) EXPECT_GE(free.sigma(k), fixed.sigma(k) * (1.0 - 1e-9)) << free.names[k];
 }
 
+
+// --- Starts from the plan (SpatialIdentifyOptions::pose_starts, identify --plan) ---
+
+// A robot of m cables drawn at random with every cable stretching (simulate needs a stiffness
+// from 7 cables on), encoders, an inclinometer and a laser; its sampled plan, and the readings
+// of a true robot whose exits are 1 mm off (the poses it cannot hold skipped).
+struct PlannedExperiment {
+  SpatialRobot nominal;
+  std::vector<SpatialPlanPose> plan;
+  SimulatedSpatialExperiment sim;
+};
+PlannedExperiment Planned(Rng& rng, int m, int poses) {
+  // A redundant random robot with stiff cables loses many poses to its tension bounds on a true
+  // robot 1 mm off, or its home: robots are drawn until 2/3 of the plan can be run (fixed seeds).
+  constexpr int kDraws = 20;
+  for (int draw = 0; draw < kDraws; ++draw) {
+    PlannedExperiment e;
+    SpatialRobot r = testing::RandomSpatialRobot(rng, "planned" + std::to_string(m), m);
+    for (SpatialCable& c : r.cables) c.stiffness_N = rng.Uniform(20.0, 100.0) * r.tension_max_N;
+    e.nominal = WithSensors(LoadSpatialRobotFromString(SpatialRobotToYaml(r), r.name), kInc | kLaser);
+    // A redundant robot planned with a tenth of the tension range kept on each side, as a lab
+    // (montecarlo --tension-margin) would: its true tensions differ from the commanded ones.
+    SpatialRobot planning = e.nominal;
+    const double margin_N = m >= 6 ? 0.1 * (e.nominal.tension_max_N - e.nominal.tension_min_N) : 0.0;
+    planning.tension_min_N += margin_N;
+    planning.tension_max_N -= margin_N;
+    e.plan = SampleSpatialPoses(planning, poses, 11);
+    SpatialSimulationOptions lab;
+    lab.skip_infeasible = true;
+    try {
+      e.sim = SimulateSpatialExperiment(e.nominal, PerturbedExits(e.nominal, rng, 0.001), e.plan, lab, rng);
+    } catch (const SolverFailure&) {
+      continue;  // the true robot cannot hold its home: no sensor zero
+    }
+    if (3 * e.sim.measurements.size() >= 2u * static_cast<std::size_t>(poses)) return e;
+  }
+  ADD_FAILURE() << "no random " << m << "-cable robot in " << kDraws << " draws held 2/3 of its plan";
+  return {};
+}
+SpatialIdentifyOptions FromPlan(const std::vector<SpatialPlanPose>& plan) {
+  SpatialIdentifyOptions o;
+  for (std::size_t j = 0; j < plan.size(); ++j) o.pose_starts[static_cast<int>(j + 1)] = {plan[j].q, plan[j].tensions_N};
+  return o;
+}
+
+// The commanded poses start the search and it ends where the starts from home lead: the same
+// cost to 1e-6 and the same geometry to a twentieth of its sigma (the directions the readings
+// see weakly are flat: where the iterations stop along them depends on the start). From 6 cables
+// on a commanded pose is the start as it is (below 6 it is fitted first).
+TEST(SpatialIdentifyPlan, CommandedStartsEndWhereStartsFromHomeDo) {
+  Rng rng(4040);
+  for (const int m : {4, 5, 8}) {
+    SCOPED_TRACE("m = " + std::to_string(m));
+    const PlannedExperiment e = Planned(rng, m, 30);
+    ASSERT_GE(e.sim.measurements.size(), 20u);  // Planned's draws
+    const SpatialIdentifyResult home = IdentifySpatial(e.nominal, e.sim.measurements, {});
+    const SpatialIdentifyResult planned = IdentifySpatial(e.nominal, e.sim.measurements, FromPlan(e.plan));
+    ASSERT_TRUE(home.converged()) << home.message;
+    ASSERT_TRUE(planned.converged()) << planned.message;
+    EXPECT_LE(planned.final_cost, home.final_cost * (1.0 + 1e-6));
+    EXPECT_NEAR(planned.final_cost, home.final_cost, 1e-6 * home.final_cost);
+    for (int k = 0; k < home.geometry.size(); ++k) {
+      if (home.sigma(k) == 0.0) continue;  // held
+      EXPECT_LT(std::abs(planned.geometry(k) - home.geometry(k)), 0.05 * home.sigma(k)) << home.names[k];
+    }
+    for (std::size_t k = 0; k < planned.pose_ids.size() && m >= 6; ++k) {
+      EXPECT_EQ(planned.starting_poses[k], e.plan[planned.pose_ids[k] - 1].q) << "pose " << planned.pose_ids[k];
+    }
+  }
+}
+
+// A plan row of another pose (rows swapped, a pose the robot did not reach) stands out among the
+// poses' misfits at their commanded starts: that pose is fitted to its readings instead, and the
+// fit ends as with the right plan.
+TEST(SpatialIdentifyPlan, AnotherPosesRowIsFittedFromTheReadings) {
+  Rng rng(4141);
+  const PlannedExperiment e = Planned(rng, 8, 30);
+  ASSERT_GE(e.sim.measurements.size(), 20u);
+  SpatialIdentifyOptions swapped = FromPlan(e.plan);
+  const int a = e.sim.measurements[2].pose_id, b = e.sim.measurements[9].pose_id;
+  std::swap(swapped.pose_starts[a], swapped.pose_starts[b]);
+  const SpatialIdentifyResult right = IdentifySpatial(e.nominal, e.sim.measurements, FromPlan(e.plan));
+  const SpatialIdentifyResult r = IdentifySpatial(e.nominal, e.sim.measurements, swapped);
+  ASSERT_TRUE(r.converged()) << r.message;
+  EXPECT_NEAR(r.final_cost, right.final_cost, 1e-6 * right.final_cost);
+  // Fitted at the nominal geometry: within a few centimetres of where the platform settled,
+  // not at the other pose's commanded position.
+  for (std::size_t k = 0; k < r.pose_ids.size(); ++k) {
+    if (r.pose_ids[k] != a && r.pose_ids[k] != b) continue;
+    const Eigen::Vector3d settled = e.sim.true_poses[k].head<3>();
+    ASSERT_GT((swapped.pose_starts[r.pose_ids[k]].q.head<3>() - settled).norm(), 0.2) << "poses too close to swap";
+    EXPECT_LT((r.starting_poses[k].head<3>() - settled).norm(), 0.05) << "pose " << r.pose_ids[k];
+  }
+}
+
+// Poses the plan has no row for start from home, named in a warning; a plan with none of the
+// readings' pose ids is refused as another experiment's.
+TEST(SpatialIdentifyPlan, PosesWithoutARowAreNamedAndAPlanOfNoneIsRefused) {
+  Rng rng(4242);
+  const PlannedExperiment e = Planned(rng, 8, 30);
+  ASSERT_GE(e.sim.measurements.size(), 20u);
+  SpatialIdentifyOptions part = FromPlan(e.plan);
+  const int a = e.sim.measurements[1].pose_id, b = e.sim.measurements[4].pose_id;
+  part.pose_starts.erase(a);
+  part.pose_starts.erase(b);
+  const SpatialIdentifyResult r = IdentifySpatial(e.nominal, e.sim.measurements, part);
+  ASSERT_TRUE(r.converged()) << r.message;
+  const std::string expected = "poses " + std::to_string(a) + ", " + std::to_string(b) + " have no row in the plan";
+  EXPECT_TRUE(std::any_of(r.warnings.begin(), r.warnings.end(),
+                          [&](const std::string& w) { return w.find(expected) != std::string::npos; }))
+      << expected;
+  SpatialIdentifyOptions other;
+  for (const auto& [id, start] : FromPlan(e.plan).pose_starts) other.pose_starts[id + 1000] = start;
+  try {
+    IdentifySpatial(e.nominal, e.sim.measurements, other);
+    ADD_FAILURE() << "a plan of other pose ids was taken";
+  } catch (const InputError& error) {
+    EXPECT_EQ(error.where(), "plan");
+    EXPECT_NE(std::string(error.what()).find("none of the readings'"), std::string::npos) << error.what();
+  }
+}
+
 }  // namespace
 }  // namespace cablecal

@@ -1060,6 +1060,29 @@ def test_spatial_identify_equals_cli_and_takes_arrays(tmp_path):
     assert "## Validation on held-out poses" in (tmp_path / "report" / "report.md").read_text()
 
 
+def test_spatial_identify_from_the_plan_equals_cli(tmp_path):
+    # identify --plan: each pose starts from its commanded pose; the same estimate as the
+    # command's, and within a twentieth of a sigma of the starts from home.
+    path = robot_file("cogiro")
+    robot, run, csv = simulated_spatial(tmp_path, path)
+    plan = cablecal.sample(robot, 16, seed=2)  # simulated_spatial's
+    plan_csv = tmp_path / "plan.csv"
+    plan_csv.write_text(plan.to_csv())
+    home = cablecal.identify(robot, run.measurements)
+    planned = cablecal.identify(robot, run.measurements, plan=plan)
+    free = home.sigma > 0
+    assert np.all(np.abs(planned.values - home.values)[free] < 0.05 * home.sigma[free])
+    doc = json.loads(cli("identify", "--robot", path, "--measurements", str(csv), "--plan", str(plan_csv), "--json"))
+    np.testing.assert_allclose([doc["parameters"][n]["value"] for n in planned.names], planned.values, rtol=1e-12)
+    loaded = cablecal.SpatialPlan.load(robot, str(plan_csv))
+    np.testing.assert_allclose(cablecal.identify(robot, run.measurements, plan=loaded).values, planned.values,
+                               rtol=1e-12)
+    with pytest.raises(cablecal.InputError, match="plan: serves spatial robots only"):
+        cablecal.identify(cablecal.Robot.load(robot_file("wang2022")), run.measurements, plan=plan)
+    with pytest.raises(cablecal.InputError, match="plan.*SpatialPlan"):
+        cablecal.identify(robot, run.measurements, plan="plan.csv")
+
+
 def test_spatial_identify_anchors_equals_cli(tmp_path):
     # cogiro with an inclinometer beside its tracker (the anchors seen) and load cells (its
     # stretching cables' tensions read).
