@@ -142,7 +142,7 @@ int RunSpatialSimulate(const Context& ctx, const SimulateOptions& options) {
   sim.skip_infeasible = options.skip_infeasible;
   std::optional<SpatialRobot> given_truth;
   if (!options.truth_path.empty()) given_truth = LoadSpatialRobotFile(options.truth_path);
-  const std::vector<SpatialPlanPose> plan = ReadSpatialPlanCsv(options.plan_path, nominal.num_cables());
+  const std::vector<SpatialPlanPose> plan = ReadSpatialPlanCsv(options.plan_path, nominal.num_cables(), &sim.pose_ids);
   CheckSpatialPlanMatchesRobot(nominal, plan, options.plan_path);
   const SpatialPlanSimulation run = SimulateSpatialPlan(nominal, given_truth, std::max(options.geometry_sigma_m, 0.0),
                                                         plan, sim, options.seed, options.plan_path);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <string>
@@ -63,10 +64,17 @@ int CsvRow::PositiveInt(int col) const {
   return std::stoi(s);
 }
 
-void ForEachCsvRow(const std::string& path, const std::vector<std::string>& expected_header,
-                   const std::function<void(const CsvRow&)>& on_row) {
+std::ifstream OpenCsvFile(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw InputError(path, "", "is a folder, not a CSV file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "", "cannot open the file");
+  return in;
+}
+
+void ForEachCsvRow(const std::string& path, const std::vector<std::string>& expected_header,
+                   const std::function<void(const CsvRow&)>& on_row) {
+  std::ifstream in = OpenCsvFile(path);
   ForEachCsvRow(in, path, expected_header, on_row);
 }
 

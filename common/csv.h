@@ -4,6 +4,7 @@
 // around cells. Everything else wrong is an InputError naming file, line and column.
 #pragma once
 
+#include <fstream>
 #include <functional>
 #include <istream>
 #include <string>
@@ -27,6 +28,11 @@ struct CsvRow {
   int PositiveInt(int col) const;
   std::string Where() const;
 };
+
+// `path` opened for reading: InputError naming it when it is a folder (a stream opens one on
+// Linux and then fails at the first read, which read as "a line longer than ..."), or cannot be
+// opened.
+std::ifstream OpenCsvFile(const std::string& path);
 
 // Reads `path`; the first non-comment line must equal `expected_header` (cells compared
 // after trimming). Calls `on_row` for every data row, which has exactly as many cells as

@@ -40,8 +40,7 @@ std::string MeasurementsCsv(const std::vector<Measurement>& measurements, const 
 std::vector<Measurement> ReadMeasurementsCsv(const std::string& path, int num_cables, char delimiter,
                                              const std::function<void(const std::vector<std::string>&)>& on_ignored,
                                              const std::function<void(const std::string&)>& on_warning) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, "", "cannot open the file");
+  std::ifstream in = OpenCsvFile(path);
   return ReadMeasurementsCsv(in, path, num_cables, delimiter, on_ignored, on_warning);
 }
 

@@ -144,8 +144,7 @@ void CheckPlanMatchesRobot(const Robot& robot, const std::vector<PlanPose>& plan
 std::string PosePlanJsonYaml(const std::vector<PlanPose>& poses) { return PlanJsonYaml<PlanarKind>(poses); }
 
 std::vector<PlanPose> ReadPosePlanCsv(const std::string& path, int num_cables) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, "", "cannot open the file");
+  std::ifstream in = OpenCsvFile(path);
   return ReadPosePlanCsv(in, path, num_cables);
 }
 

@@ -37,8 +37,7 @@ std::string SpatialMeasurementsCsv(const std::vector<SpatialMeasurement>& readin
 }
 
 std::vector<SpatialMeasurement> ReadSpatialMeasurementsCsv(const std::string& path, int num_cables, char delimiter) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, "", "cannot open the file");
+  std::ifstream in = OpenCsvFile(path);
   return ReadSpatialMeasurementsCsv(in, path, num_cables, delimiter);
 }
 

@@ -179,8 +179,7 @@ std::string SpatialPlanCsv(const std::vector<SpatialPlanPose>& plan, const std::
 }
 
 std::vector<SpatialPlanPose> ReadSpatialPlanCsv(const std::string& path, int num_cables, std::vector<int>* pose_ids) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, "", "cannot open the file");
+  std::ifstream in = OpenCsvFile(path);
   return ReadSpatialPlanCsv(in, path, num_cables, pose_ids);
 }
 

@@ -72,7 +72,7 @@ std::string SpatialPlanCsv(const std::vector<SpatialPlanPose>& plan, const std::
 // Reads it; '#' lines are comments. InputError naming file, line and column on a wrong header
 // (another cable count, a planar plan), a bad number, a duplicate or non-positive pose id; at
 // most kMaxPlanPoses rows (experiment/plan.h). `pose_ids`, when given, receives each row's pose
-// id (simulate numbers its readings 1..n in row order; identify --plan matches them by id).
+// id (simulate numbers its readings by it, and identify --plan matches them by it).
 std::vector<SpatialPlanPose> ReadSpatialPlanCsv(const std::string& path, int num_cables,
                                                 std::vector<int>* pose_ids = nullptr);
 std::vector<SpatialPlanPose> ReadSpatialPlanCsv(std::istream& in, const std::string& name, int num_cables,

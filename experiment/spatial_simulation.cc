@@ -98,8 +98,10 @@ SimulatedSpatialExperiment SimulateSpatialExperiment(const SpatialRobot& nominal
   const Eigen::VectorXd zero_paid_out = TrueEncoderZero(truth, home.paid_out_m);
   out.true_home = SettledHome(truth, home, zero_paid_out);
   const SpatialSensorZero zero = SensorZeroAt(truth, out.true_home);
+  CABLECAL_CHECK(options.pose_ids.empty() || options.pose_ids.size() == plan.size(), "one pose id per plan row");
   for (std::size_t j = 0; j < plan.size(); ++j) {
     const SpatialPlanPose& p = plan[j];
+    const int pose_id = options.pose_ids.empty() ? static_cast<int>(j + 1) : options.pose_ids[j];
     const Eigen::VectorXd commanded = zero_paid_out + p.length_change_m;
     // The commanded (nominal) pose is a good start: the true one is millimetres away.
     const SpatialForwardResult fwd = SolveForwardStatics(truth, commanded, &p.q);
@@ -132,13 +134,13 @@ SimulatedSpatialExperiment SimulateSpatialExperiment(const SpatialRobot& nominal
       }
     }
     if (!infeasible.empty()) {
-      if (!options.skip_infeasible) throw SolverFailure("pose " + std::to_string(j + 1) + ": " + infeasible);
-      out.skipped.push_back({static_cast<int>(j + 1), infeasible});
+      if (!options.skip_infeasible) throw SolverFailure("pose " + std::to_string(pose_id) + ": " + infeasible);
+      out.skipped.push_back({pose_id, infeasible});
       for (int k = 0; k < DrawsPerPose(m); ++k) rng.Normal();  // the others read what they would have
       continue;
     }
     SpatialMeasurement r;
-    r.pose_id = static_cast<int>(j + 1);
+    r.pose_id = pose_id;
     r.dl_m = p.length_change_m;
     for (int i = 0; i < m; ++i) {
       const double e = rng.Normal(0.0, nominal.sensors.encoder_sigma_m);

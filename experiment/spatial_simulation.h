@@ -49,6 +49,9 @@ struct SpatialSimulationOptions {
   // Skip a pose the true robot cannot hold (or holds outside its workspace) instead of
   // failing; its noise is drawn all the same.
   bool skip_infeasible = false;
+  // Each plan row's pose id (the plan file's pose column: the readings and the skipped poses are
+  // numbered by it, as identify --plan matches them); empty: 1..n in plan order.
+  std::vector<int> pose_ids;
 };
 
 // InputError naming --sensors when it asks for the noise of a sensor the robot file does not

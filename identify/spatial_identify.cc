@@ -18,6 +18,7 @@
 
 #include "common/error.h"
 #include "common/flatten.h"
+#include "common/format.h"
 #include "identify/least_squares.h"  // LevenbergMarquardtSettings
 #include "model/geometry.h"
 #include "model/spatial_sensor_model.h"
@@ -2347,6 +2348,29 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
   std::vector<int> unplanned;
   for (const int id : model.pose_ids) {
     if (!options.pose_starts.empty() && !options.pose_starts.count(id)) unplanned.push_back(id);
+  }
+  // A commanded pose is within the geometry's errors of where the platform settled: far from it,
+  // the plan row is likely another pose's (ids renumbered, another experiment's plan). The fit
+  // itself recovers (the rows stand out and are refitted, or the whole fit moves them), but the
+  // lab should know its plan and readings disagree.
+  std::vector<int> far;
+  double farthest_m = 0.0;
+  int farthest_id = 0;
+  for (std::size_t j = 0; j < model.pose_ids.size(); ++j) {
+    const auto planned = options.pose_starts.find(model.pose_ids[j]);
+    if (planned == options.pose_starts.end()) continue;
+    const double d_m = (locals[j].head<3>() - planned->second.q.head<3>()).norm();
+    if (!(d_m > kSpatialPlanFarFromPose_m)) continue;
+    far.push_back(model.pose_ids[j]);
+    if (d_m > farthest_m) farthest_m = d_m, farthest_id = model.pose_ids[j];
+  }
+  if (!far.empty()) {
+    char buf[160];
+    std::snprintf(buf, sizeof(buf), " (the farthest, pose %d, %.3g m)", farthest_id, farthest_m);
+    result.warnings.push_back(std::to_string(far.size()) + " of " + std::to_string(n) + " poses (" + PoseIdList(far) +
+                              ") settled more than " + FormatDouble(100.0 * kSpatialPlanFarFromPose_m) +
+                              " cm from their commanded poses in the plan" + buf +
+                              ": are the plan's pose ids the readings'? (the fit does not depend on it)");
   }
   if (!unplanned.empty()) {
     result.warnings.push_back("pose" + std::string(unplanned.size() > 1 ? "s " : " ") + PoseIdList(unplanned) +

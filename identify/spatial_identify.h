@@ -181,6 +181,11 @@ struct SpatialIdentifyOptions {
 // units, or a wrong minimum (the planar identification's factor).
 constexpr double kSpatialPoorFitFactor = 10.0;
 
+// A pose estimated farther than this from its commanded pose (SpatialIdentifyOptions::
+// pose_starts) is named in a warning: a geometry off by centimetres moves the platform by about
+// as much, a plan row of another pose by decimetres or more.
+constexpr double kSpatialPlanFarFromPose_m = 0.05;
+
 // `--identify`: "exits" (the exit points and initial lengths: the default) or "anchors" (the
 // platform anchors too). InputError naming --identify otherwise.
 bool ParseSpatialIdentify(const std::string& text);

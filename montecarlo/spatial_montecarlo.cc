@@ -171,9 +171,18 @@ TrialOutcome RunSpatialTrial(const SpatialRobot& nominal, const SpatialRobot& pl
   try {
     r = IdentifySpatial(planning, sim.measurements, commanded);
   } catch (const InputError& e) {
-    // The study's check passed at its own poses; these ones leave something unseen.
-    out.failure = sim.skipped.empty() ? std::string("identification: refused (") + e.what() + ")"
-                                      : "simulation: " + skipped() + ", and the rest refused (" + e.what() + ")";
+    // The study's check passed at its own poses; these ones leave something unseen. The gauge
+    // is the study's, not a flag the user gave: named so.
+    std::string why = e.what();
+    if (e.where() == "--gauge") {
+      const std::string prefix = e.where() + ": " + (e.key().empty() ? std::string() : e.key() + ": ");
+      std::string held;
+      for (const std::string& h : id.gauge.held) held += (held.empty() ? "" : ",") + h;
+      why = "the study's gauge (holding " + (held.empty() ? std::string("nothing") : held) + "): " +
+            why.substr(prefix.size());
+    }
+    out.failure = sim.skipped.empty() ? "identification: refused (" + why + ")"
+                                      : "simulation: " + skipped() + ", and the rest refused (" + why + ")";
     return out;
   }
   if (!r.converged()) {

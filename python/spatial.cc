@@ -228,6 +228,7 @@ py::object SpatialSimulate(const SpatialRobot& robot, py::handle plan_arg, py::h
   sim.noisy = noisy;
   sim.encoder_noise = encoder_noise;
   sim.skip_infeasible = skip_infeasible;
+  sim.pose_ids = plan.pose_ids;  // a loaded plan's pose column, as simulate numbers its readings
   CheckSpatialPlanMatchesRobot(robot, plan.poses, "plan");
   std::optional<SpatialPlanSimulation> run;
   {

@@ -519,6 +519,7 @@ TEST_F(SpatialIdentifyCli, ThePlanStartsEachPoseFromItsCommandedPose) {
   r = RunCablecal(id + " --plan " + Path("p_plan.csv") + " --out " + Path("planned.yaml"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(r.output.find("no row in the plan"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("settled more than"), std::string::npos) << r.output;
   const YAML::Node home = YAML::LoadFile(Path("home.yaml"));
   const YAML::Node planned = YAML::LoadFile(Path("planned.yaml"));
   for (const auto& p : home["parameters"]) {
@@ -556,6 +557,17 @@ TEST_F(SpatialIdentifyCli, ThePlanStartsEachPoseFromItsCommandedPose) {
   EXPECT_NE(r.output.find(Path("other_plan.csv") + ": column 'pose': none of the readings' "), std::string::npos)
       << r.output;
   EXPECT_FALSE(fs::exists(Path("other.yaml")));
+  // simulate numbers the readings by the plan's pose column: that plan's own readings match it.
+  r = RunCablecal("simulate --robot " + robot + " --plan " + Path("other_plan.csv") +
+                  " --geometry-sigma 0.0003 --seed 1 --skip-infeasible --out " + Path("other.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(Read("other.csv").find("\n100" + read_ids[0] + ","), std::string::npos) << Read("other.csv");
+  r = RunCablecal("identify --robot " + robot + " --measurements " + Path("other.csv") + " --plan " +
+                  Path("other_plan.csv") + " --out " + Path("other.yaml"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output.find("no row in the plan"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("settled more than"), std::string::npos) << r.output;
+  fs::remove(Path("other.yaml"));
   r = RunCablecal("sample --robot " + Builtin("cogiro") + " --poses 3 --out " + Path("cogiro_plan.csv"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   r = RunCablecal(id + " --plan " + Path("cogiro_plan.csv") + " --out " + Path("other.yaml"));

@@ -1565,6 +1565,13 @@ TEST(SpatialIdentifyPlan, AnotherPosesRowIsFittedFromTheReadings) {
   const SpatialIdentifyResult r = IdentifySpatial(e.nominal, e.sim.measurements, swapped);
   ASSERT_TRUE(r.converged()) << r.message;
   EXPECT_NEAR(r.final_cost, right.final_cost, 1e-6 * right.final_cost);
+  // Named: the two poses settled far from the rows given for them; the right plan warns of none.
+  const std::string far = "2 of " + std::to_string(r.pose_ids.size()) + " poses (" + std::to_string(std::min(a, b)) +
+                          ", " + std::to_string(std::max(a, b)) + ") settled more than 5 cm from their commanded poses";
+  EXPECT_TRUE(std::any_of(r.warnings.begin(), r.warnings.end(),
+                          [&](const std::string& w) { return w.find(far) != std::string::npos; }))
+      << far;
+  for (const std::string& w : right.warnings) EXPECT_EQ(w.find("settled more than"), std::string::npos) << w;
   // Fitted at the nominal geometry: within a few centimetres of where the platform settled,
   // not at the other pose's commanded position.
   for (std::size_t k = 0; k < r.pose_ids.size(); ++k) {

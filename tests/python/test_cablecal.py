@@ -1081,6 +1081,8 @@ def test_spatial_identify_from_the_plan_equals_cli(tmp_path):
         cablecal.identify(cablecal.Robot.load(robot_file("wang2022")), run.measurements, plan=plan)
     with pytest.raises(cablecal.InputError, match="plan.*SpatialPlan"):
         cablecal.identify(robot, run.measurements, plan="plan.csv")
+    with pytest.raises(cablecal.InputError, match="is a folder, not a CSV file"):
+        cablecal.SpatialPlan.load(robot, str(tmp_path))
 
 
 def test_spatial_identify_anchors_equals_cli(tmp_path):
