@@ -203,10 +203,11 @@ int main(int argc, char** argv) {
                      "result knows at least what the robot file did (ml only; default none)")
       ->each([&ident](const std::string&) { ident.geometry_prior_given = true; });
   CLI::Option* equilibrium_option = id_cmd->add_option("--equilibrium", ident.equilibrium,
-                     "on: with 2 cables each pose's static equilibrium is a residual, its sigma the robot file's "
-                     "platform.com_sigma (default 5 mm); off: theta free per pose (ml only); spatial robots: the statics "
-                     "(tensions, load cells, equilibrium, stretch), on unless given off")
-      ->capture_default_str()
+                     std::string("on: with 2 cables each pose's static equilibrium is a residual, its sigma the robot "
+                                 "file's platform.com_sigma (default 5 mm); off: theta free per pose (ml only); default ") +
+                         (cablecal::kDefaultEquilibrium ? "on" : "off") +
+                         " for planar robots; spatial robots: the statics (tensions, load cells, equilibrium, stretch), "
+                         "on unless given off")
       ->check(CLI::IsMember({"on", "off"}));
   id_cmd->add_option("--report", ident.report_dir,
                      "folder for a calibration report: report.md with the estimates, figures and provenance, and the "
