@@ -2262,6 +2262,28 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
   for (const VectorXd& x : a.start) result.starting_poses.push_back(x.head<6>());
 
   Fit fit = FitFrom(model, a.g0, a.gauge.held, options, a.start);
+  // A fit of readings at their noise has a whitened RMS near 1 over every value (the
+  // equilibrium's rows included); one that did not converge or ended beyond kRetryWhitenedRms
+  // is solved again from other starts below, and the lower objective wins.
+  constexpr double kRetryWhitenedRms = 2.0;
+  const auto astray = [&](const Fit& f) {
+    return !f.converged || !(f.objective <= 0.5 * kRetryWhitenedRms * kRetryWhitenedRms * model.num_values);
+  };
+  const auto keep_better = [&](Fit second, const Locals& starts) {
+    const bool better = second.converged == fit.converged ? second.objective < fit.objective : second.converged;
+    if (!better) return;
+    fit = std::move(second);
+    result.starting_poses.clear();
+    for (const VectorXd& x : starts) result.starting_poses.push_back(x.head<6>());
+  };
+  // A plan that is not the readings' (rows of other poses, another experiment's plan) can lead
+  // the whole fit astray even where each start that stands out is refitted (a new user's
+  // shuffled plans on a 6- and an 8-cable robot: poor_fit and not converged, where the readings
+  // alone identify in 11 to 14 iterations): solved again from the starts without the plan.
+  if (!options.pose_starts.empty() && astray(fit)) {
+    const Locals own = PoseStarts(model, nominal, readings, options.anchors, a.g0, false, {});
+    keep_better(FitFrom(model, a.g0, a.gauge.held, options, own), own);
+  }
   // Below 6 cables every pose starts from home (PoseStarts), and a pose far from home can end
   // in another equilibrium: a 4-cable robot with its centre of mass off in x and z, poses 0.7 m
   // from home, had its noise-free readings fitted at 17.5 sigma, the exits 0.3 m off. Starting
@@ -2270,21 +2292,11 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
   // not converge or ended beyond kRetryWhitenedRms (whitened RMS over every value, the
   // equilibrium's rows included): a fit of readings at their noise has an RMS near 1, so a fit
   // from home that is good keeps its result bit for bit. The lower objective wins.
-  constexpr double kRetryWhitenedRms = 2.0;
-  if (model.nt > 0 && L.m < 6 &&
-      (!fit.converged || !(fit.objective <= 0.5 * kRetryWhitenedRms * kRetryWhitenedRms * model.num_values))) {
+  if (model.nt > 0 && L.m < 6 && astray(fit)) {
     Locals staged = PoseStarts(model, nominal, readings, options.anchors, a.g0, true, {});
     bool differ = false;
     for (int j = 0; j < n; ++j) differ = differ || staged[j] != a.start[j];
-    if (differ) {
-      Fit second = FitFrom(model, a.g0, a.gauge.held, options, staged);
-      const bool better = second.converged == fit.converged ? second.objective < fit.objective : second.converged;
-      if (better) {
-        fit = std::move(second);
-        result.starting_poses.clear();
-        for (const VectorXd& x : staged) result.starting_poses.push_back(x.head<6>());
-      }
-    }
+    if (differ) keep_better(FitFrom(model, a.g0, a.gauge.held, options, staged), staged);
   }
   const VectorXd& g = fit.g;
   const Locals& locals = fit.locals;
@@ -2370,7 +2382,7 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
     result.warnings.push_back(std::to_string(far.size()) + " of " + std::to_string(n) + " poses (" + PoseIdList(far) +
                               ") settled more than " + FormatDouble(100.0 * kSpatialPlanFarFromPose_m) +
                               " cm from their commanded poses in the plan" + buf +
-                              ": are the plan's pose ids the readings'? (the fit does not depend on it)");
+                              ": are the plan's pose ids the readings'?");
   }
   if (!unplanned.empty()) {
     result.warnings.push_back("pose" + std::string(unplanned.size() > 1 ? "s " : " ") + PoseIdList(unplanned) +
