@@ -2280,7 +2280,7 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
   // the whole fit astray even where each start that stands out is refitted (a new user's
   // shuffled plans on a 6- and an 8-cable robot: poor_fit and not converged, where the readings
   // alone identify in 11 to 14 iterations): solved again from the starts without the plan.
-  if (!options.pose_starts.empty() && astray(fit)) {
+  if (options.retry_without_plan && !options.pose_starts.empty() && astray(fit)) {
     const Locals own = PoseStarts(model, nominal, readings, options.anchors, a.g0, false, {});
     keep_better(FitFrom(model, a.g0, a.gauge.held, options, own), own);
   }

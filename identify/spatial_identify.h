@@ -160,6 +160,11 @@ struct SpatialIdentifyOptions {
   // from home). A start whose misfit stands out among those of the poses started alike
   // (another pose's plan row, a wrong basin) is fitted and competes with one from home.
   std::map<int, SpatialPoseStart> pose_starts;
+  // A fit from pose_starts that did not converge or misfits is solved again from the starts
+  // without them (a plan of other poses). Off in the Monte Carlo, whose plans are its readings'
+  // own: there a misfit is the model's (encoders alone on stretching cables), and the second
+  // solve was a quarter of the spatial study's CPU time, for the same failures.
+  bool retry_without_plan = true;
   RobustLoss loss;  // on each whitened sensor value (an encoder, roll, px, ...) on its own
   int max_iterations = 200;
   bool statics = true;  // the tensions, load cells, equilibrium and stretch (file comment)

@@ -44,6 +44,7 @@ SpatialIdentifyOptions TrialIdentifyOptions(const SpatialMonteCarloOptions& o, c
   // A wild estimate from a poor pose set is a result to count (the planar Monte Carlo's rule).
   id.check_plausible_geometry = false;
   id.reading_leverage = false;  // no trial reads it
+  id.retry_without_plan = false;  // each trial's plan is its readings' own (file comment of the option)
   id.gauge.kind = SpatialGaugeKind::kHold;
   id.gauge.held = held;
   return id;
