@@ -132,9 +132,7 @@ const SpatialTrialCase& TrialCase(int sensors) {
   const SpatialGaugeAnalysis gauge = AnalyzeSpatialGauge(c.nominal, c.sim.measurements, SpatialIdentifyOptions{});
   // As RunSpatialTrial: no leverages, and each pose started from its plan pose.
   c.identify.reading_leverage = false;
-  for (std::size_t j = 0; j < c.plan.size(); ++j) {
-    c.identify.pose_starts[static_cast<int>(j + 1)] = {c.plan[j].q, c.plan[j].tensions_N};
-  }
+  c.identify.pose_starts = PoseStartsFromPlan(c.plan);
   c.identify.max_iterations = kSpatialTrialMaxIterations;
   c.identify.gauge.kind = SpatialGaugeKind::kHold;
   for (const int k : gauge.held) c.identify.gauge.held.push_back(gauge.names[k]);

@@ -96,7 +96,7 @@ int RunSpatialIdentify(const Context& ctx, const IdentifyCommandOptions& options
     std::vector<int> plan_ids;
     const std::vector<SpatialPlanPose> plan = ReadSpatialPlanCsv(options.plan_path, nominal.num_cables(), &plan_ids);
     CheckSpatialPlanMatchesRobot(nominal, plan, options.plan_path);
-    for (std::size_t k = 0; k < plan.size(); ++k) id.pose_starts[plan_ids[k]] = {plan[k].q, plan[k].tensions_N};
+    id.pose_starts = PoseStartsFromPlan(plan, plan_ids);
   }
   // What the readings as a whole cannot do (too few values, a pose they do not determine, a
   // direction nothing fixes) is named by their file, as the other refusals of the data are.
@@ -108,8 +108,7 @@ int RunSpatialIdentify(const Context& ctx, const IdentifyCommandOptions& options
                                : e.where() == "plan"   ? options.plan_path
                                                        : std::string();
       if (file.empty()) throw;
-      const std::string prefix = e.where() + ": " + (e.key().empty() ? std::string() : e.key() + ": ");
-      throw InputError(file, e.key(), std::string(e.what()).substr(prefix.size()));
+      throw InputError(file, e.key(), e.problem());
     }
   }();
   if (result.status == SpatialIdentifyStatus::kRankDeficient || result.status == SpatialIdentifyStatus::kPoorFit) {

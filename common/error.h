@@ -32,9 +32,11 @@ enum ExitCode : int {
 class InputError : public std::runtime_error {
  public:
   InputError(const std::string& where, const std::string& key, const std::string& problem)
-      : std::runtime_error(Compose(where, key, problem)), where_(where), key_(key) {}
+      : std::runtime_error(Compose(where, key, problem)), where_(where), key_(key), problem_(problem) {}
   const std::string& where() const { return where_; }
   const std::string& key() const { return key_; }
+  // The message without its where and key: for a caller that names the place better.
+  const std::string& problem() const { return problem_; }
 
  private:
   static std::string Compose(const std::string& where, const std::string& key,
@@ -43,7 +45,7 @@ class InputError : public std::runtime_error {
     if (!key.empty()) s += (s.empty() ? "" : ": ") + key;
     return s + (s.empty() ? "" : ": ") + problem;
   }
-  std::string where_, key_;
+  std::string where_, key_, problem_;
 };
 
 class SolverFailure : public std::runtime_error {

@@ -1818,9 +1818,8 @@ Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasureme
                        " less at most " + std::to_string(most_held) + " rigid motions that a gauge can hold");
   }
   if (!options.pose_starts.empty()) {
-    std::vector<int> planned_ids;
-    for (const int id : a.model.pose_ids) planned_ids.push_back(options.pose_starts.count(id) ? id : 0);
-    if (std::count(planned_ids.begin(), planned_ids.end(), 0) == n) {
+    const auto planned = [&](int id) { return options.pose_starts.count(id) > 0; };
+    if (std::none_of(a.model.pose_ids.begin(), a.model.pose_ids.end(), planned)) {
       throw InputError("plan", "column 'pose'",
                        "none of the readings' " + std::to_string(n) + " pose ids (" + PoseIdList(a.model.pose_ids) +
                            ") has a row in the plan (pose ids " + PoseIdList(PlanIds(options.pose_starts)) +

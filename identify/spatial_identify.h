@@ -92,6 +92,7 @@
 #include <vector>
 
 #include "experiment/spatial_measurements.h"
+#include "experiment/spatial_plan.h"  // SpatialPlanPose (a plain struct: header only)
 #include "identify/identify.h"  // RobustLoss
 #include "model/kind.h"
 #include "model/spatial_robot.h"
@@ -150,6 +151,18 @@ struct SpatialPoseStart {
   SpatialPose<double> q = SpatialPose<double>::Zero();  // x y z (m), roll pitch yaw (rad), in F
   Eigen::VectorXd tensions_N;  // one per cable; empty: those nearest holding the nominal platform at q
 };
+
+// A plan's rows as starts, by pose id: `pose_ids` the plan file's pose column
+// (ReadSpatialPlanCsv), empty for 1..n in plan order (as simulate numbers a plan's readings
+// without one).
+inline std::map<int, SpatialPoseStart> PoseStartsFromPlan(const std::vector<SpatialPlanPose>& plan,
+                                                          const std::vector<int>& pose_ids = {}) {
+  std::map<int, SpatialPoseStart> starts;
+  for (std::size_t k = 0; k < plan.size(); ++k) {
+    starts[pose_ids.empty() ? static_cast<int>(k + 1) : pose_ids[k]] = {plan[k].q, plan[k].tensions_N};
+  }
+  return starts;
+}
 
 struct SpatialIdentifyOptions {
   SpatialGauge gauge;

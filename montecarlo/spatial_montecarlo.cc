@@ -164,10 +164,7 @@ TrialOutcome RunSpatialTrial(const SpatialRobot& nominal, const SpatialRobot& pl
   }
   // The lab knows what it commanded: each pose starts from its plan pose (identify --plan).
   SpatialIdentifyOptions commanded = id;
-  const std::vector<SpatialPlanPose>& plan = designed ? *designed : sampled;
-  for (std::size_t j = 0; j < plan.size(); ++j) {
-    commanded.pose_starts[static_cast<int>(j + 1)] = {plan[j].q, plan[j].tensions_N};
-  }
+  commanded.pose_starts = PoseStartsFromPlan(designed ? *designed : sampled);
   SpatialIdentifyResult r;
   try {
     r = IdentifySpatial(planning, sim.measurements, commanded);
@@ -176,11 +173,9 @@ TrialOutcome RunSpatialTrial(const SpatialRobot& nominal, const SpatialRobot& pl
     // is the study's, not a flag the user gave: named so.
     std::string why = e.what();
     if (e.where() == "--gauge") {
-      const std::string prefix = e.where() + ": " + (e.key().empty() ? std::string() : e.key() + ": ");
       std::string held;
       for (const std::string& h : id.gauge.held) held += (held.empty() ? "" : ",") + h;
-      why = "the study's gauge (holding " + (held.empty() ? std::string("nothing") : held) + "): " +
-            why.substr(prefix.size());
+      why = "the study's gauge (holding " + (held.empty() ? std::string("nothing") : held) + "): " + e.problem();
     }
     out.failure = sim.skipped.empty() ? "identification: refused (" + why + ")"
                                       : "simulation: " + skipped() + ", and the rest refused (" + why + ")";

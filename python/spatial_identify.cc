@@ -119,10 +119,7 @@ py::object SpatialIdentify(const SpatialRobot& robot, py::handle measurements_ar
     const PySpatialPlan& plan = AsObject<PySpatialPlan>(plan_arg, "plan", "SpatialPlan");
     if (plan.num_cables != robot.num_cables()) Bad("plan", "made for a robot with another number of cables");
     CheckSpatialPlanMatchesRobot(robot, plan.poses, "plan");
-    for (std::size_t k = 0; k < plan.poses.size(); ++k) {
-      const int id = plan.pose_ids.empty() ? static_cast<int>(k + 1) : plan.pose_ids[k];
-      out.options.pose_starts[id] = {plan.poses[k].q, plan.poses[k].tensions_N};
-    }
+    out.options.pose_starts = PoseStartsFromPlan(plan.poses, plan.pose_ids);
   }
   {
     py::gil_scoped_release release;

@@ -1522,7 +1522,7 @@ PlannedExperiment Planned(Rng& rng, int m, int poses) {
 }
 SpatialIdentifyOptions FromPlan(const std::vector<SpatialPlanPose>& plan) {
   SpatialIdentifyOptions o;
-  for (std::size_t j = 0; j < plan.size(); ++j) o.pose_starts[static_cast<int>(j + 1)] = {plan[j].q, plan[j].tensions_N};
+  o.pose_starts = PoseStartsFromPlan(plan);
   return o;
 }
 
