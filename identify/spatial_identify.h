@@ -339,8 +339,8 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
 // diagonal. Each names the unknown and the amount.
 std::vector<std::string> SpatialPlausibilityWarnings(const SpatialRobot& nominal, const Eigen::VectorXd& geometry);
 
-// The nominal geometry vector (names order): exits, lengths at the nominal home (a cable's
-// initial_length where the file gives one), the file's anchors (when anchors), zero swivel
+// The nominal geometry vector (names order): exits, the cables paid out at the home equilibrium
+// (unstretched: as SpatialHome's paid_out_m; a cable's initial_length where the file gives one), the file's anchors (when anchors), zero swivel
 // offsets (when swivel), the home yaw (when heading), the file's mass and centre of mass (when
 // platform: the statics modelled).
 Eigen::VectorXd NominalSpatialGeometry(const SpatialRobot& nominal, bool swivel, bool heading, bool anchors = false,

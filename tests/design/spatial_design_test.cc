@@ -190,7 +190,13 @@ TEST(SpatialDesign, FewestPosesAreTheIdentificationsFewest) {
     for (int h : layout.held) hold.gauge.held.push_back(layout.names[h]);
     for (const SpatialIdentifyOptions& options : {SpatialIdentifyOptions{}, hold}) {
       if (options.gauge.kind == SpatialGaugeKind::kHold && options.gauge.held.empty()) continue;
-      for (int n : {fewest, fewest - 1}) {
+      // A weakly seen direction held as nearly rigid (within kSpatialNearlyRigid of a rigid
+      // motion) is so at the design's poses; the default gauge decides it again at the
+      // identification's, other poses, which may see it beyond that bound and then hold one
+      // coordinate fewer, needing a pose more (random4-tilted-laser at 13 poses: 2 held, where
+      // the design's 20 held 3). The hold: list design gives is exact at any poses.
+      const int more = options.gauge.kind == SpatialGaugeKind::kHold ? 0 : static_cast<int>(layout.weakly_seen_held.size());
+      for (int n : {fewest + more, fewest - 1}) {
         if (n < 1) continue;
         Rng noise(4);
         const SimulatedSpatialExperiment sim =
