@@ -4,6 +4,7 @@
 #include <cctype>
 #include <filesystem>
 #include <fstream>
+#include <cstdlib>
 #include <set>
 #include <string>
 #include <vector>
@@ -126,6 +127,8 @@ void ForEachCsvLine(std::istream& in, const std::string& path, char delimiter,
 // Plans and measurement files have one dl<i> column per cable: a header whose dl columns
 // differ in number from the robot's is a file for a robot with another cable count. The
 // message part that says so, or "" when the counts agree or either has none.
+std::string Lower(std::string text);
+
 std::string OtherCableCount(const std::vector<std::string>& wanted, const std::vector<std::string>& got) {
   // In any case: 'DL1' is a cable's column typed in capitals (refused with a hint), not another robot's.
   // A dl column given twice ('dl1,dl1') is a repeated column, which the caller names, not
@@ -144,8 +147,24 @@ std::string OtherCableCount(const std::vector<std::string>& wanted, const std::v
   };
   const int want = cable_columns(wanted), have = cable_columns(got);
   if (want <= 0 || have <= 0 || want == have) return "";
-  return "the file has columns for " + std::to_string(have) + " cables, the robot has " + std::to_string(want) +
-         ": a file for another robot?";
+  // Fewer columns, not simply the last cables' (dl1,dl2,dl4,... for 8 cables): a column dropped
+  // as likely as another robot's file, so the missing ones are named.
+  std::string message = "the file has columns for " + std::to_string(have) + " cables, the robot has " + std::to_string(want);
+  if (have < want) {
+    std::set<std::string> present;
+    for (const std::string& c : got) present.insert(Lower(c));
+    std::string missing;
+    bool only_the_last = true;
+    for (const std::string& c : wanted) {
+      if (c.size() <= 2 || c.compare(0, 2, "dl") != 0 || present.count(c)) continue;
+      missing += (missing.empty() ? "'" : ", '") + c + "'";
+      only_the_last = only_the_last && std::atoi(c.c_str() + 2) > have;
+    }
+    if (!missing.empty() && !only_the_last) {
+      return message + " (" + missing + " missing): a column dropped, or a file for another robot?";
+    }
+  }
+  return message + ": a file for another robot?";
 }
 
 std::string Lower(std::string text) {

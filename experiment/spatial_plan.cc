@@ -234,9 +234,9 @@ void CheckSpatialPlanMatchesRobot(const SpatialRobot& robot, const std::vector<S
     }
     if (!(TiltAngle(p.q) <= robot.tilt_max_rad + 1e-12)) {
       throw InputError(where, "columns 'roll,pitch'",
-                       "the platform is tilted " + FormatDouble(TiltAngle(p.q) * 180.0 / M_PI) +
-                           " degrees, beyond limits.tilt_max_deg " + FormatDouble(robot.tilt_max_rad * 180.0 / M_PI) +
-                           " of " + robot.name);
+                       "the platform is tilted " + Rounded(TiltAngle(p.q) * 180.0 / M_PI, 6) +
+                           " degrees, beyond limits.tilt_max_deg " + Rounded(robot.tilt_max_rad * 180.0 / M_PI, 6) +
+                           " of " + robot.name + ": a plan for another robot?");
     }
     const Eigen::VectorXd l = CableLengths<double>(robot, p.q);
     const Eigen::VectorXd paid_out = CommandedUnstretchedLengths(robot, l, p.tensions_N);

@@ -2431,6 +2431,33 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
                               " cm from their commanded poses in the plan" + buf +
                               ": are the plan's pose ids the readings'?");
   }
+  // The tensions are unknowns without bounds (a bound would bias the covariance): a fit may
+  // end with a cable pushing, which no cable does. Not a refusal, since the readings may fit
+  // within their noise (too few poses, a geometry far off), but the lab must know its
+  // estimate rests on an impossible state (a new user's 8-cable robot, 10 poses: -55 N).
+  std::vector<int> pushing;
+  double most_negative_N = 0.0;
+  int most_negative_id = 0, most_negative_cable = 0;
+  for (std::size_t j = 0; j < result.tensions_N.size(); ++j) {
+    const VectorXd& t = result.tensions_N[j];
+    if (t.size() == 0 || !(t.minCoeff() < 0.0)) continue;
+    pushing.push_back(model.pose_ids[j]);
+    Eigen::Index i = 0;
+    if (t.minCoeff(&i) < most_negative_N) {
+      most_negative_N = t(i);
+      most_negative_id = model.pose_ids[j];
+      most_negative_cable = static_cast<int>(i) + 1;
+    }
+  }
+  if (!pushing.empty()) {
+    char buf[160];
+    std::snprintf(buf, sizeof(buf), " (the most, cable %d of pose %d: %.3g N)", most_negative_cable, most_negative_id,
+                  most_negative_N);
+    result.warnings.push_back(std::to_string(pushing.size()) + " of " + std::to_string(n) + " poses (" +
+                              PoseIdList(pushing) + ") have a cable estimated pushing, a negative tension" + buf +
+                              ": no cable can push, so the geometry rests on an impossible state there; measure "
+                              "more poses, or check those poses' readings and the robot file's mass");
+  }
   if (!unplanned.empty()) {
     result.warnings.push_back("pose" + std::string(unplanned.size() > 1 ? "s " : " ") + PoseIdList(unplanned) +
                               (unplanned.size() > 1 ? " have" : " has") +

@@ -360,6 +360,13 @@ TEST(SpatialMeasurementsCsv, HostileFilesAreNamedByFileLineAndColumn) {
   EXPECT_EQ(twice.find("cables"), std::string::npos) << twice;
   EXPECT_NE(read("pose,dl1,dl2,dl3,dl4\n1,0,0,0,0\n").find("the file has columns for 4 cables, the robot has 3"),
             std::string::npos);
+  // A cable's column dropped in between is named; the last cables' missing reads as another robot's.
+  const std::string dropped = read("pose,dl1,dl3\n1,0,0\n");
+  EXPECT_NE(dropped.find("the file has columns for 2 cables, the robot has 3 ('dl2' missing): a column dropped"),
+            std::string::npos)
+      << dropped;
+  const std::string fewer = read("pose,dl1,dl2\n1,0,0\n");
+  EXPECT_NE(fewer.find("the robot has 3: a file for another robot?"), std::string::npos) << fewer;
 }
 
 TEST(SpatialWorkspace, GridPointsAreTheEvaluationsAndTheThreadCountChangesNothing) {
