@@ -1841,7 +1841,7 @@ Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasureme
   a.model = BuildModel(nominal, readings, options.gauge.kind == SpatialGaugeKind::kPrior, options.statics,
                        options.anchors);
   const Layout& L = a.model.layout;
-  a.g0 = NominalSpatialGeometry(nominal, L.swivel, L.heading, L.anchors, L.platform);
+  a.g0 = NominalSpatialGeometry(nominal, L.swivel, L.heading, L.anchors, L.platform, &options.home_paid_out_m);
   a.gauge.names = SpatialGeometryNames(L.m, L.swivel, L.heading, L.anchors, L.platform);
   const int p = L.size();
   const int n = static_cast<int>(a.model.pose_ids.size());
@@ -2143,7 +2143,7 @@ std::vector<std::string> SpatialGeometryNames(int num_cables, bool swivel, bool 
 }
 
 Eigen::VectorXd NominalSpatialGeometry(const SpatialRobot& nominal, bool swivel, bool heading, bool anchors,
-                                       bool platform) {
+                                       bool platform, const Eigen::VectorXd* home_paid_out_m) {
   Layout L{nominal.num_cables(), swivel, heading, anchors, platform};
   VectorXd g = VectorXd::Zero(L.size());
   // l_i0 is what the encoder counts from: the cable paid out at the home equilibrium (its
@@ -2152,11 +2152,16 @@ Eigen::VectorXd NominalSpatialGeometry(const SpatialRobot& nominal, bool swivel,
   // cable's start its stretch away (centimetres at E*A 3e4 N), and fits from home then ended
   // in wrong minima; an underactuated robot's home equilibrium also turns from home_rpy. Where
   // home is no equilibrium (a robot the caller checks elsewhere), the geometric length.
-  VectorXd home_lengths = CableLengths<double>(nominal, nominal.home_pose());
-  const SpatialPoseEvaluation home = EvaluateSpatialHome(nominal);
-  if (home.has_equilibrium) {
-    home_lengths = CommandedUnstretchedLengths(nominal, CableLengths<double>(nominal, home.equilibrium.q),
-                                               home.equilibrium.tensions_N);
+  VectorXd home_lengths;
+  if (home_paid_out_m != nullptr && home_paid_out_m->size() == L.m) {
+    home_lengths = *home_paid_out_m;
+  } else {
+    home_lengths = CableLengths<double>(nominal, nominal.home_pose());
+    const SpatialPoseEvaluation home = EvaluateSpatialHome(nominal);
+    if (home.has_equilibrium) {
+      home_lengths = CommandedUnstretchedLengths(nominal, CableLengths<double>(nominal, home.equilibrium.q),
+                                                 home.equilibrium.tensions_N);
+    }
   }
   for (int i = 0; i < L.m; ++i) {
     g.segment<3>(L.exit(i)) = nominal.cables[i].p_F_exit_m;

@@ -178,6 +178,11 @@ struct SpatialIdentifyOptions {
   // own: there a misfit is the model's (encoders alone on stretching cables), and the second
   // solve was a quarter of the spatial study's CPU time, for the same failures.
   bool retry_without_plan = true;
+  // The cables paid out at the nominal robot's home equilibrium (SpatialHome's paid_out_m), the
+  // initial lengths' start; empty: solved for from the robot (NominalSpatialGeometry). The Monte
+  // Carlo solves it once per study and passes it: a home equilibrium per trial was 0.9 ms of a
+  // cogiro trial's 5.6.
+  Eigen::VectorXd home_paid_out_m;
   RobustLoss loss;  // on each whitened sensor value (an encoder, roll, px, ...) on its own
   int max_iterations = 200;
   bool statics = true;  // the tensions, load cells, equilibrium and stretch (file comment)
@@ -343,8 +348,9 @@ std::vector<std::string> SpatialPlausibilityWarnings(const SpatialRobot& nominal
 // (unstretched: as SpatialHome's paid_out_m; a cable's initial_length where the file gives one), the file's anchors (when anchors), zero swivel
 // offsets (when swivel), the home yaw (when heading), the file's mass and centre of mass (when
 // platform: the statics modelled).
+// home_paid_out_m: those lengths when the caller has them (SpatialIdentifyOptions), else solved for.
 Eigen::VectorXd NominalSpatialGeometry(const SpatialRobot& nominal, bool swivel, bool heading, bool anchors = false,
-                                       bool platform = false);
+                                       bool platform = false, const Eigen::VectorXd* home_paid_out_m = nullptr);
 std::vector<std::string> SpatialGeometryNames(int num_cables, bool swivel, bool heading, bool anchors = false,
                                               bool platform = false);
 // The mass and centre-of-mass unknowns' names, in order (the last four of the geometry vector

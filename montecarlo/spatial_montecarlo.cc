@@ -345,9 +345,11 @@ MonteCarloResult RunSpatialMonteCarlo(const SpatialRobot& nominal, const Spatial
   const std::vector<std::string> names = SpatialGeometryNames(nominal.num_cables(), false, false);
   std::vector<int> held;
   for (const std::string& h : held_names) held.push_back(static_cast<int>(std::find(names.begin(), names.end(), h) - names.begin()));
-  const SpatialIdentifyOptions id = TrialIdentifyOptions(o, held_names);
-  // The true l_i0: what the controller pays out at home (the planning robot's home), on the true robot too.
+  SpatialIdentifyOptions id = TrialIdentifyOptions(o, held_names);
+  // The true l_i0: what the controller pays out at home (the planning robot's home), on the true
+  // robot too; the identification's start of them (the same lengths), solved once here.
   const Eigen::VectorXd l0_m = SpatialHome(planning).paid_out_m;
+  id.home_paid_out_m = l0_m;
   // The random sets' pool, sampled once (stream 0x9001): a sampler that cannot give it is the
   // cells' sampling failure, as a fresh sample's would be.
   std::vector<SpatialPlanPose> pool;

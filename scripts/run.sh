@@ -12,5 +12,5 @@ mkdir -p results
 "$build/cablecal" workspace --out results/workspace.csv --plot results/workspace.png
 "$build/cablecal" reproduce --out results "$@"
 # The spatial study (cogiro and irma4u) into results/spatial/ (README, "The spatial study"):
-# optimized, random and grid sets (525 s wall on 2 cores at b5ace51: results/spatial/README.md).
+# optimized, random and grid sets (616 s wall on 2 cores at 58db6f2: results/spatial/README.md).
 "$build/cablecal" reproduce --study spatial --out results "$@"
