@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
-#include <fstream>
 #include <cstdlib>
+#include <fstream>
 #include <set>
 #include <string>
 #include <vector>
@@ -124,11 +124,14 @@ void ForEachCsvLine(std::istream& in, const std::string& path, char delimiter,
   if (in.bad()) throw InputError(path, "", "read error");
 }
 
+std::string Lower(std::string text) {
+  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return text;
+}
+
 // Plans and measurement files have one dl<i> column per cable: a header whose dl columns
 // differ in number from the robot's is a file for a robot with another cable count. The
 // message part that says so, or "" when the counts agree or either has none.
-std::string Lower(std::string text);
-
 std::string OtherCableCount(const std::vector<std::string>& wanted, const std::vector<std::string>& got) {
   // In any case: 'DL1' is a cable's column typed in capitals (refused with a hint), not another robot's.
   // A dl column given twice ('dl1,dl1') is a repeated column, which the caller names, not
@@ -165,11 +168,6 @@ std::string OtherCableCount(const std::vector<std::string>& wanted, const std::v
     }
   }
   return message + ": a file for another robot?";
-}
-
-std::string Lower(std::string text) {
-  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return text;
 }
 
 // Header cells that name a missing column in another case ('Pose' for 'pose'): names are

@@ -29,8 +29,7 @@ SpatialHomeReference SpatialHome(const SpatialRobot& robot) {
   }
   SpatialHomeReference home;
   home.equilibrium = e.equilibrium;
-  home.paid_out_m = CommandedUnstretchedLengths(robot, CableLengths<double>(robot, e.equilibrium.q),
-                                                e.equilibrium.tensions_N);
+  home.paid_out_m = PaidOutLengths(robot, e.equilibrium);
   // A calibrated robot file knows where its encoders read zero better than its nominal home.
   for (int i = 0; i < robot.num_cables(); ++i) {
     if (robot.cables[i].initial_length_m) home.paid_out_m(i) = *robot.cables[i].initial_length_m;

@@ -21,7 +21,7 @@
 #include "common/format.h"
 #include "identify/least_squares.h"  // LevenbergMarquardtSettings
 #include "model/geometry.h"
-#include "model/forward_statics.h"  // CommandedUnstretchedLengths
+#include "model/forward_statics.h"  // PaidOutLengths
 #include "model/spatial_sensor_model.h"
 #include "model/spatial_statics.h"  // EvaluateSpatialHome
 #include "model/swivel.h"
@@ -1603,10 +1603,14 @@ int RigidNullDimension(const MatrixXd& N, const VectorXd& g, const Layout& L) {
   return std::min(rigid, static_cast<int>(G.cols()));
 }
 
-std::vector<std::string> SpatialPlausibilityWarnings(const SpatialRobot& nominal, const Eigen::VectorXd& g) {
+namespace {
+
+// SpatialPlausibilityWarnings against the nominal geometry g0 (names order: only its exits and
+// lengths are read), which IdentifySpatial's analysis has already: solving the home
+// equilibrium again for it was work in every Monte Carlo trial.
+std::vector<std::string> PlausibilityWarnings(const SpatialRobot& nominal, const VectorXd& g, const VectorXd& g0) {
   const Layout L{nominal.num_cables(), false, false};
-  CABLECAL_CHECK(g.size() >= L.size(), "a geometry vector shorter than the exits and lengths");
-  const VectorXd g0 = NominalSpatialGeometry(nominal, false, false);
+  CABLECAL_CHECK(g.size() >= L.size() && g0.size() >= L.size(), "a geometry vector shorter than the exits and lengths");
   std::vector<std::string> out;
   const Vector3d lo = nominal.p_F_frame_min_m, hi = nominal.p_F_frame_max_m;
   const double diagonal_m = (hi - lo).norm();
@@ -1629,6 +1633,12 @@ std::vector<std::string> SpatialPlausibilityWarnings(const SpatialRobot& nominal
     }
   }
   return out;
+}
+
+}  // namespace
+
+std::vector<std::string> SpatialPlausibilityWarnings(const SpatialRobot& nominal, const Eigen::VectorXd& g) {
+  return PlausibilityWarnings(nominal, g, NominalSpatialGeometry(nominal, false, false));
 }
 
 namespace {
@@ -1685,12 +1695,15 @@ Locals PoseStarts(const Model& model, const SpatialRobot& nominal, const std::ve
     }
     return std::isfinite(cost) ? cost : std::numeric_limits<double>::infinity();
   };
+  const auto first_reading = [&](int j) -> const SpatialMeasurement& {
+    return readings[model.terms[model.pose_terms[j][0]].reading];
+  };
   Locals starts(n);
   std::vector<double> staged_costs(n, -1.0);  // -1: the start from home is the only one
   std::vector<VectorXd> home_starts(n);
   for (int j = 0; j < n; ++j) {
     VectorXd s = start0;
-    const SpatialMeasurement& first = readings[model.terms[model.pose_terms[j][0]].reading];
+    const SpatialMeasurement& first = first_reading(j);
     const bool load_cells = model.nt > 0 && first.has(SpatialSensor::kLoadCell);
     if (load_cells) s.tail(model.nt) = first.values(SpatialSensor::kLoadCell);
     if (planned[j]) {
@@ -1764,7 +1777,7 @@ Locals PoseStarts(const Model& model, const SpatialRobot& nominal, const std::ve
   }
   // A pose whose start still stands out after both (a soft cable's stretch of centimetres can
   // leave the fits from home and from the rigid stage in wrong basins alike: measured on random
-  // 6- to 8-cable robots with E*A 30 times the largest tension, 3 of 26 noise-free experiments
+  // 6- to 8-cable robots with E*A 30 times the largest tension, 4 of 27 noise-free experiments
   // ended as poor_fit, one pose turned by 120 degrees about z or tilted by 30): it starts from
   // the starts of the kNeighbourStarts poses whose encoder readings are nearest its own, among
   // those that do not stand out (nearby lengths, a nearby pose), and keeps the best fit.
@@ -1773,16 +1786,15 @@ Locals PoseStarts(const Model& model, const SpatialRobot& nominal, const std::ve
   for (int j = 0; j < n; ++j) {
     if (staged_costs[j] >= 0.0 && !wrong_basin(j, staged_costs[j])) good.push_back(j);
   }
-  const auto encoders = [&](int j) -> const VectorXd& { return readings[model.terms[model.pose_terms[j][0]].reading].dl_m; };
   for (int j = 0; j < n; ++j) {
     if (staged_costs[j] < 0.0 || !wrong_basin(j, staged_costs[j]) || good.empty()) continue;
     std::vector<std::pair<double, int>> nearest;
-    for (const int k : good) nearest.emplace_back((encoders(k) - encoders(j)).squaredNorm(), k);
+    for (const int k : good) nearest.emplace_back((first_reading(k).dl_m - first_reading(j).dl_m).squaredNorm(), k);
     const std::size_t tried = std::min<std::size_t>(kNeighbourStarts, nearest.size());
     std::partial_sort(nearest.begin(), nearest.begin() + tried, nearest.end());
     for (std::size_t c = 0; c < tried; ++c) {
       VectorXd from = starts[nearest[c].second];
-      if (model.nt > 0 && readings[model.terms[model.pose_terms[j][0]].reading].has(SpatialSensor::kLoadCell)) {
+      if (model.nt > 0 && first_reading(j).has(SpatialSensor::kLoadCell)) {
         from.tail(model.nt) = home_starts[j].tail(model.nt);  // its own load cells' tensions
       }
       VectorXd fitted = StartingLocal(model, j, g0, from);
@@ -2156,12 +2168,9 @@ Eigen::VectorXd NominalSpatialGeometry(const SpatialRobot& nominal, bool swivel,
   if (home_paid_out_m != nullptr && home_paid_out_m->size() == L.m) {
     home_lengths = *home_paid_out_m;
   } else {
-    home_lengths = CableLengths<double>(nominal, nominal.home_pose());
     const SpatialPoseEvaluation home = EvaluateSpatialHome(nominal);
-    if (home.has_equilibrium) {
-      home_lengths = CommandedUnstretchedLengths(nominal, CableLengths<double>(nominal, home.equilibrium.q),
-                                                 home.equilibrium.tensions_N);
-    }
+    home_lengths = home.has_equilibrium ? PaidOutLengths(nominal, home.equilibrium)
+                                        : CableLengths<double>(nominal, nominal.home_pose());
   }
   for (int i = 0; i < L.m; ++i) {
     g.segment<3>(L.exit(i)) = nominal.cables[i].p_F_exit_m;
@@ -2407,7 +2416,7 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
   result.final_cost = cost;
   result.whitened_rms = reading_values > 0 ? std::sqrt(reading_squares / reading_values)
                                            : std::numeric_limits<double>::infinity();
-  const std::vector<std::string> implausible = SpatialPlausibilityWarnings(nominal, g);
+  const std::vector<std::string> implausible = PlausibilityWarnings(nominal, g, a.g0);
   result.warnings = implausible;
   std::vector<int> unplanned;
   for (const int id : model.pose_ids) {
@@ -2445,11 +2454,13 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
   int most_negative_id = 0, most_negative_cable = 0;
   for (std::size_t j = 0; j < result.tensions_N.size(); ++j) {
     const VectorXd& t = result.tensions_N[j];
-    if (t.size() == 0 || !(t.minCoeff() < 0.0)) continue;
-    pushing.push_back(model.pose_ids[j]);
+    if (t.size() == 0) continue;
     Eigen::Index i = 0;
-    if (t.minCoeff(&i) < most_negative_N) {
-      most_negative_N = t(i);
+    const double lowest_N = t.minCoeff(&i);
+    if (!(lowest_N < 0.0)) continue;
+    pushing.push_back(model.pose_ids[j]);
+    if (lowest_N < most_negative_N) {
+      most_negative_N = lowest_N;
       most_negative_id = model.pose_ids[j];
       most_negative_cable = static_cast<int>(i) + 1;
     }

@@ -460,6 +460,10 @@ Eigen::VectorXd CommandedUnstretchedLengths(const SpatialRobot& robot, const Eig
   return CommandedLengths<SpatialAdapter>(robot, lengths_m, tensions_N);
 }
 
+Eigen::VectorXd PaidOutLengths(const SpatialRobot& robot, const SpatialEquilibrium& equilibrium) {
+  return CommandedUnstretchedLengths(robot, CableLengths<double>(robot, equilibrium.q), equilibrium.tensions_N);
+}
+
 void CheckSimulatable(const SpatialRobot& robot) { CheckSimulatableKind<SpatialAdapter>(robot, "spatial"); }
 
 Eigen::VectorXd SnapTensionsToBounds(Eigen::VectorXd tensions_N, double tension_min_N, double tension_max_N) {

@@ -69,6 +69,9 @@ Eigen::VectorXd CommandedUnstretchedLengths(const Robot& robot, const Eigen::Vec
                                             const Eigen::VectorXd& tensions_N);
 Eigen::VectorXd CommandedUnstretchedLengths(const SpatialRobot& robot, const Eigen::VectorXd& lengths_m,
                                             const Eigen::VectorXd& tensions_N);
+// The cables paid out at a spatial equilibrium: CommandedUnstretchedLengths of its lengths and
+// tensions (at home, where the encoders read zero: SpatialHome, and the identification's start of l_i0).
+Eigen::VectorXd PaidOutLengths(const SpatialRobot& robot, const SpatialEquilibrium& equilibrium);
 
 // Whether a spatial robot can be simulated: at most as many inextensible cables as the
 // platform's 6 degrees of freedom. Throws InputError naming robot.source and the key
