@@ -174,8 +174,10 @@ int main(int argc, char** argv) {
                        "hold:a1x,a1y,...")
           ->check(CLI::Validator(
               [planar_gauge](std::string& text) {
-                if (text == "auto" || text.rfind("hold:", 0) == 0) return std::string();
-                return planar_gauge(text);
+                if (text == "auto" || text.rfind("hold:", 0) == 0 || planar_gauge(text).empty()) return std::string();
+                return "'" + text +
+                       "' is no gauge: a1x, prior or none for a planar robot; auto, none, prior or hold:a1x,a1y,... "
+                       "for a spatial one";
               },
               "a1x|prior|none (planar), auto|none|prior|hold:... (spatial)"));
   CLI::Option* max_iterations_option =

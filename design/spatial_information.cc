@@ -372,13 +372,9 @@ SpatialInformationLayout SpatialDesignLayout(const SpatialRobot& robot, const st
   L.free.clear();
   // The identification's own gauge analysis on the readings these poses would give (read at the
   // poses themselves: a robot of more than 6 inextensible cables cannot be simulated, and the
-  // study's encoders-alone design is made on one), decided at the poses and tensions themselves
-  // (the plan's starts): the identification decides a weakly seen direction near the bounds at
-  // its estimate, which for these readings is these poses.
-  SpatialIdentifyOptions at_the_poses;
-  at_the_poses.pose_starts = PoseStartsFromPlan(reference);
-  const std::vector<SpatialMeasurement> readings = PlannedSpatialReadings(robot, reference);
-  const SpatialGaugeAnalysis gauge = AnalyzeSpatialGauge(robot, readings, at_the_poses);
+  // study's encoders-alone design is made on one).
+  const SpatialGaugeAnalysis gauge =
+      AnalyzeSpatialGauge(robot, PlannedSpatialReadings(robot, reference), SpatialIdentifyOptions{});
   L.held = gauge.held;
   std::vector<const SpatialDirection*> fixed;
   for (const SpatialDirection& d : gauge.null_directions) fixed.push_back(&d);

@@ -1505,7 +1505,6 @@ std::vector<SpatialDirection> Describe(const MatrixXd& V, const VectorXd& g, con
     // turn about z that one tilted swivel axis barely sees): named so, its components after.
     const double e_c = E.col(c).norm();
     const double off = (G * C.col(c) - E.col(c)).norm();
-    if (e >= 1e-3 && e_c > 0.0) d.rigid_offset = off / e_c;
     if (e >= 1e-3 && e_c > 0.0 && off <= kSpatialNearlyRigid * e_c) {
       d.nearly_rigid = true;
       std::string words;
@@ -1846,11 +1845,7 @@ struct Analysis {
   VectorXd g0;
   Locals start;
   SpatialGaugeAnalysis gauge;
-  bool near_bound = false;  // AnalyzeGaugeAt's at the starts
 };
-
-bool AnalyzeGaugeAt(const SpatialRobot& nominal, const SpatialIdentifyOptions& options, const Model& model,
-                    const VectorXd& g0, const Locals& states, SpatialGaugeAnalysis* gauge);
 
 Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasurement>& readings,
                  const SpatialIdentifyOptions& options) {
@@ -1881,33 +1876,12 @@ Analysis Analyze(const SpatialRobot& nominal, const std::vector<SpatialMeasureme
     }
   }
   a.start = PoseStarts(a.model, nominal, readings, options.anchors, a.g0, false, options.pose_starts);
-  a.near_bound = AnalyzeGaugeAt(nominal, options, a.model, a.g0, a.start, &a.gauge);
-  return a;
-}
-
-// What the readings see at `states` (each pose's coordinates and tensions), and the gauge
-// chosen there, into *gauge (its names already set). True when a direction seen weakly there, or
-// within kReDecideFactor of the weak bound, is within kReDecideRigidFactor of the nearly-rigid bound
-// too: the default gauge's choice of it may differ at other states.
-constexpr double kReDecideFactor = 10.0, kReDecideRigidFactor = 4.0;
-bool AnalyzeGaugeAt(const SpatialRobot& nominal, const SpatialIdentifyOptions& options, const Model& model,
-                    const VectorXd& g0, const Locals& states, SpatialGaugeAnalysis* gauge) {
-  struct {
-    const Model& model;
-    const VectorXd& g0;
-    SpatialGaugeAnalysis& gauge;
-  } a{model, g0, *gauge};
-  const Layout& L = a.model.layout;
-  const int p = L.size();
-  const int n = static_cast<int>(a.model.pose_ids.size());
-  const int local = a.model.local();
-  a.gauge.held.clear();
-  // At the states with each pose's tensions moved to the nearest that hold it in exact
-  // equilibrium: at a start that misfits the equilibrium (the nominal l_i0 of a stretching cable
-  // is its length under load, not unloaded), the equilibrium rows see a turn of the whole robot
-  // about the vertical, which no reading of these sensors sees (ipanema1: the turn read as
-  // weakly seen at the start, then unseen at the estimate).
-  Locals balanced = states;
+  // What the readings alone see, at the starts with each pose's tensions moved to the nearest
+  // that hold it in exact equilibrium: at a start that misfits the equilibrium (the nominal l_i0
+  // of a stretching cable is its length under load, not unloaded), the equilibrium rows see a
+  // turn of the whole robot about the vertical, which no reading of these sensors sees
+  // (ipanema1: the turn read as weakly seen at the start, then unseen at the estimate).
+  Locals balanced = a.start;
   if (a.model.nt > 0) {
     for (VectorXd& x : balanced) x.tail(a.model.nt) = BalancedTensions(nominal, x.head<6>(), x.tail(a.model.nt));
   }
@@ -1928,15 +1902,11 @@ bool AnalyzeGaugeAt(const SpatialRobot& nominal, const SpatialIdentifyOptions& o
   const VectorXd& s = svd.singularValues();
   const double largest = s(0);
   std::vector<int> null_cols, weak_cols;
-  std::vector<int> near_cols;  // seen, weakly or within kReDecideFactor of the weak bound
   for (int c = 0; c < g; ++c) {
     if (!(s(c) > kSpatialNullThreshold * largest)) {
       null_cols.push_back(c);
     } else if (s(c) < kSpatialWeakThreshold * largest) {
       weak_cols.push_back(c);
-    }
-    if (s(c) > kSpatialNullThreshold * largest && s(c) < kReDecideFactor * kSpatialWeakThreshold * largest) {
-      near_cols.push_back(c);
     }
   }
   const auto columns = [&](const std::vector<int>& cols) {
@@ -1946,12 +1916,6 @@ bool AnalyzeGaugeAt(const SpatialRobot& nominal, const SpatialIdentifyOptions& o
   };
   const MatrixXd N = columns(null_cols);
   const int k = N.cols();
-  bool near_bound = false;  // only the default gauge's choice depends on it
-  if (options.gauge.kind == SpatialGaugeKind::kAuto) {
-    for (const SpatialDirection& d : Describe(columns(near_cols), a.g0, L, a.gauge.names)) {
-      near_bound = near_bound || d.rigid_offset <= kReDecideRigidFactor * kSpatialNearlyRigid;
-    }
-  }
   a.gauge.null_directions = Describe(N, a.g0, L, a.gauge.names);
   a.gauge.weak_directions = Describe(columns(weak_cols), a.g0, L, a.gauge.names);
   for (std::size_t c = 0; c < weak_cols.size(); ++c) {
@@ -1984,7 +1948,7 @@ bool AnalyzeGaugeAt(const SpatialRobot& nominal, const SpatialIdentifyOptions& o
   }
   // A lab's hold: list is checked and held even when the readings see everything (holding every
   // exit coordinate identifies the lengths, offsets and poses alone).
-  if (k == 0 && options.gauge.kind != SpatialGaugeKind::kHold && !hold_weak) return near_bound;
+  if (k == 0 && options.gauge.kind != SpatialGaugeKind::kHold && !hold_weak) return a;
   // A null direction that moves no holdable coordinate cannot be held: refused whatever the gauge.
   const std::vector<int> holdable = L.holdable();
   const std::string holdable_words = L.anchors ? "exit or anchor coordinates" : "exit coordinates";
@@ -2053,7 +2017,7 @@ bool AnalyzeGaugeAt(const SpatialRobot& nominal, const SpatialIdentifyOptions& o
     }
     case SpatialGaugeKind::kNone: break;
   }
-  return near_bound;
+  return a;
 }
 
 // One fit from the given starts, `held` fixed at g0: the block-arrow LM for plain least squares,
@@ -2235,8 +2199,13 @@ SpatialGauge ParseSpatialGauge(const std::string& text) {
     std::string name;
     while (std::getline(list, name, ',')) {
       if (name.empty()) throw InputError("--gauge", text, "an empty name in the hold list");
+      if (name.find_first_of(" \t") != std::string::npos) {
+        throw InputError("--gauge", text, "'" + name + "': a space in the hold list (names are separated by commas alone)");
+      }
       gauge.held.push_back(name);
     }
+    // getline gives no empty name after a trailing comma: refused as any other empty name.
+    if (text.back() == ',') throw InputError("--gauge", text, "an empty name in the hold list");
     if (gauge.held.empty()) throw InputError("--gauge", text, "hold: names no coordinate (e.g. hold:a1x,a1y,a1z)");
     return gauge;
   }
@@ -2394,36 +2363,6 @@ SpatialIdentifyResult IdentifySpatial(const SpatialRobot& nominal, const std::ve
     bool differ = false;
     for (int j = 0; j < n; ++j) differ = differ || staged[j] != a.start[j];
     if (differ) keep_better(FitFrom(model, a.g0, a.gauge.held, options, staged), staged);
-  }
-  // Where the starts saw a direction weakly or near the weak bound, the default gauge decides
-  // again at the estimate, and the fit is solved again (from its own poses) where that holds
-  // other coordinates: decided at the starts alone, a direction seen at 0.99e-4 of the best
-  // from the plan's poses and above 1e-4 from the readings' own starts was held with --plan
-  // and not without (a new user's tilted 6-cable robot, 4 cm of std against 30 cm), and a plan
-  // only starts the fit, it must not change what is identified. The estimate does not depend on
-  // the start, so neither does the choice; the directions reported are then the estimate's.
-  // Elsewhere the choice stands, and the re-analysis's cost (a fifth of a 30-pose fit) is saved.
-  if (options.gauge.kind == SpatialGaugeKind::kAuto && fit.converged && a.near_bound) {
-    SpatialGaugeAnalysis at_estimate = a.gauge;
-    bool analysed = true;
-    try {
-      AnalyzeGaugeAt(nominal, options, model, a.g0, fit.locals, &at_estimate);
-    } catch (const InputError&) {
-      analysed = false;  // fewer values than it would hold there: the start's choice stands
-    }
-    if (analysed && at_estimate.held == a.gauge.held) {
-      a.gauge = at_estimate;  // what the readings see, said at the estimate
-    } else if (analysed) {
-      Fit again = FitFrom(model, a.g0, at_estimate.held, options, fit.locals);
-      if (again.converged) {
-        a.gauge = at_estimate;
-        fit = std::move(again);
-      }
-    }
-    result.null_directions = a.gauge.null_directions;
-    result.weak_directions = a.gauge.weak_directions;
-    result.held.clear();
-    for (int h : a.gauge.held) result.held.push_back(a.gauge.names[h]);
   }
   const VectorXd& g = fit.g;
   const Locals& locals = fit.locals;

@@ -88,7 +88,6 @@
 #include <Eigen/Core>
 #include <array>
 #include <map>
-#include <limits>
 #include <string>
 #include <vector>
 
@@ -224,9 +223,6 @@ struct SpatialDirection {
   // A weakly seen direction whose exit part is within kNearlyRigid of a rigid motion of the
   // frame (a turn about z that one tilted swivel axis barely sees): the default gauge holds it.
   bool nearly_rigid = false;
-  // How far its exit part is from the nearest rigid motion of the frame, as a fraction of that
-  // part's norm (nearly_rigid: at most kSpatialNearlyRigid); infinite where it moves no exit.
-  double rigid_offset = std::numeric_limits<double>::infinity();
 };
 
 // Each value's leverage h in [0, 1] (the diagonal of the whitened fit's hat matrix, the pose

@@ -81,18 +81,14 @@ std::vector<std::string> StudyGauge(const SpatialRobot& nominal, const SpatialRo
   SpatialIdentifyOptions id;
   id.statics = o.statics;
   SpatialGaugeAnalysis gauge;
-  std::vector<std::string> held;
   try {
     gauge = AnalyzeSpatialGauge(planning, readings, id);
-    for (const int k : gauge.held) held.push_back(gauge.names[k]);
-    // Where the choice is near its bounds, identify makes it again at its estimate: the study
-    // holds what identify itself holds on these readings (identify --gauge auto's choice).
-    const SpatialIdentifyResult identified = IdentifySpatial(planning, readings, id);
-    if (identified.converged()) held = identified.held;
   } catch (const InputError& e) {
     throw InputError("--poses", "", std::to_string(fewest) + " poses of " + nominal.name +
                                         " with its sensors cannot identify the geometry: " + e.what());
   }
+  std::vector<std::string> held;
+  for (const int k : gauge.held) held.push_back(gauge.names[k]);
   return held;
 }
 
