@@ -201,7 +201,20 @@ void ForEachCsvRow(std::istream& in, const std::string& path, const std::vector<
     if (!have_header) {
       if (!optional_trailing.empty() && cells == full_header) found_header = full_header;
       if (cells != found_header) {
-        const std::string other = OtherCableCount(expected_header, cells);
+        std::string other = OtherCableCount(expected_header, cells);
+        if (other.empty()) {
+          // Name what is missing (a column dropped), else the two headers alone say it.
+          std::vector<std::string> missing;
+          for (const std::string& name : expected_header) {
+            if (std::find(cells.begin(), cells.end(), name) == cells.end()) missing.push_back("'" + name + "'");
+          }
+          constexpr std::size_t kNamed = 3;
+          if (!missing.empty()) {
+            std::string list;
+            for (std::size_t k = 0; k < std::min(kNamed, missing.size()); ++k) list += (k ? ", " : "") + missing[k];
+            other = list + (missing.size() > kNamed ? ", ..." : "") + " missing";
+          }
+        }
         throw InputError(path + ":" + std::to_string(line_no), "header",
                          "expected '" + JoinCsv(expected_header) + "', got '" + trimmed + "'" +
                              (other.empty() ? "" : " (" + other + ")"));

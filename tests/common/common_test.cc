@@ -283,7 +283,10 @@ TEST(Csv, ErrorsNameFileLineAndColumn) {
   };
   EXPECT_EQ(message("pose,x\n1,nan\n"), path + ":2: column 'x': must be a finite number (got 'nan')");
   EXPECT_EQ(message("pose,x\n1,1e400\n"), path + ":2: column 'x': must be a finite number (got '1e400')");
-  EXPECT_EQ(message("pose,y\n1,2\n"), path + ":1: header: expected 'pose,x', got 'pose,y'");
+  EXPECT_EQ(message("pose,y\n1,2\n"), path + ":1: header: expected 'pose,x', got 'pose,y' ('x' missing)");
+  // A dropped column is named (helper-23: a plan with one column dropped was told only the headers).
+  EXPECT_EQ(message("pose\n1\n"), path + ":1: header: expected 'pose,x', got 'pose' ('x' missing)");
+  EXPECT_EQ(message("pose,x,z\n1,2,3\n"), path + ":1: header: expected 'pose,x', got 'pose,x,z'");
   EXPECT_EQ(message("pose,x\n1,2,3\n"), path + ":2: expected 2 columns, got 3");
   EXPECT_EQ(message("pose,x\n0,2\n"), path + ":2: column 'pose': must be a positive integer (got '0')");
   EXPECT_EQ(message(""), path + ": is empty: no header line 'pose,x'");
