@@ -206,13 +206,13 @@ void ForEachCsvRow(std::istream& in, const std::string& path, const std::vector<
           // Name what is missing (a column dropped), else the two headers alone say it.
           std::vector<std::string> missing;
           for (const std::string& name : expected_header) {
-            if (std::find(cells.begin(), cells.end(), name) == cells.end()) missing.push_back("'" + name + "'");
+            if (std::find(cells.begin(), cells.end(), name) == cells.end()) missing.push_back(name);
           }
           constexpr std::size_t kNamed = 3;
           if (!missing.empty()) {
-            std::string list;
-            for (std::size_t k = 0; k < std::min(kNamed, missing.size()); ++k) list += (k ? ", " : "") + missing[k];
-            other = list + (missing.size() > kNamed ? ", ..." : "") + " missing";
+            const bool more = missing.size() > kNamed;
+            missing.resize(std::min(kNamed, missing.size()));
+            other = QuotedList(missing) + (more ? ", ..." : "") + " missing";
           }
         }
         throw InputError(path + ":" + std::to_string(line_no), "header",
