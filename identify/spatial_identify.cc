@@ -89,39 +89,55 @@ struct CableData {
 // The cable's state at pose q and, when asked, d length / d q (1 x 6, row-major) and
 // d length / d D (1 x 3), by the chain rule through the model's own gradient: the length
 // depends on B - D only (SwivelCable reads rho = B - D), so dl/dB = e_F_free and dl/dD =
-// -e_F_free; dB/dq is the identity on x, y, z and d(R b)/d(roll, pitch, yaw) from Jets on the
-// three angles. An AutoDiff of the whole construction on the 10 components of (q, D, l0) cost
-// ten times as much (bench/README.md, "Spatial identification"). With a free anchor b (b !=
-// nullptr), d length / d b = R^T e_F_free (1 x 3): B = p + R b.
+// -e_F_free; dB/dq is the identity on x, y, z and, on the angles, d(R b)/d(angle_a) =
+// axis_a x (R b) with model/swivel.h's EulerRateAxes, so dl/d(angle_a) = axis_a . ((R b) x e).
+// An AutoDiff of the whole construction on the 10 components of (q, D, l0) cost ten times as
+// much (bench/README.md, "Spatial identification"). With a free anchor b (b != nullptr),
+// d length / d b = R^T e_F_free (1 x 3): B = p + R b.
 struct CableWithGradient {
   SwivelCableState<double> state;
   double d_pose[6];
   double d_exit[3];
   double d_anchor[3];
 };
+
+// A pose's cables are evaluated one after another with the same angles: the rotation and its
+// rate axes are kept from the last call on this thread instead of computed for each cable
+// (bench/README.md, "Spatial identification").
+struct RotationMemo {
+  double angles_rad[3] = {std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0};
+  Eigen::Matrix3d R, axes;
+};
+const RotationMemo& RotationAt(const double* q) {
+  thread_local RotationMemo memo;
+  if (!(memo.angles_rad[0] == q[3] && memo.angles_rad[1] == q[4] && memo.angles_rad[2] == q[5])) {
+    std::copy(q + 3, q + 6, memo.angles_rad);
+    memo.R = Rotation<double>(q[3], q[4], q[5]);
+    memo.axes = EulerRateAxes<double>(memo.R, q[5]);
+  }
+  return memo;
+}
+
 CABLECAL_FLATTEN CableWithGradient CableAndGradient(const CableData& cable, const double* q, const double* d,
                                                     const double* b, bool gradient) {
-  using J3 = ceres::Jet<double, 3>;
   const SpatialPose<double> pose = PoseOf(q);
+  const RotationMemo& rotation = RotationAt(q);
+  const Eigen::Matrix3d& R = rotation.R;
+  const Vector3d r_F_anchor = R * cable.Anchor(b);
   CableWithGradient out;
-  if (!gradient) {
-    out.state = cable.At(q, d, b);
-    return out;
-  }
-  const Eigen::Matrix<J3, 3, 3> R = Rotation<J3>(J3(pose(3), 0), J3(pose(4), 1), J3(pose(5), 2));
-  const Vec3<J3> r_F_anchor = R * cable.Anchor(b).cast<J3>();
-  Vector3d p_F_anchor_m;
-  for (int a = 0; a < 3; ++a) p_F_anchor_m(a) = pose(a) + r_F_anchor(a).a;
   out.state = SwivelCable<double>(Eigen::Map<const Vector3d>(d), cable.k_F_swivel_axis, cable.pulley_radius_m,
-                                  p_F_anchor_m);
+                                  pose.head<3>() + r_F_anchor);
+  if (!gradient) return out;
   const Vector3d& e = out.state.e_F_free;
+  const Vector3d d_angles = rotation.axes.transpose() * r_F_anchor.cross(e);
   for (int a = 0; a < 3; ++a) {
     out.d_pose[a] = e(a);
     out.d_exit[a] = -e(a);
-    out.d_pose[3 + a] = e(0) * r_F_anchor(0).v(a) + e(1) * r_F_anchor(1).v(a) + e(2) * r_F_anchor(2).v(a);
+    out.d_pose[3 + a] = d_angles(a);
   }
   if (b) {
-    for (int k = 0; k < 3; ++k) out.d_anchor[k] = e(0) * R(0, k).a + e(1) * R(1, k).a + e(2) * R(2, k).a;
+    const Vector3d d_anchor = R.transpose() * e;
+    for (int k = 0; k < 3; ++k) out.d_anchor[k] = d_anchor(k);
   }
   return out;
 }
@@ -1097,8 +1113,8 @@ double BlockArrowNormal(const Model& model, const VectorXd& g, const Locals& loc
   h.setZero(p, p);
   gradient.setZero(p);
   double sum = 0.0;
-  MatrixXd jq, jg;
-  VectorXd r;
+  MatrixXd jq, jg, jgc, hc, bc;
+  VectorXd r, gc;
   std::vector<int> cols;
   const auto add = [&](const Term& t, PoseNormal* pose) {
     r.resize(t.size());
@@ -1108,16 +1124,43 @@ double BlockArrowNormal(const Model& model, const VectorXd& g, const Locals& loc
     for (std::size_t b = 0; b < t.block_offset.size(); ++b) {
       for (int c = 0; c < t.block_size[b]; ++c) cols.push_back(t.block_offset[b] + c);
     }
-    for (std::size_t x = 0; x < cols.size(); ++x) {
-      const auto jx = jg.col(cols[x]);
-      gradient(cols[x]) += jx.dot(r);
-      for (std::size_t y = 0; y < cols.size(); ++y) h(cols[x], cols[y]) += jx.dot(jg.col(cols[y]));
-      if (pose) pose->b.row(cols[x]).noalias() += jx.transpose() * jq;
+    // A term touches a few of the geometry's columns. One value's rank-one update (an encoder's)
+    // is done in plain loops, where Eigen's general products cost more in their setup than in
+    // the sums; more values' (the equilibrium's six rows over every exit) by products of the
+    // term's own columns gathered. Each of the two cut the spatial identification's instructions
+    // by a tenth (bench/README.md, "Spatial identification").
+    const int c = static_cast<int>(cols.size());
+    if (t.size() == 1) {
+      for (int x = 0; x < c; ++x) {
+        const double jx = jg(0, cols[x]);
+        gradient(cols[x]) += jx * r(0);
+        double* h_column = h.col(cols[x]).data();
+        for (int y = 0; y < c; ++y) h_column[cols[y]] += jx * jg(0, cols[y]);
+      }
+      if (!pose) return;
+      for (int q1 = 0; q1 < local; ++q1) {
+        const double jv = jq(0, q1);
+        pose->gradient(q1) += jv * r(0);
+        double* a_column = pose->a.col(q1).data();
+        for (int q2 = 0; q2 < local; ++q2) a_column[q2] += jv * jq(0, q2);
+        double* b_column = pose->b.col(q1).data();
+        for (int x = 0; x < c; ++x) b_column[cols[x]] += jv * jg(0, cols[x]);
+      }
+      return;
     }
-    if (pose) {
-      pose->a.noalias() += jq.transpose() * jq;
-      pose->gradient.noalias() += jq.transpose() * r;
+    jgc.resize(t.size(), c);
+    for (int x = 0; x < c; ++x) jgc.col(x) = jg.col(cols[x]);
+    hc.noalias() = jgc.transpose() * jgc;
+    gc.noalias() = jgc.transpose() * r;
+    for (int x = 0; x < c; ++x) {
+      gradient(cols[x]) += gc(x);
+      for (int y = 0; y < c; ++y) h(cols[y], cols[x]) += hc(y, x);
     }
+    if (!pose) return;
+    bc.noalias() = jgc.transpose() * jq;
+    for (int x = 0; x < c; ++x) pose->b.row(cols[x]) += bc.row(x);
+    pose->a.noalias() += jq.transpose() * jq;
+    pose->gradient.noalias() += jq.transpose() * r;
   };
   for (std::size_t j = 0; j < model.pose_ids.size(); ++j) {
     PoseNormal& pose = poses[j];
@@ -1265,6 +1308,10 @@ BlockArrowSummary SolveBlockArrow(const Model& model, VectorXd& g, Locals& local
     MatrixXd schur = h;
     schur.diagonal() += mu * ClampedDiagonal(h);
     VectorXd rhs = gradient;
+    // Every pose's b A^-1 and b side by side, so that the Schur complement's sum over the poses
+    // is one product (30 small ones per iteration cost 8 % of a 30-pose identification).
+    MatrixXd bc_all(p, local * n), b_all(p, local * n);
+    VectorXd gradient_all(local * n);
     for (int j = 0; j < n && valid; ++j) {
       PoseNormal& pose = poses[j];
       MatrixXd damped = pose.a;
@@ -1275,9 +1322,14 @@ BlockArrowSummary SolveBlockArrow(const Model& model, VectorXd& g, Locals& local
         break;
       }
       pose.damped_inverse = llt.solve(MatrixXd::Identity(local, local));
-      const MatrixXd bc = pose.b * pose.damped_inverse;
-      schur.noalias() -= bc * pose.b.transpose();
-      rhs.noalias() -= bc * pose.gradient;
+      bc_all.middleCols(local * j, local).noalias() = pose.b * pose.damped_inverse;
+      b_all.middleCols(local * j, local) = pose.b;
+      gradient_all.segment(local * j, local) = pose.gradient;
+    }
+    if (valid) {
+      // Only the lower half: the LDLT below reads no other.
+      schur.triangularView<Eigen::Lower>() -= bc_all * b_all.transpose();
+      rhs.noalias() -= bc_all * gradient_all;
     }
     VectorXd step_g = VectorXd::Zero(p);
     if (valid) {

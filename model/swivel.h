@@ -189,6 +189,21 @@ Eigen::Matrix<T, 3, 3> Rotation(const SpatialPose<T>& q) {
   return Rotation<T>(q(3), q(4), q(5));
 }
 
+// The axes in F about which roll, pitch and yaw turn the platform, as columns: for any platform
+// point b, d(R b)/d(angle_a) = axes.col(a) x (R b). R = Rz(yaw) Ry(pitch) Rx(roll): roll turns
+// about P's x axis (R's first column), pitch about Rz(yaw)'s y axis, yaw about F's z axis. The
+// identification's hand-written encoder derivatives use them instead of Jets on the angles.
+template <typename T>
+Eigen::Matrix<T, 3, 3> EulerRateAxes(const Eigen::Matrix<T, 3, 3>& R, const T& yaw_rad) {
+  using std::cos;
+  using std::sin;
+  Eigen::Matrix<T, 3, 3> axes;
+  axes.col(0) = R.col(0);
+  axes.col(1) << -sin(yaw_rad), cos(yaw_rad), T(0.0);
+  axes.col(2) << T(0.0), T(0.0), T(1.0);
+  return axes;
+}
+
 // The platform's tilt: the angle between P's z axis and F's z axis, acos(cos roll cos pitch).
 inline double TiltAngle(const SpatialPose<double>& q) {
   return std::acos(std::min(1.0, std::max(-1.0, Rotation<double>(q)(2, 2))));

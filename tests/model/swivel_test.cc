@@ -372,6 +372,24 @@ TEST(SpatialPlatform, RotationIsZYXEulerAngles) {
   EXPECT_NEAR(R(0, 0), std::cos(0.3), 1e-16);
 }
 
+// The Euler rate axes against Jets of the rotation itself: d(R b)/d(angle_a) = axis_a x (R b)
+// for every angle, including pitches near the limits and a yaw beyond pi.
+TEST(SpatialPlatform, EulerRateAxesGiveTheRotationsDerivative) {
+  Rng rng(59);
+  for (int trial = 0; trial < 200; ++trial) {
+    const double roll = rng.Uniform(-1.5, 1.5), pitch = rng.Uniform(-1.5, 1.5), yaw = rng.Uniform(-4.0, 4.0);
+    const Vec3d b(rng.Uniform(-1.0, 1.0), rng.Uniform(-1.0, 1.0), rng.Uniform(-1.0, 1.0));
+    const Eigen::Matrix<Jet<3>, 3, 3> Rj = Rotation<Jet<3>>(Jet<3>(roll, 0), Jet<3>(pitch, 1), Jet<3>(yaw, 2));
+    const Vec3<Jet<3>> rj = Rj * b.cast<Jet<3>>();
+    const Eigen::Matrix3d R = Rotation<double>(roll, pitch, yaw);
+    const Eigen::Matrix3d axes = EulerRateAxes<double>(R, yaw);
+    for (int a = 0; a < 3; ++a) {
+      const Vec3d expected(rj(0).v(a), rj(1).v(a), rj(2).v(a));
+      EXPECT_LT((axes.col(a).cross(R * b) - expected).norm(), 1e-14) << "angle " << a << " at trial " << trial;
+    }
+  }
+}
+
 // Virtual work: for a rigid displacement xi = (dp, dphi) in F, B_i = p + dp + R b_i +
 // dphi x R b_i to first order, and the Jets' dl/dxi must be -W^T; and the gravity wrench is
 // -dV/dxi of V = m g z_com.
