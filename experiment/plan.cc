@@ -92,11 +92,18 @@ void RequirePlanLength(const std::string& where, const std::string& robot_name, 
                                                    " m): a plan for another robot?");
 }
 
-void RequirePlanEquilibrium(const std::string& where, const std::string& robot_name, double residual_N,
-                            double weight_N, const std::string& pose_columns, int num_cables) {
+void RequirePlanEquilibrium(const std::string& where, const std::string& robot_name, const Eigen::VectorXd& tensions_N,
+                            double residual_N, double weight_N, const std::string& pose_columns) {
+  for (Eigen::Index i = 0; i < tensions_N.size(); ++i) {
+    if (!(tensions_N(i) < 0.0)) continue;
+    const std::string c = std::to_string(i + 1);
+    throw InputError(where, "column 't" + c + "'",
+                     FormatDouble(tensions_N(i)) + " N is a negative tension: cable " + c +
+                         " would push, which no cable can (the plan's tensions are in N, every one positive)");
+  }
   if (residual_N <= 1e-6 * weight_N) return;
   std::string columns = pose_columns;
-  for (int i = 1; i <= num_cables; ++i) columns += ",t" + std::to_string(i);
+  for (Eigen::Index i = 1; i <= tensions_N.size(); ++i) columns += ",t" + std::to_string(i);
   throw InputError(where, "columns '" + columns + "'",
                    "not a static equilibrium of " + robot_name + " (force and moment residual " +
                        FormatDouble(residual_N) + " N): the platform would not stay at this pose");
@@ -136,8 +143,8 @@ void CheckPlanMatchesRobot(const Robot& robot, const std::vector<PlanPose>& plan
                                                             FormatDouble(l0(i)) + " m of " + robot.name);
       }
     }
-    RequirePlanEquilibrium(where, robot.name, EquilibriumResidual<double>(robot, p.q, p.tensions_N).norm(), weight_N,
-                           "x,z,theta", robot.num_cables());
+    RequirePlanEquilibrium(where, robot.name, p.tensions_N,
+                           EquilibriumResidual<double>(robot, p.q, p.tensions_N).norm(), weight_N, "x,z,theta");
   }
 }
 

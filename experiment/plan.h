@@ -92,9 +92,11 @@ void CheckPlanMatchesRobot(const Robot& robot, const std::vector<PlanPose>& plan
 void RequirePlanLength(const std::string& where, const std::string& robot_name, int cable, double model_length_m,
                        double plan_length_m, double tolerance_m);
 
-// The plan checks' equilibrium test, shared by both kinds: InputError naming `where` and the
-// columns `pose_columns`,t1..tm when |W t + w_g| = residual_N exceeds 1e-6 of the weight.
-void RequirePlanEquilibrium(const std::string& where, const std::string& robot_name, double residual_N,
-                            double weight_N, const std::string& pose_columns, int num_cables);
+// The plan checks' tension and equilibrium tests, shared by both kinds: InputError naming
+// `where` and column t<i> for a negative tension (no cable pushes; checked first, as an
+// equilibrium held by a pushing cable is no plan's), then the columns `pose_columns`,t1..tm when
+// |W t + w_g| = residual_N exceeds 1e-6 of the weight.
+void RequirePlanEquilibrium(const std::string& where, const std::string& robot_name, const Eigen::VectorXd& tensions_N,
+                            double residual_N, double weight_N, const std::string& pose_columns);
 
 }  // namespace cablecal

@@ -249,8 +249,9 @@ void CheckSpatialPlanMatchesRobot(const SpatialRobot& robot, const std::vector<S
                              "'s paid-out length from home (" + FormatDouble(dl) + " m) of " + robot.name);
       }
     }
-    RequirePlanEquilibrium(where, robot.name, EquilibriumResidual<double>(robot, p.q, p.tensions_N).norm(), weight_N,
-                           "x,y,z,roll,pitch,yaw", robot.num_cables());
+    RequirePlanEquilibrium(where, robot.name, p.tensions_N,
+                           EquilibriumResidual<double>(robot, p.q, p.tensions_N).norm(), weight_N,
+                           "x,y,z,roll,pitch,yaw");
   }
 }
 

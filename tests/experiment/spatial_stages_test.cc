@@ -279,6 +279,9 @@ TEST(SpatialPlanCsv, HostileFilesAreNamedByFileLineAndColumn) {
   e[0].tensions_N(0) += 5.0;
   EXPECT_NE(check(e).find("not a static equilibrium"), std::string::npos) << check(e);
   e = plan;
+  e[1].tensions_N(2) = -5.0;  // a sign lost in editing: named as the tension it is
+  EXPECT_NE(check(e).find("p.csv: pose 2: column 't3': -5 N is a negative tension"), std::string::npos) << check(e);
+  e = plan;
   e[0].q(3) = 0.9;  // 52 degrees of roll
   EXPECT_NE(check(e).find("p.csv: pose 1: columns 'roll,pitch'"), std::string::npos) << check(e);
   e = plan;
