@@ -1309,6 +1309,60 @@ TEST(SpatialIdentify, StretchingRedundantRobotsWithoutLoadCellsFindTheTruth) {
   }
 }
 
+// Poses turned far about the vertical from home (+-120 degrees of yaw drawn), on a new user's
+// 8-cable robot with its exits in corner pairs, home turned by -60 degrees: three poses 1.8 to
+// 2.1 rad from home fitted every start (home, the rigid stage, the neighbours') into a wrong
+// basin, and the noise-free readings ended as not converged, RMS 88, until PoseStarts tried home
+// turned by quarter turns too.
+TEST(SpatialIdentify, PosesTurnedFarFromHomeAboutTheVerticalFindTheTruth) {
+  SpatialRobot nominal = LoadSpatialRobotFromString(R"(name: corner-pairs
+kind: spatial
+gravity: 9.81
+frame: {min: [-2.0, -2.0, 0.0], max: [2.0, 2.0, 3.0]}
+platform:
+  mass: 30.0
+  com: [0.02, 0.03, 0.12]
+  anchors: [[0.2732, 0.0732, 0.0], [-0.2299, -0.0982, 0.3], [0.0039, -0.2332, 0.0], [-0.0299, 0.2482, 0.3],
+            [-0.2732, -0.0732, 0.0], [0.2212, 0.1032, 0.3], [-0.0039, 0.2332, 0.0], [0.0212, -0.2432, 0.3]]
+cables:
+  - {exit: [-1.8, -1.6, 2.70], swivel_axis: [0.1, 0, 1], pulley_radius: 0.03, stiffness: 5.0e7}
+  - {exit: [-1.6, -1.8, 2.90], swivel_axis: [0, 0.1, 1], pulley_radius: 0.03, stiffness: 5.0e7}
+  - {exit: [-1.8, 1.6, 2.75], swivel_axis: [0.1, -0.1, 1], pulley_radius: 0.03, stiffness: 5.0e7}
+  - {exit: [-1.6, 1.8, 2.85], swivel_axis: [0, 0, 1], pulley_radius: 0.03, stiffness: 5.0e7}
+  - {exit: [1.8, 1.6, 2.80], swivel_axis: [-0.2, 0, 1], pulley_radius: 0.03, stiffness: 5.0e7}
+  - {exit: [1.6, 1.8, 2.60], swivel_axis: [0, -0.1, 1], pulley_radius: 0.03, stiffness: 5.0e7}
+  - {exit: [1.8, -1.6, 2.95], swivel_axis: [-0.05, 0.05, 1], pulley_radius: 0.03, stiffness: 5.0e7}
+  - {exit: [1.6, -1.8, 2.70], swivel_axis: [0, 0, 1], pulley_radius: 0.03, stiffness: 5.0e7}
+tension: {min: 10.0, max: 1500.0}
+limits: {tilt_max_deg: 25, margin: 0.05}
+home: [0.1, -0.1, 1.2]
+home_rpy_deg: [3, -2, -60]
+sensors:
+  encoder: {sigma: 0.00005}
+  inclinometer: {accuracy_deg: 0.1, repeatability_deg: 0.05}
+  laser: {accuracy: 0.006, repeatability: 0.0015}
+)",
+                                                    "corner-pairs");
+  const int m = nominal.num_cables();
+  const std::vector<SpatialPlanPose> plan = SampleSpatialPoses(nominal, 25, 4, 120.0 * M_PI / 180.0);
+  int far = 0;
+  for (const SpatialPlanPose& q : plan) far += std::abs(std::remainder(q.q(5) - nominal.home_pose()(5), 2 * M_PI)) > 1.7;
+  ASSERT_GE(far, 2);
+  SpatialSimulationOptions lab;
+  lab.noisy = NoisySensors::kNone;
+  lab.encoder_noise = false;
+  Rng rng(5);
+  const SimulatedSpatialExperiment sim = SimulateSpatialExperiment(nominal, nominal, plan, lab, rng);
+  ASSERT_EQ(sim.measurements.size(), plan.size());
+  const SpatialIdentifyResult r = IdentifySpatial(nominal, sim.measurements, {});
+  ASSERT_TRUE(r.converged()) << r.message;
+  const VectorXd l0_true = SpatialHome(nominal).paid_out_m;
+  for (int i = 0; i < m; ++i) {
+    for (int a = 0; a < 3; ++a) EXPECT_NEAR(r.geometry(3 * i + a), nominal.cables[i].p_F_exit_m(a), 1e-7) << r.names[3 * i + a];
+    EXPECT_NEAR(r.geometry(3 * m + i), l0_true(i), 1e-7) << r.names[3 * m + i];
+  }
+}
+
 // Soft cables (E*A 30 times the largest tension: a few per cent of stretch, up to centimetres at
 // home) identified from noise-free readings without a plan: each pose's search starts from home
 // or its readings. Before l_i0 was started at the cables paid out at home (NominalSpatialGeometry)
