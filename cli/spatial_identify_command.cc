@@ -14,7 +14,7 @@
 #include "common/format.h"
 #include "common/json.h"
 #include "common/version.h"
-#include "experiment/measurements.h"  // ParseDelimiter
+#include "experiment/measurements.h"  // ParseDelimiter, ReusedPoseIdWarning
 #include "experiment/spatial_measurements.h"
 #include "experiment/spatial_plan.h"
 #include "identify/spatial_calibration_report.h"
@@ -89,6 +89,9 @@ int RunSpatialIdentify(const Context& ctx, const IdentifyCommandOptions& options
           : ReadSpatialMeasurementsCsv(options.holdout_path, nominal.num_cables(), ParseDelimiter(options.delimiter));
   CheckSpatialReadingsPlausible(nominal, readings, options.measurements_path);
   CheckSpatialReadingsPlausible(nominal, holdout, options.holdout_path);
+  if (const auto reused = ReusedPoseIdWarning(options.measurements_path, readings)) {
+    std::fprintf(stderr, "cablecal: warning: %s\n", reused->c_str());
+  }
   // --plan: the commanded poses, each its pose's start. The plan must be this robot's (its
   // poses equilibria of the robot file's statics): another robot's would start the search at
   // poses the readings were not taken at.

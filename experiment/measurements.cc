@@ -55,26 +55,6 @@ bool LooksLikeColumn(const std::string& column, const std::string& name) {
   return lower.size() == name.size() || !std::isalnum(static_cast<unsigned char>(lower[name.size()]));
 }
 
-// A pose id that comes again after other poses (1, 2, 3, 1): the first such reading, and how many.
-std::optional<std::string> ReusedPoseIdWarning(const std::string& source, const std::vector<Measurement>& readings) {
-  std::unordered_map<int, std::size_t> first;  // pose id -> index of its first reading
-  std::size_t reused = 0, first_reused = 0;
-  for (std::size_t k = 0; k < readings.size(); ++k) {
-    const int id = readings[k].pose_id;
-    const auto [at, fresh] = first.emplace(id, k);
-    if (fresh || readings[k - 1].pose_id == id) continue;  // a new pose, or a repeat in a row
-    if (reused++ == 0) first_reused = k;
-  }
-  if (reused == 0) return std::nullopt;
-  const Measurement& m = readings[first_reused];
-  const Measurement& earlier = readings[first.at(m.pose_id)];
-  const std::string where = m.where.empty() ? source + ": reading " + std::to_string(first_reused + 1) : m.where;
-  return where + ": pose " + std::to_string(m.pose_id) + " read again after other poses (first at " +
-         (earlier.where.empty() ? "reading " + std::to_string(first.at(m.pose_id) + 1) : earlier.where) +
-         "): taken as a repeated reading of the same pose; if it is another pose give it its own id" +
-         (reused > 1 ? " (" + std::to_string(reused) + " readings in all repeat a pose id after other poses)" : "");
-}
-
 }  // namespace
 
 std::vector<std::string> MeasurementWarnings(const std::string& source, const std::vector<std::string>& ignored,

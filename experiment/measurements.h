@@ -8,7 +8,9 @@
 #include <array>
 #include <functional>
 #include <istream>
+#include <optional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "model/robot.h"
@@ -67,6 +69,30 @@ std::vector<Measurement> ReadMeasurementsCsv(std::istream& in, const std::string
 // read as a repeated reading of that pose, not as another pose (a reused id). `readings` as read.
 std::vector<std::string> MeasurementWarnings(const std::string& source, const std::vector<std::string>& ignored,
                                              const std::vector<Measurement>& readings);
+// A pose id that comes again after other poses (1, 2, 3, 1), read as a repeated reading of that
+// pose: a warning naming the first such reading (its `where`, else `source` and its index), the
+// earlier one and the count; nullopt when none. For planar and spatial readings alike (both
+// carry pose_id and where).
+template <typename Reading>
+std::optional<std::string> ReusedPoseIdWarning(const std::string& source, const std::vector<Reading>& readings) {
+  std::unordered_map<int, std::size_t> first;  // pose id -> index of its first reading
+  std::size_t reused = 0, first_reused = 0;
+  for (std::size_t k = 0; k < readings.size(); ++k) {
+    const int id = readings[k].pose_id;
+    const bool fresh = first.emplace(id, k).second;
+    if (fresh || readings[k - 1].pose_id == id) continue;  // a new pose, or a repeat in a row
+    if (reused++ == 0) first_reused = k;
+  }
+  if (reused == 0) return std::nullopt;
+  const Reading& m = readings[first_reused];
+  const Reading& earlier = readings[first.at(m.pose_id)];
+  const std::string where = m.where.empty() ? source + ": reading " + std::to_string(first_reused + 1) : m.where;
+  return where + ": pose " + std::to_string(m.pose_id) + " read again after other poses (first at " +
+         (earlier.where.empty() ? "reading " + std::to_string(first.at(m.pose_id) + 1) : earlier.where) +
+         "): taken as a repeated reading of the same pose; if it is another pose give it its own id" +
+         (reused > 1 ? " (" + std::to_string(reused) + " readings in all repeat a pose id after other poses)" : "");
+}
+
 // The delimiter of --delimiter: ",", ";", "tab" (or a tab character); InputError otherwise.
 char ParseDelimiter(const std::string& text);
 constexpr int kMaxMeasuredPoses = 100000;

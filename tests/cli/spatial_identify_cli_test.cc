@@ -238,6 +238,42 @@ sensors:
 // to a metre above home: every reading kept and predicted to rounding. Its sensors' pose guess
 // had stopped short of three of the ten (Gauss-Newton from home), which validate then refused
 // as another assembly.
+// A pose id read again after other poses is taken as a repeated reading of that pose, and said
+// (as the planar reader says it, naming the line and the first reading's); repeats in a row are
+// the usual layout of repeated readings and say nothing.
+TEST_F(SpatialIdentifyCli, APoseIdReadAgainAfterOtherPosesIsSaid) {
+  Simulate(Builtin("cogiro"), 12, "0.002", 3, "cal");
+  std::ifstream in(Path("cal.csv"));
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  std::size_t first = 0;  // pose 1's row: the first that is not a comment or the header
+  while (first < lines.size() && (lines[first].empty() || lines[first][0] == '#' || lines[first].rfind("pose", 0) == 0)) {
+    ++first;
+  }
+  ASSERT_LT(first, lines.size());
+  ASSERT_EQ(lines[first].rfind("1,", 0), 0u) << lines[first];
+  const auto write = [&](const std::string& name, std::size_t insert_after) {
+    std::ofstream out(Path(name));
+    for (std::size_t k = 0; k < lines.size(); ++k) {
+      out << lines[k] << "\n";
+      if (k == insert_after) out << lines[first] << "\n";
+    }
+  };
+  write("again.csv", lines.size() - 1);
+  const RunResult again = RunCablecal("identify --robot " + Builtin("cogiro") + " --measurements " + Path("again.csv") +
+                                      " --out " + Path("r.yaml"));
+  EXPECT_EQ(again.exit_code, 0) << again.output;
+  const std::string said = "cablecal: warning: " + Path("again.csv") + ":" + std::to_string(lines.size() + 1) +
+                           ": pose 1 read again after other poses (first at " + Path("again.csv") + ":" +
+                           std::to_string(first + 1) + ")";
+  EXPECT_NE(again.output.find(said), std::string::npos) << again.output;
+  write("in_a_row.csv", first);
+  const RunResult row = RunCablecal("identify --robot " + Builtin("cogiro") + " --measurements " + Path("in_a_row.csv") +
+                                    " --out " + Path("r.yaml"));
+  EXPECT_EQ(row.exit_code, 0) << row.output;
+  EXPECT_EQ(row.output.find("read again"), std::string::npos) << row.output;
+}
+
 TEST_F(SpatialIdentifyCli, AFourCableRobotPredictsItsOwnTiltedNoiseFreeReadings) {
   std::ofstream(Path("lab4.yaml")) << kLab4Yaml;
   RunResult r = RunCablecal("sample --robot " + Path("lab4.yaml") + " --poses 10 --seed 7 --yaw-range-deg 1 --out " +
