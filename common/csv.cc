@@ -58,7 +58,12 @@ double CsvRow::Number(int col) const {
 
 int CsvRow::PositiveInt(int col) const {
   const std::string& s = cells[col];
-  const bool digits = !s.empty() && s.size() <= 9 && s.find_first_not_of("0123456789") == std::string::npos;
+  const bool digits = !s.empty() && s.find_first_not_of("0123456789") == std::string::npos;
+  const std::size_t significant = digits ? s.size() - std::min(s.find_first_not_of('0'), s.size()) : 0;
+  if (digits && significant > 9) {  // positive, but beyond an id's nine digits
+    throw InputError(Where(), "column '" + (*header)[col] + "'",
+                     "must be a positive integer of at most 9 digits (got '" + s + "')");
+  }
   if (!digits || std::stoi(s) < 1) {
     throw InputError(Where(), "column '" + (*header)[col] + "'", "must be a positive integer (got '" + s + "')");
   }

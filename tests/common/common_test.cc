@@ -289,6 +289,11 @@ TEST(Csv, ErrorsNameFileLineAndColumn) {
   EXPECT_EQ(message("pose,x,z\n1,2,3\n"), path + ":1: header: expected 'pose,x', got 'pose,x,z'");
   EXPECT_EQ(message("pose,x\n1,2,3\n"), path + ":2: expected 2 columns, got 3");
   EXPECT_EQ(message("pose,x\n0,2\n"), path + ":2: column 'pose': must be a positive integer (got '0')");
+  // Positive but too long for an id is said so (helper-24: "must be a positive integer" of 10^20);
+  // leading zeros do not count toward its nine digits.
+  EXPECT_EQ(message("pose,x\n99999999999999999999,2\n"),
+            path + ":2: column 'pose': must be a positive integer of at most 9 digits (got '99999999999999999999')");
+  EXPECT_EQ(message("pose,x\n0000000000007,2\n"), "");
   EXPECT_EQ(message(""), path + ": is empty: no header line 'pose,x'");
   EXPECT_EQ(message("pose,x\n"), path + ": has a header but no data rows");
   EXPECT_EQ(message("pose,x\n1,2\n" + std::string(kMaxCsvLineBytes + 5, '#') + "\n3,4\n"),
