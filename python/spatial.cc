@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "common/error.h"
+#include "experiment/measurements.h"  // ReusedPoseIdWarning
 #include "experiment/spatial_measurements.h"
 #include "experiment/spatial_plan.h"
 #include "experiment/spatial_simulation.h"
@@ -110,6 +111,9 @@ void BindSpatial(py::module_& m) {
             // As the CLI reads a file: values no sensor of this robot can give (millimetres,
             // degrees) are refused here, naming the pose and column, not later in identify.
             CheckSpatialReadingsPlausible(robot, m.readings, p);
+            if (const auto reused = ReusedPoseIdWarning(p, m.readings)) {  // the CLI's warning
+              if (PyErr_WarnEx(PyExc_UserWarning, reused->c_str(), 1) < 0) throw py::error_already_set();
+            }
             return m;
           },
           py::arg("robot"), py::arg("path"),

@@ -920,6 +920,15 @@ def test_spatial_sample_workspace_simulate_equal_cli(tmp_path, name):
     mm.write_text("\n".join(lines) + "\n")
     with pytest.raises(cablecal.InputError, match=r"column 'dl1'.*millimetres\?"):
         cablecal.SpatialMeasurements.load(robot, str(mm))
+    # The first pose read again after the others: a repeated reading of it, warned about as the
+    # CLI does.
+    if held >= 2:
+        lines = m_out.read_text().splitlines()
+        again = tmp_path / "again.csv"
+        again.write_text("\n".join(lines + [lines[header + 1]]) + "\n")
+        with pytest.warns(UserWarning, match=r"again.csv:%d: pose %s read again after other poses \(first at "
+                          r".*again.csv:%d\)" % (len(lines) + 1, cells[0], header + 2)):
+            cablecal.SpatialMeasurements.load(robot, str(again))
 
 
 def test_montecarlo_whose_every_trial_fails_raises(tmp_path):
