@@ -1812,6 +1812,15 @@ Locals PoseStarts(const Model& model, const SpatialRobot& nominal, const std::ve
         compared[group] < kFewPoses || cost > kWrongBasinRatio * median[group] * model.pose_values[j];
     return !within_noise && stands_out;
   };
+  // Pose j fitted from `from` competes with its start: the lower cost is kept.
+  const auto try_start = [&](int j, const VectorXd& from) {
+    VectorXd fitted = StartingLocal(model, j, g0, from);
+    const double cost = pose_cost(j, fitted);
+    if (cost < staged_costs[j]) {
+      starts[j] = std::move(fitted);
+      staged_costs[j] = cost;
+    }
+  };
   for (int j = 0; j < n; ++j) {
     if (staged_costs[j] < 0.0 || !wrong_basin(j, staged_costs[j])) {
       if (L.m >= 6 || staged_costs[j] < 0.0) continue;
@@ -1820,12 +1829,7 @@ Locals PoseStarts(const Model& model, const SpatialRobot& nominal, const std::ve
       starts[j] = StartingLocal(model, j, g0, starts[j]);
       staged_costs[j] = pose_cost(j, starts[j]);
     }
-    VectorXd from_home = StartingLocal(model, j, g0, home_starts[j]);
-    const double home_cost = pose_cost(j, from_home);
-    if (home_cost < staged_costs[j]) {
-      starts[j] = std::move(from_home);
-      staged_costs[j] = home_cost;
-    }
+    try_start(j, home_starts[j]);
   }
   // A pose whose start still stands out after both (a soft cable's stretch of centimetres can
   // leave the fits from home and from the rigid stage in wrong basins alike: measured on random
@@ -1849,12 +1853,7 @@ Locals PoseStarts(const Model& model, const SpatialRobot& nominal, const std::ve
       if (model.nt > 0 && first_reading(j).has(SpatialSensor::kLoadCell)) {
         from.tail(model.nt) = home_starts[j].tail(model.nt);  // its own load cells' tensions
       }
-      VectorXd fitted = StartingLocal(model, j, g0, from);
-      const double cost = pose_cost(j, fitted);
-      if (cost < staged_costs[j]) {
-        starts[j] = std::move(fitted);
-        staged_costs[j] = cost;
-      }
+      try_start(j, from);
     }
   }
   // A pose that still stands out may be turned far about the vertical from home and from every
@@ -1871,12 +1870,7 @@ Locals PoseStarts(const Model& model, const SpatialRobot& nominal, const std::ve
         from.tail(model.nt) = BalancedTensions(nominal, from.head<6>(), VectorXd::Zero(model.nt));
       }
       if (rigid) from.head<6>() = StartingLocal(*rigid, j, g0, from.head<6>());
-      VectorXd fitted = StartingLocal(model, j, g0, from);
-      const double cost = pose_cost(j, fitted);
-      if (cost < staged_costs[j]) {
-        starts[j] = std::move(fitted);
-        staged_costs[j] = cost;
-      }
+      try_start(j, from);
     }
   }
   return starts;
