@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <exception>
+#include <functional>
 #include <limits>
 #include <optional>
 
@@ -51,6 +52,20 @@ double TensionMargin(const SpatialRobot& robot) { return 1e-4 + 1e-3 * (robot.te
 // A re-solved pose is the same as Ipopt's within this (m, rad).
 constexpr double kSamePose = 1e-6;
 constexpr double kEquilibriumTolerance = 1e-6;  // of the weight
+double Weight(const SpatialRobot& robot) { return robot.platform_mass_kg * robot.gravity_mps2; }
+// A solve also ends when its criterion has stalled (README, "Spatial robots", "Experiment
+// design"): no iterate in the last kStallIterations lowered the best clean one's criterion by
+// kStallChange (the criteria are logarithms: a relative change of the trace, determinant or
+// condition number), the best clean iterate then the solve's poses. Measured on cogiro, 30 poses:
+// Ipopt's first solve reaches its final criterion to 6e-5 in 290 of its 448 iterations and spends
+// the rest on its infeasibility, which the verification's projection removes anyway.
+constexpr double kStallChange = 1e-5;
+constexpr int kStallIterations = 30;
+// Clean: every bound kept (the NLP's, with its margins) and the equilibrium rows within this
+// fraction of the weight: with 6 or more cables the verification projects the tensions onto the
+// equilibrium (a shift of newtons at most against the thousandth of the tension range
+// TensionMargin keeps), with fewer it re-solves the pose, which must not move by kSamePose.
+constexpr double kCleanEquilibriumProjected = 1e-4, kCleanEquilibriumResolved = 1e-9;
 
 constexpr std::uint64_t kStartStream = 1, kRandomSetStream = 2, kGaugeStream = 3;
 // The platform's uncertain values a scenario robot moves: the mass and the centre of mass's 3
@@ -170,11 +185,21 @@ class SpatialDesignNlp : public Ipopt::TNLP {
  public:
   SpatialDesignNlp(const SpatialRobot& robot, const SpatialInformationLayout& layout,
                    const SpatialDesignOptions& options, const std::vector<SpatialPlanPose>& start,
-                   const std::vector<PoseTightening>* tightening)
-      : robot_(robot), layout_(layout), options_(options), start_(start), tightening_(tightening),
+                   const std::vector<PoseTightening>* tightening,
+                   std::function<bool(const std::vector<SpatialPlanPose>&)> holds)
+      : robot_(robot), layout_(layout), options_(options), start_(start), tightening_(tightening), holds_(std::move(holds)),
         n_(static_cast<int>(start.size())), m_(robot.num_cables()), V(6 + m_), C(PoseRowCount(m_)) {}
 
   int NumPairs() const { return options_.min_spacing_m > 0.0 ? n_ * (n_ - 1) / 2 : 0; }
+  // The squared distance of the k-th pair of reference points (pairs (0, 1), (0, 2), ..., (1, 2), ...).
+  double PairDistance2(const Number* x, int k) const {
+    int a = 0;
+    while (k >= n_ - 1 - a) k -= n_ - 1 - a++;
+    const int b = a + 1 + k;
+    double d2 = 0.0;
+    for (int c = 0; c < 3; ++c) d2 += (x[V * a + c] - x[V * b + c]) * (x[V * a + c] - x[V * b + c]);
+    return d2;
+  }
 
   bool get_nlp_info(Index& n, Index& m, Index& nnz_jac_g, Index& nnz_h_lag, IndexStyleEnum& style) override {
     n = V * n_;
@@ -239,11 +264,15 @@ class SpatialDesignNlp : public Ipopt::TNLP {
     return std::isfinite(f);
   }
 
+  // Ipopt evaluates the gradient and the constraints' Jacobian at each accepted iterate: their
+  // point and values are kept for the stall rule (intermediate_callback).
   bool eval_grad_f(Index n, const Number* x, bool, Number* grad) override {
     VectorXd g;
     const double f = SpatialDesignObjective(robot_, layout_, options_.criterion, Poses(x), &g, Power());
     if (!std::isfinite(f)) return false;
     std::copy(g.data(), g.data() + n, grad);
+    gradient_x_.assign(x, x + n);
+    gradient_f_ = f;
     return true;
   }
 
@@ -252,14 +281,7 @@ class SpatialDesignNlp : public Ipopt::TNLP {
     for (int j = 0; j < n_; ++j) {
       if (!PoseRows<double>(robot_, x + V * j, g + C * j)) return false;
     }
-    int k = 0;
-    for (int a = 0; a < n_ && NumPairs() > 0; ++a) {
-      for (int b = a + 1; b < n_; ++b, ++k) {
-        double d2 = 0.0;
-        for (int c = 0; c < 3; ++c) d2 += (x[V * a + c] - x[V * b + c]) * (x[V * a + c] - x[V * b + c]);
-        g[C * n_ + k] = d2;
-      }
-    }
+    for (int k = 0; k < NumPairs(); ++k) g[C * n_ + k] = PairDistance2(x, k);
     return true;
   }
 
@@ -288,13 +310,17 @@ class SpatialDesignNlp : public Ipopt::TNLP {
       return true;
     }
     std::vector<Jet> y(V), out(C);
+    jacobian_x_.clear();
+    jacobian_g_.resize(C * n_);
     for (int j = 0; j < n_; ++j) {
       for (int c = 0; c < V; ++c) y[c] = Jet(x[V * j + c], c);
       if (!PoseRows<Jet>(robot_, y.data(), out.data())) return false;
       for (int r = 0; r < C; ++r) {
+        jacobian_g_[C * j + r] = out[r].a;
         for (int c = 0; c < V; ++c) values[e++] = out[r].v[c];
       }
     }
+    jacobian_x_.assign(x, x + V * n_);
     for (int a = 0; a < n_ && NumPairs() > 0; ++a) {
       for (int b = a + 1; b < n_; ++b) {
         for (int c = 0; c < 3; ++c) {
@@ -323,19 +349,66 @@ class SpatialDesignNlp : public Ipopt::TNLP {
     return true;
   }
 
-  bool intermediate_callback(Ipopt::AlgorithmMode, Index, Number, Number, Number, Number, Number, Number, Number,
-                             Number, Index, const Ipopt::IpoptData*, Ipopt::IpoptCalculatedQuantities*) override {
-    return !(options_.interrupted && options_.interrupted->load());
+  // The stall rule (kStallChange): ends the solve, its poses the best clean iterate's.
+  bool intermediate_callback(Ipopt::AlgorithmMode mode, Index iteration, Number objective, Number, Number, Number,
+                             Number, Number, Number, Number, Index, const Ipopt::IpoptData*,
+                             Ipopt::IpoptCalculatedQuantities*) override {
+    if (options_.interrupted && options_.interrupted->load()) return false;
+    if (!options_.stop_when_stalled || mode != Ipopt::RegularMode) return true;
+    if (objective < best_f_ - kStallChange) last_progress_ = iteration;
+    // The kept values are this iterate's when the gradient's value is the objective Ipopt reports.
+    const bool known = !gradient_x_.empty() && gradient_x_ == jacobian_x_ &&
+                       std::abs(gradient_f_ - objective) <= 1e-12 * (1.0 + std::abs(objective));
+    if (known && gradient_f_ < best_f_ && Clean()) {
+      if (gradient_f_ < best_f_ - kStallChange) last_progress_ = iteration;
+      best_f_ = gradient_f_;
+      best_x_ = gradient_x_;
+    }
+    if (std::isfinite(best_f_) && iteration - last_progress_ >= kStallIterations) {
+      stalled_ = true;
+      return false;
+    }
+    return true;
   }
 
   void finalize_solution(Ipopt::SolverReturn, Index, const Number* x, const Number*, const Number*, Index,
                          const Number*, const Number*, Number, const Ipopt::IpoptData*,
                          Ipopt::IpoptCalculatedQuantities*) override {
-    final_ = Poses(x);
+    final_ = Poses(stalled_ ? best_x_.data() : x);
   }
   const std::vector<SpatialPlanPose>& final_poses() const { return final_; }
+  bool stalled() const { return stalled_; }
 
  private:
+  // Whether the kept iterate (jacobian_x_, jacobian_g_) is clean: its equilibrium rows within the
+  // clean tolerance and every bound kept within the NLP's margins (cheap), then its poses verified.
+  bool Clean() {
+    const int rows = C * n_ + NumPairs(), vars = V * n_;
+    if (bounds_x_l_.empty()) {
+      bounds_x_l_.resize(vars);
+      bounds_x_u_.resize(vars);
+      bounds_g_l_.resize(rows);
+      bounds_g_u_.resize(rows);
+      get_bounds_info(vars, bounds_x_l_.data(), bounds_x_u_.data(), rows, bounds_g_l_.data(), bounds_g_u_.data());
+    }
+    for (int k = 0; k < vars; ++k) {
+      if (jacobian_x_[k] < bounds_x_l_[k] - kMargin_m || jacobian_x_[k] > bounds_x_u_[k] + kMargin_m) return false;
+    }
+    const double equilibrium = Weight(robot_) * (m_ >= 6 ? kCleanEquilibriumProjected : kCleanEquilibriumResolved);
+    for (int j = 0; j < n_; ++j) {
+      for (int r = 0; r < C; ++r) {
+        const double g = jacobian_g_[C * j + r];
+        if (r < 6 ? std::abs(g) > equilibrium : g < bounds_g_l_[C * j + r] - kMargin_m || g > bounds_g_u_[C * j + r] + kMargin_m) {
+          return false;
+        }
+      }
+    }
+    for (int k = 0; k < NumPairs(); ++k) {
+      if (PairDistance2(jacobian_x_.data(), k) < bounds_g_l_[C * n_ + k]) return false;
+    }
+    return holds_(Poses(jacobian_x_.data()));
+  }
+
   double Power() const {
     return options_.criterion == Criterion::kCondition || options_.criterion == Criterion::kE ? kSpatialSurrogatePower
                                                                                             : 0.0;
@@ -354,8 +427,15 @@ class SpatialDesignNlp : public Ipopt::TNLP {
   const SpatialDesignOptions& options_;
   const std::vector<SpatialPlanPose>& start_;
   const std::vector<PoseTightening>* tightening_;  // nullptr: none
+  const std::function<bool(const std::vector<SpatialPlanPose>&)> holds_;  // the verification passes
   const int n_, m_, V, C;
   std::vector<SpatialPlanPose> final_;
+  // The stall rule's state: the last gradient's and Jacobian's points and values, the best clean iterate.
+  std::vector<double> gradient_x_, jacobian_x_, jacobian_g_, best_x_;
+  double gradient_f_ = 0.0, best_f_ = std::numeric_limits<double>::infinity();
+  std::vector<double> bounds_x_l_, bounds_x_u_, bounds_g_l_, bounds_g_u_;
+  int last_progress_ = 0;
+  bool stalled_ = false;
 };
 
 struct Outcome {
@@ -381,9 +461,18 @@ const char* StatusName(Ipopt::ApplicationReturnStatus s) {
   }
 }
 
+std::string Verify(const SpatialRobot& robot, const SpatialInformationLayout& layout,
+                   const SpatialDesignOptions& options, const std::vector<SpatialPlanPose>& ipopt,
+                   const SpatialHomeReference& home, std::vector<SpatialPlanPose>* verified);
+
 Outcome SolveNlp(const SpatialRobot& robot, const SpatialInformationLayout& layout, const SpatialDesignOptions& options,
-                 const std::vector<SpatialPlanPose>& start, const std::vector<PoseTightening>* tightening) {
-  Ipopt::SmartPtr<SpatialDesignNlp> nlp = new SpatialDesignNlp(robot, layout, options, start, tightening);
+                 const SpatialHomeReference& home, const std::vector<SpatialPlanPose>& start,
+                 const std::vector<PoseTightening>* tightening) {
+  const auto holds = [&](const std::vector<SpatialPlanPose>& poses) {
+    std::vector<SpatialPlanPose> verified;
+    return Verify(robot, layout, options, poses, home, &verified).empty();
+  };
+  Ipopt::SmartPtr<SpatialDesignNlp> nlp = new SpatialDesignNlp(robot, layout, options, start, tightening, holds);
   Ipopt::SmartPtr<Ipopt::IpoptApplication> app = IpoptApplicationFactory();
   // The planar design's settings (design/ipopt_nlp.cc says why each).
   app->Options()->SetStringValue("hessian_approximation", "limited-memory");
@@ -418,6 +507,10 @@ Outcome SolveNlp(const SpatialRobot& robot, const SpatialInformationLayout& layo
   const Ipopt::ApplicationReturnStatus status = app->OptimizeTNLP(nlp);
   out.status = StatusName(status);
   out.converged = status == Ipopt::Solve_Succeeded || status == Ipopt::Solved_To_Acceptable_Level;
+  if (status == Ipopt::User_Requested_Stop && nlp->stalled()) {
+    out.status = "Criterion_Stalled";
+    out.converged = true;
+  }
   if (Ipopt::IsValid(app->Statistics())) out.iterations = app->Statistics()->IterationCount();
   out.poses = nlp->final_poses();
   return out;
@@ -457,11 +550,12 @@ Outcome Decode(const std::string& bytes) {
 // at once, the outcome the same bit for bit), else in this process, one solve at a time
 // (Debian's MUMPS is not thread-safe; the planar design's solves take the same turns).
 Outcome SolveNlpSomewhere(const SpatialRobot& robot, const SpatialInformationLayout& layout,
-                          const SpatialDesignOptions& options, const std::vector<SpatialPlanPose>& start,
+                          const SpatialDesignOptions& options, const SpatialHomeReference& home,
+                          const std::vector<SpatialPlanPose>& start,
                           const std::vector<PoseTightening>* tightening = nullptr) {
   if (options.solve_in_child_processes) {
     const std::optional<std::string> bytes = internal::RunInChildProcess(
-        [&] { return Encode(SolveNlp(robot, layout, options, start, tightening)); }, options.interrupted);
+        [&] { return Encode(SolveNlp(robot, layout, options, home, start, tightening)); }, options.interrupted);
     if (bytes) return Decode(*bytes);
   }
   Outcome outcome;
@@ -469,7 +563,7 @@ Outcome SolveNlpSomewhere(const SpatialRobot& robot, const SpatialInformationLay
 #pragma omp critical(cablecal_ipopt)
   {
     try {
-      outcome = SolveNlp(robot, layout, options, start, tightening);
+      outcome = SolveNlp(robot, layout, options, home, start, tightening);
     } catch (...) {
       solve_error = std::current_exception();
     }
@@ -478,7 +572,6 @@ Outcome SolveNlpSomewhere(const SpatialRobot& robot, const SpatialInformationLay
   return outcome;
 }
 
-double Weight(const SpatialRobot& robot) { return robot.platform_mass_kg * robot.gravity_mps2; }
 
 // The file comment's verification; "" when every pose holds, else the first failure.
 std::string Verify(const SpatialRobot& robot, const SpatialInformationLayout& layout,
@@ -691,6 +784,9 @@ struct StartOutcome {
 // instead: more conservative (cogiro, 14 poses: a criterion 1.5 times worse), but a pose moved
 // along a bound then meets a spread it was already drawn in for, so the rounds end.
 constexpr double kRobustHeadroom = 1.5, kRobustWidening = 1.3;
+// Starts made robust at once (DesignSpatialPoses): a fixed number, so that the outcome does not
+// depend on the thread count; two, one for each core of a small machine.
+constexpr std::size_t kRobustTogether = 2;
 constexpr int kRobustOwnSpreadRounds = 2;
 
 // The first solve of a start, without robustness: the same at every k, so the robustness
@@ -699,7 +795,7 @@ StartOutcome FirstSolve(const SpatialRobot& robot, const SpatialInformationLayou
                         const SpatialDesignOptions& options, const std::vector<SpatialPlanPose>& start,
                         const SpatialHomeReference& home) {
   StartOutcome s;
-  s.outcome = SolveNlpSomewhere(robot, layout, options, start);
+  s.outcome = SolveNlpSomewhere(robot, layout, options, home, start);
   if (s.outcome.converged) s.failure = Verify(robot, layout, options, s.outcome.poses, home, &s.verified);
   return s;
 }
@@ -753,7 +849,7 @@ StartOutcome MakeRobust(const SpatialRobot& robot, const SpatialInformationLayou
       }
     }
     ++s.robust_rounds;
-    const Outcome again = SolveNlpSomewhere(robot, layout, options, s.verified, &tight);
+    const Outcome again = SolveNlpSomewhere(robot, layout, options, home, s.verified, &tight);
     s.outcome.iterations += again.iterations;
     s.outcome.status = again.status;
     if (!again.converged) {
@@ -855,30 +951,60 @@ SpatialDesignResult DesignSpatialPoses(const SpatialRobot& robot, const SpatialD
   ParallelFor(K, 1, [&](long k) {
     starts[k] = SampleSpatialPoses(robot, n, StreamSeed(options.seed, {kStartStream, static_cast<std::uint64_t>(k)}));
   });
-  // The design at robustness k: every start solved (in a child process of its own, as many at
-  // once as threads) and checked; the best verified one, or SolverFailure. The first solves are
-  // made once, at the first k tried.
+  // The design at robustness k: every start's first solve (in a child process of its own, as many
+  // at once as threads), made once at the first k tried; then the starts made robust
+  // kRobustTogether at a time, the lowest first-solve criterion first, until one holds (a start
+  // whose first solve did not verify is not made robust); the best that holds, or SolverFailure.
   std::vector<StartOutcome> first(K);
+  std::vector<double> first_objective(K, std::numeric_limits<double>::infinity());
+  std::vector<int> by_first;  // the starts whose first solves verified, lowest criterion first
   bool first_solved = false;
   std::string without_robustness;  // when no first solve gave verified poses: why (no k can help)
   const auto design_at = [&](double k) {
     if (!without_robustness.empty()) throw SolverFailure(without_robustness);
     if (k != options.robust_sigmas && options.trying_robustness) options.trying_robustness(k);
     const double k_sigma = k * sigma_m;
-    std::vector<StartOutcome> outcomes(K);
-    std::atomic<long> starts_done{0};
-    ParallelFor(K, 1, [&](long s) {
-      if (options.interrupted && options.interrupted->load()) return;
-      if (!first_solved) first[s] = FirstSolve(robot, layout, options, starts[s], home);
-      outcomes[s] = MakeRobust(robot, layout, options, first[s], home, k_sigma, k);
-      const long done = ++starts_done;
-      if (options.progress) {
+    if (!first_solved) {
+      std::atomic<long> starts_done{0};
+      ParallelFor(K, 1, [&](long s) {
+        if (options.interrupted && options.interrupted->load()) return;
+        first[s] = FirstSolve(robot, layout, options, starts[s], home);
+        if (first[s].outcome.converged && first[s].failure.empty()) {
+          first_objective[s] = SpatialDesignObjective(robot, layout, options.criterion, first[s].verified, nullptr, 0.0);
+        }
+        const long done = ++starts_done;
+        if (options.progress) {
 #pragma omp critical(cablecal_design_progress)
-        options.progress(done, K);
+          options.progress(done, K);
+        }
+      });
+      if (options.interrupted && options.interrupted->load()) throw Interrupted();
+      first_solved = true;
+      for (int s = 0; s < K; ++s) {
+        if (std::isfinite(first_objective[s])) by_first.push_back(s);
       }
-    });
-    if (options.interrupted && options.interrupted->load()) throw Interrupted();
-    first_solved = true;
+      std::stable_sort(by_first.begin(), by_first.end(), [&](int a, int b) { return first_objective[a] < first_objective[b]; });
+    }
+    std::vector<StartOutcome> outcomes = first;
+    std::vector<bool> made_robust(K, true);
+    if (k_sigma > 0.0 || Stretches(robot)) {
+      for (const int s : by_first) made_robust[s] = false;
+      for (std::size_t begin = 0; begin < by_first.size(); begin += kRobustTogether) {
+        const std::size_t end = std::min(by_first.size(), begin + kRobustTogether);
+        ParallelFor(static_cast<long>(end - begin), 1, [&](long i) {
+          if (options.interrupted && options.interrupted->load()) return;
+          const int s = by_first[begin + i];
+          outcomes[s] = MakeRobust(robot, layout, options, first[s], home, k_sigma, k);
+        });
+        if (options.interrupted && options.interrupted->load()) throw Interrupted();
+        bool held = false;
+        for (std::size_t i = begin; i < end; ++i) {
+          made_robust[by_first[i]] = true;
+          held = held || outcomes[by_first[i]].failure.empty();
+        }
+        if (held) break;
+      }
+    }
     SpatialDesignResult r;
     double best = std::numeric_limits<double>::infinity();
     for (int s = 0; s < K; ++s) {
@@ -888,14 +1014,18 @@ SpatialDesignResult DesignSpatialPoses(const SpatialRobot& robot, const SpatialD
       report.iterations = outcomes[s].outcome.iterations;
       report.converged = outcomes[s].outcome.converged;
       report.robust_rounds = outcomes[s].robust_rounds;
+      report.made_robust = made_robust[s];
+      report.first_objective = first_objective[s];
       report.objective = std::numeric_limits<double>::infinity();
       if (report.converged) {
         ++r.converged_starts;
         report.verification_failure = outcomes[s].failure;
         report.verified = outcomes[s].failure.empty();
         if (report.verified) {
-          report.objective = SpatialDesignObjective(robot, layout, options.criterion, outcomes[s].verified, nullptr, 0.0);
-          if (report.objective < best) {
+          report.objective = made_robust[s] ? SpatialDesignObjective(robot, layout, options.criterion,
+                                                                     outcomes[s].verified, nullptr, 0.0)
+                                            : first_objective[s];
+          if (made_robust[s] && report.objective < best) {
             best = report.objective;
             r.best_start = s;
           }
@@ -1067,6 +1197,10 @@ std::string SpatialDesignSummaryYaml(const SpatialRobot& robot, const SpatialDes
       << Key << "iterations" << Value << st.iterations << Key << "verified" << Value << st.verified;
     if (st.verified) o << Key << "objective" << Value << YamlNumber{st.objective};
     if (st.robust_rounds > 0) o << Key << "robust_rounds" << Value << st.robust_rounds;
+    if (st.robust_rounds > 0 && std::isfinite(st.first_objective)) {
+      o << Key << "first_solve_objective" << Value << YamlNumber{st.first_objective};
+    }
+    if (!st.made_robust) o << Key << "made_robust" << Value << false;
     if (st.converged && !st.verified) o << Key << "verification_failure" << Value << YamlString{st.verification_failure};
     o << EndMap;
   }

@@ -14,6 +14,9 @@
 //   reference points at least that far apart.
 // Starts: feasible random sets (SampleSpatialPoses), each from its own stream of the seed,
 // solved at once in child processes (as the planar design's); the best verified start wins.
+// A solve ends at Ipopt's tolerance or when its criterion has stalled: no iterate of the last 30
+// lowered the best clean one's (every bound kept, the poses verified as below) by 1e-5, that
+// iterate then the solve's result ("Criterion_Stalled").
 // Verified: each pose re-solved by the model (m < 6: the stable equilibrium
 // SolveSpatialEquilibrium finds from Ipopt's pose must be that pose; m >= 6: the tensions
 // projected exactly onto the equilibrium, or for an identification that does not model the
@@ -31,7 +34,9 @@
 // sigma), k |dc/dg|_2 = sqrt(sum over those ((c+ - c-) / 2)^2), and the
 // NLP is re-solved from its poses with every bound drawn in by that much (widened for poses
 // that failed a scenario), until the poses keep every bound to first order and on every scenario
-// robot, or kSpatialRobustRounds re-solves. Where no start holds at the requested k, the design
+// robot, or kSpatialRobustRounds re-solves. The starts are made robust two at a time, those
+// whose first solves have the lowest criteria first, until one holds (the others are reported
+// not made robust). Where no start holds at the requested k, the design
 // runs at the largest k that does (design/robustness_search.h) and says so.
 // Calibrating in rounds (--prior): the robot is the earlier identification's estimate, and its
 // information (SpatialPriorInformation) adds to every S, of the design and of the random sets.
@@ -76,6 +81,9 @@ struct SpatialDesignOptions {
   // bit). Off: the solves take turns in this process (Python; montecarlo's
   // design_in_child_processes).
   bool solve_in_child_processes = true;
+  // A solve also ends when its criterion has stalled (the file comment); off: only at Ipopt's
+  // tolerance (what the tests compare the rule with).
+  bool stop_when_stalled = true;
   const std::atomic<bool>* interrupted = nullptr;
   std::function<void(long, long)> progress;  // (starts done, starts), at every k the robustness search tries
   std::function<void(double)> trying_robustness;  // the search is about to design at this k (below the requested)
@@ -94,6 +102,10 @@ struct SpatialStartReport {
   std::string verification_failure;
   double objective = 0.0;  // the exact criterion of the verified poses
   int robust_rounds = 0;   // NLP re-solves with the bounds drawn in for robustness
+  double first_objective = 0.0;  // the exact criterion of its first solve's verified poses (inf: none)
+  // False: not made robust, because starts whose first solves had lower criteria were made robust
+  // first and one held (its status, iterations and objective are then its first solve's).
+  bool made_robust = true;
 };
 
 struct SpatialDesignResult {

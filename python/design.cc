@@ -111,10 +111,14 @@ void BindSpatialDesignResult(py::module_& m) {
           e["verification_failure"] = s.verification_failure;
           e["objective"] = s.objective;
           e["robust_rounds"] = s.robust_rounds;
+          e["first_objective"] = s.first_objective;
+          e["made_robust"] = s.made_robust;
           l.append(e);
         }
         return l;
-      }, "Per Ipopt start: status, iterations, converged, verified, objective, robust re-solves.")
+      }, "Per Ipopt start: status, iterations, converged, verified, objective, robust re-solves, the first "
+         "solve's objective, and whether it was made robust (False: starts with lower first-solve "
+         "objectives were, and one held).")
       .def("to_yaml", [](const PySpatialDesign& d) {
         return SpatialDesignSummaryYaml(d.robot, d.result, d.options, CallText("design"));
       }, "The CLI's summary.yaml.");
