@@ -14,8 +14,8 @@
 //   reference points at least that far apart.
 // Starts: feasible random sets (SampleSpatialPoses), each from its own stream of the seed,
 // solved at once in child processes (as the planar design's); the best verified start wins.
-// A solve ends at Ipopt's tolerance or when its criterion has stalled: no iterate of the last 30
-// lowered the best clean one's (every bound kept, the poses verified as below) by 1e-5, that
+// A solve ends at Ipopt's tolerance or when its criterion has stalled: no iterate of the last 20
+// lowered the best clean one's (every bound kept, the poses verified as below) by 1e-4, that
 // iterate then the solve's result ("Criterion_Stalled").
 // Verified: each pose re-solved by the model (m < 6: the stable equilibrium
 // SolveSpatialEquilibrium finds from Ipopt's pose must be that pose; m >= 6: the tensions
