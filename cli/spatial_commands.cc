@@ -214,11 +214,17 @@ int RunSpatialDesign(const Context& ctx, const DesignCommandOptions& options) {
     std::printf("%s\n", ToJson(doc).c_str());
     return kExitOk;
   }
-  int verified = 0;
-  for (const SpatialStartReport& s : result.starts) verified += s.verified ? 1 : 0;
-  std::printf("designed %zu poses of %s (criterion %s, best of %d start%s, %d converged, %d verified%s): %s",
+  int verified = 0, made_robust = 0;
+  for (const SpatialStartReport& s : result.starts) {
+    verified += s.verified ? 1 : 0;
+    made_robust += s.made_robust ? 1 : 0;
+  }
+  // Where starts were left without robust rounds (a pair with lower first-solve criteria held), how many had them.
+  const std::string robust_count =
+      made_robust < design.starts ? ", " + std::to_string(made_robust) + " made robust" : std::string();
+  std::printf("designed %zu poses of %s (criterion %s, best of %d start%s, %d converged, %d verified%s%s): %s",
               result.poses.size(), PrintableText(robot.name).c_str(), ToString(design.criterion), design.starts,
-              design.starts == 1 ? "" : "s", result.converged_starts, verified,
+              design.starts == 1 ? "" : "s", result.converged_starts, verified, robust_count.c_str(),
               design.prior ? ", counting the prior's information" : "",
               DescribeCriterion(design.criterion, result.criteria).c_str());
   if (design.random_sets > 0) {

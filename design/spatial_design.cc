@@ -903,6 +903,15 @@ SpatialDesignResult DesignSpatialPoses(const SpatialRobot& robot, const SpatialD
   if (!(options.min_spacing_m >= 0.0) || !std::isfinite(options.min_spacing_m)) {
     throw InputError("--min-spacing", "", "must be a non-negative number of metres");
   }
+  // Two reference points are at most the diagonal of the frame box less its margin apart: a
+  // larger spacing leaves no plan, said here rather than by Ipopt's failing starts.
+  const double reach_m = ((robot.p_F_frame_max_m.array() - robot.margin_m) -
+                          (robot.p_F_frame_min_m.array() + robot.margin_m)).max(0.0).matrix().norm();
+  if (n >= 2 && options.min_spacing_m > reach_m) {
+    throw InputError("--min-spacing", "",
+                     FormatDouble(options.min_spacing_m) + " m is more than any two poses can be apart: the diagonal of " +
+                         "the frame box less its margin is " + Rounded(reach_m) + " m");
+  }
   const double sigma_m = options.geometry_sigma_m.value_or(DefaultSpatialGeometrySigma(robot));
   if (!(sigma_m >= 0.0 && sigma_m <= kMaxGeometrySigma_m)) {
     throw InputError("--geometry-sigma", "", "must be between 0 and " + FormatDouble(kMaxGeometrySigma_m) + " m (got " +
@@ -1020,13 +1029,14 @@ SpatialDesignResult DesignSpatialPoses(const SpatialRobot& robot, const SpatialD
       report.objective = std::numeric_limits<double>::infinity();
       if (report.converged) {
         ++r.converged_starts;
-        report.verification_failure = outcomes[s].failure;
-        report.verified = outcomes[s].failure.empty();
+        // A start not made robust is not verified at this robustness: only its first solve was.
+        report.verification_failure =
+            made_robust[s] ? outcomes[s].failure
+                           : "not made robust: a pair of starts with lower first-solve criteria was, and one held";
+        report.verified = made_robust[s] && outcomes[s].failure.empty();
         if (report.verified) {
-          report.objective = made_robust[s] ? SpatialDesignObjective(robot, layout, options.criterion,
-                                                                     outcomes[s].verified, nullptr, 0.0)
-                                            : first_objective[s];
-          if (made_robust[s] && report.objective < best) {
+          report.objective = SpatialDesignObjective(robot, layout, options.criterion, outcomes[s].verified, nullptr, 0.0);
+          if (report.objective < best) {
             best = report.objective;
             r.best_start = s;
           }
@@ -1198,7 +1208,7 @@ std::string SpatialDesignSummaryYaml(const SpatialRobot& robot, const SpatialDes
       << Key << "iterations" << Value << st.iterations << Key << "verified" << Value << st.verified;
     if (st.verified) o << Key << "objective" << Value << YamlNumber{st.objective};
     if (st.robust_rounds > 0) o << Key << "robust_rounds" << Value << st.robust_rounds;
-    if (st.robust_rounds > 0 && std::isfinite(st.first_objective)) {
+    if ((st.robust_rounds > 0 || !st.made_robust) && std::isfinite(st.first_objective)) {
       o << Key << "first_solve_objective" << Value << YamlNumber{st.first_objective};
     }
     if (!st.made_robust) o << Key << "made_robust" << Value << false;

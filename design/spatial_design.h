@@ -96,7 +96,7 @@ int MinSpatialDesignPoses(const SpatialRobot& robot, const SpatialInformationLay
 struct SpatialStartReport {
   int start = 0;
   std::string ipopt_status;
-  int iterations = 0;
+  int iterations = 0;     // of all its solves, the robust re-solves' included
   bool converged = false;
   bool verified = false;
   std::string verification_failure;
@@ -104,7 +104,8 @@ struct SpatialStartReport {
   int robust_rounds = 0;   // NLP re-solves with the bounds drawn in for robustness
   double first_objective = 0.0;  // the exact criterion of its first solve's verified poses (inf: none)
   // False: not made robust, because starts whose first solves had lower criteria were made robust
-  // first and one held (its status, iterations and objective are then its first solve's).
+  // first and one held (its status and iterations are then its first solve's; it is not verified
+  // at the plan's robustness, verification_failure says so, and only first_objective is known).
   bool made_robust = true;
 };
 

@@ -111,14 +111,15 @@ void BindSpatialDesignResult(py::module_& m) {
           e["verification_failure"] = s.verification_failure;
           e["objective"] = s.objective;
           e["robust_rounds"] = s.robust_rounds;
-          e["first_objective"] = s.first_objective;
+          e["first_solve_objective"] = s.first_objective;
           e["made_robust"] = s.made_robust;
           l.append(e);
         }
         return l;
-      }, "Per Ipopt start: status, iterations, converged, verified, objective, robust re-solves, the first "
-         "solve's objective, and whether it was made robust (False: starts with lower first-solve "
-         "objectives were, and one held).")
+      }, "Per Ipopt start: status (its last solve's), iterations (all its solves'), converged, verified "
+         "(at the plan's robustness), verification_failure, objective (inf unless verified), robust_rounds, "
+         "first_solve_objective, and made_robust (False: starts with lower first-solve objectives were, "
+         "and one held; such a start is not verified).")
       .def("to_yaml", [](const PySpatialDesign& d) {
         return SpatialDesignSummaryYaml(d.robot, d.result, d.options, CallText("design"));
       }, "The CLI's summary.yaml.");

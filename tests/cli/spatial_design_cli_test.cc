@@ -199,8 +199,13 @@ TEST_F(SpatialDesignCli, HostileInputsExitTwoOrThreeWithOneMessageAndNothingWrit
       {"--poses 3.5", "--poses: must be a whole number from 1 to 100000 (got '3.5')", 2},
       {"--poses 3 --criterion b", "--criterion", 2},
       {"--poses 3 --min-spacing -1", "--min-spacing", 2},
-      // Poses 50 m apart in a 2 m frame: no start converges, and none is reported as a plan.
-      {"--poses 2 --starts 1 --random-sets 0 --min-spacing 50", "solver failure: none of the 1 starts gave verified poses", 3},
+      // Poses 50 m apart in a 2 m frame: refused before any solve (the box less its margin is
+      // 2.1 x 2.3 x 1.8 m, 3.6 m across).
+      {"--poses 2 --starts 1 --random-sets 0 --min-spacing 50",
+       "--min-spacing: 50 m is more than any two poses can be apart: the diagonal of the frame box less its margin is 3.6 m",
+       2},
+      // 3.5 m apart fits the box but not the workspace: no start converges, and none is reported as a plan.
+      {"--poses 2 --starts 1 --random-sets 0 --min-spacing 3.5", "solver failure: none of the 1 starts gave verified poses", 3},
   };
   for (const Case& c : cases) {
     const RunResult r = RunCablecal("design --robot " + robot + " " + c.flags + outputs);

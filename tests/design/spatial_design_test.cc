@@ -517,7 +517,8 @@ TEST(SpatialDesign, StartsAreMadeRobustTwoAtATimeLowestFirstCriterionFirst) {
       highest_made = std::max(highest_made, s.first_objective);
     } else {
       EXPECT_EQ(s.robust_rounds, 0);
-      EXPECT_EQ(s.objective, s.first_objective);
+      EXPECT_FALSE(s.verified);  // only its first solve was
+      EXPECT_TRUE(std::isfinite(s.first_objective));
       lowest_left = std::min(lowest_left, s.first_objective);
     }
   }
