@@ -1110,6 +1110,7 @@ SpatialDesignResult DesignSpatialPoses(const SpatialRobot& robot, const SpatialD
     // The spatial scenarios move the platform too, at the same k (the holds sentence gives its sigmas).
     result.robustness_note = LoweredRobustnessText(search, sigma_m) +
                              "; the platform's mass and centre of mass within the same k times their priors";
+    result.failure_at_requested = search.failure_at_requested;
   }
   result.criteria = SpatialCriteria(SpatialInformation(robot, layout, result.poses));
   const int R = options.random_sets;
@@ -1227,6 +1228,7 @@ std::string SpatialDesignSummaryYaml(const SpatialRobot& robot, const SpatialDes
     o << Key << "robustness_requested_k" << Value << YamlNumber{r.robust_sigmas_requested};
     o << Key << "robustness_achieved_k" << Value << YamlNumber{r.robust_sigmas_achieved};
     o << Key << "robustness_lowered" << Value << YamlString{r.robustness_note};
+    o << Key << "failure_at_requested_k" << Value << YamlString{r.failure_at_requested};
   }
   o << EndMap;
   o << Key << "wall_time_s" << Value << YamlNumber{std::round(r.wall_time_s * 1000.0) / 1000.0};

@@ -121,6 +121,8 @@ struct SpatialDesignResult {
   double robust_sigmas_requested = 0.0;
   double robust_sigmas_achieved = 0.0;  // the k the plan holds for
   std::string robustness_note;          // LoweredRobustnessText when lowered, else ""
+  // When lowered: why the requested robustness gave no plan (each start's failure), else "".
+  std::string failure_at_requested;
   // With a prior that holds more coordinates than this robot file's sensors need (a result of
   // fewer sensors, or a lab's hold:): which, planned as known; else "".
   std::string prior_note;

@@ -99,6 +99,10 @@ void BindSpatialDesignResult(py::module_& m) {
         if (!d.result.robustness_lowered()) return py::none();
         return py::str(d.result.robustness_note);
       }, "The sentence saying the robustness was lowered and to what; None when the requested one holds.")
+      .def_property_readonly("failure_at_requested", [](const PySpatialDesign& d) -> py::object {
+        if (!d.result.robustness_lowered()) return py::none();
+        return py::str(d.result.failure_at_requested);
+      }, "Why the requested robustness gave no plan (each start's failure there); None when it holds.")
       .def_property_readonly("starts", [](const PySpatialDesign& d) {
         py::list l;
         for (const SpatialStartReport& s : d.result.starts) {

@@ -730,6 +730,12 @@ TEST(SpatialDesign, RobustnessIsLoweredWhereNoPlanHoldsAndSaid) {
   EXPECT_NE(r.robustness_note.find("not the requested 3 x 5.0e-04 m"), std::string::npos) << r.robustness_note;
   const std::string summary = SpatialDesignSummaryYaml(robot, r, options, "test");
   EXPECT_NE(summary.find("robustness_lowered: "), std::string::npos) << summary;
+  // And why the requested k gave none: the starts' failures there (helper-25: it was not said).
+  EXPECT_NE(r.failure_at_requested.find("starts gave verified poses holding for true exit points "
+                                        "within 3 x"),
+            std::string::npos)
+      << r.failure_at_requested;
+  EXPECT_NE(summary.find("failure_at_requested_k: "), std::string::npos) << summary;
   // What was achieved holds: on true robots within the achieved k sigma, drawn at a third of it.
   std::string first;
   EXPECT_EQ(TrueRobotsThatCannotHoldThePlan(robot, r.poses, r.robust_sigmas_achieved, *robot.sensors.tracker_sigma_m, 20, &first),
