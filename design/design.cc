@@ -364,6 +364,15 @@ DesignResult DesignPosesAt(const Robot& robot, const DesignOptions& options) {
   if (!(options.min_spacing_m >= 0.0) || !std::isfinite(options.min_spacing_m)) {
     throw InputError("--min-spacing", "", "must be a non-negative number of metres");
   }
+  // Two poses are at most the diagonal of the frame less its margin apart: a larger spacing
+  // leaves no plan, said here rather than by Ipopt's failing starts (as the spatial design).
+  const double reach_m = std::hypot(std::max(0.0, robot.frame_width_m - 2.0 * robot.margin_m),
+                                    std::max(0.0, robot.frame_height_m - 2.0 * robot.margin_m));
+  if (n >= 2 && options.min_spacing_m > reach_m) {
+    throw InputError("--min-spacing", "",
+                     FormatDouble(options.min_spacing_m) + " m is more than any two poses can be apart: the diagonal of " +
+                         "the frame less its margin is " + Rounded(reach_m) + " m");
+  }
   if (!(options.geometry_sigma_m >= 0.0 && options.geometry_sigma_m <= kMaxGeometrySigma_m)) {
     throw InputError("--geometry-sigma", "", "must be between 0 and " + FormatDouble(kMaxGeometrySigma_m) +
                                                  " m (got " + FormatDouble(options.geometry_sigma_m) + ")");

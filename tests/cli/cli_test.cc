@@ -663,7 +663,16 @@ TEST_F(Cli, DesignFailuresWriteNothing) {
   const RunResult few = RunCablecal("design --poses 4 --out " + Path("p.csv") + " --summary " + Path("s.yaml"));
   EXPECT_EQ(few.exit_code, 2) << few.output;
   EXPECT_NE(few.output.find("--poses: at least 5 poses are needed"), std::string::npos) << few.output;
-  const RunResult spacing = RunCablecal("design --poses 6 --starts 2 --random-sets 5 --min-spacing 10 --out " +
+  // Beyond the frame's diagonal less its margin (5.2 x 2.8 m): refused before any solve.
+  const RunResult far = RunCablecal("design --poses 6 --starts 2 --random-sets 5 --min-spacing 10 --out " +
+                                    Path("p.csv") + " --summary " + Path("s.yaml"));
+  EXPECT_EQ(far.exit_code, 2) << far.output;
+  EXPECT_NE(far.output.find("--min-spacing: 10 m is more than any two poses can be apart: the diagonal of the frame "
+                            "less its margin is"),
+            std::string::npos)
+      << far.output;
+  // Within it but not for 6 poses: every start fails, and nothing is written.
+  const RunResult spacing = RunCablecal("design --poses 6 --starts 2 --random-sets 5 --min-spacing 5 --out " +
                                         Path("p.csv") + " --summary " + Path("s.yaml"));
   EXPECT_EQ(spacing.exit_code, 3) << spacing.output;
   EXPECT_NE(spacing.output.find("none of the 2 starts gave verified poses"), std::string::npos) << spacing.output;

@@ -429,7 +429,9 @@ TEST(Design, Rejections) {
   options.poses = 6;
   options.starts = 1;
   options.random_sets = 5;
-  options.min_spacing_m = 10.0;  // no two poses of the frame can be 10 m apart
+  options.min_spacing_m = 10.0;  // no two poses of the frame can be 10 m apart: refused before solving
+  EXPECT_THROW(DesignPoses(BuiltinRobot(), options), InputError);
+  options.min_spacing_m = 5.0;  // two poses can be, six cannot
   EXPECT_THROW(DesignPoses(BuiltinRobot(), options), SolverFailure);
 }
 
