@@ -1047,7 +1047,7 @@ SpatialDesignResult DesignSpatialPoses(const SpatialRobot& robot, const SpatialD
     if (r.best_start < 0) {
       std::string statuses;
       for (const SpatialStartReport& st : r.starts) {
-        statuses += (statuses.empty() ? "" : ", ") + st.ipopt_status +
+        statuses += (statuses.empty() ? "" : "; ") + ("start " + std::to_string(st.start) + ": ") + st.ipopt_status +
                     (st.converged && !st.verified ? " (re-verification failed: " + st.verification_failure + ")" : "");
       }
       const bool all_capped = std::all_of(r.starts.begin(), r.starts.end(), [](const SpatialStartReport& st) {
@@ -1109,7 +1109,9 @@ SpatialDesignResult DesignSpatialPoses(const SpatialRobot& robot, const SpatialD
   if (search.lowered()) {
     // The spatial scenarios move the platform too, at the same k (the holds sentence gives its sigmas).
     result.robustness_note = LoweredRobustnessText(search, sigma_m) +
-                             "; the platform's mass and centre of mass within the same k times their priors";
+                             (search.achieved_k > 0.0
+                                  ? "; the platform's mass and centre of mass within the same k times their priors"
+                                  : "");
     result.failure_at_requested = search.failure_at_requested;
   }
   result.criteria = SpatialCriteria(SpatialInformation(robot, layout, result.poses));
@@ -1208,10 +1210,8 @@ std::string SpatialDesignSummaryYaml(const SpatialRobot& robot, const SpatialDes
     o << Flow << BeginMap << Key << "start" << Value << st.start << Key << "ipopt_status" << Value << st.ipopt_status
       << Key << "iterations" << Value << st.iterations << Key << "verified" << Value << st.verified;
     if (st.verified) o << Key << "objective" << Value << YamlNumber{st.objective};
-    if (st.robust_rounds > 0) o << Key << "robust_rounds" << Value << st.robust_rounds;
-    if ((st.robust_rounds > 0 || !st.made_robust) && std::isfinite(st.first_objective)) {
-      o << Key << "first_solve_objective" << Value << YamlNumber{st.first_objective};
-    }
+    o << Key << "robust_rounds" << Value << st.robust_rounds;
+    if (std::isfinite(st.first_objective)) o << Key << "first_solve_objective" << Value << YamlNumber{st.first_objective};
     if (!st.made_robust) o << Key << "made_robust" << Value << false;
     if (st.converged && !st.verified) o << Key << "verification_failure" << Value << YamlString{st.verification_failure};
     o << EndMap;
