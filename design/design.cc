@@ -361,18 +361,10 @@ DesignResult DesignPosesAt(const Robot& robot, const DesignOptions& options) {
   }
   if (options.starts < 1) throw InputError("--starts", "", "must be at least 1");
   if (options.random_sets < 0) throw InputError("--random-sets", "", "must not be negative");
-  if (!(options.min_spacing_m >= 0.0) || !std::isfinite(options.min_spacing_m)) {
-    throw InputError("--min-spacing", "", "must be a non-negative number of metres");
-  }
-  // Two poses are at most the diagonal of the frame less its margin apart: a larger spacing
-  // leaves no plan, said here rather than by Ipopt's failing starts (as the spatial design).
-  const double reach_m = std::hypot(std::max(0.0, robot.frame_width_m - 2.0 * robot.margin_m),
-                                    std::max(0.0, robot.frame_height_m - 2.0 * robot.margin_m));
-  if (n >= 2 && options.min_spacing_m > reach_m) {
-    throw InputError("--min-spacing", "",
-                     FormatDouble(options.min_spacing_m) + " m is more than any two poses can be apart: the diagonal of " +
-                         "the frame less its margin is " + Rounded(reach_m) + " m");
-  }
+  CheckMinSpacing(options.min_spacing_m, n,
+                  std::hypot(std::max(0.0, robot.frame_width_m - 2.0 * robot.margin_m),
+                             std::max(0.0, robot.frame_height_m - 2.0 * robot.margin_m)),
+                  "the frame");
   if (!(options.geometry_sigma_m >= 0.0 && options.geometry_sigma_m <= kMaxGeometrySigma_m)) {
     throw InputError("--geometry-sigma", "", "must be between 0 and " + FormatDouble(kMaxGeometrySigma_m) +
                                                  " m (got " + FormatDouble(options.geometry_sigma_m) + ")");
@@ -567,6 +559,17 @@ DesignPrior LoadDesignPrior(const Robot& nominal, const std::string& path) {
   prior.robot = WithGeometry(nominal, known.geometry);
   prior.information = eig.eigenvectors() * eig.eigenvalues().cwiseInverse().asDiagonal() * eig.eigenvectors().transpose();
   return prior;
+}
+
+void CheckMinSpacing(double min_spacing_m, int poses, double reach_m, const std::string& region) {
+  if (!(min_spacing_m >= 0.0) || !std::isfinite(min_spacing_m)) {
+    throw InputError("--min-spacing", "", "must be a non-negative number of metres");
+  }
+  if (poses >= 2 && min_spacing_m > reach_m) {
+    throw InputError("--min-spacing", "",
+                     FormatDouble(min_spacing_m) + " m is more than any two poses can be apart: the diagonal of " +
+                         region + " less its margin is " + Rounded(reach_m) + " m");
+  }
 }
 
 std::string ImprovementText(double factor, int random_sets) {

@@ -69,6 +69,13 @@ double Improvement(Criterion c, const CriteriaValues& set, const CriteriaValues&
 // as such read as an improvement), "as good as ..." within 1 %.
 std::string ImprovementText(double factor, int random_sets);
 
+// --min-spacing of a design of `poses` poses, planar and spatial alike: a non-negative number of
+// metres, and for two poses or more no more than `reach_m`, the farthest two reference points
+// can be apart (the diagonal of `region`, the frame or the frame box, less its margin): a larger
+// spacing leaves no plan, said before any solve rather than by Ipopt's failing starts.
+// InputError naming the flag otherwise.
+void CheckMinSpacing(double min_spacing_m, int poses, double reach_m, const std::string& region);
+
 // A geometry error beyond this is not a calibration problem (the robot file is wrong).
 constexpr double kMaxGeometrySigma_m = 0.5;
 

@@ -900,18 +900,12 @@ SpatialDesignResult DesignSpatialPoses(const SpatialRobot& robot, const SpatialD
   }
   if (options.starts < 1) throw InputError("--starts", "", "must be at least 1");
   if (options.random_sets < 0) throw InputError("--random-sets", "", "must not be negative");
-  if (!(options.min_spacing_m >= 0.0) || !std::isfinite(options.min_spacing_m)) {
-    throw InputError("--min-spacing", "", "must be a non-negative number of metres");
-  }
-  // Two reference points are at most the diagonal of the frame box less its margin apart: a
-  // larger spacing leaves no plan, said here rather than by Ipopt's failing starts.
-  const double reach_m = ((robot.p_F_frame_max_m.array() - robot.margin_m) -
-                          (robot.p_F_frame_min_m.array() + robot.margin_m)).max(0.0).matrix().norm();
-  if (n >= 2 && options.min_spacing_m > reach_m) {
-    throw InputError("--min-spacing", "",
-                     FormatDouble(options.min_spacing_m) + " m is more than any two poses can be apart: the diagonal of " +
-                         "the frame box less its margin is " + Rounded(reach_m) + " m");
-  }
+  CheckMinSpacing(options.min_spacing_m, n,
+                  ((robot.p_F_frame_max_m.array() - robot.margin_m) - (robot.p_F_frame_min_m.array() + robot.margin_m))
+                      .max(0.0)
+                      .matrix()
+                      .norm(),
+                  "the frame box");
   const double sigma_m = options.geometry_sigma_m.value_or(DefaultSpatialGeometrySigma(robot));
   if (!(sigma_m >= 0.0 && sigma_m <= kMaxGeometrySigma_m)) {
     throw InputError("--geometry-sigma", "", "must be between 0 and " + FormatDouble(kMaxGeometrySigma_m) + " m (got " +
